@@ -1,0 +1,84 @@
+# Project-wide target helpers. Every module uses these so that flags and rules live in one place.
+
+# Eigen: header-only. When cross-compiling the find-root is the target sysroot, which does not
+# carry Eigen, so point at the host's headers (they are architecture independent).
+if(CMAKE_CROSSCOMPILING)
+  if(NOT TARGET Eigen3::Eigen)
+    add_library(Eigen3::Eigen INTERFACE IMPORTED)
+    set_target_properties(Eigen3::Eigen PROPERTIES INTERFACE_INCLUDE_DIRECTORIES /usr/include/eigen3)
+  endif()
+else()
+  find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+endif()
+
+set(SWF_FORBIDDEN_HEADERS_DIR ${CMAKE_CURRENT_LIST_DIR}/forbidden_headers)
+
+# Flight code rules (STYLE.md): warnings are errors, no exceptions, no RTTI, never -ffast-math.
+set(SWF_FLIGHT_FLAGS -Wall -Wextra -Werror -fno-exceptions -fno-rtti)
+
+# swf_flight_library(<name> ALIAS <ns::name> [SOURCES ...] [FP_CONTRACT_OFF])
+# Declares a flight library. Its own include directory is include/; it may not see the I/O and
+# middleware headers (LCM, V4L2, Aravis): a shadow directory answers those includes with #error.
+function(swf_flight_library name)
+  cmake_parse_arguments(ARG "FP_CONTRACT_OFF;HEADER_ONLY" "ALIAS" "SOURCES" ${ARGN})
+  if(ARG_HEADER_ONLY)
+    add_library(${name} INTERFACE)
+    target_include_directories(${name} INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/include)
+  else()
+    add_library(${name} STATIC ${ARG_SOURCES})
+    target_include_directories(${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
+    swf_apply_flight_rules(${name} ${ARG_FP_CONTRACT_OFF})
+  endif()
+  add_library(${ARG_ALIAS} ALIAS ${name})
+endfunction()
+
+# Applies the flight rules to any target that compiles flight code (the libraries and their tests).
+function(swf_apply_flight_rules target fp_contract_off)
+  target_compile_options(${target} PRIVATE ${SWF_FLIGHT_FLAGS})
+  if(fp_contract_off)
+    target_compile_options(${target} PRIVATE -ffp-contract=off)
+  endif()
+  target_include_directories(${target} BEFORE PRIVATE ${SWF_FORBIDDEN_HEADERS_DIR})
+endfunction()
+
+# swf_test(<name> SOURCES ... LIBS ... [FLIGHT] [FP_CONTRACT_OFF] [LABELS ...])
+# One GoogleTest executable = one CTest entry. FLIGHT compiles the test under the flight rules so
+# the templates it instantiates are checked against them too.
+function(swf_test name)
+  if(NOT SWF_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "FLIGHT;FP_CONTRACT_OFF" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest_main)
+  if(ARG_FLIGHT)
+    target_compile_options(${name} PRIVATE -Wall -Wextra -Werror)
+    if(ARG_FP_CONTRACT_OFF)
+      target_compile_options(${name} PRIVATE -ffp-contract=off)
+    endif()
+    target_include_directories(${name} BEFORE PRIVATE ${SWF_FORBIDDEN_HEADERS_DIR})
+  endif()
+  add_test(NAME ${name} COMMAND ${name} --gtest_brief=1
+           WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
+                       ENVIRONMENT "SWF_SHARED_DIR=${PROJECT_SOURCE_DIR}/../shared")
+endfunction()
+
+# `lint`: clang-format over every tracked C++ file and clang-tidy (naming rules) over our sources.
+function(swf_add_lint_target)
+  find_program(CLANG_FORMAT NAMES clang-format)
+  find_program(CLANG_TIDY NAMES clang-tidy)
+  if(NOT CLANG_FORMAT OR NOT CLANG_TIDY OR CMAKE_CROSSCOMPILING)
+    return()
+  endif()
+  add_custom_target(lint
+    COMMAND ${CMAKE_COMMAND} -DSOURCE_DIR=${PROJECT_SOURCE_DIR} -DBUILD_DIR=${CMAKE_BINARY_DIR}
+            -DCLANG_FORMAT=${CLANG_FORMAT} -DCLANG_TIDY=${CLANG_TIDY}
+            -P ${PROJECT_SOURCE_DIR}/cmake/lint.cmake
+    WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
+    COMMENT "clang-format and clang-tidy"
+    VERBATIM)
+endfunction()

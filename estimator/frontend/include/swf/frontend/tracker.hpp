@@ -1,0 +1,87 @@
+// Temporal tracking by translation-only Lucas-Kanade (paper 4.1.2).
+//
+// A template T(delta) (delta: integer offsets in a (2r+1)^2 patch) is aligned in image I by the
+// translation c: minimise over (c, b)
+//   E = sum_i ( I(c + o_i) + b - T_i )^2,     o_i = H(p_ref + delta_i) - H(p_ref),
+// with H the homography of the landmark's local plane from the reference frame to the current
+// one (o_i = delta_i without geometry), I sampled bilinearly and b a brightness offset.
+// Gauss-Newton with the template gradient mapped into the current image, g_i = A^-T grad T_i
+// (A = dH/dp at p_ref), centred to eliminate b:
+//   [sum g g^T] dc = sum g_i (e_i - mean e),     e_i = T_i - I(c + o_i).
+// As in the stereo refinement, the gradient only steers; the fixed point is exact.
+//
+// Plane homography: the landmark lies on a plane with the reference camera's optical axis as
+// normal, n = (0,0,1), at the landmark's depth z_ref. For p_cur = R p_ref + t (cur_T_ref) and
+// n^T p_ref = z_ref:  p_cur = (R + t n^T / z_ref) p_ref, so  H = K (R + t n^T / z_ref) K^-1.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "swf/core/status.hpp"
+#include "swf/estimator/geometry.hpp"
+#include "swf/frontend/config.hpp"
+#include "swf/frontend/image.hpp"
+
+namespace swf::frontend {
+
+struct TrackerOptions {
+  int patch_radius = 6;  // (2r+1)^2 template, r <= kMaxPatchRadius
+  int pyramid_levels = 3;
+  int max_iterations = 20;
+  float epsilon_px = 0.005f;
+  float min_zncc = 0.75f;                 // quality gate of a tracked feature
+  float max_prediction_error_px = 12.0f;  // warped tracking may not move further than this
+};
+
+// A reference patch with its (central-difference) gradients, taken where a landmark was first
+// seen.
+struct PatchTemplate {
+  int radius = 0;
+  float ref_x = 0.0f;  // centre in the reference image (pixels)
+  float ref_y = 0.0f;
+  float value[kMaxPatchPixels] = {};
+  float gx[kMaxPatchPixels] = {};
+  float gy[kMaxPatchPixels] = {};
+};
+
+// H mapping reference-frame pixels to current-frame pixels for the plane through the landmark
+// facing the reference camera (file comment). depth_ref_m is the landmark's z in the reference
+// camera; fx, fy, cx, cy of the rectified left camera.
+Eigen::Matrix3d PlaneHomography(const estimator::StereoCamera<double>& camera,
+                                const estimator::Pose<double>& cur_T_ref, double depth_ref_m);
+
+class PatchTracker {
+ public:
+  core::Status Configure(const TrackerOptions& options);
+  const TrackerOptions& Options() const { return options_; }
+
+  // Samples the template around (x, y). False when the patch leaves the image.
+  bool ExtractTemplate(const GrayView& image, float x, float y, PatchTemplate* tmpl) const;
+  // Same with the border replicated (never fails); for coarse pyramid levels.
+  void ExtractTemplateClamped(const GrayView& image, float x, float y, PatchTemplate* tmpl) const;
+
+  // Pyramidal LK without geometry (flow): the patch at p_prev in prev is searched in cur starting
+  // at *p_cur (in: initial guess, out: result). *quality = ZNCC. False when lost.
+  bool TrackFlow(const Pyramid& prev, const Pyramid& cur, float prev_x, float prev_y, float* cur_x,
+                 float* cur_y, float* quality) const;
+
+  // Warped LK at full resolution: aligns `tmpl` in `image` under homography starting from the
+  // prediction (*cur_x, *cur_y). False when lost or when the result moved further than
+  // max_prediction_error_px from the prediction.
+  bool TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
+                   const Eigen::Matrix3d& homography, float* cur_x, float* cur_y,
+                   float* quality) const;
+
+ private:
+  // Core Gauss-Newton alignment (file comment). offsets: 2 * count floats.
+  // grid_radius >= 0: offsets are the unwarped integer grid (fast sampling); clamped: replicate
+  // the border instead of failing when the patch leaves the image.
+  bool Align(const GrayView& image, const float* value, const float* gx, const float* gy,
+             const float* offsets, int count, int grid_radius, bool clamped, float* cx, float* cy,
+             float* quality) const;
+
+  TrackerOptions options_{};
+  bool configured_ = false;
+};
+
+}  // namespace swf::frontend

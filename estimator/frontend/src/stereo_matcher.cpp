@@ -1,0 +1,226 @@
+#include "swf/frontend/stereo_matcher.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+
+namespace swf::frontend {
+
+using core::Status;
+
+Status StereoMatcher::Configure(const StereoMatcherOptions& options) {
+  configured_ = false;
+  if (options.patch_radius < 1 || options.patch_radius > kMaxPatchRadius ||
+      options.min_disparity < 0 || options.max_disparity <= options.min_disparity ||
+      options.max_disparity > kMaxDisparity || options.lr_tolerance_px < 0 ||
+      options.lk_iterations < 0 || !(options.lk_epsilon_px > 0.0f) ||
+      !(options.max_lk_shift_px > 0.0f)) {
+    return Status::kInvalidArgument;
+  }
+  options_ = options;
+  configured_ = true;
+  return Status::kOk;
+}
+
+// Zero-mean SAD: each patch has its own mean removed, so a gain/offset difference between the
+// two cameras (independent auto-exposure, as in EuRoC) does not bias the search. Costs for every
+// disparity are accumulated together, innermost over the disparity, so the inner loop reads `to`
+// contiguously and vectorises. The `to` patch centre for index e is base_x + e.
+int StereoMatcher::SearchRow(const GrayView& from, const GrayView& to, int x, int y, int sign,
+                             int* best_cost, int* cost_before, int* cost_after) const {
+  const int r = options_.patch_radius;
+  if (y - r < 0 || y + r >= from.height || x - r < 0 || x + r >= from.width) return -1;
+  int d_min = options_.min_disparity;
+  int d_max = options_.max_disparity;
+  // Keep the searched patch inside `to`: column x - sign*d - r >= 0 and + r < width.
+  if (sign > 0) {
+    d_max = std::min(d_max, x - r);
+  } else {
+    d_max = std::min(d_max, to.width - 1 - r - x);
+  }
+  if (d_max < d_min) return -1;
+  const int n = d_max - d_min + 1;
+  const int base_x = sign > 0 ? x - d_max : x + d_min;
+  const int side = 2 * r + 1;
+  const int count = side * side;
+
+  // Patch means (rounded integers) of `to` for every candidate, from column sums.
+  std::int32_t column[kMaxDisparity + 2 * kMaxPatchRadius + 1];
+  const int first_col = base_x - r;
+  const int num_cols = n + 2 * r;
+  for (int c = 0; c < num_cols; ++c) column[c] = 0;
+  for (int j = -r; j <= r; ++j) {
+    const std::uint8_t* t = to.Row(y + j) + first_col;
+    for (int c = 0; c < num_cols; ++c) column[c] += t[c];
+  }
+  std::int32_t to_mean[kMaxDisparity + 1];
+  std::int32_t window = 0;
+  for (int c = 0; c < side; ++c) window += column[c];
+  for (int e = 0; e < n; ++e) {
+    if (e > 0) window += column[e + side - 1] - column[e - 1];
+    to_mean[e] = (window + count / 2) / count;
+  }
+  std::int32_t from_sum = 0;
+  for (int j = -r; j <= r; ++j) {
+    const std::uint8_t* f = from.Row(y + j);
+    for (int i = -r; i <= r; ++i) from_sum += f[x + i];
+  }
+  const std::int32_t from_mean = (from_sum + count / 2) / count;
+
+  std::int32_t cost[kMaxDisparity + 1];
+  std::fill(cost, cost + n, 0);
+  for (int j = -r; j <= r; ++j) {
+    const std::uint8_t* f = from.Row(y + j);
+    const std::uint8_t* t = to.Row(y + j);
+    for (int i = -r; i <= r; ++i) {
+      const std::int32_t fv = static_cast<std::int32_t>(f[x + i]) - from_mean;
+      const std::uint8_t* base = t + (base_x + i);
+      for (int e = 0; e < n; ++e) {
+        cost[e] += std::abs(fv - (static_cast<std::int32_t>(base[e]) - to_mean[e]));
+      }
+    }
+  }
+  // Index e -> disparity: sign > 0: d = d_max - e; sign < 0: d = d_min + e.
+  int best_e = 0;
+  for (int e = 1; e < n; ++e) {
+    if (cost[e] < cost[best_e]) best_e = e;
+  }
+  const int d = sign > 0 ? d_max - best_e : d_min + best_e;
+  *best_cost = cost[best_e];
+  const int e_lower_d = sign > 0 ? best_e + 1 : best_e - 1;  // disparity d - 1
+  const int e_upper_d = sign > 0 ? best_e - 1 : best_e + 1;  // disparity d + 1
+  *cost_before = (e_lower_d >= 0 && e_lower_d < n) ? cost[e_lower_d] : -1;
+  *cost_after = (e_upper_d >= 0 && e_upper_d < n) ? cost[e_upper_d] : -1;
+  return d;
+}
+
+bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right, float x, float y,
+                                    float* disparity, float* quality) const {
+  const int r = options_.patch_radius;
+  const float margin = static_cast<float>(r) + 1.0f;
+  if (!InsideForSampling(left, x, y, margin)) return false;
+  const int side = 2 * r + 1;
+  const int count = side * side;
+  float tmpl[kMaxPatchPixels];
+  float grad[kMaxPatchPixels];
+  float tmpl_mean = 0.0f;
+  float grad_mean = 0.0f;
+  {
+    // One grid a pixel larger than the patch: values and row-wise central differences.
+    constexpr int kExt = 2 * kMaxPatchRadius + 3;
+    float grid[kExt * kExt];
+    const int ext = side + 2;
+    SampleGrid(left, x, y, r + 1, grid);
+    for (int j = 0, k = 0; j < side; ++j) {
+      const float* g = grid + (j + 1) * ext + 1;
+      for (int i = 0; i < side; ++i, ++k) {
+        tmpl[k] = g[i];
+        grad[k] = 0.5f * (g[i + 1] - g[i - 1]);
+        tmpl_mean += tmpl[k];
+        grad_mean += grad[k];
+      }
+    }
+  }
+  tmpl_mean /= static_cast<float>(count);
+  grad_mean /= static_cast<float>(count);
+  float hessian = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    grad[k] -= grad_mean;
+    hessian += grad[k] * grad[k];
+  }
+  if (!(hessian > 1e-3f)) return false;  // textureless along the row
+
+  const float d0 = *disparity;
+  float d = d0;
+  float samples[kMaxPatchPixels];
+  float mean = 0.0f;
+  for (int it = 0; it <= options_.lk_iterations; ++it) {
+    const float xr = x - d;
+    if (!InsideForSampling(right, xr, y, margin)) return false;
+    SampleGrid(right, xr, y, r, samples);
+    mean = 0.0f;
+    for (int k = 0; k < count; ++k) mean += samples[k];
+    mean /= static_cast<float>(count);
+    if (it == options_.lk_iterations) break;  // last pass only refreshes samples for the score
+    float b = 0.0f;
+    for (int k = 0; k < count; ++k) b += grad[k] * ((samples[k] - mean) - (tmpl[k] - tmpl_mean));
+    // R(x - d - dd) ~ R(x - d) - g dd  =>  residual falls when dd = sum(g e) / sum(g^2).
+    const float step = b / hessian;
+    d += step;
+    if (std::fabs(d - d0) > options_.max_lk_shift_px) return false;
+    if (std::fabs(step) < options_.lk_epsilon_px) {
+      // Refresh the samples once more at the final disparity for the quality score.
+      const float xf = x - d;
+      if (!InsideForSampling(right, xf, y, margin)) return false;
+      SampleGrid(right, xf, y, r, samples);
+      mean = 0.0f;
+      for (int k = 0; k < count; ++k) mean += samples[k];
+      mean /= static_cast<float>(count);
+      break;
+    }
+  }
+  float num = 0.0f;
+  float den_t = 0.0f;
+  float den_s = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    const float a = tmpl[k] - tmpl_mean;
+    const float s = samples[k] - mean;
+    num += a * s;
+    den_t += a * a;
+    den_s += s * s;
+  }
+  const float den = std::sqrt(den_t * den_s);
+  *quality = den > 0.0f ? num / den : 0.0f;
+  *disparity = d;
+  return std::isfinite(d);
+}
+
+bool StereoMatcher::Match(const GrayView& left, const GrayView& right, int x, int y,
+                          StereoMatch* match) const {
+  if (!configured_) return false;
+  int cost = 0;
+  int before = 0;
+  int after = 0;
+  const int d = SearchRow(left, right, x, y, +1, &cost, &before, &after);
+  if (d < 0) return false;
+  // Left-right check: the right patch's best match back in the left image must land on x.
+  int cost_rl = 0;
+  int b2 = 0;
+  int a2 = 0;
+  const int d_rl = SearchRow(right, left, x - d, y, -1, &cost_rl, &b2, &a2);
+  if (d_rl < 0 || std::abs(d_rl - d) > options_.lr_tolerance_px) return false;
+  // Parabola through the SAD minimum as the LK starting point.
+  float disparity = static_cast<float>(d);
+  if (before >= 0 && after >= 0) {
+    const float denom = static_cast<float>(before - 2 * cost + after);
+    if (denom > 0.0f) disparity += 0.5f * static_cast<float>(before - after) / denom;
+  }
+  float quality = 0.0f;
+  if (!RefineDisparity(left, right, static_cast<float>(x), static_cast<float>(y), &disparity,
+                       &quality)) {
+    return false;
+  }
+  if (quality < options_.min_zncc) return false;
+  if (disparity < static_cast<float>(options_.min_disparity) - 1.0f) return false;
+  *match = StereoMatch{static_cast<float>(x), static_cast<float>(y), disparity, quality};
+  return true;
+}
+
+Status StereoMatcher::MatchAll(const GrayView& left, const GrayView& right,
+                               const CornerList& corners, StereoMatchList* matches) const {
+  matches->clear();
+  if (!configured_) return Status::kNotConfigured;
+  if (!left.Valid() || !right.Valid() || left.width != right.width || left.height != right.height) {
+    return Status::kInvalidArgument;
+  }
+  for (const Corner& c : corners) {
+    StereoMatch m;
+    if (Match(left, right, static_cast<int>(c.x), static_cast<int>(c.y), &m)) {
+      if (matches->push_back(m) != Status::kOk) return Status::kFull;
+    }
+  }
+  return Status::kOk;
+}
+
+}  // namespace swf::frontend

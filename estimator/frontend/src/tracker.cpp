@@ -1,0 +1,285 @@
+#include "swf/frontend/tracker.hpp"
+
+#include <cmath>
+
+namespace swf::frontend {
+
+using core::Status;
+
+namespace {
+
+// Samples the (warped) patch at centre (x, y); false when it leaves the image (unless clamped).
+// grid_radius >= 0 says the offsets are the plain integer grid of that radius (no warp), which
+// takes the shared-weight fast path when the patch is inside the image.
+bool Sample(const GrayView& image, const float* offsets, int count, int grid_radius, bool clamped,
+            float margin, float x, float y, float* samples, float* mean) {
+  float sum = 0.0f;
+  if (grid_radius >= 0 && InsideForSampling(image, x, y, margin)) {
+    SampleGrid(image, x, y, grid_radius, samples);
+    for (int k = 0; k < count; ++k) sum += samples[k];
+  } else if (clamped) {
+    for (int k = 0; k < count; ++k) {
+      samples[k] = SampleBilinearClamped(image, x + offsets[2 * k], y + offsets[2 * k + 1]);
+      sum += samples[k];
+    }
+  } else {
+    if (!InsideForSampling(image, x, y, margin)) return false;
+    for (int k = 0; k < count; ++k) {
+      samples[k] = SampleBilinear(image, x + offsets[2 * k], y + offsets[2 * k + 1]);
+      sum += samples[k];
+    }
+  }
+  *mean = sum / static_cast<float>(count);
+  return true;
+}
+
+}  // namespace
+
+Eigen::Matrix3d PlaneHomography(const estimator::StereoCamera<double>& camera,
+                                const estimator::Pose<double>& cur_T_ref, double depth_ref_m) {
+  Eigen::Matrix3d k;
+  k << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0;
+  Eigen::Matrix3d k_inv;
+  k_inv << 1.0 / camera.fx, 0.0, -camera.cx / camera.fx, 0.0, 1.0 / camera.fy,
+      -camera.cy / camera.fy, 0.0, 0.0, 1.0;
+  const Eigen::Vector3d n(0.0, 0.0, 1.0);
+  const Eigen::Matrix3d euclidean = cur_T_ref.R + cur_T_ref.t * n.transpose() / depth_ref_m;
+  return k * euclidean * k_inv;
+}
+
+Status PatchTracker::Configure(const TrackerOptions& options) {
+  configured_ = false;
+  if (options.patch_radius < 1 || options.patch_radius > kMaxPatchRadius ||
+      options.pyramid_levels < 1 || options.pyramid_levels > kMaxPyramidLevels ||
+      options.max_iterations < 1 || !(options.epsilon_px > 0.0f) ||
+      !(options.max_prediction_error_px > 0.0f)) {
+    return Status::kInvalidArgument;
+  }
+  options_ = options;
+  configured_ = true;
+  return Status::kOk;
+}
+
+bool PatchTracker::ExtractTemplate(const GrayView& image, float x, float y,
+                                   PatchTemplate* tmpl) const {
+  const int r = options_.patch_radius;
+  if (!InsideForSampling(image, x, y, static_cast<float>(r) + 1.0f)) return false;
+  // One grid one pixel larger than the patch gives values and central differences.
+  constexpr int kExt = 2 * kMaxPatchRadius + 3;
+  float grid[kExt * kExt];
+  const int side = 2 * r + 1;
+  const int ext = side + 2;
+  SampleGrid(image, x, y, r + 1, grid);
+  tmpl->radius = r;
+  tmpl->ref_x = x;
+  tmpl->ref_y = y;
+  for (int j = 0, k = 0; j < side; ++j) {
+    const float* g = grid + (j + 1) * ext + 1;
+    for (int i = 0; i < side; ++i, ++k) {
+      tmpl->value[k] = g[i];
+      tmpl->gx[k] = 0.5f * (g[i + 1] - g[i - 1]);
+      tmpl->gy[k] = 0.5f * (g[i + ext] - g[i - ext]);
+    }
+  }
+  return true;
+}
+
+void PatchTracker::ExtractTemplateClamped(const GrayView& image, float x, float y,
+                                          PatchTemplate* tmpl) const {
+  const int r = options_.patch_radius;
+  tmpl->radius = r;
+  tmpl->ref_x = x;
+  tmpl->ref_y = y;
+  for (int j = -r, k = 0; j <= r; ++j) {
+    for (int i = -r; i <= r; ++i, ++k) {
+      const float px = x + static_cast<float>(i);
+      const float py = y + static_cast<float>(j);
+      tmpl->value[k] = SampleBilinearClamped(image, px, py);
+      tmpl->gx[k] = 0.5f * (SampleBilinearClamped(image, px + 1.0f, py) -
+                            SampleBilinearClamped(image, px - 1.0f, py));
+      tmpl->gy[k] = 0.5f * (SampleBilinearClamped(image, px, py + 1.0f) -
+                            SampleBilinearClamped(image, px, py - 1.0f));
+    }
+  }
+}
+
+bool PatchTracker::Align(const GrayView& image, const float* value, const float* gx,
+                         const float* gy, const float* offsets, int count, int grid_radius,
+                         bool clamped, float* cx, float* cy, float* quality) const {
+  float mean_gx = 0.0f;
+  float mean_gy = 0.0f;
+  float mean_t = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    mean_gx += gx[k];
+    mean_gy += gy[k];
+    mean_t += value[k];
+  }
+  const float inv_n = 1.0f / static_cast<float>(count);
+  mean_gx *= inv_n;
+  mean_gy *= inv_n;
+  mean_t *= inv_n;
+  float cgx[kMaxPatchPixels];
+  float cgy[kMaxPatchPixels];
+  float hxx = 0.0f;
+  float hxy = 0.0f;
+  float hyy = 0.0f;
+  float max_offset = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    cgx[k] = gx[k] - mean_gx;
+    cgy[k] = gy[k] - mean_gy;
+    hxx += cgx[k] * cgx[k];
+    hxy += cgx[k] * cgy[k];
+    hyy += cgy[k] * cgy[k];
+    max_offset =
+        std::fmax(max_offset, std::fmax(std::fabs(offsets[2 * k]), std::fabs(offsets[2 * k + 1])));
+  }
+  const float det = hxx * hyy - hxy * hxy;
+  // Reject an ill-conditioned (edge-like or flat) patch: smallest eigenvalue too small.
+  const float trace = hxx + hyy;
+  const float min_eig = 0.5f * (trace - std::sqrt(std::fmax(0.0f, trace * trace - 4.0f * det)));
+  if (!(min_eig > 1e-2f * static_cast<float>(count))) return false;
+
+  const float margin = max_offset + 1.0f;
+  float samples[kMaxPatchPixels];
+  float x = *cx;
+  float y = *cy;
+  float mean_s = 0.0f;
+  bool sampled_at_xy = false;
+  for (int it = 0; it < options_.max_iterations; ++it) {
+    if (!Sample(image, offsets, count, grid_radius, clamped, margin, x, y, samples, &mean_s))
+      return false;
+    sampled_at_xy = true;
+    float bx = 0.0f;
+    float by = 0.0f;
+    for (int k = 0; k < count; ++k) {
+      const float e = (value[k] - mean_t) - (samples[k] - mean_s);
+      bx += cgx[k] * e;
+      by += cgy[k] * e;
+    }
+    const float dx = (hyy * bx - hxy * by) / det;
+    const float dy = (hxx * by - hxy * bx) / det;
+    x += dx;
+    y += dy;
+    sampled_at_xy = false;
+    if (!(std::isfinite(x) && std::isfinite(y))) return false;
+    if (dx * dx + dy * dy < options_.epsilon_px * options_.epsilon_px) break;
+  }
+  if (!sampled_at_xy) {
+    if (!Sample(image, offsets, count, grid_radius, clamped, margin, x, y, samples, &mean_s))
+      return false;
+  }
+  float num = 0.0f;
+  float den_t = 0.0f;
+  float den_s = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    const float a = value[k] - mean_t;
+    const float s = samples[k] - mean_s;
+    num += a * s;
+    den_t += a * a;
+    den_s += s * s;
+  }
+  const float den = std::sqrt(den_t * den_s);
+  *quality = den > 0.0f ? num / den : 0.0f;
+  *cx = x;
+  *cy = y;
+  return true;
+}
+
+bool PatchTracker::TrackFlow(const Pyramid& prev, const Pyramid& cur, float prev_x, float prev_y,
+                             float* cur_x, float* cur_y, float* quality) const {
+  if (!configured_) return false;
+  const int levels = std::min(std::min(prev.NumLevels(), cur.NumLevels()), options_.pyramid_levels);
+  const int r = options_.patch_radius;
+  const int count = (2 * r + 1) * (2 * r + 1);
+  float offsets[2 * kMaxPatchPixels];
+  for (int j = -r, k = 0; j <= r; ++j) {
+    for (int i = -r; i <= r; ++i, ++k) {
+      offsets[2 * k] = static_cast<float>(i);
+      offsets[2 * k + 1] = static_cast<float>(j);
+    }
+  }
+  // Work in displacement: the guess is propagated from coarse to fine.
+  float dx = *cur_x - prev_x;
+  float dy = *cur_y - prev_y;
+  float q = 0.0f;
+  PatchTemplate tmpl;
+  for (int l = levels - 1; l >= 0; --l) {
+    const float scale = 1.0f / static_cast<float>(1 << l);
+    const float px = prev_x * scale;
+    const float py = prev_y * scale;
+    // Coarse levels replicate the border so patches near it still get a coarse estimate; the
+    // finest level is strict (a feature leaving the image is lost).
+    const bool clamped = l > 0;
+    if (clamped) {
+      if (!ExtractTemplate(prev.Level(l), px, py, &tmpl)) {
+        ExtractTemplateClamped(prev.Level(l), px, py, &tmpl);
+      }
+    } else if (!ExtractTemplate(prev.Level(l), px, py, &tmpl)) {
+      return false;
+    }
+    float x = px + dx * scale;
+    float y = py + dy * scale;
+    if (!Align(cur.Level(l), tmpl.value, tmpl.gx, tmpl.gy, offsets, count, r, clamped, &x, &y,
+               &q)) {
+      if (l == 0) return false;
+      continue;
+    }
+    dx = (x - px) / scale;
+    dy = (y - py) / scale;
+  }
+  *cur_x = prev_x + dx;
+  *cur_y = prev_y + dy;
+  *quality = q;
+  return q >= options_.min_zncc;
+}
+
+bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
+                               const Eigen::Matrix3d& homography, float* cur_x, float* cur_y,
+                               float* quality) const {
+  if (!configured_ || tmpl.radius < 1 || tmpl.radius > kMaxPatchRadius) return false;
+  const int r = tmpl.radius;
+  const int count = (2 * r + 1) * (2 * r + 1);
+  const Eigen::Vector3d c = homography * Eigen::Vector3d(tmpl.ref_x, tmpl.ref_y, 1.0);
+  if (!(c.z() > 1e-9)) return false;
+  const double ux = c.x() / c.z();
+  const double uy = c.y() / c.z();
+  // A = d(H p)/dp at p_ref (quotient rule), used to map template gradients: g = A^-T grad T.
+  Eigen::Matrix2d a;
+  a(0, 0) = (homography(0, 0) - ux * homography(2, 0)) / c.z();
+  a(0, 1) = (homography(0, 1) - ux * homography(2, 1)) / c.z();
+  a(1, 0) = (homography(1, 0) - uy * homography(2, 0)) / c.z();
+  a(1, 1) = (homography(1, 1) - uy * homography(2, 1)) / c.z();
+  const double det = a.determinant();
+  if (!(std::fabs(det) > 1e-6)) return false;
+  const Eigen::Matrix2d a_inv_t = a.inverse().transpose();
+  float offsets[2 * kMaxPatchPixels];
+  float gx[kMaxPatchPixels];
+  float gy[kMaxPatchPixels];
+  for (int j = -r, k = 0; j <= r; ++j) {
+    for (int i = -r; i <= r; ++i, ++k) {
+      const Eigen::Vector3d p = homography * Eigen::Vector3d(tmpl.ref_x + i, tmpl.ref_y + j, 1.0);
+      offsets[2 * k] = static_cast<float>(p.x() / p.z() - ux);
+      offsets[2 * k + 1] = static_cast<float>(p.y() / p.z() - uy);
+      const Eigen::Vector2d g = a_inv_t * Eigen::Vector2d(tmpl.gx[k], tmpl.gy[k]);
+      gx[k] = static_cast<float>(g.x());
+      gy[k] = static_cast<float>(g.y());
+    }
+  }
+  const float x0 = *cur_x;
+  const float y0 = *cur_y;
+  float x = x0;
+  float y = y0;
+  float q = 0.0f;
+  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, &x, &y, &q)) return false;
+  const float ex = x - x0;
+  const float ey = y - y0;
+  if (ex * ex + ey * ey > options_.max_prediction_error_px * options_.max_prediction_error_px) {
+    return false;
+  }
+  *cur_x = x;
+  *cur_y = y;
+  *quality = q;
+  return q >= options_.min_zncc;
+}
+
+}  // namespace swf::frontend

@@ -1,0 +1,116 @@
+#include "swf/frontend/rectify.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "swf/testing/allocation_counter.hpp"
+#include "synthetic.hpp"
+
+namespace swf::frontend {
+namespace {
+
+using estimator::Pose;
+using estimator::Vec3;
+
+// The EuRoC V1_01 rig (sensor.yaml of cam0 / cam1), typed in so this test needs no files.
+CameraCalibration EurocCam(int index) {
+  CameraCalibration c;
+  c.width = 752;
+  c.height = 480;
+  Eigen::Matrix4d m;
+  if (index == 0) {
+    c.fx = 458.654, c.fy = 457.296, c.cx = 367.215, c.cy = 248.375;
+    c.k1 = -0.28340811, c.k2 = 0.07395907, c.p1 = 0.00019359, c.p2 = 1.76187114e-05;
+    m << 0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975, 0.999557249008,
+        0.0149672133247, 0.025715529948, -0.064676986768, -0.0257744366974, 0.00375618835797,
+        0.999660727178, 0.00981073058949, 0, 0, 0, 1;
+  } else {
+    c.fx = 457.587, c.fy = 456.134, c.cx = 379.999, c.cy = 255.238;
+    c.k1 = -0.28368365, c.k2 = 0.07451284, c.p1 = -0.00010473, c.p2 = -3.55590700e-05;
+    m << 0.0125552670891, -0.999755099723, 0.0182237714554, -0.0198435579556, 0.999598781151,
+        0.0130119051815, 0.0251588363115, 0.0453689425024, -0.0253898008918, 0.0179005838253,
+        0.999517347078, 0.00786212447038, 0, 0, 0, 1;
+  }
+  c.body_T_camera = Pose<double>::FromMatrix(m);
+  return c;
+}
+
+// Independent forward model: body point -> distorted raw pixel.
+Eigen::Vector2d ProjectRaw(const CameraCalibration& c, const Vec3<double>& p_body) {
+  const Vec3<double> p = c.body_T_camera.ApplyInverse(p_body);
+  const double x = p.x() / p.z();
+  const double y = p.y() / p.z();
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + c.k1 * r2 + c.k2 * r2 * r2 + c.k3 * r2 * r2 * r2;
+  const double xd = x * radial + 2.0 * c.p1 * x * y + c.p2 * (r2 + 2.0 * x * x);
+  const double yd = y * radial + c.p1 * (r2 + 2.0 * y * y) + 2.0 * c.p2 * x * y;
+  return Eigen::Vector2d(c.fx * xd + c.cx, c.fy * yd + c.cy);
+}
+
+// GIVEN the real EuRoC calibration WHEN a scene point is projected by the rectified stereo
+// camera THEN the remap's source pixels are exactly where the raw cameras see that point: the
+// rectified rows are epipolar lines and the baseline is +x.
+TEST(StereoRectifierTest, RectifiedProjectionMatchesRawCameras) {
+  auto rectifier = std::make_unique<StereoRectifier>();
+  const CameraCalibration left = EurocCam(0);
+  const CameraCalibration right = EurocCam(1);
+  ASSERT_EQ(rectifier->Configure(left, right, RectifyOptions{}), core::Status::kOk);
+  const auto& cam = rectifier->Camera();
+  EXPECT_NEAR(cam.baseline_m, 0.110, 0.001);  // EuRoC's stereo baseline is about 11 cm
+  for (double x : {-1.0, 0.0, 0.7}) {
+    for (double y : {-0.5, 0.0, 0.4}) {
+      for (double z : {2.0, 6.0}) {
+        const Vec3<double> p_rect(x, y, z);
+        const Vec3<double> p_body = rectifier->RectifiedInBody().Apply(p_rect);
+        const Vec3<double> meas = cam.Project(p_rect);
+        double u = 0.0;
+        double v = 0.0;
+        ASSERT_TRUE(rectifier->RawPixel(0, meas.x(), meas.z(), &u, &v));
+        const Eigen::Vector2d raw_left = ProjectRaw(left, p_body);
+        EXPECT_NEAR(u, raw_left.x(), 1e-6);
+        EXPECT_NEAR(v, raw_left.y(), 1e-6);
+        ASSERT_TRUE(rectifier->RawPixel(1, meas.y(), meas.z(), &u, &v));
+        const Eigen::Vector2d raw_right = ProjectRaw(right, p_body);
+        EXPECT_NEAR(u, raw_right.x(), 1e-6);
+        EXPECT_NEAR(v, raw_right.y(), 1e-6);
+      }
+    }
+  }
+}
+
+// GIVEN an ideal rig (no distortion, parallel cameras) THEN rectification is the identity.
+TEST(StereoRectifierTest, IdealRigIsIdentityAndAllocationFree) {
+  CameraCalibration left;
+  left.width = 160;
+  left.height = 120;
+  left.fx = left.fy = 200.0;
+  left.cx = 80.0;
+  left.cy = 60.0;
+  CameraCalibration right = left;
+  right.body_T_camera.t = Vec3<double>(0.2, 0.0, 0.0);
+  auto rectifier = std::make_unique<StereoRectifier>();
+  ASSERT_EQ(rectifier->Configure(left, right, RectifyOptions{}), core::Status::kOk);
+  const testing::Texture texture(4);
+  const testing::TestImage raw = texture.RenderShifted<testing::TestImage>(160, 120, 0.0, 0.0);
+  testing::TestImage out_left(160, 120);
+  testing::TestImage out_right(160, 120);
+  {
+    swf::testing::AllocationScope scope;
+    ASSERT_EQ(
+        rectifier->Rectify(raw.View(), raw.View(), out_left.MutableView(), out_right.MutableView()),
+        core::Status::kOk);
+    EXPECT_EQ(scope.Count(), 0u);
+  }
+  EXPECT_EQ(out_left.pixels, raw.pixels);
+  EXPECT_EQ(out_right.pixels, raw.pixels);
+  testing::TestImage wrong(100, 100);
+  EXPECT_EQ(
+      rectifier->Rectify(raw.View(), raw.View(), wrong.MutableView(), out_right.MutableView()),
+      core::Status::kInvalidArgument);
+  right.body_T_camera.t.setZero();
+  EXPECT_EQ(rectifier->Configure(left, right, RectifyOptions{}), core::Status::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace swf::frontend

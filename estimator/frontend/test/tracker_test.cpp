@@ -1,0 +1,157 @@
+#include "swf/frontend/tracker.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "swf/frontend/harris.hpp"
+#include "swf/testing/allocation_counter.hpp"
+#include "synthetic.hpp"
+
+namespace swf::frontend {
+namespace {
+
+using testing::Median;
+using testing::Render;
+using testing::TestImage;
+
+CornerList Detect(const TestImage& img) {
+  auto detector = std::make_unique<HarrisDetector>();
+  EXPECT_EQ(detector->Configure(HarrisOptions{}), core::Status::kOk);
+  CornerList corners;
+  EXPECT_EQ(detector->Detect(img.View(), nullptr, 0, &corners), core::Status::kOk);
+  return corners;
+}
+
+struct FlowCase {
+  double dx;
+  double dy;
+};
+
+class FlowSubpixelTest : public ::testing::TestWithParam<FlowCase> {};
+
+// GIVEN a texture moved by an exactly known subpixel shift WHEN tracking with pyramidal LK
+// THEN the median endpoint error is <= 0.1 px.
+TEST_P(FlowSubpixelTest, MedianEndpointErrorBelowTenthPixel) {
+  const FlowCase shift = GetParam();
+  const testing::Texture texture(21);
+  const TestImage a = texture.RenderShifted<TestImage>(400, 300, 0.0, 0.0);
+  const TestImage b = texture.RenderShifted<TestImage>(400, 300, shift.dx, shift.dy);
+  auto prev = std::make_unique<Pyramid>();
+  auto cur = std::make_unique<Pyramid>();
+  ASSERT_EQ(prev->Build(a.View(), 3), core::Status::kOk);
+  ASSERT_EQ(cur->Build(b.View(), 3), core::Status::kOk);
+  PatchTracker tracker;
+  ASSERT_EQ(tracker.Configure(TrackerOptions{}), core::Status::kOk);
+  const CornerList corners = Detect(a);
+  ASSERT_GE(corners.size(), 100u);
+  std::vector<double> errors;
+  errors.reserve(corners.size());
+  std::size_t tracked = 0;
+  std::size_t trackable = 0;  // destination at least one patch inside the image
+  {
+    swf::testing::AllocationScope scope;
+    for (const Corner& c : corners) {
+      const double tx = c.x + shift.dx;
+      const double ty = c.y + shift.dy;
+      if (tx < 8 || ty < 8 || tx > 392 || ty > 292) continue;
+      ++trackable;
+      float x = c.x;
+      float y = c.y;
+      float q = 0.0f;
+      if (!tracker.TrackFlow(*prev, *cur, c.x, c.y, &x, &y, &q)) continue;
+      ++tracked;
+      errors.push_back(std::hypot(x - c.x - shift.dx, y - c.y - shift.dy));
+    }
+    EXPECT_EQ(scope.Count(), 0u);
+  }
+  EXPECT_GE(tracked, trackable * 95 / 100);
+  EXPECT_LE(Median(errors), 0.1);
+}
+
+INSTANTIATE_TEST_SUITE_P(Shifts, FlowSubpixelTest,
+                         ::testing::Values(FlowCase{0.37, -0.21}, FlowCase{2.6, 1.3},
+                                           FlowCase{-6.45, 4.2}, FlowCase{11.3, -8.8}));
+
+TEST(PlaneHomographyTest, MapsPlanePointsLikeTheCameras) {
+  estimator::StereoCamera<double> cam;
+  cam.fx = 450.0;
+  cam.fy = 452.0;
+  cam.cx = 320.0;
+  cam.cy = 241.0;
+  cam.baseline_m = 0.1;
+  estimator::Pose<double> cur_T_ref;
+  cur_T_ref.R = estimator::ExpSO3<double>(estimator::Vec3<double>(0.05, -0.1, 0.2));
+  cur_T_ref.t = estimator::Vec3<double>(0.3, -0.2, -1.0);
+  const double depth = 7.5;
+  const Eigen::Matrix3d h = PlaneHomography(cam, cur_T_ref, depth);
+  for (double x : {-2.0, 0.0, 1.5}) {
+    for (double y : {-1.0, 0.5, 2.0}) {
+      const estimator::Vec3<double> p_ref(x, y, depth);
+      const estimator::Vec3<double> z_ref = cam.Project(p_ref);
+      const estimator::Vec3<double> z_cur = cam.Project(cur_T_ref.Apply(p_ref));
+      const Eigen::Vector3d m = h * Eigen::Vector3d(z_ref.x(), z_ref.z(), 1.0);
+      EXPECT_NEAR(m.x() / m.z(), z_cur.x(), 1e-9);
+      EXPECT_NEAR(m.y() / m.z(), z_cur.z(), 1e-9);
+    }
+  }
+}
+
+// GIVEN a view rotated by 15 deg and scaled by 1.2 (paper 4.1.2: descent imagery) WHEN tracking
+// the reference patches warped by the true homography THEN the error is subpixel-accurate, and
+// better than square-patch tracking of the same features.
+TEST(PatchTrackerTest, WarpedTrackingBeatsSquarePatches) {
+  const testing::Texture texture(33);
+  const TestImage a = texture.RenderShifted<TestImage>(400, 300, 0.0, 0.0);
+  Eigen::Matrix3d h;  // ref -> cur: rotation + scale about (200, 150), slight perspective
+  const double c = 1.2 * std::cos(0.26);
+  const double s = 1.2 * std::sin(0.26);
+  h << c, -s, 200.0 - c * 200.0 + s * 150.0 + 3.3, s, c, 150.0 - s * 200.0 - c * 150.0 - 2.1, 1e-5,
+      -2e-5, 1.0;
+  const Eigen::Matrix3d h_inv = h.inverse();
+  const TestImage b = Render(400, 300, [&](double x, double y) {
+    const Eigen::Vector3d p = h_inv * Eigen::Vector3d(x, y, 1.0);
+    return texture(p.x() / p.z(), p.y() / p.z());
+  });
+  PatchTracker tracker;
+  ASSERT_EQ(tracker.Configure(TrackerOptions{}), core::Status::kOk);
+  const CornerList corners = Detect(a);
+  std::vector<double> warped_errors;
+  std::vector<double> square_errors;
+  std::size_t candidates = 0;
+  for (const Corner& corner : corners) {
+    const Eigen::Vector3d t = h * Eigen::Vector3d(corner.x, corner.y, 1.0);
+    const double tx = t.x() / t.z();
+    const double ty = t.y() / t.z();
+    if (tx < 20 || ty < 20 || tx > 380 || ty > 280) continue;
+    ++candidates;
+    PatchTemplate tmpl;
+    ASSERT_TRUE(tracker.ExtractTemplate(a.View(), corner.x, corner.y, &tmpl));
+    // Prediction off by (0.8, -0.6) px, as from a noisy pose.
+    float x = static_cast<float>(tx + 0.8);
+    float y = static_cast<float>(ty - 0.6);
+    float q = 0.0f;
+    if (tracker.TrackWarped(b.View(), tmpl, h, &x, &y, &q)) {
+      warped_errors.push_back(std::hypot(x - tx, y - ty));
+    }
+    // Square patch: the same template with a pure translation as the warp.
+    Eigen::Matrix3d translation = Eigen::Matrix3d::Identity();
+    translation(0, 2) = tx - corner.x;
+    translation(1, 2) = ty - corner.y;
+    x = static_cast<float>(tx + 0.8);
+    y = static_cast<float>(ty - 0.6);
+    if (tracker.TrackWarped(b.View(), tmpl, translation, &x, &y, &q)) {
+      square_errors.push_back(std::hypot(x - tx, y - ty));
+    }
+  }
+  ASSERT_GE(candidates, 50u);
+  EXPECT_GE(warped_errors.size(), candidates * 9 / 10);
+  EXPECT_LE(Median(warped_errors), 0.1);
+  std::printf("warped: %zu tracked, median %.3f px; square: %zu tracked, median %.3f px\n",
+              warped_errors.size(), Median(warped_errors), square_errors.size(),
+              Median(square_errors));
+  EXPECT_GT(Median(square_errors), 3.0 * Median(warped_errors));
+}
+
+}  // namespace
+}  // namespace swf::frontend

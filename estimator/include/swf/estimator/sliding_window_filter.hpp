@@ -1,0 +1,1171 @@
+// SlidingWindowFilter: the estimator of Sibley, Matthies and Sukhatme, "Sliding Window Filter
+// with Application to Planetary Landing" (JFR 2010), sections 2-3, as a fixed-size flight
+// library. Equation numbers below refer to that paper.
+//
+// ----------------------------------------------------------------------------------------------
+// The problem (eqs. 1-6). State x = [landmarks x_m ; window poses x_p]. Three information
+// sources make the Gauss-Newton system  Lambda dx = g  (eq. 7):
+//     Lambda = L^T Pi L  +  D^T Q^-1 D  +  H^T R^-1 H                                     (eq. 6)
+//   measurements  z_ij = h(x_mi, x_pj) + v,  v ~ N(0, R_ij)   (Model::Predict)
+//   process       x_pj+1 = f(x_pj, u_j+1) + w, w ~ N(0, Q)    (Model::ProcessResidual)
+//   prior         everything marginalized so far, a quadratic in Delta = x (-) x_bar about its
+//                 own linearization point x_bar:  0.5 Delta^T Pi Delta - g_Pi^T Delta
+//
+// Structure used by the solver (Figs. 4-8): the prior always spans {oldest window pose} and a
+// set of "prior landmarks" Lp; every other ("free") landmark couples only to the poses that
+// observe it, so its 3x3 block is eliminated first (Schur complement of the map onto the path):
+//     S = Lambda_DD - sum_i Lambda_Di Lambda_ii^-1 Lambda_iD,   s = g_D - sum_i Lambda_Di
+//     Lambda_ii^-1 g_i
+// where D = [window poses ; prior landmarks]. S is dense (the pose block is block-tridiagonal
+// plus fill-in from free landmarks and the prior) and is solved by DenseCholesky. Free landmark
+// updates follow by back-substitution: dx_i = Lambda_ii^-1 (g_i - Lambda_iD dx_D).
+//
+// Robust Gauss-Newton (section 3.1.3): measurements are whitened (r = W (z - h), W^T W = R^-1)
+// and weighted by Huber's kernel, w = min(1, tau / |r|), with tau = huber_k * sigma_hat, where
+// sigma_hat is the inlier standard deviation estimated each iteration from the median whitened
+// residual norm (never below the nominal 1). Iterations are bounded (max_iterations), a step
+// that raises the cost is halved at most max_backtracking times, and the loop stops when the
+// relative cost decrease or the largest step component falls below its tolerance.
+//
+// Marginalization (eqs. 8-10) happens in Update() before solving:
+//   * when the window holds more than K poses, the oldest pose p1 is removed. All factors that
+//     touch it (its measurements, the process factor to p2, the prior) are linearized at the
+//     current estimate into a local system over [p1 ; p2 ; Lp u landmarks seen from p1], and
+//         Pi_new = Lambda_bb - Lambda_ba Lambda_aa^-1 Lambda_ab,   g_new = g_b - Lambda_ba
+//         Lambda_aa^-1 g_a
+//     becomes the new prior over [p2 ; Lp'] with x_bar = the current estimate. This is exactly
+//     the fill-in of Figs. 6-8: among landmarks seen from p1, between p2 and those landmarks.
+//   * every landmark with no measurement left in the window is removed the same way; if it is
+//     in the prior this only touches Pi (Fig. 7c), otherwise it carries no information.
+// Modes on the same code:
+// The window holds options.window_size poses (at most the capacity K).
+//   kSlidingWindow   the above (K = 1 is the EKF: marginalizing p1 through the process factor
+//                    is the prediction, the solve is the (iterated) update)
+//   kBatch           never marginalize; the window must hold the whole sequence (full SLAM/BA)
+//   kVisualOdometry  delete the oldest pose and its measurements instead of marginalizing, and
+//                    hold the new oldest pose fixed (conditioning; section 4.2.4)
+//   kVsdf            marginalize with only the block diagonal of the Schur term (eq. 12)
+//
+// Memory: K (window), N (active landmarks), M (measurements per pose) and P (landmarks the prior
+// can hold) are template parameters; every buffer is a member, so the object is large: create it
+// once at start-up (e.g. std::make_unique), never on the stack. No call allocates afterwards.
+// Determinism: single-threaded, fixed iteration order, no clocks; same input -> same bits.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "swf/core/assert.hpp"
+#include "swf/core/static_vector.hpp"
+#include "swf/core/status.hpp"
+#include "swf/estimator/dense_cholesky.hpp"
+#include "swf/estimator/geometry.hpp"
+
+namespace swf::estimator {
+
+enum class SwfMode : std::uint8_t { kSlidingWindow, kBatch, kVisualOdometry, kVsdf };
+
+// Sticky numerical-health bits (values shared with health_t.FAULT_*).
+enum SwfFault : std::uint32_t {
+  kFaultNotPositiveDefinite = 1u << 0,  // a solve or marginalization found a non-SPD system
+  kFaultNonFinite = 1u << 1,            // a residual or update was NaN/Inf; the step was refused
+  kFaultNotConverged = 1u << 2,         // Gauss-Newton hit max_iterations
+  kFaultLandmarkCapacity = 1u << 3,     // a new landmark was refused: N active landmarks
+  kFaultMeasurementCapacity = 1u << 4,  // a measurement was refused: M per pose
+  kFaultPriorCapacity = 1u << 7,        // a landmark could not enter the prior (P); its
+                                        // measurement from the marginalized pose was dropped
+  kFaultDegenerateLandmark = 1u << 8,   // a landmark's 3x3 block was singular; held fixed
+  kFaultReset = 1u << 9,                // the state became non-finite; the filter was reset
+};
+
+struct SwfOptions {
+  SwfMode mode = SwfMode::kSlidingWindow;
+  int window_size = 0;                    // poses kept in the window; 0 = the capacity K
+  int max_iterations = 10;                // Gauss-Newton iterations per Update (>= 1)
+  int max_backtracking = 4;               // step halvings when a step raises the cost
+  double relative_cost_tolerance = 1e-4;  // stop when (cost_before - cost_after) <= tol * cost
+  double step_tolerance = 1e-10;          // stop when the largest update component is below
+  bool robust = true;                     // Huber weighting of measurements
+  double huber_k = 3.5;                   // threshold in inlier standard deviations
+  bool fix_first_pose = false;            // hold the first pose fixed (gauge), else use:
+  double first_pose_sigma_m = 1e-3;       // prior on the first pose: position (metres)
+  double first_pose_sigma_rad = 1e-4;     // and rotation (radians), or the linear analogue
+
+  core::Status Validate() const {
+    if (max_iterations < 1 || max_iterations > 100) return core::Status::kInvalidArgument;
+    if (max_backtracking < 0 || max_backtracking > 20) return core::Status::kInvalidArgument;
+    if (!(relative_cost_tolerance >= 0.0) || !(step_tolerance >= 0.0))
+      return core::Status::kInvalidArgument;
+    if (!(huber_k > 0.0)) return core::Status::kInvalidArgument;
+    if (!fix_first_pose && !(first_pose_sigma_m > 0.0 && first_pose_sigma_rad > 0.0))
+      return core::Status::kInvalidArgument;
+    return core::Status::kOk;
+  }
+};
+
+struct SwfSummary {
+  core::Status status = core::Status::kOk;
+  int iterations = 0;
+  bool converged = false;
+  double initial_cost = 0.0;  // robust cost at the start of the last solve
+  double final_cost = 0.0;    // robust cost at its end
+  int num_measurements = 0;   // measurements in the window
+  int num_downweighted = 0;   // measurements with Huber weight < 1 at the end
+  double huber_threshold = 0.0;
+  int poses_marginalized = 0;      // in the last Update
+  int landmarks_marginalized = 0;  // in the last Update (retired landmarks)
+  int dense_dimension = 0;         // size of the reduced system S
+  int state_dimension = 0;         // 6 * poses + 3 * active landmarks
+};
+
+// A landmark that left the estimator in the last Update (its final estimate).
+template <typename S>
+struct RetiredLandmark {
+  std::int64_t id = 0;
+  Vec3<S> position = Vec3<S>::Zero();
+  int total_observations = 0;
+};
+
+template <typename Model, int K, int N, int M, int P>
+class SlidingWindowFilter {
+  static_assert(K >= 1 && N >= 1 && M >= 1 && P >= 1, "capacities must be positive");
+
+ public:
+  using S = typename Model::Scalar;
+  using PoseType = typename Model::PoseType;
+  using MotionType = typename Model::MotionType;
+
+  static constexpr int kMaxPoses = K + 1;  // one extra while a new pose awaits marginalization
+  static constexpr int kMaxDense = 6 * K + 3 * P;
+  static constexpr int kMaxPriorDim = 6 + 3 * P;
+  static constexpr int kMaxLocalDim = 12 + 3 * P;
+  static constexpr int kMaxObservations = kMaxPoses * M;
+
+  SlidingWindowFilter() = default;
+  SlidingWindowFilter(const SlidingWindowFilter&) = delete;
+  SlidingWindowFilter& operator=(const SlidingWindowFilter&) = delete;
+
+  core::Status Configure(const Model& model, const SwfOptions& options) {
+    const core::Status status = options.Validate();
+    if (status != core::Status::kOk) return status;
+    if (options.window_size < 0 || options.window_size > K) return core::Status::kInvalidArgument;
+    model_ = model;
+    options_ = options;
+    window_ = options.window_size == 0 ? K : options.window_size;
+    configured_ = true;
+    Reset();
+    return core::Status::kOk;
+  }
+
+  // Forgets all state (keeps the configuration).
+  void Reset() {
+    num_poses_ = 0;
+    head_ = 0;
+    for (int i = 0; i < N; ++i) landmarks_[i].used = false;
+    free_slots_.clear();
+    for (int i = N - 1; i >= 0; --i) (void)free_slots_.push_back(i);
+    ids_.Clear();
+    num_landmarks_ = 0;
+    prior_landmarks_.clear();
+    frames_added_ = 0;
+    tau_ = S(1e30);
+    fault_bits_ = 0;
+    summary_ = SwfSummary{};
+    retired_.clear();
+  }
+
+  // ---- adding a frame: one AddPose* call, its AddObservation calls, then Update() -----------
+
+  // Adds a pose with an initial estimate and no process factor (bundle-adjustment style).
+  core::Status AddPose(const PoseType& estimate) { return PushPose(estimate, nullptr, nullptr); }
+
+  // Adds a pose predicted by the process model from a relative-motion input u with
+  // information W^T W = Q^-1 (process_sqrt_information = W).
+  core::Status AddPoseWithMotion(const MotionType& u, const Mat6<S>& process_sqrt_information) {
+    if (num_poses_ == 0) return core::Status::kInvalidArgument;
+    return PushPose(model_.Propagate(Newest().pose, u), &u, &process_sqrt_information);
+  }
+
+  // Constant-velocity fallback: repeats the last relative motion (none with a single pose).
+  core::Status AddPoseConstantVelocity(const Mat6<S>& process_sqrt_information) {
+    if (num_poses_ == 0) return core::Status::kInvalidArgument;
+    const PoseType& last = Newest().pose;
+    const MotionType u = num_poses_ >= 2 ? model_.RelativeMotion(Slot(num_poses_ - 2).pose, last)
+                                         : model_.RelativeMotion(last, last);
+    return AddPoseWithMotion(u, process_sqrt_information);
+  }
+
+  // Adds a measurement z of landmark `landmark_id` from the newest pose, with information
+  // W^T W = R^-1 (sqrt_information = W). A new id is initialized from z by stereo.
+  core::Status AddObservation(std::int64_t landmark_id, const Vec3<S>& z,
+                              const Mat3<S>& sqrt_information) {
+    if (num_poses_ == 0) return core::Status::kNotConfigured;
+    if (!z.allFinite() || !sqrt_information.allFinite()) return core::Status::kInvalidArgument;
+    PoseSlot& pose = Newest();
+    if (pose.obs.full()) {
+      fault_bits_ |= kFaultMeasurementCapacity;
+      return core::Status::kFull;
+    }
+    int slot = ids_.Find(landmark_id);
+    if (slot >= 0) {
+      for (const Observation& o : pose.obs)
+        if (o.landmark == slot) return core::Status::kInvalidArgument;  // duplicate in frame
+    } else {
+      Vec3<S> position;
+      if (!model_.InitLandmark(pose.pose, z, &position)) return core::Status::kInvalidArgument;
+      if (free_slots_.empty()) {
+        fault_bits_ |= kFaultLandmarkCapacity;
+        return core::Status::kFull;
+      }
+      slot = free_slots_.back();
+      free_slots_.pop_back();
+      LandmarkSlot& l = landmarks_[slot];
+      l = LandmarkSlot{};
+      l.used = true;
+      l.id = landmark_id;
+      l.position = position;
+      ids_.Insert(landmark_id, slot);
+      ++num_landmarks_;
+    }
+    Observation o;
+    o.landmark = slot;
+    o.z = z;
+    o.sqrt_info = sqrt_information;
+    (void)pose.obs.push_back(o);
+    ++landmarks_[slot].obs_in_window;
+    ++landmarks_[slot].total_obs;
+    return core::Status::kOk;
+  }
+
+  // Marginalizes (per mode) and runs robust Gauss-Newton over the window.
+  core::Status Update() {
+    if (!configured_) return core::Status::kNotConfigured;
+    summary_ = SwfSummary{};
+    retired_.clear();
+    if (num_poses_ > window_) {
+      if (options_.mode == SwfMode::kVisualOdometry) {
+        DeleteOldestPose();
+      } else {
+        MarginalizeOldestPose();
+      }
+      summary_.poses_marginalized = 1;
+    }
+    RetireUnsupportedLandmarks();
+    core::Status status = Solve();
+    if (!StateIsFinite()) {
+      // Local recovery: a non-finite state cannot be repaired in place. Start over; the caller
+      // re-initializes with its next AddPose (it sees kNumericalFailure and the sticky bit).
+      const std::uint32_t faults = fault_bits_ | kFaultReset | kFaultNonFinite;
+      Reset();
+      fault_bits_ = faults;
+      status = core::Status::kNumericalFailure;
+    }
+    summary_.status = status;
+    return status;
+  }
+
+  // Marginal covariances of every window pose block and active landmark at the current
+  // estimate (inverse of the full information matrix, by the Schur complement). O(n^3) in the
+  // reduced dimension: call it at the output rate, not inside the estimation loop.
+  core::Status ComputeCovariances() {
+    if (num_poses_ == 0) return core::Status::kNotConfigured;
+    EvaluateMeasurements(true);
+    const core::Status status = BuildAndFactor();
+    if (status != core::Status::kOk) return status;
+    const int np6 = 6 * num_poses_;
+    // Pose block of S^-1 (needed for free landmarks) and the prior landmarks' diagonal blocks.
+    for (int c = 0; c < np6; ++c) {
+      dense_.InverseColumn(c, column_);
+      for (int r = 0; r < np6; ++r) pose_cov_[c * kMaxPosesDim + r] = column_[r];
+    }
+    // A fixed pose is known exactly; its identity rows in S only stand in for "no update".
+    for (int j = 0; j < num_poses_; ++j) {
+      if (!Slot(j).fixed) continue;
+      for (int k = 6 * j; k < 6 * j + 6; ++k)
+        for (int m = 0; m < np6; ++m)
+          pose_cov_[k * kMaxPosesDim + m] = pose_cov_[m * kMaxPosesDim + k] = S(0);
+    }
+    for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
+      LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
+      for (int k = 0; k < 3; ++k) {
+        dense_.InverseColumn(np6 + 3 * q + k, column_);
+        for (int r = 0; r < 3; ++r) l.covariance(r, k) = column_[np6 + 3 * q + r];
+      }
+    }
+    for (int i = 0; i < N; ++i) {
+      LandmarkSlot& l = landmarks_[i];
+      if (!l.used || l.prior_index >= 0 || !l.invertible) continue;
+      Mat3<S> cross = Mat3<S>::Zero();  // sum_a sum_b W_a^T Sigma(ja, jb) W_b
+      for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
+        const Observation& oa = ObsAt(adj_[a]);
+        for (int b = lm_begin_[i]; b < lm_begin_[i + 1]; ++b) {
+          const Observation& ob = ObsAt(adj_[b]);
+          const Eigen::Map<const Mat6<S>, Eigen::Unaligned, Eigen::OuterStride<>> sigma(
+              pose_cov_ + (6 * adj_[b].pose) * kMaxPosesDim + 6 * adj_[a].pose,
+              Eigen::OuterStride<>(kMaxPosesDim));
+          cross += oa.w_pl.transpose() * sigma * ob.w_pl;
+        }
+      }
+      l.covariance = l.h_inv + l.h_inv * cross * l.h_inv;
+    }
+    newest_pose_cov_.setZero();
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r < 6; ++r)
+        newest_pose_cov_(r, c) = pose_cov_[(np6 - 6 + c) * kMaxPosesDim + np6 - 6 + r];
+    return core::Status::kOk;
+  }
+
+  // ---- results -----------------------------------------------------------------------------
+  int NumPoses() const { return num_poses_; }
+  int WindowSize() const { return window_; }
+  const PoseType& PoseAt(int j) const { return Slot(j).pose; }  // 0 = oldest
+  const PoseType& NewestPose() const { return Slot(num_poses_ - 1).pose; }
+  int NumLandmarks() const { return num_landmarks_; }
+  int NumPriorLandmarks() const { return static_cast<int>(prior_landmarks_.size()); }
+
+  bool GetLandmark(std::int64_t id, Vec3<S>* position) const {
+    const int slot = ids_.Find(id);
+    if (slot < 0) return false;
+    *position = landmarks_[slot].position;
+    return true;
+  }
+  // After ComputeCovariances().
+  bool GetLandmarkCovariance(std::int64_t id, Mat3<S>* covariance) const {
+    const int slot = ids_.Find(id);
+    if (slot < 0) return false;
+    *covariance = landmarks_[slot].covariance;
+    return true;
+  }
+  // Covariance of pose j's update vector, after ComputeCovariances().
+  Mat6<S> PoseCovariance(int j) const {
+    Mat6<S> c;
+    for (int k = 0; k < 6; ++k)
+      for (int r = 0; r < 6; ++r) c(r, k) = pose_cov_[(6 * j + k) * kMaxPosesDim + 6 * j + r];
+    return c;
+  }
+  const Mat6<S>& NewestPoseCovariance() const { return newest_pose_cov_; }
+
+  // Calls f(id, position, observations in window) for every active landmark, in slot order.
+  template <typename F>
+  void ForEachLandmark(F&& f) const {
+    for (int i = 0; i < N; ++i)
+      if (landmarks_[i].used)
+        f(landmarks_[i].id, landmarks_[i].position, landmarks_[i].obs_in_window);
+  }
+
+  const core::StaticVector<RetiredLandmark<S>, N>& Retired() const { return retired_; }
+  const SwfSummary& Summary() const { return summary_; }
+  std::uint32_t FaultBits() const { return fault_bits_; }
+  void ClearFaults() { fault_bits_ = 0; }
+  const SwfOptions& Options() const { return options_; }
+
+  // Total cost 0.5 * sum |W (z - h)|^2 of the measurements alone (no robust kernel, no prior,
+  // no process model): the bundle-adjustment cost used to compare with other solvers.
+  double MeasurementCost() {
+    EvaluateMeasurements(false);
+    double cost = 0.0;
+    for (int j = 0; j < num_poses_; ++j)
+      for (const Observation& o : Slot(j).obs)
+        if (o.valid) cost += 0.5 * static_cast<double>(o.r.squaredNorm());
+    return cost;
+  }
+
+ private:
+  static constexpr int kMaxPosesDim = 6 * kMaxPoses;
+
+  struct Observation {
+    std::int32_t landmark = -1;
+    Vec3<S> z = Vec3<S>::Zero();
+    Mat3<S> sqrt_info = Mat3<S>::Identity();
+    // Linearization workspace (whitened residual and Jacobians, Huber weight, coupling block).
+    Vec3<S> r = Vec3<S>::Zero();
+    Mat36<S> jp = Mat36<S>::Zero();
+    Mat3<S> jl = Mat3<S>::Zero();
+    Eigen::Matrix<S, 6, 3> w_pl = Eigen::Matrix<S, 6, 3>::Zero();
+    S weight = S(1);
+    bool valid = false;
+  };
+
+  struct PoseSlot {
+    PoseType pose{};
+    MotionType motion{};  // process input from the previous pose, if has_process
+    Mat6<S> process_sqrt_info = Mat6<S>::Zero();
+    bool has_process = false;
+    bool fixed = false;
+    core::StaticVector<Observation, M> obs;
+  };
+
+  struct LandmarkSlot {
+    bool used = false;
+    std::int64_t id = 0;
+    Vec3<S> position = Vec3<S>::Zero();
+    int prior_index = -1;  // position in prior_landmarks_, or -1 for a free landmark
+    int obs_in_window = 0;
+    int total_obs = 0;
+    // Per-iteration workspace.
+    int lm_count = 0;
+    Mat3<S> h = Mat3<S>::Zero();
+    Vec3<S> b = Vec3<S>::Zero();
+    Mat3<S> h_inv = Mat3<S>::Zero();
+    Vec3<S> delta = Vec3<S>::Zero();
+    bool invertible = false;
+    Vec3<S> backup = Vec3<S>::Zero();
+    Mat3<S> covariance = Mat3<S>::Zero();
+  };
+
+  struct AdjEntry {
+    std::int32_t pose = 0;
+    std::int32_t obs = 0;
+  };
+
+  // Fixed-capacity open-addressing map from landmark id to slot (linear probing, deletion by
+  // backward shift so no tombstones accumulate).
+  class IdMap {
+   public:
+    void Clear() {
+      for (int i = 0; i < kSize; ++i) used_[i] = false;
+    }
+    int Find(std::int64_t key) const {
+      for (int i = Hash(key), n = 0; n < kSize; i = (i + 1) & (kSize - 1), ++n) {
+        if (!used_[i]) return -1;
+        if (keys_[i] == key) return values_[i];
+      }
+      return -1;
+    }
+    void Insert(std::int64_t key, int value) {
+      for (int i = Hash(key), n = 0; n < kSize; i = (i + 1) & (kSize - 1), ++n) {
+        if (!used_[i] || keys_[i] == key) {
+          used_[i] = true;
+          keys_[i] = key;
+          values_[i] = value;
+          return;
+        }
+      }
+      SWF_ASSERT(false);  // cannot happen: the table holds twice the landmark capacity
+    }
+    void Erase(std::int64_t key) {
+      int i = Hash(key);
+      for (int n = 0; n < kSize; ++n, i = (i + 1) & (kSize - 1)) {
+        if (!used_[i]) return;
+        if (keys_[i] == key) break;
+      }
+      if (!used_[i] || keys_[i] != key) return;
+      // Backward-shift the following cluster so every remaining key stays reachable.
+      int hole = i;
+      for (int j = (i + 1) & (kSize - 1), n = 0; n < kSize && used_[j];
+           j = (j + 1) & (kSize - 1), ++n) {
+        const int home = Hash(keys_[j]);
+        const bool movable = hole <= j ? (home <= hole || home > j) : (home <= hole && home > j);
+        if (movable) {
+          keys_[hole] = keys_[j];
+          values_[hole] = values_[j];
+          hole = j;
+        }
+      }
+      used_[hole] = false;
+    }
+
+   private:
+    static constexpr int kSize = [] {
+      int s = 1;
+      while (s < 2 * N) s <<= 1;
+      return s;
+    }();
+    static int Hash(std::int64_t key) {
+      std::uint64_t x = static_cast<std::uint64_t>(key) + 0x9e3779b97f4a7c15ull;
+      x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+      x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+      x ^= x >> 31;
+      return static_cast<int>(x & static_cast<std::uint64_t>(kSize - 1));
+    }
+    std::int64_t keys_[kSize];
+    int values_[kSize];
+    bool used_[kSize] = {};
+  };
+
+  template <int R, int C>
+  using BlockMap = Eigen::Map<Eigen::Matrix<S, R, C>, Eigen::Unaligned, Eigen::OuterStride<>>;
+  template <int R, int C>
+  static BlockMap<R, C> Blk(S* a, int ld, int row, int col) {
+    return BlockMap<R, C>(a + col * ld + row, Eigen::OuterStride<>(ld));
+  }
+
+  PoseSlot& Slot(int j) { return poses_[(head_ + j) % kMaxPoses]; }
+  const PoseSlot& Slot(int j) const { return poses_[(head_ + j) % kMaxPoses]; }
+  PoseSlot& Newest() { return Slot(num_poses_ - 1); }
+  Observation& ObsAt(const AdjEntry& e) { return Slot(e.pose).obs[e.obs]; }
+
+  core::Status PushPose(const PoseType& estimate, const MotionType* u, const Mat6<S>* sqrt_info) {
+    if (!configured_) return core::Status::kNotConfigured;
+    const int limit = options_.mode == SwfMode::kBatch ? window_ : window_ + 1;
+    if (num_poses_ >= limit) return core::Status::kFull;
+    if (num_poses_ == 0) head_ = 0;
+    ++num_poses_;
+    PoseSlot& slot = Newest();
+    slot.pose = estimate;
+    slot.obs.clear();
+    slot.fixed = false;
+    slot.has_process = u != nullptr;
+    if (u != nullptr) {
+      slot.motion = *u;
+      slot.process_sqrt_info = *sqrt_info;
+    }
+    if (num_poses_ == 1) InitializePrior();
+    ++frames_added_;
+    return core::Status::kOk;
+  }
+
+  // The prior over the very first pose: fixed (gauge) or a Gaussian around its estimate.
+  void InitializePrior() {
+    prior_landmarks_.clear();
+    prior_dim_ = 6;
+    for (int i = 0; i < 36; ++i) prior_[(i / 6) * kMaxPriorDim + i % 6] = S(0);
+    for (int i = 0; i < 6; ++i) prior_g_[i] = S(0);
+    prior_pose_lin_ = Slot(0).pose;
+    const bool fixed = options_.fix_first_pose || options_.mode == SwfMode::kVisualOdometry;
+    Slot(0).fixed = fixed;
+    if (!fixed) {
+      for (int i = 0; i < 3; ++i) {
+        prior_[i * kMaxPriorDim + i] =
+            S(1.0 / (options_.first_pose_sigma_m * options_.first_pose_sigma_m));
+        prior_[(i + 3) * kMaxPriorDim + i + 3] =
+            S(1.0 / (options_.first_pose_sigma_rad * options_.first_pose_sigma_rad));
+      }
+    }
+  }
+
+  bool StateIsFinite() const {
+    for (int j = 0; j < num_poses_; ++j) {
+      const Vec6<S> d = Model::Difference(prior_pose_lin_, Slot(j).pose, &scratch_jacobian_);
+      if (!d.allFinite()) return false;
+    }
+    for (int i = 0; i < N; ++i)
+      if (landmarks_[i].used && !landmarks_[i].position.allFinite()) return false;
+    for (int r = 0; r < prior_dim_; ++r)
+      if (!std::isfinite(prior_g_[r])) return false;
+    return true;
+  }
+
+  // ---- linearization -----------------------------------------------------------------------
+
+  // Whitened residuals (and Jacobians) of every measurement at the current state.
+  void EvaluateMeasurements(bool with_jacobians) {
+    for (int j = 0; j < num_poses_; ++j) {
+      PoseSlot& p = Slot(j);
+      for (Observation& o : p.obs) EvaluateObservation(p.pose, &o, with_jacobians);
+    }
+  }
+
+  void EvaluateObservation(const PoseType& pose, Observation* o, bool with_jacobians) {
+    Vec3<S> h;
+    Mat36<S> jp;
+    Mat3<S> jl;
+    o->valid = model_.Predict(pose, landmarks_[o->landmark].position, &h,
+                              with_jacobians ? &jp : nullptr, &jl);
+    if (!o->valid) return;
+    o->r = o->sqrt_info * (o->z - h);
+    if (!o->r.allFinite()) {
+      o->valid = false;
+      fault_bits_ |= kFaultNonFinite;
+      return;
+    }
+    if (with_jacobians) {
+      o->jp = o->sqrt_info * jp;
+      o->jl = o->sqrt_info * jl;
+    }
+  }
+
+  // Huber threshold from the inlier standard deviation: sigma_hat = median |r| / median of the
+  // chi distribution with 3 degrees of freedom (1.5382), floored at the nominal 1.
+  void UpdateRobustWeights() {
+    int n = 0;
+    for (int j = 0; j < num_poses_; ++j)
+      for (const Observation& o : Slot(j).obs)
+        if (o.valid) norms_[n++] = o.r.norm();
+    if (!options_.robust || n == 0) {
+      tau_ = S(1e30);
+    } else {
+      std::nth_element(norms_, norms_ + n / 2, norms_ + n);
+      const S sigma = std::max(S(1), norms_[n / 2] / S(1.5382));
+      tau_ = S(options_.huber_k) * sigma;
+    }
+    summary_.huber_threshold = static_cast<double>(tau_);
+    ApplyWeights();
+  }
+
+  void ApplyWeights() {
+    int downweighted = 0;
+    for (int j = 0; j < num_poses_; ++j) {
+      for (Observation& o : Slot(j).obs) {
+        if (!o.valid) continue;
+        const S norm = o.r.norm();
+        o.weight = norm <= tau_ ? S(1) : tau_ / norm;
+        downweighted += o.weight < S(1) ? 1 : 0;
+      }
+    }
+    summary_.num_downweighted = downweighted;
+  }
+
+  S HuberCost(S squared_norm) const {
+    const S norm = std::sqrt(squared_norm);
+    return norm <= tau_ ? S(0.5) * squared_norm : tau_ * norm - S(0.5) * tau_ * tau_;
+  }
+
+  // Robust cost of all three information sources at the current state (residuals must be
+  // evaluated). Used to accept or shorten steps.
+  S TotalCost() {
+    S cost = S(0);
+    for (int j = 0; j < num_poses_; ++j)
+      for (const Observation& o : Slot(j).obs)
+        if (o.valid) cost += HuberCost(o.r.squaredNorm());
+    for (int j = 1; j < num_poses_; ++j) {
+      const PoseSlot& p = Slot(j);
+      if (!p.has_process) continue;
+      Mat6<S> a;
+      Mat6<S> b;
+      const Vec6<S> r =
+          p.process_sqrt_info * model_.ProcessResidual(Slot(j - 1).pose, p.pose, p.motion, &a, &b);
+      cost += S(0.5) * r.squaredNorm();
+    }
+    // 0.5 Delta^T Pi Delta - g^T Delta = Delta^T (0.5 (grad + g) - g) with grad = Pi Delta - g.
+    PriorGradient();
+    for (int r = 0; r < prior_dim_; ++r)
+      cost += prior_delta_[r] * (S(0.5) * (prior_grad_[r] + prior_g_[r]) - prior_g_[r]);
+    return cost;
+  }
+
+  // prior_grad_ = Pi Delta - g at the current state (Delta coordinates). Accumulated column by
+  // column so the inner loop is contiguous. (A strided row-dot-product form of this loop was
+  // mis-vectorized by GCC 12 at -O3 into an aligned load of a misaligned address.)
+  void PriorGradient() {
+    PriorDelta();
+    for (int r = 0; r < prior_dim_; ++r) prior_grad_[r] = -prior_g_[r];
+    for (int c = 0; c < prior_dim_; ++c) {
+      const S dc = prior_delta_[c];
+      const S* column = prior_ + c * kMaxPriorDim;
+      for (int r = 0; r < prior_dim_; ++r) prior_grad_[r] += column[r] * dc;
+    }
+  }
+
+  // Delta = x (-) x_bar for the prior's variables and the pose block's Jacobian.
+  void PriorDelta() {
+    const Vec6<S> d = Model::Difference(prior_pose_lin_, Slot(0).pose, &prior_pose_jacobian_);
+    for (int i = 0; i < 6; ++i) prior_delta_[i] = d[i];
+    for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
+      const Vec3<S> dl = landmarks_[prior_landmarks_[q]].position - prior_landmark_lin_[q];
+      for (int k = 0; k < 3; ++k) prior_delta_[6 + 3 * q + k] = dl[k];
+    }
+  }
+
+  // Builds the reduced system S dx_D = s over [poses ; prior landmarks] (free landmarks
+  // eliminated) and factorizes it. Measurements must be evaluated with Jacobians and weighted.
+  core::Status BuildAndFactor() {
+    const int np = num_poses_;
+    const int nq = static_cast<int>(prior_landmarks_.size());
+    const int lm0 = 6 * np;
+    const int n = lm0 + 3 * nq;
+    dense_.Reset(n);
+    for (int i = 0; i < n; ++i) rhs_[i] = S(0);
+    for (int i = 0; i < N; ++i) {
+      landmarks_[i].h.setZero();
+      landmarks_[i].b.setZero();
+      landmarks_[i].lm_count = 0;
+    }
+    // Measurements (H^T R^-1 H and its right-hand side).
+    for (int j = 0; j < np; ++j) {
+      for (Observation& o : Slot(j).obs) {
+        if (!o.valid) continue;
+        const S w = o.weight;
+        LandmarkSlot& l = landmarks_[o.landmark];
+        dense_.AddBlock(6 * j, 6 * j, w * o.jp.transpose() * o.jp);
+        Blk<6, 1>(rhs_, kMaxDense, 6 * j, 0) += w * o.jp.transpose() * o.r;
+        l.h += w * o.jl.transpose() * o.jl;
+        l.b += w * o.jl.transpose() * o.r;
+        o.w_pl = w * o.jp.transpose() * o.jl;
+        if (l.prior_index >= 0) dense_.AddBlock(lm0 + 3 * l.prior_index, 6 * j, o.w_pl.transpose());
+        ++l.lm_count;
+      }
+    }
+    // Adjacency of free landmarks (counting sort by slot) for the Schur complement.
+    int offset = 0;
+    for (int i = 0; i < N; ++i) {
+      lm_begin_[i] = offset;
+      offset += landmarks_[i].lm_count;
+      landmarks_[i].lm_count = 0;
+    }
+    lm_begin_[N] = offset;
+    for (int j = 0; j < np; ++j) {
+      const PoseSlot& p = Slot(j);
+      for (int k = 0; k < static_cast<int>(p.obs.size()); ++k) {
+        if (!p.obs[k].valid) continue;
+        LandmarkSlot& l = landmarks_[p.obs[k].landmark];
+        adj_[lm_begin_[p.obs[k].landmark] + l.lm_count++] = AdjEntry{j, k};
+      }
+    }
+    // Process model (D^T Q^-1 D).
+    for (int j = 1; j < np; ++j) {
+      const PoseSlot& p = Slot(j);
+      if (!p.has_process) continue;
+      Mat6<S> a;
+      Mat6<S> b;
+      const Vec6<S> e = model_.ProcessResidual(Slot(j - 1).pose, p.pose, p.motion, &a, &b);
+      const Vec6<S> r = p.process_sqrt_info * e;
+      a = p.process_sqrt_info * a;
+      b = p.process_sqrt_info * b;
+      dense_.AddBlock(6 * (j - 1), 6 * (j - 1), a.transpose() * a);
+      dense_.AddBlock(6 * j, 6 * j, b.transpose() * b);
+      dense_.AddBlock(6 * j, 6 * (j - 1), b.transpose() * a);
+      Blk<6, 1>(rhs_, kMaxDense, 6 * (j - 1), 0) -= a.transpose() * r;
+      Blk<6, 1>(rhs_, kMaxDense, 6 * j, 0) -= b.transpose() * r;
+    }
+    // Prior (L^T Pi L): pose block -> pose 0, landmark q -> lm0 + 3q.
+    AddPrior(lm0);
+    // Prior landmarks' own measurement information.
+    for (int q = 0; q < nq; ++q) {
+      const LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
+      dense_.AddBlock(lm0 + 3 * q, lm0 + 3 * q, l.h);
+      Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * q, 0) += l.b;
+    }
+    // Schur complement of the free landmarks onto the poses.
+    for (int i = 0; i < N; ++i) {
+      LandmarkSlot& l = landmarks_[i];
+      l.invertible = false;
+      if (!l.used || l.prior_index >= 0 || lm_begin_[i] == lm_begin_[i + 1]) continue;
+      const Eigen::LLT<Mat3<S>> llt(l.h);
+      if (llt.info() != Eigen::Success || !(l.h.trace() > S(0))) {
+        fault_bits_ |= kFaultDegenerateLandmark;
+        continue;  // held at its current estimate for this iteration
+      }
+      l.h_inv = llt.solve(Mat3<S>::Identity());
+      l.invertible = true;
+      for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
+        const Observation& oa = ObsAt(adj_[a]);
+        const Eigen::Matrix<S, 6, 3> x = oa.w_pl * l.h_inv;
+        Blk<6, 1>(rhs_, kMaxDense, 6 * adj_[a].pose, 0) -= x * l.b;
+        for (int b = lm_begin_[i]; b < lm_begin_[i + 1]; ++b) {
+          if (adj_[a].pose < adj_[b].pose) continue;
+          const Observation& ob = ObsAt(adj_[b]);
+          dense_.AddBlock(6 * adj_[a].pose, 6 * adj_[b].pose, -(x * ob.w_pl.transpose()));
+        }
+      }
+    }
+    // Fixed poses: identity rows, zero right-hand side (conditioning on their value).
+    for (int j = 0; j < np; ++j) {
+      if (!Slot(j).fixed) continue;
+      for (int k = 6 * j; k < 6 * j + 6; ++k) {
+        for (int c = 0; c <= k; ++c) dense_.At(k, c) = S(0);
+        for (int r = k; r < n; ++r) dense_.At(r, k) = S(0);
+        dense_.At(k, k) = S(1);
+        rhs_[k] = S(0);
+      }
+    }
+    summary_.dense_dimension = n;
+    const core::Status status = dense_.Factorize();
+    if (status != core::Status::kOk) fault_bits_ |= kFaultNotPositiveDefinite;
+    return status;
+  }
+
+  void AddPrior(int lm0) {
+    const int nq = static_cast<int>(prior_landmarks_.size());
+    PriorGradient();
+    const Mat6<S>& jp = prior_pose_jacobian_;
+    const Mat6<S> pi_pp = Blk<6, 6>(prior_, kMaxPriorDim, 0, 0);
+    dense_.AddBlock(0, 0, jp.transpose() * pi_pp * jp);
+    Blk<6, 1>(rhs_, kMaxDense, 0, 0) -= jp.transpose() * Blk<6, 1>(prior_grad_, kMaxPriorDim, 0, 0);
+    for (int q = 0; q < nq; ++q) {
+      const Eigen::Matrix<S, 3, 6> pi_qp = Blk<3, 6>(prior_, kMaxPriorDim, 6 + 3 * q, 0);
+      dense_.AddBlock(lm0 + 3 * q, 0, pi_qp * jp);
+      Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * q, 0) -=
+          Blk<3, 1>(prior_grad_, kMaxPriorDim, 6 + 3 * q, 0);
+      for (int q2 = 0; q2 <= q; ++q2) {
+        dense_.AddBlock(lm0 + 3 * q, lm0 + 3 * q2,
+                        Blk<3, 3>(prior_, kMaxPriorDim, 6 + 3 * q, 6 + 3 * q2));
+      }
+    }
+  }
+
+  // ---- solving -----------------------------------------------------------------------------
+
+  core::Status Solve() {
+    int total = 0;
+    for (int j = 0; j < num_poses_; ++j) total += static_cast<int>(Slot(j).obs.size());
+    summary_.num_measurements = total;
+    summary_.state_dimension = 6 * num_poses_ + 3 * num_landmarks_;
+    if (num_poses_ == 0) return core::Status::kOk;
+    core::Status status = core::Status::kOk;
+    bool converged = false;
+    for (int it = 0; it < options_.max_iterations; ++it) {
+      EvaluateMeasurements(true);
+      UpdateRobustWeights();
+      const S cost0 = TotalCost();
+      if (it == 0) summary_.initial_cost = static_cast<double>(cost0);
+      summary_.final_cost = static_cast<double>(cost0);
+      status = BuildAndFactor();
+      if (status != core::Status::kOk) break;
+      dense_.SolveInPlace(rhs_);
+      const int lm0 = 6 * num_poses_;
+      S max_step = S(0);
+      bool finite = true;
+      for (int i = 0; i < dense_.size(); ++i) {
+        max_step = std::max(max_step, std::abs(rhs_[i]));
+        finite = finite && std::isfinite(rhs_[i]);
+      }
+      for (int i = 0; i < N; ++i) {
+        LandmarkSlot& l = landmarks_[i];
+        if (!l.used) continue;
+        if (l.prior_index >= 0) {
+          l.delta = Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * l.prior_index, 0);
+          continue;
+        }
+        l.delta.setZero();
+        if (!l.invertible) continue;
+        Vec3<S> g = l.b;
+        for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a)
+          g -= ObsAt(adj_[a]).w_pl.transpose() * Blk<6, 1>(rhs_, kMaxDense, 6 * adj_[a].pose, 0);
+        l.delta = l.h_inv * g;
+        max_step = std::max(max_step, l.delta.cwiseAbs().maxCoeff());
+        finite = finite && l.delta.allFinite();
+      }
+      if (!finite) {
+        fault_bits_ |= kFaultNonFinite;
+        status = core::Status::kNumericalFailure;
+        break;
+      }
+      // Step with backtracking: accept the first step length that does not raise the cost.
+      Backup();
+      S alpha = S(1);
+      S cost1 = S(0);
+      bool accepted = false;
+      for (int attempt = 0; attempt <= options_.max_backtracking; ++attempt) {
+        ApplyStep(alpha);
+        EvaluateMeasurements(false);
+        cost1 = TotalCost();
+        if (std::isfinite(cost1) && cost1 <= cost0) {
+          accepted = true;
+          break;
+        }
+        Restore();
+        alpha *= S(0.5);
+      }
+      if (!accepted) {  // no descent along the Gauss-Newton direction: at the minimum
+        converged = true;
+        break;
+      }
+      summary_.iterations = it + 1;
+      summary_.final_cost = static_cast<double>(cost1);
+      if (cost0 - cost1 <= S(options_.relative_cost_tolerance) * cost0 ||
+          alpha * max_step <= S(options_.step_tolerance)) {
+        converged = true;
+        break;
+      }
+    }
+    summary_.converged = converged;
+    if (status == core::Status::kOk && !converged) {
+      fault_bits_ |= kFaultNotConverged;
+      status = core::Status::kNotConverged;
+    }
+    // Leave the linearization (and weights) at the final state for marginalization/covariance.
+    EvaluateMeasurements(true);
+    ApplyWeights();
+    return status;
+  }
+
+  void Backup() {
+    for (int j = 0; j < num_poses_; ++j) pose_backup_[j] = Slot(j).pose;
+    for (int i = 0; i < N; ++i)
+      if (landmarks_[i].used) landmarks_[i].backup = landmarks_[i].position;
+  }
+  void Restore() {
+    for (int j = 0; j < num_poses_; ++j) Slot(j).pose = pose_backup_[j];
+    for (int i = 0; i < N; ++i)
+      if (landmarks_[i].used) landmarks_[i].position = landmarks_[i].backup;
+  }
+  void ApplyStep(S alpha) {
+    for (int j = 0; j < num_poses_; ++j) {
+      if (Slot(j).fixed) continue;
+      const Vec6<S> d = alpha * Vec6<S>(Blk<6, 1>(rhs_, kMaxDense, 6 * j, 0));
+      Slot(j).pose = Model::Retract(pose_backup_[j], d);
+    }
+    for (int i = 0; i < N; ++i) {
+      LandmarkSlot& l = landmarks_[i];
+      if (l.used) l.position = l.backup + alpha * l.delta;
+    }
+  }
+
+  // ---- marginalization ---------------------------------------------------------------------
+
+  // Removes the oldest pose by the Schur complement (eqs. 8-10), or by its block diagonal only
+  // in VSDF mode (eq. 12). See the file comment for the local system it forms.
+  void MarginalizeOldestPose() {
+    PoseSlot& p0 = Slot(0);
+    PoseSlot& p1 = Slot(1);
+    // Variables of the new prior: the old prior landmarks (same order), then landmarks seen
+    // from p0 that are not yet in the prior, as long as the prior has room.
+    for (Observation& o : p0.obs) {
+      EvaluateObservation(p0.pose, &o, true);
+      if (!o.valid) continue;
+      LandmarkSlot& l = landmarks_[o.landmark];
+      if (l.prior_index >= 0) continue;
+      if (prior_landmarks_.full()) {
+        o.valid = false;  // its information is dropped, and reported
+        fault_bits_ |= kFaultPriorCapacity;
+        continue;
+      }
+      l.prior_index = static_cast<int>(prior_landmarks_.size());
+      (void)prior_landmarks_.push_back(o.landmark);
+      prior_landmark_lin_[l.prior_index] = l.position;
+      // A new prior variable enters with zero information about itself until the Schur below.
+      GrowPrior();
+    }
+    const int nq = static_cast<int>(prior_landmarks_.size());
+    const int dim = 12 + 3 * nq;  // [p0 | p1 | landmarks]
+    for (int c = 0; c < dim; ++c)
+      for (int r = 0; r < dim; ++r) local_[c * kMaxLocalDim + r] = S(0);
+    for (int r = 0; r < dim; ++r) local_b_[r] = S(0);
+    auto local_index = [](int prior_index) {
+      return prior_index < 6 ? prior_index : prior_index + 6;
+    };
+    // Prior at the current estimate: Hessian J^T Pi J, right-hand side -J^T (Pi Delta - g).
+    PriorGradient();
+    // J = blockdiag(prior_pose_jacobian_, I): scale the pose rows/columns of Pi.
+    for (int c = 0; c < prior_dim_; ++c)
+      for (int r = 0; r < prior_dim_; ++r)
+        local_[local_index(c) * kMaxLocalDim + local_index(r)] = prior_[c * kMaxPriorDim + r];
+    {
+      const Mat6<S>& jp = prior_pose_jacobian_;
+      Blk<6, 6>(local_, kMaxLocalDim, 0, 0) =
+          jp.transpose() * Blk<6, 6>(prior_, kMaxPriorDim, 0, 0) * jp;
+      for (int q = 0; q < nq; ++q) {
+        const Eigen::Matrix<S, 3, 6> pi_qp = Blk<3, 6>(prior_, kMaxPriorDim, 6 + 3 * q, 0);
+        Blk<3, 6>(local_, kMaxLocalDim, 12 + 3 * q, 0) = pi_qp * jp;
+        Blk<6, 3>(local_, kMaxLocalDim, 0, 12 + 3 * q) = (pi_qp * jp).transpose();
+      }
+      Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0) =
+          -(jp.transpose() * Blk<6, 1>(prior_grad_, kMaxPriorDim, 0, 0));
+      for (int r = 6; r < prior_dim_; ++r) local_b_[r + 6] = -prior_grad_[r];
+    }
+    // Process factor between p0 and p1.
+    if (p1.has_process) {
+      Mat6<S> a;
+      Mat6<S> b;
+      const Vec6<S> e = model_.ProcessResidual(p0.pose, p1.pose, p1.motion, &a, &b);
+      const Vec6<S> r = p1.process_sqrt_info * e;
+      a = p1.process_sqrt_info * a;
+      b = p1.process_sqrt_info * b;
+      Blk<6, 6>(local_, kMaxLocalDim, 0, 0) += a.transpose() * a;
+      Blk<6, 6>(local_, kMaxLocalDim, 6, 6) += b.transpose() * b;
+      Blk<6, 6>(local_, kMaxLocalDim, 6, 0) += b.transpose() * a;
+      Blk<6, 6>(local_, kMaxLocalDim, 0, 6) += a.transpose() * b;
+      Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0) -= a.transpose() * r;
+      Blk<6, 1>(local_b_, kMaxLocalDim, 6, 0) -= b.transpose() * r;
+    }
+    // p0's measurements, with the weights of the last solve.
+    for (const Observation& o : p0.obs) {
+      if (!o.valid) continue;
+      const int k = 12 + 3 * landmarks_[o.landmark].prior_index;
+      const S norm = o.r.norm();
+      const S w = norm <= tau_ ? S(1) : tau_ / norm;
+      Blk<6, 6>(local_, kMaxLocalDim, 0, 0) += w * o.jp.transpose() * o.jp;
+      Blk<3, 3>(local_, kMaxLocalDim, k, k) += w * o.jl.transpose() * o.jl;
+      Blk<3, 6>(local_, kMaxLocalDim, k, 0) += w * o.jl.transpose() * o.jp;
+      Blk<6, 3>(local_, kMaxLocalDim, 0, k) += w * o.jp.transpose() * o.jl;
+      Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0) += w * o.jp.transpose() * o.r;
+      Blk<3, 1>(local_b_, kMaxLocalDim, k, 0) += w * o.jl.transpose() * o.r;
+    }
+    // Eliminate p0 (or condition on it when it is fixed).
+    if (!p0.fixed) {
+      const bool diagonal_only = options_.mode == SwfMode::kVsdf;
+      if (!EliminateFirstPose(dim, diagonal_only)) fault_bits_ |= kFaultNotPositiveDefinite;
+    }
+    // The new prior is the [p1 | landmarks] part, linearized at the current estimate.
+    prior_dim_ = dim - 6;
+    for (int c = 0; c < prior_dim_; ++c)
+      for (int r = 0; r < prior_dim_; ++r)
+        prior_[c * kMaxPriorDim + r] = local_[(c + 6) * kMaxLocalDim + r + 6];
+    for (int r = 0; r < prior_dim_; ++r) prior_g_[r] = local_b_[r + 6];
+    prior_pose_lin_ = p1.pose;
+    for (int q = 0; q < nq; ++q) prior_landmark_lin_[q] = landmarks_[prior_landmarks_[q]].position;
+    // Drop p0.
+    for (const Observation& o : p0.obs) --landmarks_[o.landmark].obs_in_window;
+    p0.obs.clear();
+    head_ = (head_ + 1) % kMaxPoses;
+    --num_poses_;
+    Slot(0).has_process = false;  // consumed into the prior
+  }
+
+  // Adds three zero rows/columns to the prior for a landmark entering it.
+  void GrowPrior() {
+    const int d = prior_dim_;
+    for (int c = 0; c < d + 3; ++c)
+      for (int r = (c < d ? d : 0); r < d + 3; ++r) {
+        prior_[c * kMaxPriorDim + r] = S(0);
+        prior_[r * kMaxPriorDim + c] = S(0);
+      }
+    for (int r = d; r < d + 3; ++r) prior_g_[r] = S(0);
+    prior_dim_ = d + 3;
+  }
+
+  // Schur complement of the first 6 variables of the local system onto the rest (eq. 9).
+  bool EliminateFirstPose(int dim, bool diagonal_only) {
+    const Mat6<S> aa = Blk<6, 6>(local_, kMaxLocalDim, 0, 0);
+    const Eigen::LLT<Mat6<S>> llt(aa);
+    if (llt.info() != Eigen::Success) return false;
+    const Mat6<S> t = llt.solve(Mat6<S>::Identity());
+    const Vec6<S> ba = Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0);
+    const int chunks = (dim - 6) / 3;
+    // X_r = Lambda_ra Lambda_aa^-1 for each 3-row chunk r of the remaining variables.
+    for (int r = 0; r < chunks; ++r) {
+      const int row = 6 + 3 * r;
+      Eigen::Matrix<S, 3, 6> x = Blk<3, 6>(local_, kMaxLocalDim, row, 0) * t;
+      Blk<3, 6>(x_, 3 * P + 6, 3 * r, 0) = x;
+      Blk<3, 1>(local_b_, kMaxLocalDim, row, 0) -= x * ba;
+    }
+    // Chunks 0 and 1 are p1 (one variable), chunk k >= 2 is landmark k - 2.
+    auto variable = [](int chunk) { return chunk < 2 ? 0 : chunk - 1; };
+    for (int c = 0; c < chunks; ++c) {
+      const Eigen::Matrix<S, 6, 3> a_c = Blk<6, 3>(local_, kMaxLocalDim, 0, 6 + 3 * c);
+      for (int r = 0; r < chunks; ++r) {
+        if (diagonal_only && variable(r) != variable(c)) continue;
+        Blk<3, 3>(local_, kMaxLocalDim, 6 + 3 * r, 6 + 3 * c) -=
+            Eigen::Matrix<S, 3, 6>(Blk<3, 6>(x_, 3 * P + 6, 3 * r, 0)) * a_c;
+      }
+    }
+    return true;
+  }
+
+  // VO mode: forget the oldest pose and everything attached to it; hold the next one fixed.
+  void DeleteOldestPose() {
+    PoseSlot& p0 = Slot(0);
+    for (const Observation& o : p0.obs) --landmarks_[o.landmark].obs_in_window;
+    p0.obs.clear();
+    head_ = (head_ + 1) % kMaxPoses;
+    --num_poses_;
+    Slot(0).has_process = false;
+    Slot(0).fixed = true;
+    prior_dim_ = 6;
+    for (int i = 0; i < 36; ++i) prior_[(i / 6) * kMaxPriorDim + i % 6] = S(0);
+    for (int i = 0; i < 6; ++i) prior_g_[i] = S(0);
+    prior_pose_lin_ = Slot(0).pose;
+  }
+
+  // Landmarks with no measurement left in the window leave the estimator (Fig. 7c).
+  void RetireUnsupportedLandmarks() {
+    for (int i = 0; i < N; ++i) {
+      LandmarkSlot& l = landmarks_[i];
+      if (!l.used || l.obs_in_window > 0) continue;
+      if (options_.mode == SwfMode::kBatch) continue;
+      if (l.prior_index >= 0) {
+        if (!EliminatePriorLandmark(l.prior_index)) fault_bits_ |= kFaultNotPositiveDefinite;
+      }
+      RetiredLandmark<S> r;
+      r.id = l.id;
+      r.position = l.position;
+      r.total_observations = l.total_obs;
+      (void)retired_.push_back(r);
+      ids_.Erase(l.id);
+      l.used = false;
+      (void)free_slots_.push_back(i);
+      --num_landmarks_;
+      ++summary_.landmarks_marginalized;
+    }
+  }
+
+  // Schur complement of prior landmark q onto the rest of the prior, then removal of its rows.
+  bool EliminatePriorLandmark(int q) {
+    const int o = 6 + 3 * q;
+    const int d = prior_dim_;
+    const Mat3<S> aa = Blk<3, 3>(prior_, kMaxPriorDim, o, o);
+    const Eigen::LLT<Mat3<S>> llt(aa);
+    const bool ok = llt.info() == Eigen::Success;
+    if (ok) {
+      const Mat3<S> t = llt.solve(Mat3<S>::Identity());
+      const Vec3<S> go = Blk<3, 1>(prior_g_, kMaxPriorDim, o, 0);
+      for (int r = 0; r < d / 3; ++r) {
+        if (3 * r == o) continue;
+        const Mat3<S> x = Blk<3, 3>(prior_, kMaxPriorDim, 3 * r, o) * t;
+        Blk<3, 3>(x_, 3 * P + 6, 3 * r, 0) = x;
+        Blk<3, 1>(prior_g_, kMaxPriorDim, 3 * r, 0) -= x * go;
+      }
+      for (int c = 0; c < d / 3; ++c) {
+        if (3 * c == o) continue;
+        const Mat3<S> a_c = Blk<3, 3>(prior_, kMaxPriorDim, o, 3 * c);
+        for (int r = 0; r < d / 3; ++r) {
+          if (3 * r == o) continue;
+          Blk<3, 3>(prior_, kMaxPriorDim, 3 * r, 3 * c) -=
+              Mat3<S>(Blk<3, 3>(x_, 3 * P + 6, 3 * r, 0)) * a_c;
+        }
+      }
+    }
+    // Remove rows/columns o..o+2 (order kept) and renumber the later prior landmarks.
+    for (int c = 0; c < d; ++c) {
+      if (c >= o && c < o + 3) continue;
+      const int cc = c < o ? c : c - 3;
+      for (int r = 0; r < d; ++r) {
+        if (r >= o && r < o + 3) continue;
+        const int rr = r < o ? r : r - 3;
+        prior_[cc * kMaxPriorDim + rr] = prior_[c * kMaxPriorDim + r];
+      }
+    }
+    for (int r = o + 3; r < d; ++r) prior_g_[r - 3] = prior_g_[r];
+    prior_dim_ = d - 3;
+    landmarks_[prior_landmarks_[q]].prior_index = -1;
+    prior_landmarks_.erase(static_cast<std::size_t>(q));
+    for (int k = q; k < static_cast<int>(prior_landmarks_.size()); ++k) {
+      landmarks_[prior_landmarks_[k]].prior_index = k;
+      prior_landmark_lin_[k] = prior_landmark_lin_[k + 1];
+    }
+    return ok;
+  }
+
+  Model model_{};
+  SwfOptions options_{};
+  int window_ = K;
+  bool configured_ = false;
+
+  PoseSlot poses_[kMaxPoses];
+  int head_ = 0;
+  int num_poses_ = 0;
+  std::int64_t frames_added_ = 0;
+
+  LandmarkSlot landmarks_[N];
+  core::StaticVector<int, N> free_slots_;
+  IdMap ids_;
+  int num_landmarks_ = 0;
+
+  // Prior (full symmetric, column-major, leading dimension kMaxPriorDim) over
+  // [oldest pose | prior landmarks], its right-hand side and linearization point.
+  S prior_[kMaxPriorDim * kMaxPriorDim] = {};
+  S prior_g_[kMaxPriorDim] = {};
+  S prior_delta_[kMaxPriorDim] = {};
+  S prior_grad_[kMaxPriorDim] = {};
+  int prior_dim_ = 6;
+  PoseType prior_pose_lin_{};
+  Mat6<S> prior_pose_jacobian_ = Mat6<S>::Identity();
+  mutable Mat6<S> scratch_jacobian_ = Mat6<S>::Identity();
+  core::StaticVector<int, P> prior_landmarks_;
+  Vec3<S> prior_landmark_lin_[P];
+
+  // Workspaces.
+  DenseCholesky<S, kMaxDense> dense_;
+  S rhs_[kMaxDense] = {};
+  S local_[kMaxLocalDim * kMaxLocalDim] = {};
+  S local_b_[kMaxLocalDim] = {};
+  S x_[(3 * P + 6) * 6] = {};
+  S norms_[kMaxObservations] = {};
+  int lm_begin_[N + 1] = {};
+  AdjEntry adj_[kMaxObservations] = {};
+  PoseType pose_backup_[kMaxPoses];
+  S pose_cov_[kMaxPosesDim * kMaxPosesDim] = {};
+  S column_[kMaxDense] = {};
+  Mat6<S> newest_pose_cov_ = Mat6<S>::Zero();
+
+  S tau_ = S(1e30);
+  std::uint32_t fault_bits_ = 0;
+  SwfSummary summary_{};
+  core::StaticVector<RetiredLandmark<S>, N> retired_;
+};
+
+}  // namespace swf::estimator

@@ -1,0 +1,336 @@
+// Exactness of the Sliding Window Filter on a linear-Gaussian problem, where marginalization
+// loses nothing: SWF(K) must equal an independent dense batch solution (estimates and marginal
+// covariances) for every K and every order of marginalizations, and SWF(K=1) must equal a
+// Kalman filter written independently here.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "swf/estimator/sliding_window_filter.hpp"
+
+namespace swf::estimator {
+namespace {
+
+// z = A_l l + A_p p  (3),   p_j+1 = F p_j + u  (6). Additive updates: the model is exactly linear.
+struct LinearModel {
+  using Scalar = double;
+  using PoseType = Vec6<double>;
+  using MotionType = Vec6<double>;
+  Mat36<double> a_pose;
+  Mat3<double> a_landmark;
+  Mat6<double> f;
+
+  bool Predict(const PoseType& p, const Vec3<double>& l, Vec3<double>* z, Mat36<double>* j_pose,
+               Mat3<double>* j_landmark) const {
+    *z = a_landmark * l + a_pose * p;
+    if (j_pose != nullptr) {
+      *j_pose = a_pose;
+      *j_landmark = a_landmark;
+    }
+    return true;
+  }
+  bool InitLandmark(const PoseType& p, const Vec3<double>& z, Vec3<double>* l) const {
+    *l = a_landmark.inverse() * (z - a_pose * p);
+    return true;
+  }
+  PoseType Propagate(const PoseType& p, const MotionType& u) const { return f * p + u; }
+  MotionType RelativeMotion(const PoseType& a, const PoseType& b) const { return b - f * a; }
+  Vec6<double> ProcessResidual(const PoseType& prev, const PoseType& next, const MotionType& u,
+                               Mat6<double>* j_prev, Mat6<double>* j_next) const {
+    *j_prev = -f;
+    *j_next = Mat6<double>::Identity();
+    return next - (f * prev + u);
+  }
+  static PoseType Retract(const PoseType& p, const Vec6<double>& d) { return p + d; }
+  static Vec6<double> Difference(const PoseType& base, const PoseType& p, Mat6<double>* j) {
+    j->setIdentity();
+    return p - base;
+  }
+};
+
+struct Obs {
+  int frame;
+  int landmark;
+  Vec3<double> z;
+};
+
+struct Problem {
+  LinearModel model;
+  int frames = 0;
+  int landmarks = 0;
+  std::vector<Vec6<double>> u;  // u[j] drives frame j (j >= 1)
+  std::vector<Obs> obs;         // sorted by frame
+  Vec6<double> first_pose;
+  double sigma_z = 0.5;
+  double sigma_q = 0.05;
+  SwfOptions options;
+};
+
+Problem MakeProblem(std::uint64_t seed, int frames, int landmarks, int min_track, int max_track) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_int_distribution<int> start(0, frames - 1);
+  std::uniform_int_distribution<int> length(min_track, max_track);
+  Problem pr;
+  pr.frames = frames;
+  pr.landmarks = landmarks;
+  pr.model.a_landmark = Mat3<double>::Identity() + 0.2 * Mat3<double>::Random();
+  pr.model.a_pose.leftCols<3>() = -Mat3<double>::Identity();
+  pr.model.a_pose.rightCols<3>() = Mat3<double>::Random();
+  pr.model.f = Mat6<double>::Identity() + 0.05 * Mat6<double>::Random();
+  std::vector<Vec6<double>> truth(frames);
+  truth[0] = Vec6<double>::Random();
+  pr.u.assign(frames, Vec6<double>::Zero());
+  for (int j = 1; j < frames; ++j) {
+    pr.u[j] = 0.3 * Vec6<double>::Random();
+    Vec6<double> w;
+    for (int k = 0; k < 6; ++k) w[k] = pr.sigma_q * g(rng);
+    truth[j] = pr.model.f * truth[j - 1] + pr.u[j] + w;
+  }
+  std::vector<Vec3<double>> points(landmarks);
+  std::vector<std::pair<int, int>> tracks(landmarks);
+  for (int i = 0; i < landmarks; ++i) {
+    points[i] = 5.0 * Vec3<double>::Random();
+    const int s = start(rng);
+    tracks[i] = {s, std::min(frames, s + length(rng))};
+  }
+  for (int j = 0; j < frames; ++j) {
+    for (int i = 0; i < landmarks; ++i) {
+      if (j < tracks[i].first || j >= tracks[i].second) continue;
+      Vec3<double> z;
+      Mat36<double> jp;
+      Mat3<double> jl;
+      pr.model.Predict(truth[j], points[i], &z, &jp, &jl);
+      for (int k = 0; k < 3; ++k) z[k] += pr.sigma_z * g(rng);
+      pr.obs.push_back({j, i, z});
+    }
+  }
+  pr.first_pose = truth[0] + 0.01 * Vec6<double>::Random();
+  pr.options.robust = false;
+  pr.options.max_iterations = 5;
+  pr.options.first_pose_sigma_m = 0.1;
+  pr.options.first_pose_sigma_rad = 0.2;
+  return pr;
+}
+
+// Independent dense batch: every pose and landmark, every factor, one linear solve.
+struct Batch {
+  Eigen::VectorXd x;
+  Eigen::MatrixXd cov;
+  int PoseIndex(int j) const { return 6 * j; }
+  int LandmarkIndex(int i) const { return 6 * frames + 3 * i; }
+  int frames = 0;
+};
+
+Batch SolveBatch(const Problem& pr, int last_frame) {
+  const int nf = last_frame + 1;
+  const int n = 6 * nf + 3 * pr.landmarks;
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
+  // Prior on pose 0 around the initial estimate; information as SwfOptions builds it.
+  Vec6<double> pi;
+  pi << Vec3<double>::Constant(1 / (0.1 * 0.1)), Vec3<double>::Constant(1 / (0.2 * 0.2));
+  h.block<6, 6>(0, 0) += pi.asDiagonal();
+  b.segment<6>(0) += pi.asDiagonal() * pr.first_pose;
+  const double qi = 1 / (pr.sigma_q * pr.sigma_q);
+  for (int j = 1; j < nf; ++j) {  // p_j - F p_j-1 = u_j
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(6, n);
+    jac.block<6, 6>(0, 6 * j) = Mat6<double>::Identity();
+    jac.block<6, 6>(0, 6 * (j - 1)) = -pr.model.f;
+    h += qi * jac.transpose() * jac;
+    b += qi * jac.transpose() * pr.u[j];
+  }
+  std::vector<bool> seen(pr.landmarks, false);
+  const double ri = 1 / (pr.sigma_z * pr.sigma_z);
+  for (const Obs& o : pr.obs) {
+    if (o.frame > last_frame) continue;
+    seen[o.landmark] = true;
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, n);
+    jac.block<3, 6>(0, 6 * o.frame) = pr.model.a_pose;
+    jac.block<3, 3>(0, 6 * nf + 3 * o.landmark) = pr.model.a_landmark;
+    h += ri * jac.transpose() * jac;
+    b += ri * jac.transpose() * o.z;
+  }
+  for (int i = 0; i < pr.landmarks; ++i)  // unseen landmarks: decoupled placeholders
+    if (!seen[i]) h.block<3, 3>(6 * nf + 3 * i, 6 * nf + 3 * i) = Mat3<double>::Identity();
+  Batch out;
+  out.frames = nf;
+  out.cov = h.inverse();
+  out.x = out.cov * b;
+  return out;
+}
+
+// Runs the SWF over the first `last_frame + 1` frames and compares with the batch solution.
+template <int K>
+void ExpectEqualsBatch(const Problem& pr, SwfMode mode, int last_frame) {
+  using Filter = SlidingWindowFilter<LinearModel, K, 64, 64, 64>;
+  auto swf = std::make_unique<Filter>();
+  SwfOptions options = pr.options;
+  options.mode = mode;
+  ASSERT_EQ(swf->Configure(pr.model, options), core::Status::kOk);
+  const Mat6<double> q_sqrt = Mat6<double>::Identity() / pr.sigma_q;
+  const Mat3<double> r_sqrt = Mat3<double>::Identity() / pr.sigma_z;
+  std::size_t next = 0;
+  for (int j = 0; j <= last_frame; ++j) {
+    if (j == 0) {
+      ASSERT_EQ(swf->AddPose(pr.first_pose), core::Status::kOk);
+    } else {
+      ASSERT_EQ(swf->AddPoseWithMotion(pr.u[j], q_sqrt), core::Status::kOk);
+    }
+    for (; next < pr.obs.size() && pr.obs[next].frame == j; ++next)
+      ASSERT_EQ(swf->AddObservation(pr.obs[next].landmark, pr.obs[next].z, r_sqrt),
+                core::Status::kOk);
+    ASSERT_EQ(swf->Update(), core::Status::kOk) << "frame " << j;
+  }
+  ASSERT_EQ(swf->ComputeCovariances(), core::Status::kOk);
+  const Batch batch = SolveBatch(pr, last_frame);
+  const int np = swf->NumPoses();
+  ASSERT_EQ(np, mode == SwfMode::kBatch ? last_frame + 1 : std::min(K, last_frame + 1));
+  for (int j = 0; j < np; ++j) {
+    const int frame = last_frame + 1 - np + j;
+    const Vec6<double> expected = batch.x.segment<6>(batch.PoseIndex(frame));
+    EXPECT_LT((swf->PoseAt(j) - expected).cwiseAbs().maxCoeff(), 1e-9) << "pose " << frame;
+    const Mat6<double> expected_cov =
+        batch.cov.block<6, 6>(batch.PoseIndex(frame), batch.PoseIndex(frame));
+    EXPECT_LT((swf->PoseCovariance(j) - expected_cov).cwiseAbs().maxCoeff(), 1e-9)
+        << "pose covariance " << frame;
+  }
+  int compared = 0;
+  int compared_prior = 0;
+  swf->ForEachLandmark([&](std::int64_t id, const Vec3<double>& position, int) {
+    const int index = batch.LandmarkIndex(static_cast<int>(id));
+    EXPECT_LT((position - batch.x.segment<3>(index)).cwiseAbs().maxCoeff(), 1e-9) << id;
+    Mat3<double> cov;
+    ASSERT_TRUE(swf->GetLandmarkCovariance(id, &cov));
+    EXPECT_LT((cov - batch.cov.block<3, 3>(index, index)).cwiseAbs().maxCoeff(), 1e-9) << id;
+    ++compared;
+  });
+  compared_prior = swf->NumPriorLandmarks();
+  EXPECT_GT(compared, 5);
+  if (mode != SwfMode::kBatch && last_frame + 1 > K) {
+    // The interesting case: information reached these landmarks only through the prior.
+    EXPECT_GT(compared_prior, 0);
+  }
+}
+
+TEST(SwfLinear, BatchModeEqualsIndependentBatch) {
+  const Problem pr = MakeProblem(1, 12, 30, 2, 6);
+  ExpectEqualsBatch<16>(pr, SwfMode::kBatch, 11);
+}
+
+TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSize) {
+  for (std::uint64_t seed : {2u, 3u, 4u}) {
+    const Problem pr = MakeProblem(seed, 14, 40, 1, 8);
+    ExpectEqualsBatch<1>(pr, SwfMode::kSlidingWindow, 13);
+    ExpectEqualsBatch<2>(pr, SwfMode::kSlidingWindow, 13);
+    ExpectEqualsBatch<3>(pr, SwfMode::kSlidingWindow, 13);
+    ExpectEqualsBatch<5>(pr, SwfMode::kSlidingWindow, 13);
+    // Stopping at different frames changes which poses and landmarks were marginalized when.
+    ExpectEqualsBatch<4>(pr, SwfMode::kSlidingWindow, 6);
+    ExpectEqualsBatch<4>(pr, SwfMode::kSlidingWindow, 9);
+  }
+}
+
+TEST(SwfLinear, LongTracksFillThePriorAndStillMatch) {
+  const Problem pr = MakeProblem(5, 10, 20, 8, 10);  // landmarks live across many windows
+  ExpectEqualsBatch<2>(pr, SwfMode::kSlidingWindow, 9);
+  ExpectEqualsBatch<3>(pr, SwfMode::kSlidingWindow, 9);
+}
+
+// K = 1 against a Kalman filter over [pose ; landmarks], written here in covariance form.
+TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) {
+  Problem pr = MakeProblem(7, 8, 10, 8, 8);
+  // Every landmark observed in every frame so the filter state is fixed from frame 0.
+  std::vector<Obs> all;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.0, pr.sigma_z);
+  std::vector<Vec3<double>> points(pr.landmarks);
+  for (auto& p : points) p = 4.0 * Vec3<double>::Random();
+  Vec6<double> pose = pr.first_pose;
+  for (int j = 0; j < pr.frames; ++j) {
+    if (j > 0) pose = pr.model.f * pose + pr.u[j];
+    for (int i = 0; i < pr.landmarks; ++i) {
+      Vec3<double> z;
+      Mat36<double> a;
+      Mat3<double> b;
+      pr.model.Predict(pose, points[i], &z, &a, &b);
+      all.push_back({j, i, z + Vec3<double>(g(rng), g(rng), g(rng))});
+    }
+  }
+  pr.obs = all;
+
+  const int n = 6 + 3 * pr.landmarks;
+  const double ri = 1 / (pr.sigma_z * pr.sigma_z);
+  auto measurement_jacobian = [&](int i) {
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, n);
+    jac.block<3, 6>(0, 0) = pr.model.a_pose;
+    jac.block<3, 3>(0, 6 + 3 * i) = pr.model.a_landmark;
+    return jac;
+  };
+  // Frame 0 in information form (landmarks have no prior), then covariance form.
+  Eigen::MatrixXd info = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+  Vec6<double> pi;
+  pi << Vec3<double>::Constant(1 / (0.1 * 0.1)), Vec3<double>::Constant(1 / (0.2 * 0.2));
+  info.block<6, 6>(0, 0) += pi.asDiagonal();
+  rhs.head<6>() += pi.asDiagonal() * pr.first_pose;
+  for (const Obs& o : pr.obs) {
+    if (o.frame != 0) continue;
+    const Eigen::MatrixXd jac = measurement_jacobian(o.landmark);
+    info += ri * jac.transpose() * jac;
+    rhs += ri * jac.transpose() * o.z;
+  }
+  Eigen::MatrixXd cov = info.inverse();
+  Eigen::VectorXd x = cov * rhs;
+
+  auto swf = std::make_unique<SlidingWindowFilter<LinearModel, 1, 16, 16, 16>>();
+  ASSERT_EQ(swf->Configure(pr.model, pr.options), core::Status::kOk);
+  const Mat6<double> q_sqrt = Mat6<double>::Identity() / pr.sigma_q;
+  const Mat3<double> r_sqrt = Mat3<double>::Identity() / pr.sigma_z;
+  for (int j = 0; j < pr.frames; ++j) {
+    if (j == 0) {
+      ASSERT_EQ(swf->AddPose(pr.first_pose), core::Status::kOk);
+    } else {
+      ASSERT_EQ(swf->AddPoseWithMotion(pr.u[j], q_sqrt), core::Status::kOk);
+      // Kalman predict.
+      Eigen::MatrixXd f = Eigen::MatrixXd::Identity(n, n);
+      f.block<6, 6>(0, 0) = pr.model.f;
+      x.head<6>() = pr.model.f * x.head<6>() + pr.u[j];
+      cov = f * cov * f.transpose();
+      cov.block<6, 6>(0, 0) += pr.sigma_q * pr.sigma_q * Mat6<double>::Identity();
+      // Kalman update, one measurement at a time (equivalent for independent noise).
+      for (const Obs& o : pr.obs) {
+        if (o.frame != j) continue;
+        const Eigen::MatrixXd h = measurement_jacobian(o.landmark);
+        const Eigen::Matrix3d s =
+            h * cov * h.transpose() + pr.sigma_z * pr.sigma_z * Mat3<double>::Identity();
+        const Eigen::MatrixXd gain = cov * h.transpose() * s.inverse();
+        x += gain * (o.z - h * x);
+        cov = (Eigen::MatrixXd::Identity(n, n) - gain * h) * cov;
+      }
+    }
+    for (const Obs& o : pr.obs) {
+      if (o.frame == j) {
+        ASSERT_EQ(swf->AddObservation(o.landmark, o.z, r_sqrt), core::Status::kOk);
+      }
+    }
+    ASSERT_EQ(swf->Update(), core::Status::kOk);
+    ASSERT_EQ(swf->ComputeCovariances(), core::Status::kOk);
+    EXPECT_LT((swf->NewestPose() - x.head<6>()).cwiseAbs().maxCoeff(), 1e-9) << "frame " << j;
+    EXPECT_LT((swf->NewestPoseCovariance() - cov.block<6, 6>(0, 0)).cwiseAbs().maxCoeff(), 1e-9);
+    for (int i = 0; i < pr.landmarks; ++i) {
+      Vec3<double> l;
+      Mat3<double> lc;
+      ASSERT_TRUE(swf->GetLandmark(i, &l));
+      ASSERT_TRUE(swf->GetLandmarkCovariance(i, &lc));
+      EXPECT_LT((l - x.segment<3>(6 + 3 * i)).cwiseAbs().maxCoeff(), 1e-9);
+      EXPECT_LT((lc - cov.block<3, 3>(6 + 3 * i, 6 + 3 * i)).cwiseAbs().maxCoeff(), 1e-9);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace swf::estimator

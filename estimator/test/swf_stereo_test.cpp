@@ -1,0 +1,267 @@
+// The flight configuration of the Sliding Window Filter (stereo measurements, SE(3) poses) on
+// synthetic scenes with exact truth: Jacobians, convergence against batch, the modes the paper
+// compares, robustness, bad input, allocation-freedom and determinism.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "scene_runner.hpp"
+#include "swf/estimator/sliding_window_filter.hpp"
+#include "swf/estimator/stereo_model.hpp"
+#include "swf/testing/allocation_counter.hpp"
+#include "synthetic_scene.hpp"
+
+namespace swf::estimator {
+namespace {
+
+using testing::ModeOptions;
+using testing::RunScene;
+using testing::SceneOptions;
+using testing::StereoSwf;
+using testing::SyntheticScene;
+
+// ---- Jacobians against central differences ----------------------------------------------
+
+TEST(StereoModel, MeasurementJacobiansMatchNumeric) {
+  StereoModel<double> model;
+  model.camera = testing::EdlRig();
+  const Pose<double> pose{ExpSO3<double>(Vec3<double>(3.0, 0.1, -0.05)), Vec3<double>(1, 2, 60)};
+  const Vec3<double> l(3.0, -1.0, 0.5);
+  Vec3<double> z;
+  Mat36<double> jp;
+  Mat3<double> jl;
+  ASSERT_TRUE(model.Predict(pose, l, &z, &jp, &jl));
+  const double h = 1e-6;
+  for (int k = 0; k < 6; ++k) {
+    Vec6<double> d = Vec6<double>::Zero();
+    d[k] = h;
+    Vec3<double> zp;
+    Vec3<double> zm;
+    ASSERT_TRUE(model.Predict(pose.Retract(d), l, &zp, nullptr, nullptr));
+    ASSERT_TRUE(model.Predict(pose.Retract(-d), l, &zm, nullptr, nullptr));
+    EXPECT_LT(((zp - zm) / (2 * h) - jp.col(k)).norm(), 1e-4 * (1 + jp.col(k).norm())) << k;
+  }
+  for (int k = 0; k < 3; ++k) {
+    Vec3<double> d = Vec3<double>::Zero();
+    d[k] = h;
+    Vec3<double> zp;
+    Vec3<double> zm;
+    ASSERT_TRUE(model.Predict(pose, l + d, &zp, nullptr, nullptr));
+    ASSERT_TRUE(model.Predict(pose, l - d, &zm, nullptr, nullptr));
+    EXPECT_LT(((zp - zm) / (2 * h) - jl.col(k)).norm(), 1e-4 * (1 + jl.col(k).norm())) << k;
+  }
+  // Behind the camera: no prediction.
+  EXPECT_FALSE(model.Predict(pose, Vec3<double>(1, 2, 80), &z, &jp, &jl));
+}
+
+TEST(StereoModel, ProcessJacobiansMatchNumeric) {
+  StereoModel<double> model;
+  const Pose<double> a{ExpSO3<double>(Vec3<double>(0.2, -0.3, 0.1)), Vec3<double>(1, 2, 3)};
+  const Pose<double> u{ExpSO3<double>(Vec3<double>(0.05, 0.02, -0.04)), Vec3<double>(0.3, -0.1, 1)};
+  const Pose<double> b =
+      (a * u).Retract((Vec6<double>() << 0.1, -0.2, 0.05, 0.03, -0.02, 0.04).finished());
+  Mat6<double> ja;
+  Mat6<double> jb;
+  model.ProcessResidual(a, b, u, &ja, &jb);
+  const double h = 1e-6;
+  for (int k = 0; k < 6; ++k) {
+    Vec6<double> d = Vec6<double>::Zero();
+    d[k] = h;
+    Mat6<double> unused1;
+    Mat6<double> unused2;
+    const Vec6<double> na = (model.ProcessResidual(a.Retract(d), b, u, &unused1, &unused2) -
+                             model.ProcessResidual(a.Retract(-d), b, u, &unused1, &unused2)) /
+                            (2 * h);
+    const Vec6<double> nb = (model.ProcessResidual(a, b.Retract(d), u, &unused1, &unused2) -
+                             model.ProcessResidual(a, b.Retract(-d), u, &unused1, &unused2)) /
+                            (2 * h);
+    EXPECT_LT((na - ja.col(k)).norm(), 1e-7) << k;
+    EXPECT_LT((nb - jb.col(k)).norm(), 1e-7) << k;
+  }
+  Mat6<double> jd;
+  const Vec6<double> delta = StereoModel<double>::Difference(a, b, &jd);
+  for (int k = 0; k < 6; ++k) {
+    Vec6<double> d = Vec6<double>::Zero();
+    d[k] = h;
+    Mat6<double> unused;
+    const Vec6<double> n = (StereoModel<double>::Difference(a, b.Retract(d), &unused) -
+                            StereoModel<double>::Difference(a, b.Retract(-d), &unused)) /
+                           (2 * h);
+    EXPECT_LT((n - jd.col(k)).norm(), 1e-7) << k;
+  }
+  EXPECT_LT((a.Retract(delta).Matrix() - b.Matrix()).norm(), 1e-12);
+}
+
+TEST(SwfStereo, HuberWeightingResistsGrossOutliers) {
+  SceneOptions so;
+  so.frames = 20;
+  so.num_landmarks = 60;
+  SyntheticScene clean(so);
+  // Corrupt a random 10% of the measurements by 30 px (gross mismatches; seeded).
+  auto corrupted = clean;
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (auto& f : corrupted.mutable_frames())
+    for (auto& o : f.obs)
+      if (unit(rng) < 0.1) o.z += Vec3<double>(30, 30, 30);
+  SwfOptions robust = ModeOptions(SwfMode::kSlidingWindow);
+  SwfOptions plain = robust;
+  plain.robust = false;
+  const double e_robust = RunScene(std::make_unique<StereoSwf<5>>().get(), corrupted, robust).rms_m;
+  const double e_plain = RunScene(std::make_unique<StereoSwf<5>>().get(), corrupted, plain).rms_m;
+  const double e_clean = RunScene(std::make_unique<StereoSwf<5>>().get(), clean, robust).rms_m;
+  std::printf("outliers: clean %.4f robust %.4f plain %.4f\n", e_clean, e_robust, e_plain);
+  EXPECT_LT(e_robust, 0.5 * e_plain);
+}
+
+TEST(SwfStereo, BadInputIsRefusedAndCounted) {
+  auto swf = std::make_unique<SlidingWindowFilter<StereoModel<double>, 3, 4, 2, 4>>();
+  StereoModel<double> model;
+  model.camera = testing::EdlRig();
+  SwfOptions bad;
+  bad.max_iterations = 0;
+  EXPECT_EQ(swf->Configure(model, bad), core::Status::kInvalidArgument);
+  ASSERT_EQ(swf->Configure(model, ModeOptions(SwfMode::kSlidingWindow)), core::Status::kOk);
+  const Mat3<double> r = Mat3<double>::Identity();
+  EXPECT_EQ(swf->AddObservation(1, Vec3<double>(500, 480, 300), r), core::Status::kNotConfigured);
+  EXPECT_EQ(swf->AddPoseConstantVelocity(Mat6<double>::Identity()), core::Status::kInvalidArgument);
+  Pose<double> start;
+  start.R << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  start.t = Vec3<double>(0, 0, 50);
+  ASSERT_EQ(swf->AddPose(start), core::Status::kOk);
+  EXPECT_EQ(swf->AddObservation(1, Vec3<double>(std::nan(""), 1, 1), r),
+            core::Status::kInvalidArgument);
+  EXPECT_EQ(swf->AddObservation(1, Vec3<double>(500, 510, 300), r), core::Status::kInvalidArgument);
+  EXPECT_EQ(swf->AddObservation(1, Vec3<double>(500, 480, 300), r), core::Status::kOk);
+  EXPECT_EQ(swf->AddObservation(1, Vec3<double>(500, 480, 300), r), core::Status::kInvalidArgument);
+  EXPECT_EQ(swf->AddObservation(2, Vec3<double>(400, 380, 300), r), core::Status::kOk);
+  EXPECT_EQ(swf->AddObservation(3, Vec3<double>(300, 280, 300), r), core::Status::kFull);
+  EXPECT_NE(swf->FaultBits() & kFaultMeasurementCapacity, 0u);
+  EXPECT_EQ(swf->Update(), core::Status::kOk);
+}
+
+// Paper Fig. 14 load on a long sideways pass: ~20 measurements per frame, tracks ~10 frames.
+SceneOptions LongPass(int frames) {
+  SceneOptions so;
+  so.motion = SceneOptions::Motion::kSideways;
+  so.frames = frames;
+  so.start_altitude_m = 50.0;
+  so.step_m = 2.2;
+  so.landmark_density_per_m2 = 0.055;
+  so.seed = 9;
+  return so;
+}
+
+template <typename Filter>
+std::uint64_t CountAllocations(Filter* swf, const SyntheticScene& scene, SwfMode mode) {
+  StereoModel<double> model;
+  model.camera = scene.camera();
+  EXPECT_EQ(swf->Configure(model, ModeOptions(mode)), core::Status::kOk);
+  Mat6<double> q_sqrt = Mat6<double>::Zero();
+  q_sqrt.diagonal() << Vec3<double>::Constant(2.0), Vec3<double>::Constant(50.0);
+  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options().sigma_px;
+  // Relative motions as an IMU would give them, computed before counting starts.
+  std::vector<Pose<double>> motion(scene.frames().size());
+  for (std::size_t j = 1; j < motion.size(); ++j)
+    motion[j] = scene.frames()[j - 1].truth.Inverse() * scene.frames()[j].truth;
+  int bad = 0;
+  swf::testing::AllocationScope scope;
+  for (std::size_t j = 0; j < scene.frames().size(); ++j) {
+    const auto& f = scene.frames()[j];
+    (void)(j == 0 ? swf->AddPose(f.truth) : swf->AddPoseWithMotion(motion[j], q_sqrt));
+    for (const auto& o : f.obs) (void)swf->AddObservation(o.id, o.z, r_sqrt);
+    const core::Status s = swf->Update();
+    bad += (s == core::Status::kOk || s == core::Status::kNotConverged) ? 0 : 1;
+    if (j % 50 == 0) (void)swf->ComputeCovariances();
+  }
+  const std::uint64_t count = scope.Count();
+  EXPECT_EQ(bad, 0);
+  return count;
+}
+
+TEST(SwfStereo, ZeroAllocationsOverAThousandFramesInEveryMode) {
+  const SyntheticScene scene(LongPass(1000));
+  double obs = 0;
+  for (const auto& f : scene.frames()) obs += static_cast<double>(f.obs.size());
+  std::printf("long pass: %.1f measurements per frame\n", obs / 1000.0);
+  EXPECT_GT(obs / 1000.0, 15.0);
+  EXPECT_EQ(CountAllocations(
+                std::make_unique<SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>>().get(),
+                scene, SwfMode::kSlidingWindow),
+            0u);
+  EXPECT_EQ(CountAllocations(
+                std::make_unique<SlidingWindowFilter<StereoModel<double>, 1, 400, 64, 96>>().get(),
+                scene, SwfMode::kSlidingWindow),
+            0u);
+  EXPECT_EQ(CountAllocations(
+                std::make_unique<SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>>().get(),
+                scene, SwfMode::kVisualOdometry),
+            0u);
+  EXPECT_EQ(CountAllocations(
+                std::make_unique<SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>>().get(),
+                scene, SwfMode::kVsdf),
+            0u);
+  // Batch holds the whole sequence in its window, so it is bounded by K frames.
+  const SyntheticScene short_pass(LongPass(60));
+  EXPECT_EQ(CountAllocations(
+                std::make_unique<SlidingWindowFilter<StereoModel<double>, 60, 1000, 64, 1>>().get(),
+                short_pass, SwfMode::kBatch),
+            0u);
+}
+
+// Numerical trouble is a counted, reported recovery: a poisoned state resets the filter.
+TEST(SwfStereo, NonFiniteStateResetsAndReports) {
+  auto swf = std::make_unique<StereoSwf<3>>();
+  StereoModel<double> model;
+  model.camera = testing::EdlRig();
+  ASSERT_EQ(swf->Configure(model, ModeOptions(SwfMode::kSlidingWindow)), core::Status::kOk);
+  Pose<double> start;
+  start.R << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  start.t = Vec3<double>(0, 0, 50);
+  ASSERT_EQ(swf->AddPose(start), core::Status::kOk);
+  ASSERT_EQ(swf->AddObservation(1, Vec3<double>(500, 480, 300), Mat3<double>::Identity()),
+            core::Status::kOk);
+  // A motion input with a NaN poisons the predicted pose.
+  Pose<double> poisoned;
+  poisoned.t = Vec3<double>(std::nan(""), 0, 0);
+  ASSERT_EQ(swf->Update(), core::Status::kOk);
+  ASSERT_EQ(swf->AddPoseWithMotion(poisoned, Mat6<double>::Identity()), core::Status::kOk);
+  EXPECT_EQ(swf->Update(), core::Status::kNumericalFailure);
+  EXPECT_NE(swf->FaultBits() & kFaultReset, 0u);
+  EXPECT_EQ(swf->NumPoses(), 0);
+  // And it works again from the next frame.
+  ASSERT_EQ(swf->AddPose(start), core::Status::kOk);
+  ASSERT_EQ(swf->AddObservation(1, Vec3<double>(500, 480, 300), Mat3<double>::Identity()),
+            core::Status::kOk);
+  EXPECT_EQ(swf->Update(), core::Status::kOk);
+}
+
+TEST(SwfStereo, RepeatRunsAreBitIdentical) {
+  const SyntheticScene scene(LongPass(120));
+  using Filter = SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>;
+  auto a = std::make_unique<Filter>();
+  auto b = std::make_unique<Filter>();
+  RunScene(a.get(), scene, ModeOptions(SwfMode::kSlidingWindow));
+  RunScene(b.get(), scene, ModeOptions(SwfMode::kSlidingWindow));
+  ASSERT_EQ(a->NumPoses(), b->NumPoses());
+  for (int j = 0; j < a->NumPoses(); ++j) {
+    EXPECT_EQ(std::memcmp(a->PoseAt(j).R.data(), b->PoseAt(j).R.data(), sizeof(double) * 9), 0);
+    EXPECT_EQ(std::memcmp(a->PoseAt(j).t.data(), b->PoseAt(j).t.data(), sizeof(double) * 3), 0);
+  }
+  std::vector<std::pair<std::int64_t, Vec3<double>>> la;
+  std::vector<std::pair<std::int64_t, Vec3<double>>> lb;
+  a->ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int) { la.push_back({id, p}); });
+  b->ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int) { lb.push_back({id, p}); });
+  ASSERT_EQ(la.size(), lb.size());
+  ASSERT_GT(la.size(), 10u);
+  for (std::size_t i = 0; i < la.size(); ++i) {
+    EXPECT_EQ(la[i].first, lb[i].first);
+    EXPECT_EQ(std::memcmp(la[i].second.data(), lb[i].second.data(), sizeof(double) * 3), 0);
+  }
+}
+
+}  // namespace
+}  // namespace swf::estimator

@@ -1,0 +1,71 @@
+// Appearance: what the ground looks like, as a radiance factor per world point (1 = flat,
+// fully lit ground of mean albedo; the renderer turns it into digital numbers).
+//
+//   radiance(x, y) = albedo(x, y) * shading(x, y) * (1 + detail(x, y, footprint))
+// - albedo (per height-field node) from real orbital imagery: a mostly-lit window of the Kaguya
+//   (SELENE) south-pole orthoimage, normalized to mean 1 and mirror-tiled at image_pixel_m per
+//   pixel, modulated by a seeded crop of the USGS/Clementine global albedo map spread over the
+//   whole terrain (weight global_weight). Without images, albedo is 1.
+// - shading (per node, Lambert with an ambient term, normalized so flat lit ground is 1):
+//       ambient + (1 - ambient) * lit * max(0, n . s) / sin(elevation)
+//   with n the height-field normal and lit the cast-shadow test: a sweep toward the sun carries
+//   the horizon height node to node (dropping cell * tan(elevation) per cell travelled) and a
+//   node is lit when it reaches above it.
+// - detail: procedural value-noise octaves of wavelength cell / 2^o below the grid, amplitude
+//   detail_strength * 2^(-o/2), each faded in only where its wavelength spans >= 3 pixels and
+//   out below 1.5 (band-limiting by the pixel footprint: the texture anti-aliasing), so there is
+//   trackable texture from 100 m down to a few metres without aliasing.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "swf/core/status.hpp"
+#include "swf/sim/terrain.hpp"
+
+namespace swf::sim {
+
+struct AppearanceOptions {
+  std::string intensity_image_path;  // e.g. ../shared/data/terrain/kaguya_south_pole_intensity.pgm
+  std::string mask_image_path;       // its validity mask (optional)
+  std::string global_albedo_path;    // e.g. ../shared/data/terrain/moon_4k.jpg (optional)
+  double image_pixel_m = 0.2;        // ground size of one orbital-image pixel
+  double global_weight = 0.35;
+  double sun_azimuth_deg = 135.0;  // from +x towards +y
+  double sun_elevation_deg = 30.0;
+  double ambient = 0.05;
+  double detail_strength = 0.3;
+  std::uint64_t seed = 1;
+};
+
+// Paths of the shared terrain imagery under shared_dir (the project's ../shared).
+AppearanceOptions DefaultImagery(const std::string& shared_dir);
+
+class Appearance {
+ public:
+  // kInvalidArgument for a sun elevation outside (0, 90] deg, ambient outside [0, 1], negative
+  // weights; kIoError / kCorruptData when a named image cannot be read.
+  core::Status Configure(const Terrain& terrain, const AppearanceOptions& options);
+
+  // Radiance factor at a world point; footprint_m is the ground size of one pixel there.
+  double Radiance(double x_m, double y_m, double footprint_m) const;
+
+  // Per-node grids (row-major like Terrain::Heights()).
+  const std::vector<float>& Albedo() const { return albedo_; }
+  const std::vector<float>& Shaded() const { return shaded_; }
+  const std::vector<std::uint8_t>& Lit() const { return lit_; }
+  std::int32_t Size() const { return size_; }
+
+ private:
+  AppearanceOptions options_;
+  std::int32_t size_ = 0;
+  double origin_m_ = 0.0;
+  double cell_m_ = 1.0;
+  std::vector<float> albedo_;
+  std::vector<float> shaded_;
+  std::vector<std::uint8_t> lit_;
+  std::uint64_t detail_key_ = 0;
+};
+
+}  // namespace swf::sim

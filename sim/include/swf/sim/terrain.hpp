@@ -1,0 +1,136 @@
+// Terrain: the simulated landing area as a height field with exact ground truth.
+//
+// Grid: size x size nodes, spacing cell_m, centred on the world origin: node (i, j) sits at
+//   x = (i - (size-1)/2) cell_m,  y = (j - (size-1)/2) cell_m,   heights[j * size + i]
+// and h(x, y) between nodes is bilinear. Layers, each deterministic from the seed:
+//   1. tilt: the plane tilt_x * x + tilt_y * y (exact-slope tests);
+//   2. multi-scale relief: fractional-Brownian value noise, octaves of wavelength
+//      largest_wavelength_m / 2^o down to 4 cells, amplitude ~ wavelength^hurst, scaled to
+//      relief_rms_m;
+//   3. craters: cumulative size-frequency distribution N(>D) = density_at_1m * D^-sfd_exponent per
+//      m^2 (D in metres) between min and max diameter (exponent 2: the lunar equilibrium slope of
+//      small craters, Gault 1970), at uniform positions. Profile (r from the centre, R = D/2,
+//      depth d = depth_ratio D f, rim height h = rim_ratio D f, freshness f uniform in
+//      [min_freshness, 1]; Pike 1977 gives d/D ~ 0.2, h/D ~ 0.04 for fresh simple craters):
+//         r <= R:       dz = h + d ((r/R)^2 - 1)            (parabolic bowl)
+//         R < r < 3R:   dz = h ((R/r)^3 - 1/27) / (1 - 1/27)  (ejecta blanket, 0 at 3R)
+//   4. rocks: the Golombek & Rapp (1997) model: the cumulative fractional area covered by rocks of
+//      diameter >= D is F_k(D) = k exp(-q(k) D), q(k) = 1.79 + 0.152 / k. The number density
+//      follows from n(D) pi D^2 / 4 = -dF/dD. Rocks between min and max diameter are drawn at
+//      uniform positions (expected count, rounded), shaped as half-ellipsoid domes of height
+//      height_ratio * D (Golombek et al. 2003: ~0.5) resting on the surface below them.
+// The crater and rock lists are the exact truth; the height field is rasterized from them.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "swf/core/status.hpp"
+#include "swf/sim/surface.hpp"
+
+namespace swf::sim {
+
+struct CraterOptions {
+  double density_at_1m = 0.0;  // N(>1 m) per m^2; 0 disables craters
+  double sfd_exponent = 2.0;
+  double min_diameter_m = 1.0;
+  double max_diameter_m = 40.0;
+  double depth_ratio = 0.2;
+  double rim_ratio = 0.04;
+  double min_freshness = 0.3;
+};
+
+struct RockOptions {
+  double k = 0.0;  // Golombek-Rapp cumulative fractional area; 0 disables rocks
+  double min_diameter_m = 0.3;
+  double max_diameter_m = 2.5;
+  double height_ratio = 0.5;
+  // Lab-scale models: the drawn rock (diameters above are model units, metres at scale 1) is
+  // scaled by this factor, keeping the fractional area covered.
+  double size_scale = 1.0;
+};
+
+struct TerrainOptions {
+  std::int32_t size = 2048;  // nodes per side
+  double cell_m = 0.1;
+  double tilt_x = 0.0;  // dz/dx of a plane under everything
+  double tilt_y = 0.0;
+  double relief_rms_m = 0.5;
+  double relief_hurst = 0.8;
+  double largest_wavelength_m = 200.0;
+  CraterOptions craters;
+  RockOptions rocks;
+  std::uint64_t seed = 1;
+};
+
+enum class TerrainPreset : std::uint8_t { kSmoothPlains, kCraterField, kRockField };
+
+// Presets at the paper's EDL scale (cell 0.1 m, 204.8 m square). For the lab rig, scale cell_m
+// and every length by 0.1 (ScaleTerrain).
+TerrainOptions TerrainPresetOptions(TerrainPreset preset, std::uint64_t seed = 1);
+TerrainOptions ScaleTerrain(const TerrainOptions& options, double factor);
+// "plains" | "craters" | "rocks"; false for an unknown name.
+bool ParseTerrainPreset(const char* name, TerrainPreset* preset);
+
+struct Crater {
+  Eigen::Vector2d center_m{0.0, 0.0};
+  double diameter_m = 0.0;
+  double depth_m = 0.0;
+  double rim_height_m = 0.0;
+};
+
+struct Rock {
+  Eigen::Vector2d center_m{0.0, 0.0};
+  double diameter_m = 0.0;
+  double height_m = 0.0;  // above the surface the rock rests on
+  double base_z_m = 0.0;  // that surface's height at the rock centre
+};
+
+class Terrain final : public Surface {
+ public:
+  // kInvalidArgument for size outside [8, 16384], non-positive cell or lengths, bad SFD or rock
+  // parameters (k >= 1, min diameter > max, ...).
+  core::Status Configure(const TerrainOptions& options);
+
+  double HeightAt(double x_m, double y_m) const override;
+  bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                 double* t) const override;
+
+  std::int32_t Size() const { return size_; }
+  double CellM() const { return options_.cell_m; }
+  double NodeX(std::int32_t i) const { return origin_m_ + i * options_.cell_m; }
+  double NodeY(std::int32_t j) const { return origin_m_ + j * options_.cell_m; }
+  double HalfExtentM() const { return -origin_m_; }
+  // Node heights, row-major (j * size + i): the full surface and the surface without rocks.
+  const std::vector<float>& Heights() const { return heights_; }
+  const std::vector<float>& BaseHeights() const { return base_heights_; }
+  double MinHeightM() const { return min_height_m_; }
+  double MaxHeightM() const { return max_height_m_; }
+  const std::vector<Crater>& Craters() const { return craters_; }
+  const std::vector<Rock>& Rocks() const { return rocks_; }
+  const TerrainOptions& Options() const { return options_; }
+
+ private:
+  double NodeHeight(std::int32_t i, std::int32_t j) const { return heights_[j * size_ + i]; }
+  // Bilinear height in grid coordinates (gx, gy), clamped to the grid.
+  double GridHeight(double gx, double gy) const;
+  bool FineMarch(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double t_begin,
+                 double t_end, double* t) const;
+
+  static constexpr std::int32_t kBlock = 8;  // cells per side of a max-height block
+
+  TerrainOptions options_;
+  std::int32_t size_ = 0;
+  double origin_m_ = 0.0;
+  std::vector<float> heights_;
+  std::vector<float> base_heights_;
+  std::int32_t blocks_ = 0;
+  std::vector<float> block_max_;
+  double min_height_m_ = 0.0;
+  double max_height_m_ = 0.0;
+  std::vector<Crater> craters_;
+  std::vector<Rock> rocks_;
+};
+
+}  // namespace swf::sim

@@ -1,0 +1,279 @@
+#include "swf/sim/appearance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "swf/sim/image_io.hpp"
+#include "swf/sim/rng.hpp"
+
+namespace swf::sim {
+namespace {
+
+constexpr int kDetailOctaves = 8;
+
+double HashValue(std::uint64_t key, std::int64_t ix, std::int64_t iy) {
+  const std::uint64_t h = Mix64(key ^ (static_cast<std::uint64_t>(ix) * 0x9E3779B97F4A7C15ull) ^
+                                (static_cast<std::uint64_t>(iy) * 0xC2B2AE3D27D4EB4Full));
+  return static_cast<double>(h >> 11) * 0x1.0p-52 - 1.0;
+}
+
+double ValueNoise(std::uint64_t key, double x, double y) {
+  const double fx0 = std::floor(x);
+  const double fy0 = std::floor(y);
+  const auto ix = static_cast<std::int64_t>(fx0);
+  const auto iy = static_cast<std::int64_t>(fy0);
+  double fx = x - fx0;
+  double fy = y - fy0;
+  fx = fx * fx * (3.0 - 2.0 * fx);
+  fy = fy * fy * (3.0 - 2.0 * fy);
+  const double v00 = HashValue(key, ix, iy);
+  const double v10 = HashValue(key, ix + 1, iy);
+  const double v01 = HashValue(key, ix, iy + 1);
+  const double v11 = HashValue(key, ix + 1, iy + 1);
+  const double top = v00 + fx * (v10 - v00);
+  const double bottom = v01 + fx * (v11 - v01);
+  return top + fy * (bottom - top);
+}
+
+// Bilinear sample of an image at continuous pixel coordinates, mirror-repeated.
+double SampleMirrored(const std::vector<float>& img, std::int32_t w, std::int32_t h, double x,
+                      double y) {
+  auto mirror = [](double v, std::int32_t n) {
+    const double period = 2.0 * (n - 1);
+    double m = std::fmod(v, period);
+    if (m < 0.0) m += period;
+    return m > n - 1 ? period - m : m;
+  };
+  x = mirror(x, w);
+  y = mirror(y, h);
+  const std::int32_t i = std::min(static_cast<std::int32_t>(x), w - 2);
+  const std::int32_t j = std::min(static_cast<std::int32_t>(y), h - 2);
+  const double fx = x - i;
+  const double fy = y - j;
+  const float* p = &img[static_cast<size_t>(j) * w + i];
+  const double top = p[0] + fx * (p[1] - p[0]);
+  const double bottom = p[w] + fx * (p[w + 1] - p[w]);
+  return top + fy * (bottom - top);
+}
+
+}  // namespace
+
+AppearanceOptions DefaultImagery(const std::string& shared_dir) {
+  AppearanceOptions o;
+  o.intensity_image_path = shared_dir + "/data/terrain/kaguya_south_pole_intensity.pgm";
+  o.mask_image_path = shared_dir + "/data/terrain/kaguya_south_pole_mask.pgm";
+  o.global_albedo_path = shared_dir + "/data/terrain/moon_4k.jpg";
+  return o;
+}
+
+core::Status Appearance::Configure(const Terrain& terrain, const AppearanceOptions& options) {
+  if (!(options.sun_elevation_deg > 0.0 && options.sun_elevation_deg <= 90.0) ||
+      !(options.ambient >= 0.0 && options.ambient <= 1.0) || !(options.global_weight >= 0.0) ||
+      !(options.detail_strength >= 0.0) || !(options.image_pixel_m > 0.0) ||
+      !std::isfinite(options.sun_azimuth_deg) || terrain.Size() < 2) {
+    return core::Status::kInvalidArgument;
+  }
+  options_ = options;
+  size_ = terrain.Size();
+  origin_m_ = terrain.NodeX(0);
+  cell_m_ = terrain.CellM();
+  const size_t n = static_cast<size_t>(size_) * size_;
+  Rng rng(options.seed);
+  detail_key_ = rng.Bits();
+  albedo_.assign(n, 1.0f);
+
+  // Kaguya: pick the 384 px window with the most valid, lit pixels; normalize to mean 1.
+  if (!options.intensity_image_path.empty()) {
+    GrayImage intensity;
+    GrayImage mask;
+    if (const core::Status s = ReadGrayImage(options.intensity_image_path, &intensity);
+        s != core::Status::kOk) {
+      return s;
+    }
+    const bool has_mask = !options.mask_image_path.empty();
+    if (has_mask) {
+      if (const core::Status s = ReadGrayImage(options.mask_image_path, &mask);
+          s != core::Status::kOk) {
+        return s;
+      }
+      if (mask.width != intensity.width || mask.height != intensity.height) {
+        return core::Status::kCorruptData;
+      }
+    }
+    constexpr std::int32_t kLitDn = 20;
+    const std::int32_t win = std::min({384, intensity.width, intensity.height});
+    if (win < 16) return core::Status::kCorruptData;
+    auto good = [&](std::int32_t x, std::int32_t y) {
+      return intensity.At(x, y) >= kLitDn && (!has_mask || mask.At(x, y) > 0);
+    };
+    std::int64_t best = -1;
+    std::int32_t best_x = 0;
+    std::int32_t best_y = 0;
+    for (std::int32_t y0 = 0; y0 + win <= intensity.height; y0 += 32) {
+      for (std::int32_t x0 = 0; x0 + win <= intensity.width; x0 += 32) {
+        std::int64_t count = 0;
+        for (std::int32_t y = y0; y < y0 + win; y += 4) {
+          for (std::int32_t x = x0; x < x0 + win; x += 4) count += good(x, y) ? 1 : 0;
+        }
+        if (count > best) {
+          best = count;
+          best_x = x0;
+          best_y = y0;
+        }
+      }
+    }
+    std::vector<float> window(static_cast<size_t>(win) * win);
+    double sum = 0.0;
+    std::int64_t lit = 0;
+    for (std::int32_t y = 0; y < win; ++y) {
+      for (std::int32_t x = 0; x < win; ++x) {
+        if (good(best_x + x, best_y + y)) {
+          sum += intensity.At(best_x + x, best_y + y);
+          ++lit;
+        }
+      }
+    }
+    const double mean = lit > 0 ? sum / static_cast<double>(lit) : 1.0;
+    for (std::int32_t y = 0; y < win; ++y) {
+      for (std::int32_t x = 0; x < win; ++x) {
+        const double v = good(best_x + x, best_y + y) ? intensity.At(best_x + x, best_y + y) / mean
+                                                      : 0.5;  // real shadow / no data: dim
+        window[static_cast<size_t>(y) * win + x] = static_cast<float>(std::clamp(v, 0.3, 2.5));
+      }
+    }
+    const double offset_x = rng.Uniform(0.0, 2.0 * win);
+    const double offset_y = rng.Uniform(0.0, 2.0 * win);
+    const double per_cell = cell_m_ / options.image_pixel_m;
+    for (std::int32_t j = 0; j < size_; ++j) {
+      for (std::int32_t i = 0; i < size_; ++i) {
+        albedo_[static_cast<size_t>(j) * size_ + i] = static_cast<float>(SampleMirrored(
+            window, win, win, offset_x + i * per_cell, offset_y + (size_ - 1 - j) * per_cell));
+      }
+    }
+  }
+
+  // Global albedo: a 256 px crop between +-45 deg latitude stretched over the terrain.
+  if (!options.global_albedo_path.empty() && options.global_weight > 0.0) {
+    GrayImage global;
+    if (const core::Status s = ReadGrayImage(options.global_albedo_path, &global);
+        s != core::Status::kOk) {
+      return s;
+    }
+    constexpr std::int32_t kCrop = 256;
+    if (global.width < 2 * kCrop || global.height < 2 * kCrop) return core::Status::kCorruptData;
+    const auto x0 = static_cast<std::int32_t>(rng.UniformInt(0, global.width - kCrop - 1));
+    const auto y0 = static_cast<std::int32_t>(
+        rng.UniformInt(global.height / 4, 3 * global.height / 4 - kCrop - 1));
+    std::vector<float> crop(static_cast<size_t>(kCrop) * kCrop);
+    double sum = 0.0;
+    for (std::int32_t y = 0; y < kCrop; ++y) {
+      for (std::int32_t x = 0; x < kCrop; ++x) {
+        crop[static_cast<size_t>(y) * kCrop + x] = global.At(x0 + x, y0 + y);
+        sum += global.At(x0 + x, y0 + y);
+      }
+    }
+    const double mean = std::max(1.0, sum / (kCrop * kCrop));
+    const double scale = (kCrop - 1.0) / (size_ - 1.0);
+    for (std::int32_t j = 0; j < size_; ++j) {
+      for (std::int32_t i = 0; i < size_; ++i) {
+        const double g = SampleMirrored(crop, kCrop, kCrop, i * scale, (size_ - 1 - j) * scale);
+        float& a = albedo_[static_cast<size_t>(j) * size_ + i];
+        a = static_cast<float>(a * std::max(0.2, 1.0 + options.global_weight * (g / mean - 1.0)));
+      }
+    }
+  }
+
+  // Cast shadows: sweep from the sun side carrying the horizon height.
+  const double az = options.sun_azimuth_deg * std::numbers::pi / 180.0;
+  const double el = options.sun_elevation_deg * std::numbers::pi / 180.0;
+  const Eigen::Vector3d sun(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+  const std::vector<float>& h = terrain.Heights();
+  lit_.assign(n, 1);
+  if (options.sun_elevation_deg < 90.0) {
+    // Walk along the dominant horizontal axis of the sun direction ("major"), one node per step.
+    const bool x_major = std::abs(sun.x()) >= std::abs(sun.y());
+    const double major = x_major ? sun.x() : sun.y();
+    const double minor = x_major ? sun.y() : sun.x();
+    const int step = major > 0.0 ? 1 : -1;         // towards the sun along the major axis
+    const double slope = minor / std::abs(major);  // minor-axis offset per major step
+    const double drop = cell_m_ * std::sqrt(1.0 + slope * slope) * std::tan(el);
+    auto index = [&](std::int32_t a, std::int32_t b) {  // a along major, b along minor
+      return x_major ? static_cast<size_t>(b) * size_ + a : static_cast<size_t>(a) * size_ + b;
+    };
+    std::vector<double> horizon(n, -std::numeric_limits<double>::infinity());
+    const std::int32_t first = step > 0 ? size_ - 1 : 0;
+    for (std::int32_t b = 0; b < size_; ++b) horizon[index(first, b)] = h[index(first, b)];
+    for (std::int32_t a = first - step; a >= 0 && a < size_; a -= step) {
+      const std::int32_t up = a + step;
+      for (std::int32_t b = 0; b < size_; ++b) {
+        const double pb = b + slope;
+        double upstream = -std::numeric_limits<double>::infinity();
+        if (pb >= 0.0 && pb <= size_ - 1) {
+          const std::int32_t b0 = std::min(static_cast<std::int32_t>(pb), size_ - 2);
+          const double f = pb - b0;
+          upstream = (1.0 - f) * horizon[index(up, b0)] + f * horizon[index(up, b0 + 1)];
+        }
+        const double here = h[index(a, b)];
+        const double carried = upstream - drop;
+        lit_[index(a, b)] = here >= carried ? 1 : 0;
+        horizon[index(a, b)] = std::max(here, carried);
+      }
+    }
+  }
+
+  shaded_.assign(n, 0.0f);
+  const double inv_2cell = 0.5 / cell_m_;
+  for (std::int32_t j = 0; j < size_; ++j) {
+    for (std::int32_t i = 0; i < size_; ++i) {
+      const std::int32_t il = std::max(0, i - 1);
+      const std::int32_t ir = std::min(size_ - 1, i + 1);
+      const std::int32_t jd = std::max(0, j - 1);
+      const std::int32_t ju = std::min(size_ - 1, j + 1);
+      const double hx =
+          (h[static_cast<size_t>(j) * size_ + ir] - h[static_cast<size_t>(j) * size_ + il]) *
+          inv_2cell * 2.0 / (ir - il);
+      const double hy =
+          (h[static_cast<size_t>(ju) * size_ + i] - h[static_cast<size_t>(jd) * size_ + i]) *
+          inv_2cell * 2.0 / (ju - jd);
+      const Eigen::Vector3d normal = Eigen::Vector3d(-hx, -hy, 1.0).normalized();
+      const size_t k = static_cast<size_t>(j) * size_ + i;
+      const double direct = lit_[k] * std::max(0.0, normal.dot(sun)) / std::sin(el);
+      shaded_[k] =
+          static_cast<float>(albedo_[k] * (options.ambient + (1.0 - options.ambient) * direct));
+    }
+  }
+  return core::Status::kOk;
+}
+
+double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
+  const double gx = std::clamp((x_m - origin_m_) / cell_m_, 0.0, size_ - 1.0);
+  const double gy = std::clamp((y_m - origin_m_) / cell_m_, 0.0, size_ - 1.0);
+  const std::int32_t i = std::min(static_cast<std::int32_t>(gx), size_ - 2);
+  const std::int32_t j = std::min(static_cast<std::int32_t>(gy), size_ - 2);
+  const double fx = gx - i;
+  const double fy = gy - j;
+  const float* p = &shaded_[static_cast<size_t>(j) * size_ + i];
+  const double top = p[0] + fx * (p[1] - p[0]);
+  const double bottom = p[size_] + fx * (p[size_ + 1] - p[size_]);
+  const double base = top + fy * (bottom - top);
+
+  double detail = 0.0;
+  double wavelength = cell_m_;
+  double amplitude = options_.detail_strength;
+  std::uint64_t key = detail_key_;
+  for (int o = 0; o < kDetailOctaves; ++o) {
+    const double ratio = wavelength / footprint_m;  // pixels per wavelength
+    if (ratio < 1.5) break;
+    double w = std::min(1.0, (ratio - 1.5) / 1.5);
+    w = w * w * (3.0 - 2.0 * w);
+    detail += w * amplitude * ValueNoise(key, x_m / wavelength, y_m / wavelength);
+    wavelength *= 0.5;
+    amplitude *= std::numbers::sqrt2 * 0.5;
+    key = Mix64(key);
+  }
+  return base * std::max(0.05, 1.0 + detail);
+}
+
+}  // namespace swf::sim

@@ -1,0 +1,174 @@
+#include "swf/sim/terrain.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "swf/sim/appearance.hpp"
+#include "swf/sim/hazard.hpp"
+
+namespace swf::sim {
+namespace {
+
+TerrainOptions Small(TerrainPreset preset, std::uint64_t seed = 3) {
+  TerrainOptions o = TerrainPresetOptions(preset, seed);
+  o.size = 512;  // 51.2 m: keeps the tests fast
+  return o;
+}
+
+TEST(TerrainTest, SameSeedGivesIdenticalHeightsAndOtherSeedDiffers) {
+  Terrain a;
+  Terrain b;
+  Terrain c;
+  ASSERT_EQ(a.Configure(Small(TerrainPreset::kCraterField, 3)), core::Status::kOk);
+  ASSERT_EQ(b.Configure(Small(TerrainPreset::kCraterField, 3)), core::Status::kOk);
+  ASSERT_EQ(c.Configure(Small(TerrainPreset::kCraterField, 4)), core::Status::kOk);
+  EXPECT_EQ(a.Heights(), b.Heights());
+  EXPECT_NE(a.Heights(), c.Heights());
+}
+
+TEST(TerrainTest, CraterAndRockCountsFollowTheirModels) {
+  Terrain t;
+  const TerrainOptions o = Small(TerrainPreset::kRockField);
+  ASSERT_EQ(t.Configure(o), core::Status::kOk);
+  const double area = std::pow((o.size - 1) * o.cell_m, 2);
+  const double b = o.craters.sfd_exponent;
+  const double expected_craters =
+      area * o.craters.density_at_1m *
+      (std::pow(o.craters.min_diameter_m, -b) - std::pow(o.craters.max_diameter_m, -b));
+  EXPECT_NEAR(static_cast<double>(t.Craters().size()), expected_craters, 0.51);
+  // Golombek-Rapp: the fractional area covered by drawn rocks ~ F(Dmin) - F(Dmax).
+  const double q = 1.79 + 0.152 / o.rocks.k;
+  const double expected_fraction =
+      o.rocks.k * (std::exp(-q * o.rocks.min_diameter_m) - std::exp(-q * o.rocks.max_diameter_m));
+  double covered = 0.0;
+  for (const Rock& r : t.Rocks()) covered += std::numbers::pi * 0.25 * r.diameter_m * r.diameter_m;
+  EXPECT_NEAR(covered / area, expected_fraction, 0.2 * expected_fraction);
+  for (const Rock& r : t.Rocks()) {
+    EXPECT_GE(r.diameter_m, o.rocks.min_diameter_m);
+    EXPECT_LE(r.diameter_m, o.rocks.max_diameter_m);
+    EXPECT_DOUBLE_EQ(r.height_m, 0.5 * r.diameter_m);
+  }
+}
+
+TEST(TerrainTest, RayHitsATiltedPlaneExactly) {
+  TerrainOptions o;
+  o.size = 256;
+  o.relief_rms_m = 0.0;
+  o.tilt_x = 0.1;
+  o.tilt_y = -0.05;
+  Terrain t;
+  ASSERT_EQ(t.Configure(o), core::Status::kOk);
+  const Eigen::Vector3d origin(1.0, 2.0, 30.0);
+  const Eigen::Vector3d dir(0.1, -0.07, -1.0);
+  double s = 0.0;
+  ASSERT_TRUE(t.Intersect(origin, dir, &s));
+  // Plane z = 0.1 x - 0.05 y along the ray: 30 - s = 0.1 (1 + 0.1 s) - 0.05 (2 - 0.07 s).
+  const double expected = (30.0 - 0.1 * 1.0 + 0.05 * 2.0) / (1.0 + 0.1 * 0.1 + 0.05 * 0.07);
+  EXPECT_NEAR(s, expected, 1e-6);
+}
+
+TEST(HazardTest, TruthAgreesWithTheHeightField) {
+  // GIVEN a tilted plane with rocks on it.
+  TerrainOptions o;
+  o.size = 512;
+  o.relief_rms_m = 0.0;
+  o.tilt_x = std::tan(5.0 * std::numbers::pi / 180.0);
+  o.rocks.k = 0.1;
+  Terrain t;
+  ASSERT_EQ(t.Configure(o), core::Status::kOk);
+  ASSERT_GT(t.Rocks().size(), 100u);
+  HazardMap map;
+  ASSERT_EQ(ComputeHazardTruth(t, HazardOptions{}, &map), core::Status::kOk);
+  // THEN the slope is the plane's everywhere and below the 10 deg threshold.
+  for (size_t k = 0; k < map.slope_deg.size(); k += 97) EXPECT_NEAR(map.slope_deg[k], 5.0, 1e-3);
+  // AND each rock's top is in the height field at its centre and flagged when tall.
+  int flagged = 0;
+  for (const Rock& r : t.Rocks()) {
+    const auto i = static_cast<std::int32_t>(std::lround((r.center_m.x() - t.NodeX(0)) / o.cell_m));
+    const auto j = static_cast<std::int32_t>(std::lround((r.center_m.y() - t.NodeY(0)) / o.cell_m));
+    const double dx = t.NodeX(i) - r.center_m.x();
+    const double dy = t.NodeY(j) - r.center_m.y();
+    const double radius = 0.5 * r.diameter_m;
+    const double s2 = (dx * dx + dy * dy) / (radius * radius);
+    const double rock_here = r.height_m * std::sqrt(std::max(0.0, 1.0 - s2));
+    const size_t k = static_cast<size_t>(j) * t.Size() + i;
+    EXPECT_GE(t.Heights()[k] + 1e-4, r.base_z_m + rock_here);
+    EXPECT_NEAR(map.rock_height_m[k], t.Heights()[k] - t.BaseHeights()[k], 1e-6);
+    if (map.rock_height_m[k] > 0.25f) {
+      EXPECT_TRUE(map.hazard[k] & kHazardRock);
+      ++flagged;
+    }
+  }
+  EXPECT_GT(flagged, 10);
+  // AND ground away from rocks is safe.
+  int safe = 0;
+  for (size_t k = 0; k < map.hazard.size(); ++k) {
+    if (map.rock_height_m[k] == 0.0f) {
+      EXPECT_EQ(map.hazard[k], 0);
+      ++safe;
+    }
+  }
+  EXPECT_GT(safe, 1000);
+}
+
+TEST(AppearanceTest, CraterRimCastsAShadowIntoTheBowl) {
+  TerrainOptions o;
+  o.size = 128;
+  o.relief_rms_m = 0.0;
+  Terrain t;
+  ASSERT_EQ(t.Configure(o), core::Status::kOk);
+  // A flat terrain has no shadows.
+  AppearanceOptions a;
+  a.sun_azimuth_deg = 0.0;  // sun towards +x
+  a.sun_elevation_deg = 20.0;
+  Appearance flat;
+  ASSERT_EQ(flat.Configure(t, a), core::Status::kOk);
+  for (std::uint8_t lit : flat.Lit()) ASSERT_EQ(lit, 1);
+  // A crater bowl: its sunward inner wall (+x side, seen from inside) is in shadow near the rim.
+  o.craters.density_at_1m = 0.117;  // about one crater of 4-4.5 m on 650 m^2
+  o.craters.min_diameter_m = 4.0;
+  o.craters.max_diameter_m = 4.5;
+  o.craters.min_freshness = 1.0;
+  o.size = 256;
+  // Deterministically pick the first seed that gives one crater well inside the grid.
+  bool found = false;
+  for (std::uint64_t seed = 1; seed < 50 && !found; ++seed) {
+    o.seed = seed;
+    ASSERT_EQ(t.Configure(o), core::Status::kOk);
+    found = t.Craters().size() == 1 &&
+            std::abs(t.Craters()[0].center_m.x()) + 6.0 < t.HalfExtentM() &&
+            std::abs(t.Craters()[0].center_m.y()) + 6.0 < t.HalfExtentM();
+  }
+  ASSERT_TRUE(found);
+  Appearance shaded;
+  ASSERT_EQ(shaded.Configure(t, a), core::Status::kOk);
+  const Crater& c = t.Craters()[0];
+  auto node_lit = [&](double x, double y) {
+    const auto i = static_cast<std::int32_t>(std::lround((x - t.NodeX(0)) / o.cell_m));
+    const auto j = static_cast<std::int32_t>(std::lround((y - t.NodeY(0)) / o.cell_m));
+    return shaded.Lit()[static_cast<size_t>(j) * t.Size() + i];
+  };
+  const double r = 0.5 * c.diameter_m;
+  // Just inside the rim on the sun side the bowl is hidden by that rim.
+  EXPECT_EQ(node_lit(c.center_m.x() + 0.8 * r, c.center_m.y()), 0);
+  // The inner wall facing the sun (the -x side) is lit.
+  EXPECT_EQ(node_lit(c.center_m.x() - 0.8 * r, c.center_m.y()), 1);
+}
+
+TEST(TerrainTest, RejectsBadOptions) {
+  Terrain t;
+  TerrainOptions o;
+  o.size = 4;
+  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
+  o = TerrainOptions{};
+  o.rocks.k = 1.5;
+  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
+  o = TerrainOptions{};
+  o.craters.min_diameter_m = 50.0;
+  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
+}
+
+}  // namespace
+}  // namespace swf::sim

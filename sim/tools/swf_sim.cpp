@@ -1,0 +1,277 @@
+// swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth.
+//   swf-sim [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks]
+//           [--out DIR] [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4]
+// Writes DIR/left_NNNN.png, right_NNNN.png, poses.csv (t_ns, position, quaternion x y z w of
+// world_T_camera), landmarks.csv + observations.csv (measurement-level truth on the same terrain),
+// craters.csv, rocks.csv, terrain_hazard.png (shaded terrain | hazard truth) and
+// contact_sheet.png (12 left frames). Progress goes to stderr.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "swf/sim/hazard.hpp"
+#include "swf/sim/image_io.hpp"
+#include "swf/sim/measurement.hpp"
+#include "swf/sim/renderer.hpp"
+#include "swf/sim/trajectory.hpp"
+
+namespace {
+
+using swf::core::Status;
+
+int Fail(const char* what, Status s) {
+  std::fprintf(stderr, "swf-sim: %s failed: %s\n", what, swf::core::ToString(s));
+  return 1;
+}
+
+void WriteHazardPicture(const swf::sim::Terrain& terrain, const swf::sim::Appearance& appearance,
+                        const swf::sim::HazardMap& hazard, const std::string& path) {
+  const std::int32_t n = terrain.Size();
+  const std::int32_t panel = std::min<std::int32_t>(512, n);
+  const double step = static_cast<double>(n - 1) / (panel - 1);
+  std::vector<std::uint8_t> rgb(static_cast<size_t>(2 * panel) * panel * 3, 0);
+  for (std::int32_t r = 0; r < panel; ++r) {
+    for (std::int32_t c = 0; c < panel; ++c) {
+      const auto i = static_cast<std::int32_t>(c * step);
+      const auto j = static_cast<std::int32_t>((panel - 1 - r) * step);  // north up
+      const size_t k = static_cast<size_t>(j) * n + i;
+      const auto g =
+          static_cast<std::uint8_t>(std::clamp(appearance.Shaded()[k] * 110.0f, 0.0f, 255.0f));
+      std::uint8_t* left = &rgb[(static_cast<size_t>(r) * 2 * panel + c) * 3];
+      left[0] = left[1] = left[2] = g;
+      std::uint8_t* right = &rgb[(static_cast<size_t>(r) * 2 * panel + panel + c) * 3];
+      const std::uint8_t bits = hazard.hazard[k];
+      const std::uint8_t dim = static_cast<std::uint8_t>(g / 2);
+      if (bits & swf::sim::kHazardRock) {
+        right[0] = 255, right[1] = 40, right[2] = 40;
+      } else if (bits & swf::sim::kHazardSlope) {
+        right[0] = 255, right[1] = 200, right[2] = 0;
+      } else {
+        right[0] = dim, right[1] = static_cast<std::uint8_t>(std::min(255, dim + 60)),
+        right[2] = dim;
+      }
+    }
+  }
+  (void)swf::sim::WritePng(path, rgb.data(), 2 * panel, panel, 3, 2 * panel * 3);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string scenario = "descent";
+  std::string terrain_name = "craters";
+  std::string out = "out/sim";
+  std::string shared = "../shared";
+  if (const char* env = std::getenv("SWF_SHARED_DIR")) shared = env;
+  int max_frames = -1;
+  int every = 1;
+  int spp = 1;
+  std::uint64_t seed = 1;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    const char* value = a + 1 < argc ? argv[a + 1] : nullptr;
+    auto take = [&]() {
+      ++a;
+      return std::string(value);
+    };
+    if (value == nullptr && arg != "--help") {
+      std::fprintf(stderr, "swf-sim: %s needs a value\n", arg.c_str());
+      return 2;
+    }
+    if (arg == "--scenario")
+      scenario = take();
+    else if (arg == "--terrain")
+      terrain_name = take();
+    else if (arg == "--out")
+      out = take();
+    else if (arg == "--shared")
+      shared = take();
+    else if (arg == "--frames")
+      max_frames = std::atoi(take().c_str());
+    else if (arg == "--every")
+      every = std::max(1, std::atoi(take().c_str()));
+    else if (arg == "--seed")
+      seed = std::strtoull(take().c_str(), nullptr, 10);
+    else if (arg == "--spp")
+      spp = std::atoi(take().c_str());
+    else {
+      std::fprintf(
+          stderr,
+          "usage: swf-sim [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks] "
+          "[--out DIR] [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4]\n");
+      return arg == "--help" ? 0 : 2;
+    }
+  }
+  swf::sim::RigOptions rig = swf::sim::EdlRig();
+  swf::sim::TrajectoryOptions traj;
+  double scale = 1.0;
+  if (scenario == "descent") {
+    traj = swf::sim::DescentTrajectory(15.0);
+  } else if (scenario == "hover") {
+    traj = swf::sim::HoverTrajectory(50.0, 60);
+  } else if (scenario == "sideways") {
+    traj = swf::sim::SidewaysTrajectory(rig, 50.0, 0.85, 40);
+  } else if (scenario == "lab") {
+    rig = swf::sim::LabRig();
+    traj = swf::sim::LabTrajectory(15.0);
+    scale = 0.1;
+  } else {
+    std::fprintf(stderr, "swf-sim: unknown scenario '%s'\n", scenario.c_str());
+    return 2;
+  }
+  traj.seed = seed;
+  swf::sim::TerrainPreset preset;
+  if (!swf::sim::ParseTerrainPreset(terrain_name.c_str(), &preset)) {
+    std::fprintf(stderr, "swf-sim: unknown terrain '%s'\n", terrain_name.c_str());
+    return 2;
+  }
+  std::string mkdir = "mkdir -p '" + out + "'";
+  if (std::system(mkdir.c_str()) != 0) {
+    std::fprintf(stderr, "swf-sim: cannot create %s\n", out.c_str());
+    return 1;
+  }
+
+  std::fprintf(stderr, "swf-sim: terrain '%s' (seed %llu) ...\n", terrain_name.c_str(),
+               static_cast<unsigned long long>(seed));
+  swf::sim::Terrain terrain;
+  swf::sim::TerrainOptions terrain_options =
+      swf::sim::ScaleTerrain(swf::sim::TerrainPresetOptions(preset, seed), scale);
+  if (Status s = terrain.Configure(terrain_options); s != Status::kOk) return Fail("terrain", s);
+  swf::sim::AppearanceOptions look = swf::sim::DefaultImagery(shared);
+  look.image_pixel_m *= scale;
+  look.seed = seed;
+  swf::sim::Appearance appearance;
+  if (Status s = appearance.Configure(terrain, look); s != Status::kOk) {
+    return Fail("appearance (is --shared right?)", s);
+  }
+  swf::sim::HazardOptions hazard_options;
+  hazard_options.max_rock_height_m *= scale;
+  hazard_options.slope_baseline_m *= scale;
+  swf::sim::HazardMap hazard;
+  if (Status s = swf::sim::ComputeHazardTruth(terrain, hazard_options, &hazard); s != Status::kOk) {
+    return Fail("hazard truth", s);
+  }
+  WriteHazardPicture(terrain, appearance, hazard, out + "/terrain_hazard.png");
+  if (std::FILE* f = std::fopen((out + "/rocks.csv").c_str(), "w")) {
+    std::fprintf(f, "x_m,y_m,diameter_m,height_m,base_z_m\n");
+    for (const auto& r : terrain.Rocks()) {
+      std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", r.center_m.x(), r.center_m.y(), r.diameter_m,
+                   r.height_m, r.base_z_m);
+    }
+    std::fclose(f);
+  }
+  if (std::FILE* f = std::fopen((out + "/craters.csv").c_str(), "w")) {
+    std::fprintf(f, "x_m,y_m,diameter_m,depth_m,rim_height_m\n");
+    for (const auto& c : terrain.Craters()) {
+      std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", c.center_m.x(), c.center_m.y(), c.diameter_m,
+                   c.depth_m, c.rim_height_m);
+    }
+    std::fclose(f);
+  }
+
+  swf::sim::Trajectory trajectory;
+  if (Status s = trajectory.Configure(traj); s != Status::kOk) return Fail("trajectory", s);
+  swf::sim::MeasurementOptions mo;
+  mo.trajectory = traj;
+  mo.rig = rig;
+  mo.surface = &terrain;
+  mo.seed = seed;
+  swf::sim::MeasurementScenario measurements;
+  if (Status s = measurements.Configure(mo); s != Status::kOk) return Fail("measurements", s);
+  if (std::FILE* f = std::fopen((out + "/landmarks.csv").c_str(), "w")) {
+    std::fprintf(f, "id,x_m,y_m,z_m\n");
+    for (size_t i = 0; i < measurements.Landmarks().size(); ++i) {
+      const auto& l = measurements.Landmarks()[i];
+      std::fprintf(f, "%zu,%.6f,%.6f,%.6f\n", i, l.x(), l.y(), l.z());
+    }
+    std::fclose(f);
+  }
+  if (std::FILE* f = std::fopen((out + "/observations.csv").c_str(), "w")) {
+    std::fprintf(f, "frame,landmark_id,u_left_px,u_right_px,v_px,is_outlier\n");
+    for (int k = 0; k < measurements.NumFrames(); ++k) {
+      for (const auto& o : measurements.Frame(k).observations) {
+        std::fprintf(f, "%d,%d,%.6f,%.6f,%.6f,%d\n", k, o.landmark_id, o.u_left_px, o.u_right_px,
+                     o.v_px, o.is_outlier ? 1 : 0);
+      }
+    }
+    std::fclose(f);
+  }
+
+  swf::sim::RenderOptions ro;
+  ro.rig = rig;
+  ro.seed = seed;
+  ro.samples_per_pixel = spp;
+  swf::sim::Renderer renderer;
+  if (Status s = renderer.Configure(ro); s != Status::kOk) return Fail("renderer", s);
+  std::vector<int> frames;
+  for (int k = 0; k < trajectory.NumFrames(); k += every) frames.push_back(k);
+  if (max_frames >= 0 && static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
+
+  constexpr int kSheetCols = 4;
+  constexpr int kSheetRows = 3;
+  const int tile_w = rig.width_px / 4;
+  const int tile_h = rig.height_px / 4;
+  std::vector<std::uint8_t> sheet(static_cast<size_t>(kSheetCols * tile_w) * kSheetRows * tile_h,
+                                  0);
+  std::vector<int> sheet_frames;
+  for (int s = 0; s < kSheetCols * kSheetRows && !frames.empty(); ++s) {
+    sheet_frames.push_back(frames[(frames.size() - 1) * s / (kSheetCols * kSheetRows - 1)]);
+  }
+
+  std::FILE* poses = std::fopen((out + "/poses.csv").c_str(), "w");
+  if (poses == nullptr) return Fail("poses.csv", Status::kIoError);
+  std::fprintf(poses, "frame,t_ns,x_m,y_m,z_m,qx,qy,qz,qw\n");
+  swf::sim::StereoImages images;
+  const swf::core::TimeNs start = swf::core::MonotonicNs();
+  for (size_t n = 0; n < frames.size(); ++n) {
+    const int k = frames[n];
+    const auto& pose = trajectory.WorldTCamera(k);
+    if (Status s =
+            renderer.Render(terrain, appearance, pose, static_cast<std::uint64_t>(k), &images);
+        s != Status::kOk) {
+      return Fail("render", s);
+    }
+    char name[64];
+    std::snprintf(name, sizeof(name), "/left_%04d.png", k);
+    (void)swf::sim::WritePng(out + name, images.left.data(), images.width, images.height, 1,
+                             images.width);
+    std::snprintf(name, sizeof(name), "/right_%04d.png", k);
+    (void)swf::sim::WritePng(out + name, images.right.data(), images.width, images.height, 1,
+                             images.width);
+    const Eigen::Quaterniond q(pose.R);
+    std::fprintf(poses, "%d,%lld,%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f\n", k,
+                 static_cast<long long>(trajectory.FrameTimeNs(k)), pose.t.x(), pose.t.y(),
+                 pose.t.z(), q.x(), q.y(), q.z(), q.w());
+    for (size_t s = 0; s < sheet_frames.size(); ++s) {
+      if (sheet_frames[s] != k) continue;
+      const int ox = static_cast<int>(s % kSheetCols) * tile_w;
+      const int oy = static_cast<int>(s / kSheetCols) * tile_h;
+      for (int y = 0; y < tile_h; ++y) {
+        for (int x = 0; x < tile_w; ++x) {
+          int sum = 0;
+          for (int dy = 0; dy < 4; ++dy) {
+            for (int dx = 0; dx < 4; ++dx)
+              sum += images.left[(4 * y + dy) * images.width + 4 * x + dx];
+          }
+          sheet[static_cast<size_t>(oy + y) * kSheetCols * tile_w + ox + x] =
+              static_cast<std::uint8_t>(sum / 16);
+        }
+      }
+    }
+    const double elapsed_s = (swf::core::MonotonicNs() - start) * 1e-9;
+    std::fprintf(stderr, "\rswf-sim: frame %d (%zu/%zu), altitude %.1f m, %.2f s/pair", k, n + 1,
+                 frames.size(), pose.t.z(), elapsed_s / static_cast<double>(n + 1));
+  }
+  std::fprintf(stderr, "\n");
+  std::fclose(poses);
+  (void)swf::sim::WritePng(out + "/contact_sheet.png", sheet.data(), kSheetCols * tile_w,
+                           kSheetRows * tile_h, 1, kSheetCols * tile_w);
+  std::fprintf(stderr, "swf-sim: wrote %zu pairs, %d landmarks, %zu rocks, %zu craters to %s\n",
+               frames.size(), measurements.Summary().num_landmarks, terrain.Rocks().size(),
+               terrain.Craters().size(), out.c_str());
+  return 0;
+}

@@ -1,0 +1,82 @@
+// glibc lets an executable interpose malloc and friends; the real allocator stays reachable
+// through the __libc_* entry points. operator new is replaced as the standard allows.
+#include "swf/testing/allocation_counter.hpp"
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+extern "C" {
+void* __libc_malloc(std::size_t size);
+void* __libc_calloc(std::size_t n, std::size_t size);
+void* __libc_realloc(void* p, std::size_t size);
+void* __libc_memalign(std::size_t alignment, std::size_t size);
+void __libc_free(void* p);
+}
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<std::uint64_t> g_count{0};
+
+inline void Note() {
+  if (g_counting.load(std::memory_order_relaxed)) g_count.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+
+namespace swf::testing {
+std::uint64_t AllocationsSinceStart() { return g_count.load(); }
+void StartCountingAllocations() {
+  g_count.store(0);
+  g_counting.store(true);
+}
+std::uint64_t StopCountingAllocations() {
+  g_counting.store(false);
+  return g_count.load();
+}
+}  // namespace swf::testing
+
+extern "C" {
+void* malloc(std::size_t size) {
+  Note();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t n, std::size_t size) {
+  Note();
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size) {
+  Note();
+  return __libc_realloc(p, size);
+}
+void free(void* p) { __libc_free(p); }
+}
+
+void* operator new(std::size_t size) {
+  Note();
+  void* p = __libc_malloc(size == 0 ? 1 : size);
+  if (p == nullptr) std::abort();
+  return p;
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  Note();
+  return __libc_malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void* operator new(std::size_t size, std::align_val_t align) {
+  Note();
+  void* p = __libc_memalign(static_cast<std::size_t>(align), size == 0 ? 1 : size);
+  if (p == nullptr) std::abort();
+  return p;
+}
+void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
+void operator delete(void* p) noexcept { __libc_free(p); }
+void operator delete[](void* p) noexcept { __libc_free(p); }
+void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }

@@ -1,0 +1,255 @@
+// Estimator benchmarks (tools/run bench -> out/bench/estimator.json):
+//   Fig14a/<mode>/<frame>: time of the update at a given frame index with ~20 measurements per
+//     frame and tracks of ~10 frames (paper Fig. 14a): sliding windows flat, batch growing.
+//   Fig13Update/K=10: full update (robust Gauss-Newton + marginalization) with 150 landmarks
+//     tracked through the whole descent, at steady state (every landmark in the prior).
+//   KittiVo/swf, KittiVo/ceres: the kitti-vo batch problem solved by swf-vo's solver and by Ceres
+//     (SPARSE_SCHUR, same cost, same tolerances), same process, same run.
+// The estimator is single-threaded; run on an idle core and read medians (the JSON keeps all
+// repetitions).
+#include <benchmark/benchmark.h>
+#include <ceres/ceres.h>
+
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "../../estimator/test/synthetic_scene.hpp"
+#include "kitti_vo.hpp"
+#include "swf/estimator/sliding_window_filter.hpp"
+#include "swf/estimator/stereo_model.hpp"
+
+namespace {
+
+using swf::estimator::Mat3;
+using swf::estimator::Mat6;
+using swf::estimator::Pose;
+using swf::estimator::SlidingWindowFilter;
+using swf::estimator::StereoModel;
+using swf::estimator::SwfMode;
+using swf::estimator::SwfOptions;
+using swf::estimator::Vec3;
+using swf::estimator::testing::SceneOptions;
+using swf::estimator::testing::SyntheticScene;
+
+const SyntheticScene& Fig14Scene() {
+  static const SyntheticScene scene = [] {
+    SceneOptions so;
+    so.motion = SceneOptions::Motion::kSideways;
+    so.frames = 160;
+    so.start_altitude_m = 50.0;
+    so.step_m = 2.2;
+    so.landmark_density_per_m2 = 0.055;
+    so.seed = 3;
+    return SyntheticScene(so);
+  }();
+  return scene;
+}
+
+const SyntheticScene& Fig13Scene() {
+  static const SyntheticScene scene = [] {
+    SceneOptions so;  // 150 landmarks, 100 m descent, 1.5 m per frame
+    so.frames = 40;
+    return SyntheticScene(so);
+  }();
+  return scene;
+}
+
+// Feeds frame j (motion input = true relative motion, as from an IMU).
+template <typename Filter>
+void AddFrame(Filter* swf, const SyntheticScene& scene, std::size_t j) {
+  static const Mat6<double> q_sqrt = [] {
+    Mat6<double> q = Mat6<double>::Zero();
+    q.diagonal() << Vec3<double>::Constant(10.0), Vec3<double>::Constant(500.0);
+    return q;
+  }();
+  const auto& f = scene.frames()[j];
+  if (j == 0) {
+    (void)swf->AddPose(f.truth);
+  } else {
+    (void)swf->AddPoseWithMotion(scene.frames()[j - 1].truth.Inverse() * f.truth, q_sqrt);
+  }
+  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options().sigma_px;
+  for (const auto& o : f.obs) (void)swf->AddObservation(o.id, o.z, r_sqrt);
+}
+
+template <typename Filter>
+void Configure(Filter* swf, const SyntheticScene& scene, SwfMode mode) {
+  StereoModel<double> model;
+  model.camera = scene.camera();
+  SwfOptions options;
+  options.mode = mode;
+  options.first_pose_sigma_m = 1e-3;
+  options.first_pose_sigma_rad = 1e-5;
+  if (swf->Configure(model, options) != swf::core::Status::kOk) std::abort();
+}
+
+// Times the update at frame state.range(0); earlier frames are replayed untimed.
+template <typename Filter>
+void Fig14a(benchmark::State& state, SwfMode mode) {
+  const SyntheticScene& scene = Fig14Scene();
+  const auto frame = static_cast<std::size_t>(state.range(0));
+  auto swf = std::make_unique<Filter>();
+  for (auto _ : state) {
+    state.PauseTiming();
+    Configure(swf.get(), scene, mode);
+    for (std::size_t j = 0; j < frame; ++j) {
+      AddFrame(swf.get(), scene, j);
+      // Batch solves once per frame in Fig. 14a as well; the untimed replay only needs the
+      // state, so batch skips its earlier solves.
+      if (mode != SwfMode::kBatch) (void)swf->Update();
+    }
+    AddFrame(swf.get(), scene, frame);
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(swf->Update());
+  }
+  state.counters["measurements"] = swf->Summary().num_measurements;
+  state.counters["state_dim"] = swf->Summary().state_dimension;
+  state.counters["iterations"] = swf->Summary().iterations;
+}
+
+using Swf10 = SlidingWindowFilter<StereoModel<double>, 10, 600, 64, 128>;
+using Swf20 = SlidingWindowFilter<StereoModel<double>, 20, 600, 64, 128>;
+using Batch = SlidingWindowFilter<StereoModel<double>, 128, 4000, 64, 1>;
+
+void BM_Fig14a_Swf10(benchmark::State& s) { Fig14a<Swf10>(s, SwfMode::kSlidingWindow); }
+void BM_Fig14a_Swf20(benchmark::State& s) { Fig14a<Swf20>(s, SwfMode::kSlidingWindow); }
+void BM_Fig14a_Batch(benchmark::State& s) { Fig14a<Batch>(s, SwfMode::kBatch); }
+BENCHMARK(BM_Fig14a_Swf10)
+    ->Arg(25)
+    ->Arg(50)
+    ->Arg(100)
+    ->Arg(150)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(10)
+    ->Repetitions(5);
+BENCHMARK(BM_Fig14a_Swf20)
+    ->Arg(25)
+    ->Arg(50)
+    ->Arg(100)
+    ->Arg(150)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(10)
+    ->Repetitions(5);
+BENCHMARK(BM_Fig14a_Batch)
+    ->Arg(25)
+    ->Arg(50)
+    ->Arg(100)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3)
+    ->Repetitions(3);
+
+void BM_Fig13Update_K10(benchmark::State& state) {
+  using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
+  const SyntheticScene& scene = Fig13Scene();
+  auto swf = std::make_unique<Filter>();
+  constexpr std::size_t kFrame = 30;
+  for (auto _ : state) {
+    state.PauseTiming();
+    Configure(swf.get(), scene, SwfMode::kSlidingWindow);
+    for (std::size_t j = 0; j < kFrame; ++j) {
+      AddFrame(swf.get(), scene, j);
+      (void)swf->Update();
+    }
+    AddFrame(swf.get(), scene, kFrame);
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(swf->Update());
+  }
+  state.counters["dense_dim"] = swf->Summary().dense_dimension;
+  state.counters["iterations"] = swf->Summary().iterations;
+  state.counters["prior_landmarks"] = swf->NumPriorLandmarks();
+}
+BENCHMARK(BM_Fig13Update_K10)->Unit(benchmark::kMillisecond)->Iterations(5)->Repetitions(5);
+
+const swf::tools::KittiVoProblem& Kitti() {
+  static const swf::tools::KittiVoProblem problem = [] {
+    const char* shared = std::getenv("SWF_SHARED_DIR");
+    const std::string dir =
+        std::string(shared != nullptr ? shared : "../shared") + "/data/kitti-vo/";
+    swf::tools::KittiVoProblem p;
+    std::string error;
+    if (!swf::tools::LoadKittiVo(dir + "VO_calibration.txt", dir + "VO_camera_poses_large.txt",
+                                 dir + "VO_stereo_factors_large.txt", &p, &error)) {
+      std::fprintf(stderr, "bench_estimator: %s\n", error.c_str());
+      std::exit(1);
+    }
+    return p;
+  }();
+  return problem;
+}
+
+void BM_KittiVo_Swf(benchmark::State& state) {
+  double cost = 0;  // kept observable so the solve is not optimized away
+  for (auto _ : state) {
+    const auto r = swf::tools::SolveKittiVo(Kitti(), 0);
+    cost = r.final_cost;
+    benchmark::DoNotOptimize(cost);
+  }
+}
+BENCHMARK(BM_KittiVo_Swf)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+struct StereoResidual {
+  StereoResidual(const swf::estimator::StereoCamera<double>& c, const Vec3<double>& z)
+      : cam(c), z(z) {}
+  template <typename T>
+  bool operator()(const T* q, const T* t, const T* l, T* r) const {
+    const Eigen::Quaternion<T> world_q_camera(q[3], q[0], q[1], q[2]);
+    const Eigen::Matrix<T, 3, 1> p =
+        world_q_camera.conjugate() *
+        (Eigen::Matrix<T, 3, 1>(l[0], l[1], l[2]) - Eigen::Matrix<T, 3, 1>(t[0], t[1], t[2]));
+    r[0] = T(z.x()) - (T(cam.cx) + T(cam.fx) * p.x() / p.z());
+    r[1] = T(z.y()) - (T(cam.cx) + T(cam.fx) * (p.x() - T(cam.baseline_m)) / p.z());
+    r[2] = T(z.z()) - (T(cam.cy) + T(cam.fy) * p.y() / p.z());
+    return true;
+  }
+  swf::estimator::StereoCamera<double> cam;
+  Vec3<double> z;
+};
+
+void BM_KittiVo_Ceres(benchmark::State& state) {
+  const auto& problem = Kitti();
+  double cost = 0;  // kept observable so the solve is not optimized away
+  for (auto _ : state) {
+    const int n = static_cast<int>(problem.poses.size());
+    std::vector<std::array<double, 4>> q(n);
+    std::vector<std::array<double, 3>> t(n);
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Quaterniond qq(problem.poses[j].R);
+      q[j] = {qq.x(), qq.y(), qq.z(), qq.w()};
+      t[j] = {problem.poses[j].t.x(), problem.poses[j].t.y(), problem.poses[j].t.z()};
+    }
+    std::map<std::int64_t, std::array<double, 3>> points;
+    ceres::Problem cp;
+    for (const auto& f : problem.factors) {
+      if (points.count(f.landmark) == 0) {
+        Vec3<double> pc;
+        (void)problem.camera.Triangulate(f.z, &pc);
+        const Vec3<double> pw = problem.poses[f.pose].Apply(pc);
+        points[f.landmark] = {pw.x(), pw.y(), pw.z()};
+      }
+      cp.AddResidualBlock(new ceres::AutoDiffCostFunction<StereoResidual, 3, 4, 3, 3>(
+                              new StereoResidual(problem.camera, f.z)),
+                          nullptr, q[f.pose].data(), t[f.pose].data(), points[f.landmark].data());
+    }
+    for (int j = 0; j < n; ++j) cp.SetManifold(q[j].data(), new ceres::EigenQuaternionManifold);
+    cp.SetParameterBlockConstant(q[0].data());
+    cp.SetParameterBlockConstant(t[0].data());
+    ceres::Solver::Options options;
+    options.linear_solver_type = ceres::SPARSE_SCHUR;
+    options.max_num_iterations = 100;
+    options.function_tolerance = 1e-14;  // as swf-vo's relative cost tolerance
+    options.gradient_tolerance = 1e-16;
+    options.parameter_tolerance = 1e-12;  // as swf-vo's step tolerance
+    options.num_threads = 1;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &cp, &summary);
+    cost = summary.final_cost;
+    benchmark::DoNotOptimize(cost);
+  }
+}
+BENCHMARK(BM_KittiVo_Ceres)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+}  // namespace
+
+BENCHMARK_MAIN();
