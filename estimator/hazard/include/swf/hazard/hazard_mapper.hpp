@@ -1,0 +1,213 @@
+// Hazard mapping (issue 8): dense stereo + the SWF's pose and covariance + its landmarks fused
+// into a local-level elevation grid with per-cell sigma, slope / rock / roughness analysis with
+// uncertainty-aware classes, and a stable safe landing site. The one header the flight process
+// needs; every buffer is allocated by Configure(), Update() never allocates.
+//
+// Per Update():
+//  1. The rectified pair is reduced by `downsample` (1, 2 or 4; [1 2 1] low-pass) and matched by
+//     SGM (dense_stereo.hpp) over a disparity range predicted from the landmarks in view (else
+//     from the map, else from ground_z_hint_m).
+//  2. Each valid pixel becomes a world point p_w = R p_c + t, p_c = Z (u', v', 1), Z = f B / d.
+//     Stereo sigma: sigma_Z = Z^2 sigma_d / (f B) (sigma_d = disparity_sigma_px (2 - confidence)),
+//     projected on the vertical. Pixels are averaged per cell into one measurement per frame
+//     (neighbouring SGM disparities are correlated, so n counts at most max_independent_pixels);
+//     the pose covariance (SWF update vector [rho, phi], p_w = R Exp(phi) p_c + t + rho) adds
+//     J Sigma J^T, J = [e_z^T, -e_z^T R [p_c]x], at the cell's mean camera-frame point.
+//  3. Frames and landmarks (sigma^2 = their covariance's zz) are fused per cell by inverse
+//     variance. Unknown cells stay unknown (NaN). The cell size is chosen from altitude
+//     (pixels_per_cell working pixels per cell, a power of 2 times min_cell_m) and only ever
+//     refined: on refinement the grid is resampled (information per child = parent / 4).
+//  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
+//     lander footprint gives slope and roughness; a plane over rock_window_radius_m gives each
+//     cell's rock height. Sigma of slope from the fit and the attitude covariance; sigma of the
+//     rock height from the cell's stereo sigma and the fit. Classes: kRock / kSlope when the
+//     value exceeds its threshold by confidence_k sigma, kUncertain when value + k sigma exceeds
+//     it, kSafe otherwise, kUnknown without data.
+//  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
+//     is not kSafe or to the grid border; candidates need clearance >= footprint radius. Score
+//     = clearance (capped) + confidence - distance to the target; the previous site is kept
+//     while still valid and within site_hysteresis of the best score.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "swf/core/status.hpp"
+#include "swf/estimator/geometry.hpp"
+#include "swf/frontend/image.hpp"
+#include "swf/hazard/dense_stereo.hpp"
+
+namespace swf::hazard {
+
+enum class HazardClass : std::uint8_t { kUnknown = 0, kSafe, kUncertain, kSlope, kRock };
+
+struct HazardMapperOptions {
+  // Full-resolution rectified camera and image size of the pairs Update() receives.
+  estimator::StereoCamera<double> camera;
+  int image_width = 1024;
+  int image_height = 768;
+  // Dense stereo.
+  int downsample = 2;         // 1, 2 or 4
+  int max_disparities = 128;  // at working resolution
+  int sgm_paths = 8;
+  int sgm_p1 = 8;
+  int sgm_p2 = 96;
+  float uniqueness = 0.05f;
+  float min_confidence = 0.05f;
+  double disparity_sigma_px = 0.25;  // at working resolution, confidence 1
+  int max_independent_pixels = 4;
+  double ground_z_hint_m = 0.0;  // used for the disparity range with no landmark and no map
+  // Grid.
+  int grid_cells = 256;  // cells per side (capacity and size)
+  double min_cell_m = 0.05;
+  double max_cell_m = 0.8;
+  double pixels_per_cell = 2.0;
+  bool target_from_first_pose = true;  // grid centre / target = nadir of the first frame
+  Eigen::Vector2d target_world_m{0.0, 0.0};
+  int max_landmarks = 1024;
+  // Hazards (defaults: rocks above 0.3 m, slopes above 10 deg).
+  double max_slope_deg = 10.0;
+  double max_rock_height_m = 0.3;
+  double footprint_radius_m = 1.5;
+  double rock_window_radius_m = 1.0;
+  double confidence_k = 2.0;
+  double min_known_fraction = 0.6;  // of a window, for a plane fit
+  // Safe site.
+  double clearance_cap_m = 5.0;
+  double target_weight = 0.5;  // score lost per grid half-extent from the target
+  double site_hysteresis = 0.1;
+};
+
+// A landmark of the SWF (world frame) with its marginal covariance.
+struct HazardLandmark {
+  Eigen::Vector3d position_world_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+};
+
+struct HazardFrame {
+  frontend::GrayView left;  // rectified, image_width x image_height
+  frontend::GrayView right;
+  estimator::Pose<double> world_T_camera;
+  Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  const HazardLandmark* landmarks = nullptr;
+  int num_landmarks = 0;
+};
+
+struct SafeSite {
+  bool valid = false;
+  Eigen::Vector2d position_world_m{0.0, 0.0};
+  double elevation_m = 0.0;
+  double score = 0.0;
+  double clearance_m = 0.0;  // to the nearest non-safe cell or the grid border
+  double slope_deg = 0.0;
+  double sigma_m = 0.0;
+  int stable_updates = 0;  // consecutive updates the site has been kept
+};
+
+struct HazardStats {
+  std::uint64_t updates = 0;
+  int valid_pixels = 0;
+  int fused_cells = 0;  // cells measured by this frame
+  int landmarks_used = 0;
+  int known_cells = 0;
+  int safe_cells = 0;
+  int rock_cells = 0;
+  int slope_cells = 0;
+  int uncertain_cells = 0;
+  int min_disparity = 0;
+  int num_disparities = 0;
+  std::uint32_t range_clamped = 0;       // updates whose predicted range exceeded max_disparities
+  std::uint32_t landmarks_rejected = 0;  // non-finite, off-grid or over max_landmarks
+};
+
+class HazardMapper {
+ public:
+  // Allocates everything. kInvalidArgument for a bad camera, sizes, downsample not 1/2/4,
+  // thresholds <= 0, min_cell > max_cell, ...
+  core::Status Configure(const HazardMapperOptions& options);
+  // Forgets the map (keeps the configuration).
+  void Reset();
+  // One hazard update. kNotConfigured before Configure(); kInvalidArgument for images of the
+  // wrong size, a non-finite pose or covariance, or a landmark array inconsistent with its count.
+  // kOk also when no pixel matched (the map is unchanged; Stats().valid_pixels == 0).
+  core::Status Update(const HazardFrame& frame);
+
+  // Grid: GridCells() x GridCells(), cell (i, j) centred at world
+  // (CornerX() + (i + 0.5) CellM(), CornerY() + (j + 0.5) CellM()); arrays row-major j * n + i.
+  int GridCells() const { return n_; }
+  double CellM() const { return cell_m_; }
+  double CornerX() const { return corner_x_; }
+  double CornerY() const { return corner_y_; }
+  const float* Elevation() const { return elevation_.data(); }  // NaN = unknown
+  const float* Sigma() const { return sigma_.data(); }          // NaN = unknown
+  const std::uint16_t* Count() const { return count_.data(); }  // frames + landmarks fused
+  const HazardClass* Classes() const { return class_.data(); }
+  const float* SlopeDeg() const { return slope_deg_.data(); }  // footprint plane, NaN unknown
+  const float* RockHeight() const { return rock_m_.data(); }   // NaN unknown
+  const float* Roughness() const { return rough_m_.data(); }   // footprint RMS, NaN unknown
+  const float* ClearanceM() const { return clearance_m_.data(); }
+  // Cell containing world (x, y); false when outside the grid.
+  bool CellOf(double x_m, double y_m, int* i, int* j) const;
+  const SafeSite& Site() const { return site_; }
+  const Eigen::Vector2d& Target() const { return target_; }
+  const HazardStats& Stats() const { return stats_; }
+  const SgmMatcher& Stereo() const { return sgm_; }
+  const HazardMapperOptions& Options() const { return options_; }
+
+ private:
+  void Reduce(const frontend::GrayView& src, std::vector<std::uint8_t>* dst) const;
+  void ChooseRange(const HazardFrame& frame, int* min_d, int* num_d);
+  void MaybeRefine(double altitude_m);
+  void FuseStereo(const HazardFrame& frame);
+  void FuseLandmarks(const HazardFrame& frame);
+  void Analyze(const HazardFrame& frame);
+  void SelectSite();
+  void DistanceTransform();
+
+  HazardMapperOptions options_;
+  bool configured_ = false;
+  bool started_ = false;
+  SgmMatcher sgm_;
+  int work_w_ = 0;
+  int work_h_ = 0;
+  std::vector<std::uint8_t> left_small_;
+  std::vector<std::uint8_t> right_small_;
+  std::vector<std::uint8_t> tmp_small_;
+  int n_ = 0;
+  double cell_m_ = 0.0;
+  double corner_x_ = 0.0;
+  double corner_y_ = 0.0;
+  Eigen::Vector2d target_{0.0, 0.0};
+  // Fused state per cell.
+  std::vector<double> info_;      // sum 1/sigma^2 (stereo + pose + landmarks)
+  std::vector<double> info_z_;    // sum z/sigma^2
+  std::vector<double> info_rel_;  // sum 1/sigma_stereo^2 (relative, pose-free)
+  std::vector<std::uint16_t> count_;
+  // Per-frame scratch (also used for resampling).
+  std::vector<double> f_w_;
+  std::vector<double> f_wz_;
+  std::vector<double> f_pc_;  // 3 per cell: sum of camera-frame points
+  std::vector<std::int32_t> f_n_;
+  // Outputs.
+  std::vector<float> elevation_;
+  std::vector<float> sigma_;
+  std::vector<float> sigma_rel_;
+  std::vector<HazardClass> class_;
+  std::vector<float> slope_deg_;
+  std::vector<float> slope_sigma_deg_;
+  std::vector<float> rock_m_;
+  std::vector<float> rough_m_;
+  std::vector<float> clearance_m_;
+  // Summed-area tables, (n+1)^2 each: count, x, y, z, xx, xy, yy, xz, yz, zz, sigma^2.
+  std::vector<double> sat_;
+  // Distance transform scratch.
+  std::vector<float> dt_f_;
+  std::vector<float> dt_d_;
+  std::vector<float> dt_z_;
+  std::vector<int> dt_v_;
+  SafeSite site_;
+  HazardStats stats_;
+};
+
+}  // namespace swf::hazard

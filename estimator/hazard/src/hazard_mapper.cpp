@@ -1,0 +1,673 @@
+// Hazard mapping (see hazard_mapper.hpp for the method).
+#include "swf/hazard/hazard_mapper.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace swf::hazard {
+namespace {
+
+constexpr int kSatChannels = 11;  // count, x, y, z, xx, xy, yy, xz, yz, zz, sigma^2
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr double kRadToDeg = 57.29577951308232;
+constexpr std::uint16_t kMaxCount = 65535;
+
+// Halves src (w x h, stride) into dst ((w+1)/2 x (h+1)/2) with a [1 2 1] x [1 2 1] / 16 filter.
+void Half(const std::uint8_t* src, int w, int h, int stride, std::uint8_t* dst) {
+  const int w2 = (w + 1) / 2;
+  const int h2 = (h + 1) / 2;
+  for (int y = 0; y < h2; ++y) {
+    const int sy = 2 * y;
+    const std::uint8_t* rm = src + static_cast<std::ptrdiff_t>(sy > 0 ? sy - 1 : 0) * stride;
+    const std::uint8_t* rc = src + static_cast<std::ptrdiff_t>(sy) * stride;
+    const std::uint8_t* rp =
+        src + static_cast<std::ptrdiff_t>(sy + 1 < h ? sy + 1 : h - 1) * stride;
+    std::uint8_t* o = dst + static_cast<std::ptrdiff_t>(y) * w2;
+    for (int x = 0; x < w2; ++x) {
+      const int sx = 2 * x;
+      const int xm = sx > 0 ? sx - 1 : 0;
+      const int xp = sx + 1 < w ? sx + 1 : w - 1;
+      const int cm = rm[xm] + 2 * rc[xm] + rp[xm];
+      const int cc = rm[sx] + 2 * rc[sx] + rp[sx];
+      const int cp = rm[xp] + 2 * rc[xp] + rp[xp];
+      o[x] = static_cast<std::uint8_t>((cm + 2 * cc + cp + 8) >> 4);
+    }
+  }
+}
+
+struct Plane {
+  bool ok = false;
+  double n = 0.0;
+  double mx = 0.0, my = 0.0, mz = 0.0;
+  double b = 0.0, c = 0.0;          // dz / d(cell) along x and y
+  double var_b = 0.0, var_c = 0.0;  // from the mean cell sigma^2
+  double rss = 0.0;
+  double mean_var = 0.0;
+};
+
+// Least-squares plane through the window sums s (kSatChannels values).
+Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
+  Plane p;
+  const double n = s[0];
+  if (n < std::max(3.0, min_count)) return p;
+  p.n = n;
+  p.mx = s[1] / n;
+  p.my = s[2] / n;
+  p.mz = s[3] / n;
+  const double cxx = s[4] / n - p.mx * p.mx;
+  const double cxy = s[5] / n - p.mx * p.my;
+  const double cyy = s[6] / n - p.my * p.my;
+  const double cxz = s[7] / n - p.mx * p.mz;
+  const double cyz = s[8] / n - p.my * p.mz;
+  const double czz = s[9] / n - p.mz * p.mz;
+  const double det = cxx * cyy - cxy * cxy;
+  if (!(det > 1e-6)) return p;
+  p.b = (cyy * cxz - cxy * cyz) / det;
+  p.c = (cxx * cyz - cxy * cxz) / det;
+  p.mean_var = s[10] / n;
+  p.var_b = p.mean_var / n * (cyy / det);
+  p.var_c = p.mean_var / n * (cxx / det);
+  p.rss = std::max(0.0, n * (czz - p.b * cxz - p.c * cyz));
+  p.ok = true;
+  return p;
+}
+
+}  // namespace
+
+core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
+  configured_ = false;
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  if (!positive(o.camera.fx) || !positive(o.camera.fy) || !positive(o.camera.baseline_m) ||
+      !std::isfinite(o.camera.cx) || !std::isfinite(o.camera.cy) || o.image_width < 32 ||
+      o.image_height < 32 || (o.downsample != 1 && o.downsample != 2 && o.downsample != 4) ||
+      o.grid_cells < 16 || o.grid_cells > 2048 || !positive(o.min_cell_m) ||
+      !positive(o.max_cell_m) || o.min_cell_m > o.max_cell_m || !positive(o.pixels_per_cell) ||
+      !positive(o.disparity_sigma_px) || o.max_independent_pixels < 1 ||
+      !positive(o.max_slope_deg) || !positive(o.max_rock_height_m) ||
+      !positive(o.footprint_radius_m) || !positive(o.rock_window_radius_m) ||
+      !(o.confidence_k >= 0.0) || !(o.min_known_fraction >= 0.0 && o.min_known_fraction <= 1.0) ||
+      !positive(o.clearance_cap_m) || !(o.target_weight >= 0.0) || !(o.site_hysteresis >= 0.0) ||
+      o.max_landmarks < 0 || !std::isfinite(o.ground_z_hint_m) || !o.target_world_m.allFinite() ||
+      !(o.min_confidence >= 0.0f && o.min_confidence <= 1.0f)) {
+    return core::Status::kInvalidArgument;
+  }
+  options_ = o;
+  work_w_ = o.image_width;
+  work_h_ = o.image_height;
+  for (int d = o.downsample; d > 1; d /= 2) {
+    work_w_ = (work_w_ + 1) / 2;
+    work_h_ = (work_h_ + 1) / 2;
+  }
+  SgmOptions so;
+  so.max_width = work_w_;
+  so.max_height = work_h_;
+  so.max_disparities = o.max_disparities;
+  so.paths = o.sgm_paths;
+  so.p1 = o.sgm_p1;
+  so.p2 = o.sgm_p2;
+  so.uniqueness = o.uniqueness;
+  if (core::Status s = sgm_.Configure(so); s != core::Status::kOk) return s;
+  const std::size_t half = static_cast<std::size_t>((o.image_width + 1) / 2) *
+                           static_cast<std::size_t>((o.image_height + 1) / 2);
+  left_small_.assign(half, 0);
+  right_small_.assign(half, 0);
+  tmp_small_.assign(half, 0);
+  n_ = o.grid_cells;
+  const std::size_t cells = static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_);
+  info_.assign(cells, 0.0);
+  info_z_.assign(cells, 0.0);
+  info_rel_.assign(cells, 0.0);
+  count_.assign(cells, 0);
+  f_w_.assign(cells, 0.0);
+  f_wz_.assign(cells, 0.0);
+  f_pc_.assign(3 * cells, 0.0);
+  f_n_.assign(cells, 0);
+  elevation_.assign(cells, kNaN);
+  sigma_.assign(cells, kNaN);
+  sigma_rel_.assign(cells, kNaN);
+  class_.assign(cells, HazardClass::kUnknown);
+  slope_deg_.assign(cells, kNaN);
+  slope_sigma_deg_.assign(cells, kNaN);
+  rock_m_.assign(cells, kNaN);
+  rough_m_.assign(cells, kNaN);
+  clearance_m_.assign(cells, 0.0f);
+  sat_.assign(static_cast<std::size_t>(n_ + 1) * static_cast<std::size_t>(n_ + 1) * kSatChannels,
+              0.0);
+  dt_f_.assign(cells, 0.0f);
+  dt_d_.assign(static_cast<std::size_t>(n_), 0.0f);
+  dt_z_.assign(static_cast<std::size_t>(n_) + 1, 0.0f);
+  dt_v_.assign(static_cast<std::size_t>(n_), 0);
+  configured_ = true;
+  Reset();
+  return core::Status::kOk;
+}
+
+void HazardMapper::Reset() {
+  started_ = false;
+  std::fill(info_.begin(), info_.end(), 0.0);
+  std::fill(info_z_.begin(), info_z_.end(), 0.0);
+  std::fill(info_rel_.begin(), info_rel_.end(), 0.0);
+  std::fill(count_.begin(), count_.end(), 0);
+  std::fill(elevation_.begin(), elevation_.end(), kNaN);
+  std::fill(sigma_.begin(), sigma_.end(), kNaN);
+  std::fill(sigma_rel_.begin(), sigma_rel_.end(), kNaN);
+  std::fill(class_.begin(), class_.end(), HazardClass::kUnknown);
+  std::fill(slope_deg_.begin(), slope_deg_.end(), kNaN);
+  std::fill(rock_m_.begin(), rock_m_.end(), kNaN);
+  std::fill(rough_m_.begin(), rough_m_.end(), kNaN);
+  std::fill(clearance_m_.begin(), clearance_m_.end(), 0.0f);
+  site_ = SafeSite{};
+  stats_ = HazardStats{};
+  cell_m_ = options_.max_cell_m;
+  target_ = options_.target_world_m;
+  corner_x_ = target_.x() - 0.5 * n_ * cell_m_;
+  corner_y_ = target_.y() - 0.5 * n_ * cell_m_;
+}
+
+bool HazardMapper::CellOf(double x_m, double y_m, int* i, int* j) const {
+  const double fx = (x_m - corner_x_) / cell_m_;
+  const double fy = (y_m - corner_y_) / cell_m_;
+  if (!(fx >= 0.0 && fy >= 0.0 && fx < n_ && fy < n_)) return false;
+  *i = static_cast<int>(fx);
+  *j = static_cast<int>(fy);
+  return true;
+}
+
+void HazardMapper::Reduce(const frontend::GrayView& src, std::vector<std::uint8_t>* dst) const {
+  if (options_.downsample == 1) return;
+  if (options_.downsample == 2) {
+    Half(src.data, src.width, src.height, src.stride, dst->data());
+    return;
+  }
+  std::uint8_t* tmp = const_cast<std::uint8_t*>(tmp_small_.data());
+  Half(src.data, src.width, src.height, src.stride, tmp);
+  const int w2 = (src.width + 1) / 2;
+  const int h2 = (src.height + 1) / 2;
+  Half(tmp, w2, h2, w2, dst->data());
+}
+
+void HazardMapper::ChooseRange(const HazardFrame& frame, int* min_d, int* num_d) {
+  const double ds = options_.downsample;
+  const double fxw = options_.camera.fx / ds;
+  const double fb = fxw * options_.camera.baseline_m;
+  const Eigen::Matrix3d& world_R_camera = frame.world_T_camera.R;
+  const Eigen::Vector3d& t = frame.world_T_camera.t;
+  double z_lo = std::numeric_limits<double>::infinity();
+  double z_hi = 0.0;
+  int in_view = 0;
+  const int nl = std::min(frame.num_landmarks, options_.max_landmarks);
+  for (int k = 0; k < nl; ++k) {
+    const Eigen::Vector3d& p = frame.landmarks[k].position_world_m;
+    if (!p.allFinite()) continue;
+    const Eigen::Vector3d pc = world_R_camera.transpose() * (p - t);
+    if (!(pc.z() > 0.1)) continue;
+    const double u = options_.camera.cx + options_.camera.fx * pc.x() / pc.z();
+    const double v = options_.camera.cy + options_.camera.fy * pc.y() / pc.z();
+    if (u < 0.0 || v < 0.0 || u > options_.image_width - 1 || v > options_.image_height - 1) {
+      continue;
+    }
+    z_lo = std::min(z_lo, pc.z());
+    z_hi = std::max(z_hi, pc.z());
+    ++in_view;
+  }
+  if (in_view >= 3) {
+    z_lo *= 0.8;
+    z_hi *= 1.25;
+  } else {
+    double ground = options_.ground_z_hint_m;
+    double sum = 0.0;
+    int known = 0;
+    if (started_) {
+      for (std::size_t c = 0; c < elevation_.size(); c += 7) {
+        if (!std::isnan(elevation_[c])) {
+          sum += elevation_[c];
+          ++known;
+        }
+      }
+      if (known > 0) ground = sum / known;
+    }
+    const double axis_z = -world_R_camera(2, 2);  // cosine of the optical axis with straight down
+    const double depth = (t.z() - ground) / std::max(axis_z, 0.2);
+    z_lo = std::max(0.5, depth * 0.6);
+    z_hi = std::max(z_lo + 0.5, depth * 1.6);
+  }
+  int lo = static_cast<int>(std::floor(fb / z_hi)) - 2;
+  int hi = static_cast<int>(std::ceil(fb / z_lo)) + 2;
+  lo = std::max(lo, 0);
+  int num = hi - lo + 1;
+  if (num > options_.max_disparities) {
+    ++stats_.range_clamped;
+    const int mid = (lo + hi) / 2;
+    num = options_.max_disparities;
+    lo = std::max(0, mid - num / 2);
+  }
+  num = std::max(num, 16);
+  num = std::min(num, options_.max_disparities);
+  if (lo + num >= work_w_) lo = std::max(0, work_w_ - 1 - num);
+  *min_d = lo;
+  *num_d = num;
+}
+
+void HazardMapper::MaybeRefine(double altitude_m) {
+  const double fxw = options_.camera.fx / options_.downsample;
+  const double desired = options_.pixels_per_cell * altitude_m / fxw;
+  double cell = options_.min_cell_m;
+  while (cell * 2.0 <= desired && cell * 2.0 <= options_.max_cell_m * 1.000001) cell *= 2.0;
+  if (started_ && cell >= cell_m_ * 0.999) return;
+  if (!started_) {
+    cell_m_ = cell;
+    corner_x_ = target_.x() - 0.5 * n_ * cell_m_;
+    corner_y_ = target_.y() - 0.5 * n_ * cell_m_;
+    return;
+  }
+  // Resample the fused state onto the finer grid (same centre).
+  const std::size_t cells = info_.size();
+  std::copy(info_.begin(), info_.end(), f_w_.begin());
+  std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
+  std::copy(info_rel_.begin(), info_rel_.end(), f_pc_.begin());
+  for (std::size_t c = 0; c < cells; ++c) f_n_[c] = count_[c];
+  const double old_cell = cell_m_;
+  const double old_cx = corner_x_;
+  const double old_cy = corner_y_;
+  const double ratio = old_cell / cell;
+  const double scale = 1.0 / (ratio * ratio);
+  cell_m_ = cell;
+  corner_x_ = target_.x() - 0.5 * n_ * cell_m_;
+  corner_y_ = target_.y() - 0.5 * n_ * cell_m_;
+  for (int j = 0; j < n_; ++j) {
+    const double y = corner_y_ + (j + 0.5) * cell_m_;
+    const int oj = static_cast<int>(std::floor((y - old_cy) / old_cell));
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      const double x = corner_x_ + (i + 0.5) * cell_m_;
+      const int oi = static_cast<int>(std::floor((x - old_cx) / old_cell));
+      if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
+        info_[c] = info_z_[c] = info_rel_[c] = 0.0;
+        count_[c] = 0;
+        continue;
+      }
+      const std::size_t o = static_cast<std::size_t>(oj) * n_ + oi;
+      info_[c] = f_w_[o] * scale;
+      info_z_[c] = f_wz_[o] * scale;
+      info_rel_[c] = f_pc_[o] * scale;
+      count_[c] = static_cast<std::uint16_t>(f_n_[o]);
+    }
+  }
+  site_.valid = site_.valid && CellOf(site_.position_world_m.x(), site_.position_world_m.y(),
+                                      &dt_v_[0], &dt_v_[0]);
+}
+
+void HazardMapper::FuseStereo(const HazardFrame& frame) {
+  const std::size_t cells = info_.size();
+  std::fill(f_w_.begin(), f_w_.end(), 0.0);
+  std::fill(f_wz_.begin(), f_wz_.end(), 0.0);
+  std::fill(f_pc_.begin(), f_pc_.begin() + static_cast<std::ptrdiff_t>(3 * cells), 0.0);
+  std::fill(f_n_.begin(), f_n_.end(), 0);
+  const double ds = options_.downsample;
+  const double fxw = options_.camera.fx / ds;
+  const double fyw = options_.camera.fy / ds;
+  const double cxw = options_.camera.cx / ds;
+  const double cyw = options_.camera.cy / ds;
+  const double fb = fxw * options_.camera.baseline_m;
+  const Eigen::Matrix3d& world_R_camera = frame.world_T_camera.R;
+  const Eigen::Vector3d& t = frame.world_T_camera.t;
+  const int w = sgm_.Width();
+  const int h = sgm_.Height();
+  int valid = 0;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float d = sgm_.DisparityAt(u, v);
+      const float q = sgm_.ConfidenceAt(u, v);
+      if (!(d > 0.5f) || q < options_.min_confidence) continue;
+      const double z = fb / d;
+      const Eigen::Vector3d ray((u - cxw) / fxw, (v - cyw) / fyw, 1.0);
+      const Eigen::Vector3d pc = z * ray;
+      const Eigen::Vector3d pw = world_R_camera * pc + t;
+      int i = 0;
+      int j = 0;
+      if (!CellOf(pw.x(), pw.y(), &i, &j)) continue;
+      const double sigma_d = options_.disparity_sigma_px * (2.0 - q);
+      const double sigma_z = z * z * sigma_d / fb;
+      const double vertical = std::fabs(world_R_camera.row(2).dot(ray));
+      const double sigma_e = std::max(vertical * sigma_z, 1e-4);
+      const double wgt = 1.0 / (sigma_e * sigma_e);
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      f_w_[c] += wgt;
+      f_wz_[c] += wgt * pw.z();
+      f_pc_[3 * c] += pc.x();
+      f_pc_[3 * c + 1] += pc.y();
+      f_pc_[3 * c + 2] += pc.z();
+      ++f_n_[c];
+      ++valid;
+    }
+  }
+  stats_.valid_pixels = valid;
+  const Eigen::Matrix<double, 6, 6>& cov = frame.pose_covariance;
+  int fused = 0;
+  for (std::size_t c = 0; c < cells; ++c) {
+    const int n = f_n_[c];
+    if (n == 0) continue;
+    const double zf = f_wz_[c] / f_w_[c];
+    const double var_st =
+        (1.0 / f_w_[c]) * static_cast<double>(n) / std::min(n, options_.max_independent_pixels);
+    const Eigen::Vector3d p(f_pc_[3 * c] / n, f_pc_[3 * c + 1] / n, f_pc_[3 * c + 2] / n);
+    Eigen::Matrix<double, 1, 6> jac;
+    jac << 0.0, 0.0, 1.0, -(world_R_camera.row(2) * estimator::Skew<double>(p));
+    const double var_pose = std::max(0.0, (jac * cov * jac.transpose())(0, 0));
+    const double var = var_st + var_pose;
+    info_[c] += 1.0 / var;
+    info_z_[c] += zf / var;
+    info_rel_[c] += 1.0 / var_st;
+    if (count_[c] < kMaxCount) ++count_[c];
+    ++fused;
+  }
+  stats_.fused_cells = fused;
+}
+
+void HazardMapper::FuseLandmarks(const HazardFrame& frame) {
+  int used = 0;
+  for (int k = 0; k < frame.num_landmarks; ++k) {
+    if (k >= options_.max_landmarks) {
+      stats_.landmarks_rejected += static_cast<std::uint32_t>(frame.num_landmarks - k);
+      break;
+    }
+    const HazardLandmark& l = frame.landmarks[k];
+    const double var = l.covariance(2, 2);
+    int i = 0;
+    int j = 0;
+    if (!l.position_world_m.allFinite() || !(var > 0.0) || !std::isfinite(var) ||
+        !CellOf(l.position_world_m.x(), l.position_world_m.y(), &i, &j)) {
+      ++stats_.landmarks_rejected;
+      continue;
+    }
+    const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+    info_[c] += 1.0 / var;
+    info_z_[c] += l.position_world_m.z() / var;
+    info_rel_[c] += 1.0 / var;
+    if (count_[c] < kMaxCount) ++count_[c];
+    ++used;
+  }
+  stats_.landmarks_used = used;
+}
+
+void HazardMapper::Analyze(const HazardFrame& frame) {
+  const std::size_t cells = info_.size();
+  double sum = 0.0;
+  int known = 0;
+  for (std::size_t c = 0; c < cells; ++c) {
+    if (info_[c] > 0.0) {
+      elevation_[c] = static_cast<float>(info_z_[c] / info_[c]);
+      sigma_[c] = static_cast<float>(1.0 / std::sqrt(info_[c]));
+      sigma_rel_[c] = static_cast<float>(1.0 / std::sqrt(info_rel_[c]));
+      sum += elevation_[c];
+      ++known;
+    } else {
+      elevation_[c] = sigma_[c] = sigma_rel_[c] = kNaN;
+    }
+  }
+  stats_.known_cells = known;
+  const double z_ref = known > 0 ? sum / known : 0.0;
+  // Summed-area tables.
+  const int n1 = n_ + 1;
+  std::fill(sat_.begin(), sat_.begin() + static_cast<std::ptrdiff_t>(n1) * kSatChannels, 0.0);
+  for (int j = 0; j < n_; ++j) {
+    double row[kSatChannels] = {};
+    double* out = sat_.data() + (static_cast<std::size_t>(j + 1) * n1) * kSatChannels;
+    const double* above = sat_.data() + (static_cast<std::size_t>(j) * n1) * kSatChannels;
+    for (int k = 0; k < kSatChannels; ++k) out[k] = 0.0;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      if (!std::isnan(elevation_[c])) {
+        const double x = i;
+        const double y = j;
+        const double z = elevation_[c] - z_ref;
+        const double s = sigma_rel_[c];
+        const double v[kSatChannels] = {1.0,   x,     y,     z,     x * x, x * y,
+                                        y * y, x * z, y * z, z * z, s * s};
+        for (int k = 0; k < kSatChannels; ++k) row[k] += v[k];
+      }
+      double* o = out + static_cast<std::size_t>(i + 1) * kSatChannels;
+      const double* a = above + static_cast<std::size_t>(i + 1) * kSatChannels;
+      for (int k = 0; k < kSatChannels; ++k) o[k] = a[k] + row[k];
+    }
+  }
+  const auto window = [&](int ci, int cj, int r) {
+    std::array<double, kSatChannels> s{};
+    const int i0 = std::max(0, ci - r);
+    const int j0 = std::max(0, cj - r);
+    const int i1 = std::min(n_, ci + r + 1);
+    const int j1 = std::min(n_, cj + r + 1);
+    const double* a = sat_.data() + (static_cast<std::size_t>(j1) * n1 + i1) * kSatChannels;
+    const double* b = sat_.data() + (static_cast<std::size_t>(j0) * n1 + i1) * kSatChannels;
+    const double* c = sat_.data() + (static_cast<std::size_t>(j1) * n1 + i0) * kSatChannels;
+    const double* d = sat_.data() + (static_cast<std::size_t>(j0) * n1 + i0) * kSatChannels;
+    for (int k = 0; k < kSatChannels; ++k) s[k] = a[k] - b[k] - c[k] + d[k];
+    return s;
+  };
+  const int rf = std::max(1, static_cast<int>(std::lround(options_.footprint_radius_m / cell_m_)));
+  const int rr =
+      std::max(1, static_cast<int>(std::lround(options_.rock_window_radius_m / cell_m_)));
+  const double min_f = options_.min_known_fraction * (2 * rf + 1) * (2 * rf + 1);
+  const double min_r = options_.min_known_fraction * (2 * rr + 1) * (2 * rr + 1);
+  const Eigen::Matrix<double, 6, 6>& cov = frame.pose_covariance;
+  // Tilt of the map from attitude error: rotations about the horizontal world axes.
+  const Eigen::Matrix3d rot_cov =
+      frame.world_T_camera.R * cov.block<3, 3>(3, 3) * frame.world_T_camera.R.transpose();
+  const double var_tilt = std::max(0.0, rot_cov(0, 0)) + std::max(0.0, rot_cov(1, 1));
+  const double k = options_.confidence_k;
+  int safe = 0;
+  int rock = 0;
+  int slope = 0;
+  int uncertain = 0;
+  for (int j = 0; j < n_; ++j) {
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      slope_deg_[c] = slope_sigma_deg_[c] = rock_m_[c] = rough_m_[c] = kNaN;
+      class_[c] = HazardClass::kUnknown;
+      if (std::isnan(elevation_[c])) continue;
+      const Plane pf = FitPlane(window(i, j, rf), min_f);
+      const Plane pr = FitPlane(window(i, j, rr), min_r);
+      if (!pf.ok || !pr.ok) continue;
+      const double g = std::hypot(pf.b, pf.c) / cell_m_;
+      const double var_g = (pf.var_b + pf.var_c) / (cell_m_ * cell_m_) + var_tilt;
+      const double slope_deg = std::atan(g) * kRadToDeg;
+      const double slope_sigma_deg = std::sqrt(var_g) / (1.0 + g * g) * kRadToDeg;
+      const double plane_here = pr.mz + pr.b * (i - pr.mx) + pr.c * (j - pr.my);
+      const double h = (elevation_[c] - z_ref) - plane_here;
+      const double sr = sigma_rel_[c];
+      const double sigma_h = std::sqrt(sr * sr + pr.mean_var / pr.n);
+      slope_deg_[c] = static_cast<float>(slope_deg);
+      slope_sigma_deg_[c] = static_cast<float>(slope_sigma_deg);
+      rock_m_[c] = static_cast<float>(h);
+      rough_m_[c] = static_cast<float>(std::sqrt(pf.rss / pf.n));
+      if (h - k * sigma_h > options_.max_rock_height_m) {
+        class_[c] = HazardClass::kRock;
+        ++rock;
+      } else if (slope_deg - k * slope_sigma_deg > options_.max_slope_deg) {
+        class_[c] = HazardClass::kSlope;
+        ++slope;
+      } else if (h + k * sigma_h > options_.max_rock_height_m ||
+                 slope_deg + k * slope_sigma_deg > options_.max_slope_deg) {
+        class_[c] = HazardClass::kUncertain;
+        ++uncertain;
+      } else {
+        class_[c] = HazardClass::kSafe;
+        ++safe;
+      }
+    }
+  }
+  stats_.safe_cells = safe;
+  stats_.rock_cells = rock;
+  stats_.slope_cells = slope;
+  stats_.uncertain_cells = uncertain;
+}
+
+// Exact squared Euclidean distance transform (Felzenszwalb & Huttenlocher 2012), rows then
+// columns, into clearance_m_.
+void HazardMapper::DistanceTransform() {
+  const float inf = 1e20f;
+  const std::size_t cells = class_.size();
+  for (std::size_t c = 0; c < cells; ++c) {
+    dt_f_[c] = class_[c] == HazardClass::kSafe ? inf : 0.0f;
+  }
+  const auto pass = [&](float* base, int step) {
+    // 1-D transform of n_ values base[0], base[step], ...
+    int k = 0;
+    dt_v_[0] = 0;
+    dt_z_[0] = -inf;
+    dt_z_[1] = inf;
+    for (int q = 1; q < n_; ++q) {
+      const float fq = base[q * step];
+      float s = 0.0f;
+      while (true) {
+        const int vk = dt_v_[k];
+        const float fv = base[vk * step];
+        s = ((fq + static_cast<float>(q * q)) - (fv + static_cast<float>(vk * vk))) /
+            static_cast<float>(2 * q - 2 * vk);
+        if (s <= dt_z_[k] && k > 0) {
+          --k;
+          continue;
+        }
+        break;
+      }
+      if (s <= dt_z_[k]) {  // k == 0 and the new parabola dominates everywhere
+        dt_v_[0] = q;
+        dt_z_[0] = -inf;
+        dt_z_[1] = inf;
+        continue;
+      }
+      ++k;
+      dt_v_[k] = q;
+      dt_z_[k] = s;
+      dt_z_[k + 1] = inf;
+    }
+    k = 0;
+    for (int q = 0; q < n_; ++q) {
+      while (dt_z_[k + 1] < static_cast<float>(q)) ++k;
+      const float dq = static_cast<float>(q - dt_v_[k]);
+      dt_d_[q] = dq * dq + base[dt_v_[k] * step];
+    }
+    for (int q = 0; q < n_; ++q) base[q * step] = dt_d_[q];
+  };
+  for (int j = 0; j < n_; ++j) pass(dt_f_.data() + static_cast<std::size_t>(j) * n_, 1);
+  for (int i = 0; i < n_; ++i) pass(dt_f_.data() + i, n_);
+  for (int j = 0; j < n_; ++j) {
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      const double border =
+          std::min(std::min(i + 0.5, j + 0.5), std::min(n_ - i - 0.5, n_ - j - 0.5));
+      const double hazard = dt_f_[c] >= inf * 0.5f ? border : std::sqrt(dt_f_[c]) - 0.5;
+      clearance_m_[c] = static_cast<float>(std::max(0.0, std::min(border, hazard)) * cell_m_);
+    }
+  }
+}
+
+void HazardMapper::SelectSite() {
+  DistanceTransform();
+  const double radius = options_.footprint_radius_m;
+  const double half_extent = 0.5 * n_ * cell_m_;
+  const auto score_of = [&](std::size_t c, int i, int j) {
+    const double x = corner_x_ + (i + 0.5) * cell_m_;
+    const double y = corner_y_ + (j + 0.5) * cell_m_;
+    const double dist = std::hypot(x - target_.x(), y - target_.y());
+    const double clear = std::min<double>(clearance_m_[c], options_.clearance_cap_m);
+    const double conf = 1.0 - std::min(1.0, sigma_rel_[c] / options_.max_rock_height_m);
+    return clear / options_.clearance_cap_m + 0.5 * conf -
+           options_.target_weight * dist / half_extent;
+  };
+  double best = -std::numeric_limits<double>::infinity();
+  int best_i = -1;
+  int best_j = -1;
+  for (int j = 0; j < n_; ++j) {
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      if (class_[c] != HazardClass::kSafe || clearance_m_[c] < radius) continue;
+      const double s = score_of(c, i, j);
+      if (s > best) {
+        best = s;
+        best_i = i;
+        best_j = j;
+      }
+    }
+  }
+  if (best_i < 0) {
+    site_ = SafeSite{};
+    return;
+  }
+  int pi = 0;
+  int pj = 0;
+  if (site_.valid && CellOf(site_.position_world_m.x(), site_.position_world_m.y(), &pi, &pj)) {
+    const std::size_t c = static_cast<std::size_t>(pj) * n_ + pi;
+    if (class_[c] == HazardClass::kSafe && clearance_m_[c] >= radius) {
+      const double s = score_of(c, pi, pj);
+      if (s >= best - options_.site_hysteresis) {
+        best = s;
+        best_i = pi;
+        best_j = pj;
+      }
+    }
+  }
+  const std::size_t c = static_cast<std::size_t>(best_j) * n_ + best_i;
+  const Eigen::Vector2d pos(corner_x_ + (best_i + 0.5) * cell_m_,
+                            corner_y_ + (best_j + 0.5) * cell_m_);
+  const bool same = site_.valid && (pos - site_.position_world_m).norm() < 0.5 * cell_m_ + 1e-9;
+  site_.stable_updates = same ? site_.stable_updates + 1 : 0;
+  site_.valid = true;
+  site_.position_world_m = pos;
+  site_.elevation_m = elevation_[c];
+  site_.score = best;
+  site_.clearance_m = clearance_m_[c];
+  site_.slope_deg = slope_deg_[c];
+  site_.sigma_m = sigma_[c];
+}
+
+core::Status HazardMapper::Update(const HazardFrame& frame) {
+  if (!configured_) return core::Status::kNotConfigured;
+  const frontend::GrayView& l = frame.left;
+  const frontend::GrayView& r = frame.right;
+  if (!l.Valid() || !r.Valid() || l.width != options_.image_width ||
+      l.height != options_.image_height || r.width != l.width || r.height != l.height ||
+      !frame.world_T_camera.R.allFinite() || !frame.world_T_camera.t.allFinite() ||
+      !frame.pose_covariance.allFinite() || frame.num_landmarks < 0 ||
+      (frame.num_landmarks > 0 && frame.landmarks == nullptr)) {
+    return core::Status::kInvalidArgument;
+  }
+  frontend::GrayView wl = l;
+  frontend::GrayView wr = r;
+  if (options_.downsample > 1) {
+    Reduce(l, &left_small_);
+    Reduce(r, &right_small_);
+    wl = frontend::GrayView{left_small_.data(), work_w_, work_h_, work_w_};
+    wr = frontend::GrayView{right_small_.data(), work_w_, work_h_, work_w_};
+  }
+  int min_d = 0;
+  int num_d = 0;
+  ChooseRange(frame, &min_d, &num_d);
+  stats_.min_disparity = min_d;
+  stats_.num_disparities = num_d;
+  if (core::Status s = sgm_.Compute(wl, wr, min_d, num_d); s != core::Status::kOk) return s;
+  const double fb = options_.camera.fx / options_.downsample * options_.camera.baseline_m;
+  const double range_m = fb / (min_d + 0.5 * num_d);
+  if (!started_) {
+    if (options_.target_from_first_pose) {
+      const Eigen::Vector3d axis = frame.world_T_camera.R.col(2);
+      const Eigen::Vector3d ground = frame.world_T_camera.t + range_m * axis;
+      target_ = ground.head<2>();
+    } else {
+      target_ = options_.target_world_m;
+    }
+  }
+  MaybeRefine(range_m);
+  started_ = true;
+  FuseStereo(frame);
+  FuseLandmarks(frame);
+  Analyze(frame);
+  SelectSite();
+  ++stats_.updates;
+  return core::Status::kOk;
+}
+
+}  // namespace swf::hazard

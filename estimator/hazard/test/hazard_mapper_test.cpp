@@ -1,0 +1,220 @@
+// HazardMapper on synthetic scenes with exact truth: a flat plane (everything safe, sigma honest),
+// a tilted plane (slope), boxes (rocks), site selection away from them, no allocation per update.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "swf/hazard/hazard_mapper.hpp"
+#include "swf/testing/allocation_counter.hpp"
+#include "synthetic_pair.hpp"
+
+namespace swf::hazard {
+namespace {
+
+using testing::Box;
+using testing::Pair;
+using testing::Scene;
+
+constexpr int kW = 320;
+constexpr int kH = 240;
+
+HazardMapperOptions Options() {
+  HazardMapperOptions o;
+  o.camera.fx = o.camera.fy = 500.0;
+  o.camera.cx = 0.5 * (kW - 1);
+  o.camera.cy = 0.5 * (kH - 1);
+  o.camera.baseline_m = 1.0;
+  o.image_width = kW;
+  o.image_height = kH;
+  o.downsample = 1;
+  o.max_disparities = 64;
+  o.grid_cells = 64;
+  o.min_cell_m = 0.05;
+  o.max_cell_m = 0.4;
+  o.footprint_radius_m = 0.6;
+  o.rock_window_radius_m = 0.5;
+  return o;
+}
+
+struct SceneRun {
+  std::unique_ptr<HazardMapper> mapper = std::make_unique<HazardMapper>();
+  Pair pair;
+  HazardFrame frame;
+};
+
+void Prepare(const Scene& scene, double altitude, SceneRun* run) {
+  const HazardMapperOptions o = Options();
+  ASSERT_EQ(run->mapper->Configure(o), core::Status::kOk);
+  estimator::Pose<double> pose;
+  pose.R = testing::Nadir();
+  pose.t = {0.0, 0.0, altitude};
+  testing::Render(scene, o.camera, kW, kH, pose, &run->pair);
+  run->frame.left = frontend::GrayView{run->pair.left.data(), kW, kH, kW};
+  run->frame.right = frontend::GrayView{run->pair.right.data(), kW, kH, kW};
+  run->frame.world_T_camera = pose;
+  run->frame.pose_covariance.setZero();
+  run->frame.pose_covariance.diagonal() << 1e-4, 1e-4, 1e-4, 1e-8, 1e-8, 1e-8;
+}
+
+TEST(HazardMapperTest, RejectsBadConfigurationAndInput) {
+  HazardMapper m;
+  HazardMapperOptions o = Options();
+  o.downsample = 3;
+  EXPECT_EQ(m.Configure(o), core::Status::kInvalidArgument);
+  HazardFrame f;
+  EXPECT_EQ(m.Update(f), core::Status::kNotConfigured);
+  ASSERT_EQ(m.Configure(Options()), core::Status::kOk);
+  EXPECT_EQ(m.Update(f), core::Status::kInvalidArgument);
+  std::vector<std::uint8_t> img(kW * kH, 100);
+  f.left = f.right = frontend::GrayView{img.data(), kW, kH, kW};
+  f.world_T_camera.t.x() = std::nan("");
+  EXPECT_EQ(m.Update(f), core::Status::kInvalidArgument);
+  f.world_T_camera.t = {0, 0, 8};
+  f.num_landmarks = 3;  // but no array
+  EXPECT_EQ(m.Update(f), core::Status::kInvalidArgument);
+  f.num_landmarks = 0;
+  // A textureless pair is no error: nothing matches, the map stays unknown.
+  EXPECT_EQ(m.Update(f), core::Status::kOk);
+  EXPECT_FALSE(m.Site().valid);
+}
+
+// GIVEN a flat textured plane at z = 0 seen from 8 m WHEN fused THEN elevations are within a few
+// sigma of 0, about 68 % within 1 sigma (not wildly over- or under-confident), every known cell
+// with a full footprint is safe and a site is chosen near the target.
+TEST(HazardMapperTest, FlatPlaneIsSafeWithHonestSigma) {
+  SceneRun run;
+  Prepare(Scene{}, 8.0, &run);
+  {
+    swf::testing::AllocationScope scope;
+    ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+    ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+    EXPECT_EQ(scope.Count(), 0u);
+  }
+  const HazardMapper& m = *run.mapper;
+  int known = 0;
+  int within = 0;
+  int outliers = 0;
+  for (int c = 0; c < m.GridCells() * m.GridCells(); ++c) {
+    if (std::isnan(m.Elevation()[c])) continue;
+    ++known;
+    within += std::fabs(m.Elevation()[c]) <= m.Sigma()[c];
+    outliers += std::fabs(m.Elevation()[c]) > 5.0 * m.Sigma()[c] + 0.01;
+  }
+  EXPECT_LE(outliers, known / 500);
+  ASSERT_GT(known, 500);
+  const double frac = static_cast<double>(within) / known;
+  std::printf("flat plane: %d known cells, cell %.3f m, %.1f%% within 1 sigma\n", known, m.CellM(),
+              100.0 * frac);
+  EXPECT_GT(frac, 0.45);
+  EXPECT_EQ(m.Stats().rock_cells, 0);
+  EXPECT_EQ(m.Stats().slope_cells, 0);
+  ASSERT_TRUE(m.Site().valid);
+  EXPECT_LT(m.Site().position_world_m.norm(), 1.0);
+  EXPECT_GE(m.Site().clearance_m, Options().footprint_radius_m);
+  EXPECT_EQ(m.Site().stable_updates, 1);
+}
+
+// GIVEN a plane tilted 15 deg THEN the footprint slope is 15 +- 1 deg and cells are kSlope.
+TEST(HazardMapperTest, TiltedPlaneIsSlopeHazard) {
+  SceneRun run;
+  Scene scene;
+  scene.tilt_x = std::tan(15.0 * M_PI / 180.0);
+  Prepare(scene, 8.0, &run);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  int slopes = 0;
+  int fitted = 0;
+  int within = 0;
+  for (int c = 0; c < m.GridCells() * m.GridCells(); ++c) {
+    if (std::isnan(m.SlopeDeg()[c])) continue;
+    ++fitted;
+    within += std::fabs(m.SlopeDeg()[c] - 15.0) < 1.0;
+    EXPECT_NEAR(m.SlopeDeg()[c], 15.0, 2.0);
+    slopes += m.Classes()[c] == HazardClass::kSlope;
+  }
+  ASSERT_GT(fitted, 200);
+  EXPECT_GT(within, fitted * 95 / 100);
+  EXPECT_GT(slopes, fitted * 9 / 10);
+  EXPECT_FALSE(m.Site().valid);
+}
+
+// GIVEN two 0.5 m boxes (rocks) and a 0.1 m one on flat ground THEN the big ones are kRock at
+// their centres, the small one is not, and the safe site keeps a footprint away from the rocks.
+TEST(HazardMapperTest, RocksDetectedAndAvoided) {
+  SceneRun run;
+  Scene scene;
+  scene.boxes.push_back(Box{0.0, 0.0, 0.15, 0.5});
+  scene.boxes.push_back(Box{0.9, 0.8, 0.15, 0.5});
+  scene.boxes.push_back(Box{0.9, -0.8, 0.15, 0.1});
+  Prepare(scene, 8.0, &run);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  int i = 0;
+  int j = 0;
+  for (int b = 0; b < 2; ++b) {
+    ASSERT_TRUE(m.CellOf(scene.boxes[b].x, scene.boxes[b].y, &i, &j));
+    EXPECT_EQ(m.Classes()[j * m.GridCells() + i], HazardClass::kRock) << "box " << b;
+    EXPECT_NEAR(m.RockHeight()[j * m.GridCells() + i], 0.5, 0.15);
+  }
+  ASSERT_TRUE(m.CellOf(0.9, -0.8, &i, &j));
+  EXPECT_NE(m.Classes()[j * m.GridCells() + i], HazardClass::kRock);
+  ASSERT_TRUE(m.Site().valid);
+  for (int b = 0; b < 2; ++b) {
+    const double d = std::hypot(m.Site().position_world_m.x() - scene.boxes[b].x,
+                                m.Site().position_world_m.y() - scene.boxes[b].y);
+    EXPECT_GT(d, Options().footprint_radius_m + scene.boxes[b].half) << "box " << b;
+  }
+}
+
+// GIVEN a pose covariance with 1 m vertical sigma THEN the fused sigma reflects it (absolute
+// elevation uncertain) while rocks are still detected (relative heights do not depend on it).
+TEST(HazardMapperTest, PoseCovarianceEntersSigma) {
+  SceneRun run;
+  Scene scene;
+  scene.boxes.push_back(Box{0.0, 0.0, 0.15, 0.5});
+  Prepare(scene, 8.0, &run);
+  run.frame.pose_covariance(2, 2) = 1.0;
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  int i = 0;
+  int j = 0;
+  ASSERT_TRUE(m.CellOf(0.5, 0.5, &i, &j));
+  EXPECT_GT(m.Sigma()[j * m.GridCells() + i], 0.9);
+  ASSERT_TRUE(m.CellOf(0.0, 0.0, &i, &j));
+  EXPECT_EQ(m.Classes()[j * m.GridCells() + i], HazardClass::kRock);
+}
+
+// GIVEN landmarks only (no texture) THEN their cells become known with the landmark's sigma.
+TEST(HazardMapperTest, LandmarksEnterTheMap) {
+  HazardMapper m;
+  ASSERT_EQ(m.Configure(Options()), core::Status::kOk);
+  std::vector<std::uint8_t> img(kW * kH, 100);
+  HazardFrame f;
+  f.left = f.right = frontend::GrayView{img.data(), kW, kH, kW};
+  f.world_T_camera.R = testing::Nadir();
+  f.world_T_camera.t = {0, 0, 8};
+  std::vector<HazardLandmark> lm(3);
+  lm[0].position_world_m = {0.3, 0.2, 0.1};
+  lm[0].covariance = Eigen::Matrix3d::Identity() * 0.01;
+  lm[1].position_world_m = {-0.5, 0.4, -0.1};
+  lm[1].covariance = Eigen::Matrix3d::Identity() * 0.04;
+  lm[2].position_world_m = {std::nan(""), 0.0, 0.0};
+  f.landmarks = lm.data();
+  f.num_landmarks = 3;
+  ASSERT_EQ(m.Update(f), core::Status::kOk);
+  EXPECT_EQ(m.Stats().landmarks_used, 2);
+  EXPECT_EQ(m.Stats().landmarks_rejected, 1u);
+  int i = 0;
+  int j = 0;
+  ASSERT_TRUE(m.CellOf(0.3, 0.2, &i, &j));
+  EXPECT_NEAR(m.Elevation()[j * m.GridCells() + i], 0.1, 1e-6);
+  EXPECT_NEAR(m.Sigma()[j * m.GridCells() + i], 0.1, 1e-6);
+  ASSERT_TRUE(m.CellOf(-0.5, 0.4, &i, &j));
+  EXPECT_NEAR(m.Sigma()[j * m.GridCells() + i], 0.2, 1e-6);
+}
+
+}  // namespace
+}  // namespace swf::hazard
