@@ -69,6 +69,18 @@ AppearanceOptions DefaultImagery(const std::string& shared_dir) {
 }
 
 core::Status Appearance::Configure(const Terrain& terrain, const AppearanceOptions& options) {
+  const core::Status status = Build(terrain, options);
+  if (status != core::Status::kOk) {
+    // A half-built appearance must not look usable: Size() == 0 makes Render refuse it.
+    size_ = 0;
+    albedo_.clear();
+    shaded_.clear();
+    lit_.clear();
+  }
+  return status;
+}
+
+core::Status Appearance::Build(const Terrain& terrain, const AppearanceOptions& options) {
   if (!(options.sun_elevation_deg > 0.0 && options.sun_elevation_deg <= 90.0) ||
       !(options.ambient >= 0.0 && options.ambient <= 1.0) || !(options.global_weight >= 0.0) ||
       !(options.detail_strength >= 0.0) || !(options.image_pixel_m > 0.0) ||

@@ -49,7 +49,7 @@ TEST(RendererTest, TrueDisparityOfATiltedPlaneIsAnalytic) {
   t.tilt_x = 0.08;
   t.tilt_y = 0.03;
   Scene scene;
-  MakeScene(t, AppearanceOptions{}, &scene);
+  ASSERT_NO_FATAL_FAILURE(MakeScene(t, AppearanceOptions{}, &scene));
   RenderOptions r;
   r.rig = SmallRig();
   Renderer renderer;
@@ -76,7 +76,7 @@ TEST(RendererTest, RenderedImagesAgreeWithTheTrueDisparity) {
   t.size = 512;
   AppearanceOptions a = DefaultImagery(SharedDir());
   Scene scene;
-  MakeScene(t, a, &scene);
+  ASSERT_NO_FATAL_FAILURE(MakeScene(t, a, &scene));
   RenderOptions r;
   r.rig = SmallRig();
   r.add_noise = false;
@@ -123,7 +123,8 @@ TEST(RendererTest, TrueLandmarkProjectsOntoItsPlantedFiducial) {
   t.size = 512;
   t.rocks.k = 0.0;
   Scene scene;
-  MakeScene(t, AppearanceOptions{}, &scene);  // uniform albedo: only the fiducial has contrast
+  ASSERT_NO_FATAL_FAILURE(
+      MakeScene(t, AppearanceOptions{}, &scene));  // uniform albedo: only the fiducial has contrast
   const estimator::Pose<double> pose = NadirAt(0.3, -0.2, 12.0);
   RenderOptions r;
   r.rig = SmallRig();
@@ -179,8 +180,8 @@ TEST(RendererTest, SameSeedGivesBitIdenticalImages) {
   AppearanceOptions a = DefaultImagery(SharedDir());
   Scene s1;
   Scene s2;
-  MakeScene(t, a, &s1);
-  MakeScene(t, a, &s2);
+  ASSERT_NO_FATAL_FAILURE(MakeScene(t, a, &s1));
+  ASSERT_NO_FATAL_FAILURE(MakeScene(t, a, &s2));
   RenderOptions r;
   r.rig = SmallRig();
   r.samples_per_pixel = 4;
@@ -208,7 +209,7 @@ TEST(RendererTest, PhotometricNoiseHasTheModelledSigma) {
   a.detail_strength = 0.0;
   a.sun_elevation_deg = 90.0;
   Scene scene;
-  MakeScene(t, a, &scene);
+  ASSERT_NO_FATAL_FAILURE(MakeScene(t, a, &scene));
   RenderOptions r;
   r.rig = SmallRig();
   Renderer renderer;
@@ -240,6 +241,25 @@ TEST(RendererTest, RejectsBadOptions) {
   Appearance a;
   StereoImages im;
   EXPECT_EQ(renderer.Render(t, a, NadirAt(0, 0, 1), 0, &im), core::Status::kNotConfigured);
+}
+
+TEST(RendererTest, MissingImageryIsAClearErrorAndTheSceneIsRefused) {
+  // GIVEN imagery paths that do not exist.
+  TerrainOptions t;
+  t.size = 64;
+  Terrain terrain;
+  ASSERT_EQ(terrain.Configure(t), core::Status::kOk);
+  Appearance appearance;
+  // WHEN the appearance is configured THEN it says so, and a render with it is refused.
+  EXPECT_NE(appearance.Configure(terrain, DefaultImagery("/nonexistent")), core::Status::kOk);
+  EXPECT_EQ(appearance.Size(), 0);
+  RenderOptions r;
+  r.rig = SmallRig();
+  Renderer renderer;
+  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
+  StereoImages im;
+  EXPECT_EQ(renderer.Render(terrain, appearance, NadirAt(0, 0, 10), 0, &im),
+            core::Status::kInvalidArgument);
 }
 
 }  // namespace

@@ -130,7 +130,7 @@ class DenseCholesky {
     SolveInPlace(out);
   }
 
-  bool factorized() const { return factorized_; }
+  bool IsFactorized() const { return factorized_; }
 
  private:
   alignas(64) S a_[kMaxPadded * kMaxPadded];

@@ -58,6 +58,8 @@ class Appearance {
   std::int32_t Size() const { return size_; }
 
  private:
+  core::Status Build(const Terrain& terrain, const AppearanceOptions& options);
+
   AppearanceOptions options_;
   std::int32_t size_ = 0;
   double origin_m_ = 0.0;
