@@ -53,6 +53,29 @@ inline int AdaptiveP2(int p1, int p2, int i0, int i1) {
 
 }  // namespace
 
+void HalveImage(const frontend::GrayView& src, std::uint8_t* dst) {
+  const int w = src.width;
+  const int h = src.height;
+  const int w2 = (w + 1) / 2;
+  const int h2 = (h + 1) / 2;
+  for (int y = 0; y < h2; ++y) {
+    const int sy = 2 * y;
+    const std::uint8_t* rm = src.Row(sy > 0 ? sy - 1 : 0);
+    const std::uint8_t* rc = src.Row(sy);
+    const std::uint8_t* rp = src.Row(sy + 1 < h ? sy + 1 : h - 1);
+    std::uint8_t* o = dst + static_cast<std::ptrdiff_t>(y) * w2;
+    for (int x = 0; x < w2; ++x) {
+      const int sx = 2 * x;
+      const int xm = sx > 0 ? sx - 1 : 0;
+      const int xp = sx + 1 < w ? sx + 1 : w - 1;
+      const int cm = rm[xm] + 2 * rc[xm] + rp[xm];
+      const int cc = rm[sx] + 2 * rc[sx] + rp[sx];
+      const int cp = rm[xp] + 2 * rc[xp] + rp[xp];
+      o[x] = static_cast<std::uint8_t>((cm + 2 * cc + cp + 8) >> 4);
+    }
+  }
+}
+
 core::Status SgmMatcher::Configure(const SgmOptions& options) {
   configured_ = false;
   if (options.max_width < 8 || options.max_height < 8 ||

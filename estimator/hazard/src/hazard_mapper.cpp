@@ -15,29 +15,6 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kRadToDeg = 57.29577951308232;
 constexpr std::uint16_t kMaxCount = 65535;
 
-// Halves src (w x h, stride) into dst ((w+1)/2 x (h+1)/2) with a [1 2 1] x [1 2 1] / 16 filter.
-void Half(const std::uint8_t* src, int w, int h, int stride, std::uint8_t* dst) {
-  const int w2 = (w + 1) / 2;
-  const int h2 = (h + 1) / 2;
-  for (int y = 0; y < h2; ++y) {
-    const int sy = 2 * y;
-    const std::uint8_t* rm = src + static_cast<std::ptrdiff_t>(sy > 0 ? sy - 1 : 0) * stride;
-    const std::uint8_t* rc = src + static_cast<std::ptrdiff_t>(sy) * stride;
-    const std::uint8_t* rp =
-        src + static_cast<std::ptrdiff_t>(sy + 1 < h ? sy + 1 : h - 1) * stride;
-    std::uint8_t* o = dst + static_cast<std::ptrdiff_t>(y) * w2;
-    for (int x = 0; x < w2; ++x) {
-      const int sx = 2 * x;
-      const int xm = sx > 0 ? sx - 1 : 0;
-      const int xp = sx + 1 < w ? sx + 1 : w - 1;
-      const int cm = rm[xm] + 2 * rc[xm] + rp[xm];
-      const int cc = rm[sx] + 2 * rc[sx] + rp[sx];
-      const int cp = rm[xp] + 2 * rc[xp] + rp[xp];
-      o[x] = static_cast<std::uint8_t>((cm + 2 * cc + cp + 8) >> 4);
-    }
-  }
-}
-
 struct Plane {
   bool ok = false;
   double n = 0.0;
@@ -68,9 +45,11 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
   p.b = (cyy * cxz - cxy * cyz) / det;
   p.c = (cxx * cyz - cxy * cxz) / det;
   p.mean_var = s[10] / n;
-  p.var_b = p.mean_var / n * (cyy / det);
-  p.var_c = p.mean_var / n * (cxx / det);
   p.rss = std::max(0.0, n * (czz - p.b * cxz - p.c * cyz));
+  // Slope variance from the larger of the predicted noise and the fit's own residuals.
+  const double noise = std::max(p.mean_var, p.rss / (n - 3.0 + 1e-9));
+  p.var_b = noise / n * (cyy / det);
+  p.var_c = noise / n * (cxx / det);
   p.ok = true;
   return p;
 }
@@ -179,14 +158,14 @@ bool HazardMapper::CellOf(double x_m, double y_m, int* i, int* j) const {
 void HazardMapper::Reduce(const frontend::GrayView& src, std::vector<std::uint8_t>* dst) const {
   if (options_.downsample == 1) return;
   if (options_.downsample == 2) {
-    Half(src.data, src.width, src.height, src.stride, dst->data());
+    HalveImage(src, dst->data());
     return;
   }
   std::uint8_t* tmp = const_cast<std::uint8_t*>(tmp_small_.data());
-  Half(src.data, src.width, src.height, src.stride, tmp);
+  HalveImage(src, tmp);
   const int w2 = (src.width + 1) / 2;
   const int h2 = (src.height + 1) / 2;
-  Half(tmp, w2, h2, w2, dst->data());
+  HalveImage(frontend::GrayView{tmp, w2, h2, w2}, dst->data());
 }
 
 void HazardMapper::ChooseRange(const HazardFrame& frame, int* min_d, int* num_d) {
@@ -214,6 +193,7 @@ void HazardMapper::ChooseRange(const HazardFrame& frame, int* min_d, int* num_d)
     ++in_view;
   }
   if (in_view >= 3) {
+    predicted_depth_m_ = std::sqrt(z_lo * z_hi);
     z_lo *= 0.8;
     z_hi *= 1.25;
   } else {
@@ -231,6 +211,7 @@ void HazardMapper::ChooseRange(const HazardFrame& frame, int* min_d, int* num_d)
     }
     const double axis_z = -world_R_camera(2, 2);  // cosine of the optical axis with straight down
     const double depth = (t.z() - ground) / std::max(axis_z, 0.2);
+    predicted_depth_m_ = std::max(depth, 0.5);
     z_lo = std::max(0.5, depth * 0.6);
     z_hi = std::max(z_lo + 0.5, depth * 1.6);
   }
@@ -483,10 +464,14 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       slope_sigma_deg_[c] = static_cast<float>(slope_sigma_deg);
       rock_m_[c] = static_cast<float>(h);
       rough_m_[c] = static_cast<float>(std::sqrt(pf.rss / pf.n));
-      if (h - k * sigma_h > options_.max_rock_height_m) {
+      // A hazard is declared only where the map resolves it (sigma below a third of the
+      // threshold); elsewhere an exceedance is kUncertain.
+      if (h - k * sigma_h > options_.max_rock_height_m &&
+          sigma_h * 3.0 <= options_.max_rock_height_m) {
         class_[c] = HazardClass::kRock;
         ++rock;
-      } else if (slope_deg - k * slope_sigma_deg > options_.max_slope_deg) {
+      } else if (slope_deg - k * slope_sigma_deg > options_.max_slope_deg &&
+                 slope_sigma_deg * 3.0 <= options_.max_slope_deg) {
         class_[c] = HazardClass::kSlope;
         ++slope;
       } else if (h + k * sigma_h > options_.max_rock_height_m ||
@@ -649,8 +634,7 @@ core::Status HazardMapper::Update(const HazardFrame& frame) {
   stats_.min_disparity = min_d;
   stats_.num_disparities = num_d;
   if (core::Status s = sgm_.Compute(wl, wr, min_d, num_d); s != core::Status::kOk) return s;
-  const double fb = options_.camera.fx / options_.downsample * options_.camera.baseline_m;
-  const double range_m = fb / (min_d + 0.5 * num_d);
+  const double range_m = predicted_depth_m_;
   if (!started_) {
     if (options_.target_from_first_pose) {
       const Eigen::Vector3d axis = frame.world_T_camera.R.col(2);

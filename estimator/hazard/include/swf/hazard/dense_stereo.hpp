@@ -34,6 +34,11 @@ struct SgmOptions {
   float lr_max_diff = 1.0f;   // left-right consistency tolerance (px)
 };
 
+// Halves an image with a [1 2 1] x [1 2 1] / 16 low-pass: dst (row-major, (width + 1) / 2 x
+// (height + 1) / 2, caller-owned) pixel (x, y) is centred on src pixel (2x, 2y), so a camera's
+// fx, fy, cx, cy simply halve.
+void HalveImage(const frontend::GrayView& src, std::uint8_t* dst);
+
 class SgmMatcher {
  public:
   static constexpr float kInvalid = -1.0f;

@@ -21,8 +21,9 @@
 //     lander footprint gives slope and roughness; a plane over rock_window_radius_m gives each
 //     cell's rock height. Sigma of slope from the fit and the attitude covariance; sigma of the
 //     rock height from the cell's stereo sigma and the fit. Classes: kRock / kSlope when the
-//     value exceeds its threshold by confidence_k sigma, kUncertain when value + k sigma exceeds
-//     it, kSafe otherwise, kUnknown without data.
+//     value exceeds its threshold by confidence_k sigma and the sigma resolves it (sigma <= a
+//     third of the threshold), kUncertain when value + k sigma exceeds the threshold otherwise,
+//     kSafe otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
 //     is not kSafe or to the grid border; candidates need clearance >= footprint radius. Score
 //     = clearance (capped) + confidence - distance to the target; the previous site is kept
@@ -55,9 +56,9 @@ struct HazardMapperOptions {
   int sgm_p2 = 96;
   float uniqueness = 0.05f;
   float min_confidence = 0.05f;
-  double disparity_sigma_px = 0.25;  // at working resolution, confidence 1
-  int max_independent_pixels = 4;
-  double ground_z_hint_m = 0.0;  // used for the disparity range with no landmark and no map
+  double disparity_sigma_px = 0.3;  // at working resolution, confidence 1
+  int max_independent_pixels = 2;   // SGM errors are correlated within a cell (measured)
+  double ground_z_hint_m = 0.0;     // used for the disparity range with no landmark and no map
   // Grid.
   int grid_cells = 256;  // cells per side (capacity and size)
   double min_cell_m = 0.05;
@@ -70,7 +71,7 @@ struct HazardMapperOptions {
   double max_slope_deg = 10.0;
   double max_rock_height_m = 0.3;
   double footprint_radius_m = 1.5;
-  double rock_window_radius_m = 1.0;
+  double rock_window_radius_m = 1.5;
   double confidence_k = 2.0;
   double min_known_fraction = 0.6;  // of a window, for a plane fit
   // Safe site.
@@ -179,6 +180,7 @@ class HazardMapper {
   double corner_x_ = 0.0;
   double corner_y_ = 0.0;
   Eigen::Vector2d target_{0.0, 0.0};
+  double predicted_depth_m_ = 1.0;
   // Fused state per cell.
   std::vector<double> info_;      // sum 1/sigma^2 (stereo + pose + landmarks)
   std::vector<double> info_z_;    // sum z/sigma^2

@@ -1,0 +1,87 @@
+// Hazard-mapping evaluation against the simulator's truth (tools only, never flight code):
+// seeded descents over a simulated terrain, metrics of a HazardMapper's map against the exact
+// terrain layers, and the hazard-map PNG rendering.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "swf/core/status.hpp"
+#include "swf/hazard/hazard_mapper.hpp"
+#include "swf/sim/appearance.hpp"
+#include "swf/sim/hazard.hpp"
+#include "swf/sim/renderer.hpp"
+#include "swf/sim/terrain.hpp"
+
+namespace swf::hazard_eval {
+
+struct EvalOptions {
+  int image_width = 512;  // rendered resolution (the EDL rig's 25 deg FOV is kept)
+  int image_height = 384;
+  int downsample = 1;                      // mapper's dense-stereo reduction
+  int terrain_size = 1024;                 // nodes (0.1 m): 102.4 m square
+  double pose_sigma_per_altitude = 0.002;  // position sigma per axis = this x altitude (m)
+  double attitude_sigma_deg = 0.02;
+  int num_landmarks = 60;
+  double footprint_radius_m = 1.5;
+  double max_rock_height_m = 0.3;
+  double max_slope_deg = 10.0;
+  std::string shared_dir = "../shared";
+};
+
+// Metrics of one map against truth.
+struct FrameMetrics {
+  double altitude_m = 0.0;
+  double cell_m = 0.0;
+  int known_cells = 0;
+  int rocks_in_view = 0;     // truth rocks >= max_rock_height whose centre cell is resolved
+                             // (sigma <= max_rock_height / 3)
+  int rocks_detected = 0;    // ... with a kRock cell within the rock's radius + one cell
+  int rocks_flagged = 0;     // ... with a kRock or kUncertain cell there (never a site)
+  int rock_cells = 0;        // cells classified kRock
+  int false_rock_cells = 0;  // kRock cells with no truth rock >= half the threshold nearby
+  int rock_free_cells = 0;   // known cells with no such rock nearby
+  std::vector<double> slope_errors_deg;    // |estimated - true| per fitted cell
+  std::vector<double> elevation_errors_m;  // |estimated - true cell mean|
+  std::vector<double> elevation_sigmas_m;
+  bool site_valid = false;
+  bool site_on_hazard = false;    // a truth hazard node inside the footprint at the site
+  double site_clearance_m = 0.0;  // site to nearest truth hazard node
+  double update_ms = 0.0;
+};
+
+class World {
+ public:
+  // Builds terrain (preset, seed, reduced size) + appearance + renderer + truth.
+  core::Status Configure(sim::TerrainPreset preset, std::uint64_t seed, const EvalOptions& o);
+  const sim::Terrain& Terrain() const { return terrain_; }
+  const sim::HazardMap& Truth() const { return truth_; }
+  const sim::Renderer& Renderer() const { return renderer_; }
+  const sim::Appearance& Appearance() const { return appearance_; }
+  // Renders a pair at world_T_camera and feeds the mapper (pose perturbed by its covariance,
+  // noisy landmarks from the truth depth). rng_seed drives the perturbations.
+  core::Status Step(const estimator::Pose<double>& world_T_camera, std::uint64_t frame,
+                    std::uint64_t rng_seed, hazard::HazardMapper* mapper, double* update_ms);
+  // Compares the map with truth.
+  FrameMetrics Evaluate(const hazard::HazardMapper& mapper, double altitude_m) const;
+  hazard::HazardMapperOptions MapperOptions() const;
+
+ private:
+  EvalOptions options_;
+  sim::Terrain terrain_;
+  sim::Appearance appearance_;
+  sim::Renderer renderer_;
+  sim::HazardMap truth_;
+  sim::StereoImages images_;
+  std::vector<hazard::HazardLandmark> landmarks_;
+};
+
+// Hazard map as RGB (3 x scale^2 bytes per cell, north up): hill-shaded elevation, classes
+// tinted (rock red, slope orange, uncertain yellow, safe green, unknown dark blue), the safe site
+// as a white footprint circle with a cross.
+void RenderHazardMap(const hazard::HazardMapper& mapper, int scale, std::vector<std::uint8_t>* rgb,
+                     int* width, int* height);
+core::Status WriteHazardMapPng(const hazard::HazardMapper& mapper, const std::string& path);
+
+}  // namespace swf::hazard_eval

@@ -1,0 +1,363 @@
+// swf-hazard: evaluates hazard mapping on seeded simulated descents against the simulator's truth.
+//
+//   swf-hazard eval OUTDIR [--descents N] [--sweep-seeds S] [--shared DIR] [--width W]
+//                          [--height H] [--downsample D]
+//       altitude sweep (single-frame maps, fresh mapper per altitude) over the three terrain
+//       presets: rock detection probability / false-alarm rate, slope error, elevation error vs
+//       sigma against altitude; then N seeded fused descents per preset with the safe-site check.
+//       Writes OUTDIR/hazard_eval.json, *.dat, hazard_*.png (gnuplot) and hazard_map_*.png.
+//   swf-hazard map OUT.png [--preset plains|craters|rocks] [--seed S] [--shared DIR]
+//       one fused descent, the final hazard map as PNG.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "swf/hazard_eval/hazard_eval.hpp"
+#include "swf/sim/rng.hpp"
+#include "swf/sim/trajectory.hpp"
+
+namespace {
+
+using swf::hazard_eval::EvalOptions;
+using swf::hazard_eval::FrameMetrics;
+using swf::hazard_eval::World;
+
+constexpr double kSweepAltitudes[] = {100.0, 80.0, 60.0, 50.0, 40.0, 30.0, 20.0, 15.0, 10.0};
+constexpr double kDescentAltitudes[] = {80.0, 50.0, 30.0, 20.0, 14.0, 10.0};
+const char* const kPresetNames[] = {"plains", "craters", "rocks"};
+
+struct Acc {
+  int rocks_in_view = 0, rocks_detected = 0, rocks_flagged = 0, false_cells = 0, free_cells = 0,
+      frames = 0;
+  double cell_m = 0.0, update_ms = 0.0;
+  std::vector<double> slope_err, elev_err, elev_sigma;
+  void Add(const FrameMetrics& m) {
+    rocks_in_view += m.rocks_in_view;
+    rocks_detected += m.rocks_detected;
+    rocks_flagged += m.rocks_flagged;
+    false_cells += m.false_rock_cells;
+    free_cells += m.rock_free_cells;
+    cell_m += m.cell_m;
+    update_ms += m.update_ms;
+    ++frames;
+    slope_err.insert(slope_err.end(), m.slope_errors_deg.begin(), m.slope_errors_deg.end());
+    elev_err.insert(elev_err.end(), m.elevation_errors_m.begin(), m.elevation_errors_m.end());
+    elev_sigma.insert(elev_sigma.end(), m.elevation_sigmas_m.begin(), m.elevation_sigmas_m.end());
+  }
+  double Pd() const { return rocks_in_view > 0 ? double(rocks_detected) / rocks_in_view : NAN; }
+  double Pf() const { return rocks_in_view > 0 ? double(rocks_flagged) / rocks_in_view : NAN; }
+  double Far() const { return free_cells > 0 ? double(false_cells) / free_cells : NAN; }
+  static double Quantile(std::vector<double> v, double q) {
+    if (v.empty()) return NAN;
+    const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * v.size()));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[k];
+  }
+  double WithinSigma(double k) const {
+    if (elev_err.empty()) return NAN;
+    int in = 0;
+    for (std::size_t i = 0; i < elev_err.size(); ++i) in += elev_err[i] <= k * elev_sigma[i];
+    return double(in) / elev_err.size();
+  }
+};
+
+swf::estimator::Pose<double> CameraPose(const World& w, double x, double y, double altitude,
+                                        double heading) {
+  swf::estimator::Pose<double> p;
+  p.R = swf::sim::NadirRotation(heading);
+  p.t = {x, y, w.Terrain().HeightAt(x, y) + altitude};
+  return p;
+}
+
+const char* Arg(int argc, char** argv, const char* name, const char* fallback) {
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (std::strcmp(argv[i], name) == 0) return argv[i + 1];
+  }
+  return fallback;
+}
+
+void Json(FILE* f, double v) {
+  if (std::isfinite(v)) {
+    std::fprintf(f, "%.6g", v);
+  } else {
+    std::fprintf(f, "null");
+  }
+}
+
+int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_seeds) {
+  FILE* json = std::fopen((out + "/hazard_eval.json").c_str(), "w");
+  if (json == nullptr) {
+    std::fprintf(stderr, "cannot write %s/hazard_eval.json\n", out.c_str());
+    return 1;
+  }
+  constexpr int kNumAlt = sizeof(kSweepAltitudes) / sizeof(kSweepAltitudes[0]);
+  std::vector<std::vector<Acc>> sweep(3, std::vector<Acc>(kNumAlt));
+  std::vector<Acc> all_alt(kNumAlt);
+  auto mapper = std::make_unique<swf::hazard::HazardMapper>();
+  for (int p = 0; p < 3; ++p) {
+    for (int s = 0; s < sweep_seeds; ++s) {
+      World world;
+      const auto seed = static_cast<std::uint64_t>(100 + s);
+      if (world.Configure(static_cast<swf::sim::TerrainPreset>(p), seed, eo) !=
+          swf::core::Status::kOk) {
+        std::fprintf(stderr, "world configure failed (--shared?)\n");
+        return 1;
+      }
+      if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+      swf::sim::Rng rng(seed * 7919);
+      for (int a = 0; a < kNumAlt; ++a) {
+        mapper->Reset();
+        const double x = rng.Uniform(-20.0, 20.0);
+        const double y = rng.Uniform(-20.0, 20.0);
+        const auto pose = CameraPose(world, x, y, kSweepAltitudes[a], rng.Uniform(0.0, 6.283));
+        double ms = 0.0;
+        if (world.Step(pose, a, seed * 1000 + a, mapper.get(), &ms) != swf::core::Status::kOk) {
+          std::fprintf(stderr, "update failed\n");
+          return 1;
+        }
+        FrameMetrics m = world.Evaluate(*mapper, kSweepAltitudes[a]);
+        m.update_ms = ms;
+        sweep[p][a].Add(m);
+        all_alt[a].Add(m);
+        if (p == 2 && s == 0 && (a == 5 || a == 7)) {
+          (void)swf::hazard_eval::WriteHazardMapPng(
+              *mapper,
+              out + "/hazard_map_rocks_" + std::to_string(int(kSweepAltitudes[a])) + "m.png");
+        }
+      }
+      std::fprintf(stderr, "sweep %s seed %d done\n", kPresetNames[p], s);
+    }
+  }
+  // Descents.
+  struct DescentResult {
+    int preset;
+    int seed;
+    bool valid;
+    bool on_hazard;
+    double clearance;
+    int stable;
+  };
+  std::vector<DescentResult> results;
+  std::vector<Acc> descent_acc(3);
+  for (int p = 0; p < 3; ++p) {
+    for (int s = 0; s < descents; ++s) {
+      World world;
+      const auto seed = static_cast<std::uint64_t>(1000 + s);
+      if (world.Configure(static_cast<swf::sim::TerrainPreset>(p), seed, eo) !=
+          swf::core::Status::kOk) {
+        return 1;
+      }
+      if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+      swf::sim::Rng rng(seed * 104729);
+      const double x0 = rng.Uniform(-20.0, 20.0);
+      const double y0 = rng.Uniform(-20.0, 20.0);
+      const double heading = rng.Uniform(0.0, 6.283);
+      int f = 0;
+      FrameMetrics m;
+      for (double alt : kDescentAltitudes) {
+        const auto pose =
+            CameraPose(world, x0 + 0.2 * rng.Gaussian(), y0 + 0.2 * rng.Gaussian(), alt, heading);
+        double ms = 0.0;
+        if (world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms) != swf::core::Status::kOk) {
+          return 1;
+        }
+        ++f;
+        m = world.Evaluate(*mapper, alt);
+        m.update_ms = ms;
+      }
+      descent_acc[p].Add(m);
+      results.push_back({p, s, m.site_valid, m.site_on_hazard, m.site_clearance_m,
+                         mapper->Site().stable_updates});
+      if (s == 0) {
+        (void)swf::hazard_eval::WriteHazardMapPng(
+            *mapper, out + "/hazard_map_descent_" + kPresetNames[p] + ".png");
+      }
+    }
+    std::fprintf(stderr, "descents %s done\n", kPresetNames[p]);
+  }
+  // JSON.
+  std::fprintf(json, "{\n  \"image\": [%d, %d], \"downsample\": %d, \"footprint_radius_m\": %g,\n",
+               eo.image_width, eo.image_height, eo.downsample, eo.footprint_radius_m);
+  std::fprintf(json, "  \"max_rock_height_m\": %g, \"max_slope_deg\": %g,\n", eo.max_rock_height_m,
+               eo.max_slope_deg);
+  std::fprintf(json, "  \"sweep_seeds_per_preset\": %d,\n  \"sweep\": [\n", sweep_seeds);
+  FILE* dat = std::fopen((out + "/hazard_sweep.dat").c_str(), "w");
+  std::fprintf(dat,
+               "# altitude pd_all far_all pd_plains pd_craters pd_rocks slope_med slope_p90 "
+               "within1 within2 sigma_med cell_m dz_formula pflag_all\n");
+  const double fx = eo.image_width / 2.0 / std::tan(12.5 * M_PI / 180.0) / eo.downsample;
+  for (int a = 0; a < kNumAlt; ++a) {
+    const Acc& t = all_alt[a];
+    const double z = kSweepAltitudes[a];
+    const double dz = z * z * 0.25 / (fx * 1.0);
+    std::fprintf(json, "    {\"altitude_m\": %g, \"cell_m\": ", z);
+    Json(json, t.cell_m / std::max(1, t.frames));
+    std::fprintf(json, ", \"rocks_in_view\": %d, \"detection_probability\": ", t.rocks_in_view);
+    Json(json, t.Pd());
+    std::fprintf(json, ", \"flagged_probability\": ");
+    Json(json, t.Pf());
+    std::fprintf(json, ", \"false_alarm_rate\": ");
+    Json(json, t.Far());
+    std::fprintf(json, ", \"detection_probability_by_preset\": [");
+    for (int p = 0; p < 3; ++p) {
+      Json(json, sweep[p][a].Pd());
+      std::fprintf(json, p < 2 ? ", " : "]");
+    }
+    std::fprintf(json, ", \"slope_error_median_deg\": ");
+    Json(json, Acc::Quantile(t.slope_err, 0.5));
+    std::fprintf(json, ", \"slope_error_p90_deg\": ");
+    Json(json, Acc::Quantile(t.slope_err, 0.9));
+    std::fprintf(json, ", \"elevation_within_1sigma\": ");
+    Json(json, t.WithinSigma(1.0));
+    std::fprintf(json, ", \"elevation_within_2sigma\": ");
+    Json(json, t.WithinSigma(2.0));
+    std::fprintf(json, ", \"elevation_sigma_median_m\": ");
+    Json(json, Acc::Quantile(t.elev_sigma, 0.5));
+    std::fprintf(json, ", \"elevation_error_median_m\": ");
+    Json(json, Acc::Quantile(t.elev_err, 0.5));
+    std::fprintf(json, ", \"range_resolution_formula_m\": ");
+    Json(json, dz);
+    std::fprintf(json, ", \"update_ms_mean\": ");
+    Json(json, t.update_ms / std::max(1, t.frames));
+    std::fprintf(json, "}%s\n", a + 1 < kNumAlt ? "," : "");
+    std::fprintf(dat, "%g %g %g %g %g %g %g %g %g %g %g %g %g %g\n", z, t.Pd(), t.Far(),
+                 sweep[0][a].Pd(), sweep[1][a].Pd(), sweep[2][a].Pd(),
+                 Acc::Quantile(t.slope_err, 0.5), Acc::Quantile(t.slope_err, 0.9),
+                 t.WithinSigma(1.0), t.WithinSigma(2.0), Acc::Quantile(t.elev_sigma, 0.5),
+                 t.cell_m / std::max(1, t.frames), dz, t.Pf());
+  }
+  std::fclose(dat);
+  int valid = 0;
+  int on_hazard = 0;
+  double min_clear = 1e9;
+  std::vector<double> clear;
+  for (const DescentResult& r : results) {
+    valid += r.valid;
+    on_hazard += r.valid && r.on_hazard;
+    if (r.valid) {
+      min_clear = std::min(min_clear, r.clearance);
+      clear.push_back(r.clearance);
+    }
+  }
+  std::fprintf(json,
+               "  ],\n  \"descents\": {\"count\": %zu, \"per_preset\": %d, "
+               "\"altitudes_m\": [80, 50, 30, 20, 14, 10],\n",
+               results.size(), descents);
+  std::fprintf(json,
+               "    \"site_found\": %d, \"site_on_true_hazard\": %d, "
+               "\"site_clearance_min_m\": ",
+               valid, on_hazard);
+  Json(json, valid > 0 ? min_clear : NAN);
+  std::fprintf(json, ", \"site_clearance_median_m\": ");
+  Json(json, Acc::Quantile(clear, 0.5));
+  std::fprintf(json, ",\n    \"final_map\": [");
+  for (int p = 0; p < 3; ++p) {
+    const Acc& t = descent_acc[p];
+    std::fprintf(json, "{\"preset\": \"%s\", \"detection_probability\": ", kPresetNames[p]);
+    Json(json, t.Pd());
+    std::fprintf(json, ", \"flagged_probability\": ");
+    Json(json, t.Pf());
+    std::fprintf(json, ", \"false_alarm_rate\": ");
+    Json(json, t.Far());
+    std::fprintf(json, ", \"elevation_within_1sigma\": ");
+    Json(json, t.WithinSigma(1.0));
+    std::fprintf(json, ", \"slope_error_median_deg\": ");
+    Json(json, Acc::Quantile(t.slope_err, 0.5));
+    std::fprintf(json, "}%s", p < 2 ? ", " : "]");
+  }
+  std::fprintf(json, ",\n    \"runs\": [");
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const DescentResult& r = results[i];
+    std::fprintf(json,
+                 "%s{\"preset\": \"%s\", \"seed\": %d, \"site\": %s, \"on_hazard\": %s, "
+                 "\"clearance_m\": %.3f, \"stable_updates\": %d}",
+                 i == 0 ? "\n      " : ",\n      ", kPresetNames[r.preset], r.seed,
+                 r.valid ? "true" : "false", r.on_hazard ? "true" : "false", r.clearance, r.stable);
+  }
+  std::fprintf(json, "]\n  }\n}\n");
+  std::fclose(json);
+  // Plots.
+  const std::string gp = out + "/hazard_plots.gp";
+  FILE* g = std::fopen(gp.c_str(), "w");
+  std::fprintf(g,
+               "set terminal pngcairo size 900,600\nset grid\nset key bottom right\n"
+               "set xlabel 'altitude (m)'\n"
+               "set output '%s/hazard_detection.png'\nset ylabel 'probability / rate'\n"
+               "set title 'Rocks >= %.2f m: detection probability and false-alarm rate'\n"
+               "plot '%s/hazard_sweep.dat' u 1:2 w lp lw 2 t 'P_d (all)', '' u 1:14 w lp lw 2 t "
+               "'P(flagged: rock or uncertain)', '' u 1:4 w lp t "
+               "'P_d plains', '' u 1:5 w lp t 'P_d craters', '' u 1:6 w lp t 'P_d rocks', '' u "
+               "1:($3*100) w lp lw 2 t 'false-alarm rate x100'\n"
+               "set output '%s/hazard_elevation.png'\nset key top left\n"
+               "set title 'Elevation error vs predicted sigma'\nset ylabel 'fraction / metres'\n"
+               "plot '%s/hazard_sweep.dat' u 1:9 w lp lw 2 t 'fraction within 1 sigma', '' u "
+               "1:10 w lp t 'within 2 sigma', '' u 1:11 w lp t 'median sigma (m)', '' u 1:13 w l "
+               "dt 2 t 'dZ = Z^2 0.25 px / (f B)', 0.683 w l dt 3 t '68.3 %%'\n"
+               "set output '%s/hazard_slope.png'\nset title 'Slope error (footprint plane)'\n"
+               "set ylabel 'deg'\nplot '%s/hazard_sweep.dat' u 1:7 w lp lw 2 t 'median', '' u "
+               "1:8 w lp t '90th percentile'\n",
+               out.c_str(), eo.max_rock_height_m, out.c_str(), out.c_str(), out.c_str(),
+               out.c_str(), out.c_str());
+  std::fclose(g);
+  const std::string cmd = "gnuplot " + gp + " 2>/dev/null";
+  if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "gnuplot failed (plots skipped)\n");
+  std::printf("%s/hazard_eval.json: %d descents, site found %d, on true hazard %d\n", out.c_str(),
+              static_cast<int>(results.size()), valid, on_hazard);
+  return on_hazard == 0 ? 0 : 2;
+}
+
+int Map(const std::string& path, const EvalOptions& eo, swf::sim::TerrainPreset preset,
+        std::uint64_t seed) {
+  World world;
+  if (world.Configure(preset, seed, eo) != swf::core::Status::kOk) return 1;
+  auto mapper = std::make_unique<swf::hazard::HazardMapper>();
+  if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+  int f = 0;
+  for (double alt : kDescentAltitudes) {
+    if (world.Step(CameraPose(world, 0.0, 0.0, alt, 0.0), f, seed * 1000 + f, mapper.get(),
+                   nullptr) != swf::core::Status::kOk) {
+      return 1;
+    }
+    ++f;
+  }
+  return swf::hazard_eval::WriteHazardMapPng(*mapper, path) == swf::core::Status::kOk ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr,
+                 "usage: swf-hazard eval OUTDIR [--descents N] [--sweep-seeds S] [--shared DIR] "
+                 "[--width W] [--height H] [--downsample D]\n"
+                 "       swf-hazard map OUT.png [--preset plains|craters|rocks] [--seed S] "
+                 "[--shared DIR]\n");
+    return 1;
+  }
+  EvalOptions eo;
+  const char* env = std::getenv("SWF_SHARED_DIR");
+  eo.shared_dir = Arg(argc, argv, "--shared", env != nullptr ? env : "../shared");
+  eo.image_width = std::atoi(Arg(argc, argv, "--width", "512"));
+  eo.image_height = std::atoi(Arg(argc, argv, "--height", "384"));
+  eo.downsample = std::atoi(Arg(argc, argv, "--downsample", "1"));
+  const std::string verb = argv[1];
+  if (verb == "eval") {
+    return Eval(argv[2], eo, std::atoi(Arg(argc, argv, "--descents", "17")),
+                std::atoi(Arg(argc, argv, "--sweep-seeds", "3")));
+  }
+  if (verb == "map") {
+    swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kRockField;
+    if (!swf::sim::ParseTerrainPreset(Arg(argc, argv, "--preset", "rocks"), &preset)) {
+      std::fprintf(stderr, "unknown preset\n");
+      return 1;
+    }
+    return Map(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10));
+  }
+  std::fprintf(stderr, "unknown verb %s\n", verb.c_str());
+  return 1;
+}
