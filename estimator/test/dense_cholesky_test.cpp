@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <memory>
 #include <random>
 
@@ -40,6 +43,91 @@ TEST(DenseCholesky, SolvesLikeEigenForManySizes) {
   }
 }
 
+// Sizes around the 8-row panels and the 128-column inner-product chunks of the kernel.
+TEST(DenseCholesky, SolvesLikeEigenAcrossPanelAndChunkBoundaries) {
+  auto chol = std::make_unique<DenseCholesky<double, 300>>();
+  for (int n : {127, 128, 129, 136, 137, 255, 257, 300}) {
+    const Eigen::MatrixXd a = RandomSpd(n, static_cast<std::uint64_t>(n) + 11);
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, 2.0, -1.0);
+    chol->Reset(n);
+    for (int j = 0; j < n; ++j)
+      for (int i = j; i < n; ++i) chol->At(i, j) = a(i, j);
+    ASSERT_EQ(chol->Factorize(), core::Status::kOk) << n;
+    // The factor itself, against Eigen's (unique for an SPD matrix).
+    const Eigen::MatrixXd l = a.llt().matrixL();
+    double max_err = 0.0;
+    for (int j = 0; j < n; ++j)
+      for (int i = j; i < n; ++i) max_err = std::max(max_err, std::abs(chol->At(i, j) - l(i, j)));
+    EXPECT_LT(max_err, 1e-12 * l.cwiseAbs().maxCoeff()) << n;
+    Eigen::VectorXd x = b;
+    chol->SolveInPlace(x.data());
+    EXPECT_LT((a * x - b).norm() / b.norm(), 1e-13) << n;
+  }
+}
+
+// Same input, same bits (fixed operation order), including after a different problem.
+TEST(DenseCholesky, IsDeterministic) {
+  auto chol = std::make_unique<DenseCholesky<double, 200>>();
+  const Eigen::MatrixXd a = RandomSpd(190, 5);
+  const Eigen::MatrixXd other = RandomSpd(200, 6);
+  Eigen::VectorXd x1 = Eigen::VectorXd::Ones(190);
+  Eigen::VectorXd x2 = x1;
+  for (Eigen::VectorXd* x : {&x1, &x2}) {
+    chol->Reset(190);
+    for (int j = 0; j < 190; ++j)
+      for (int i = j; i < 190; ++i) chol->At(i, j) = a(i, j);
+    ASSERT_EQ(chol->Factorize(), core::Status::kOk);
+    chol->SolveInPlace(x->data());
+    chol->Reset(200);
+    for (int j = 0; j < 200; ++j)
+      for (int i = j; i < 200; ++i) chol->At(i, j) = other(i, j);
+    ASSERT_EQ(chol->Factorize(), core::Status::kOk);
+  }
+  EXPECT_EQ(std::memcmp(x1.data(), x2.data(), sizeof(double) * 190), 0);
+}
+
+// Blocks straddling the 8-row panels (6x6 pose blocks at 6 j, 3x3 landmark blocks) and the
+// bulk symmetric add build the same matrix as a dense reference.
+TEST(DenseCholesky, BlocksAndSymmetricAddsBuildTheMatrix) {
+  constexpr int kN = 33;
+  auto chol = std::make_unique<DenseCholesky<double, 40>>();
+  const Eigen::MatrixXd a = RandomSpd(kN, 9);
+  const Eigen::MatrixXd prior = RandomSpd(15, 10);
+  chol->Reset(kN);
+  Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(kN, kN);
+  for (int j = 0; j < 3; ++j) {  // 6x6 diagonal blocks and their off-diagonal neighbours
+    const Eigen::Matrix<double, 6, 6> d = a.block<6, 6>(6 * j, 6 * j);
+    chol->AddBlock(6 * j, 6 * j, d);
+    expected.block<6, 6>(6 * j, 6 * j) += d;
+    if (j > 0) {
+      const Eigen::Matrix<double, 6, 6> o = a.block<6, 6>(6 * j, 6 * (j - 1));
+      chol->AddBlock(6 * (j - 1), 6 * j, o.transpose());  // upper: mirrored
+      expected.block<6, 6>(6 * j, 6 * (j - 1)) += o;
+      expected.block<6, 6>(6 * (j - 1), 6 * j) += o.transpose();
+    }
+  }
+  chol->AddSymmetric(18, prior.data(), 15, 15);
+  expected.block<15, 15>(18, 18) += prior;
+  for (int q = 0; q < 5; ++q) {
+    const Eigen::Matrix<double, 3, 6> c = a.block<3, 6>(18 + 3 * q, 0);
+    chol->AddBlock(18 + 3 * q, 0, c);
+    expected.block<3, 6>(18 + 3 * q, 0) += c;
+    expected.block<6, 3>(0, 18 + 3 * q) += c.transpose();
+  }
+  for (int j = 0; j < kN; ++j)
+    for (int i = j; i < kN; ++i) EXPECT_EQ(chol->At(i, j), expected(i, j)) << i << "," << j;
+  // Make it positive definite and compare the solve.
+  for (int i = 0; i < kN; ++i) {
+    chol->At(i, i) += 100.0;
+    expected(i, i) += 100.0;
+  }
+  ASSERT_EQ(chol->Factorize(), core::Status::kOk);
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(kN, 1.0, 3.0);
+  const Eigen::VectorXd b = x;
+  chol->SolveInPlace(x.data());
+  EXPECT_LT((expected * x - b).norm() / b.norm(), 1e-13);
+}
+
 TEST(DenseCholesky, AddBlockMirrorsIntoTheLowerTriangle) {
   auto chol = std::make_unique<DenseCholesky<double, 12>>();
   chol->Reset(6);
@@ -67,16 +155,18 @@ TEST(DenseCholesky, RefusesIndefiniteAndNonFinite) {
 }
 
 TEST(DenseCholesky, FactorAndSolveNeverAllocate) {
-  auto chol = std::make_unique<DenseCholesky<double, 200>>();
-  const Eigen::MatrixXd a = RandomSpd(200, 7);
-  Eigen::VectorXd b = Eigen::VectorXd::Ones(200);
+  auto chol = std::make_unique<DenseCholesky<double, 300>>();
+  const Eigen::MatrixXd a = RandomSpd(290, 7);
+  Eigen::VectorXd b = Eigen::VectorXd::Ones(290);
+  Eigen::VectorXd column(290);
   swf::testing::AllocationScope scope;
-  chol->Reset(200);
-  for (int j = 0; j < 200; ++j)
-    for (int i = j; i < 200; ++i) chol->At(i, j) = a(i, j);
+  chol->Reset(290);
+  chol->AddSymmetric(0, a.data(), 290, 290);
   ASSERT_EQ(chol->Factorize(), core::Status::kOk);
   chol->SolveInPlace(b.data());
+  chol->InverseColumn(3, column.data());
   EXPECT_EQ(scope.Count(), 0u);
+  EXPECT_LT((a * column - Eigen::VectorXd::Unit(290, 3)).norm(), 1e-12);
 }
 
 }  // namespace

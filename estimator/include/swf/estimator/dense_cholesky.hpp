@@ -2,103 +2,150 @@
 // A x = b of run-time size n <= MaxDim with all storage inside the object.
 //
 // Why not Eigen::LLT: for dynamic sizes Eigen's blocked products allocate packing buffers on the
-// heap, and fixed-max-size matrices of this size trip its stack-allocation limit. Here the matrix
-// is padded to a multiple of kBlock with an identity tail, and the right-looking blocked algorithm
-//     for each block column k:   A_kk = L_kk L_kk^T            (kBlock x kBlock Cholesky)
-//                                L_ik = A_ik L_kk^-T           (i > k)
-//                                A_ij -= L_ik L_jk^T           (i >= j > k)
-// runs entirely on fixed-size Eigen blocks (unrolled, vectorized, allocation-free).
-// Only the lower triangle of A is read. Deterministic: a fixed operation order.
+// heap, and fixed-max-size matrices of this size trip its stack-allocation limit. Eigen's
+// products of small fixed blocks (8x8 and up) also go through its general GEMM path, packing both
+// operands on every call, which made the old block-by-block version of this class slow.
+//
+// Storage: only the lower triangle, in row panels of kBlock = 8 rows. Panel I (rows 8I..8I+7)
+// holds columns 0..8I+7, each as 8 consecutive scalars, so element (i, j), i >= j, lives at
+//     a_[PanelOffset(i / 8) + 8 j + i % 8]
+// and every kernel below streams memory contiguously. The matrix is padded to a multiple of
+// kBlock with an identity tail.
+//
+// Factorization: left-looking (Crout) blocked Cholesky. For each block column J (ascending):
+//     for each row panel I >= J:  C_IJ = A_IJ - sum_{p < 8J} L(I rows, p) L(J rows, p)^T
+//                                 I == J: C_JJ = L_JJ L_JJ^T   (8x8 Cholesky)
+//                                 I >  J: L_IJ = C_IJ L_JJ^-T  (8x8 triangular solve)
+// The sum (all but O(n^2) of the n^3/3 flops) runs in a register-blocked micro-kernel: an 8x2
+// strip of C_IJ lives in eight 2-wide registers while p runs over a chunk of kChunk columns, the
+// chunk of panel I (8 x kChunk) stays in L1 for the four strips, and panel J's chunk is copied
+// once per block column with each scalar duplicated into both lanes (SSE2 has no broadcast
+// load). The 2-wide vectors are GCC/Clang vector extensions: SSE2 on baseline x86-64, NEON on
+// aarch64, each lane a plain IEEE multiply and subtract (no FMA: -ffp-contract=off), so results
+// are bit-identical across hosts that round the same way. Deterministic: a fixed operation
+// order; no allocation.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cmath>
+#include <cstring>
 
 #include "swf/core/assert.hpp"
 #include "swf/core/status.hpp"
 
 namespace swf::estimator {
 
+namespace dense_detail {
+// Two lanes of S in one SIMD register (vector extension; lowered to scalar code if needed).
+template <typename S>
+struct Pair;
+template <>
+struct Pair<double> {
+  typedef double Type __attribute__((vector_size(16)));
+};
+template <>
+struct Pair<float> {
+  typedef float Type __attribute__((vector_size(8)));
+};
+template <typename S>
+using PairT = typename Pair<S>::Type;
+
+template <typename S>
+inline PairT<S> Load(const S* p) {
+  PairT<S> v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
+template <typename S>
+inline void Store(S* p, const PairT<S>& v) {
+  std::memcpy(p, &v, sizeof(v));
+}
+}  // namespace dense_detail
+
 template <typename S, int MaxDim>
 class DenseCholesky {
  public:
   static constexpr int kBlock = 8;
-  static constexpr int kMaxPadded = ((MaxDim + kBlock - 1) / kBlock) * kBlock;
-  using Block = Eigen::Matrix<S, kBlock, kBlock>;
-  using BlockMap = Eigen::Map<Block, Eigen::Unaligned, Eigen::OuterStride<>>;
+  static constexpr int kMaxBlocks = (MaxDim + kBlock - 1) / kBlock;
+  static constexpr int kMaxPadded = kMaxBlocks * kBlock;
+  static constexpr int kStorage = kBlock * kBlock * kMaxBlocks * (kMaxBlocks + 1) / 2;
+  // Columns of the inner product per pass: panel I's chunk (8 x kChunk) plus panel J's
+  // duplicated chunk (16 x kChunk) is 24 KiB in double, inside a 32 KiB L1.
+  static constexpr int kChunk = 128;
 
   // Sets the size and clears A to zero (identity on the padding). Must precede filling.
   void Reset(int n) {
     SWF_ASSERT(n >= 0 && n <= MaxDim);
     n_ = n;
-    np_ = ((n + kBlock - 1) / kBlock) * kBlock;
-    for (int i = 0; i < np_ * np_; ++i) a_[i] = S(0);
+    nb_ = (n + kBlock - 1) / kBlock;
+    np_ = nb_ * kBlock;
+    const int used = PanelOffset(nb_);
+    for (int i = 0; i < used; ++i) a_[i] = S(0);
     for (int i = n_; i < np_; ++i) At(i, i) = S(1);
     factorized_ = false;
   }
 
   int size() const { return n_; }
-  int Ld() const { return np_; }
 
-  // Column-major element access (row i, column j). Fill the lower triangle (i >= j).
-  S& At(int i, int j) { return a_[j * np_ + i]; }
-  S At(int i, int j) const { return a_[j * np_ + i]; }
-  S* Data() { return a_; }
+  // Element (i, j) of the lower triangle, i >= j.
+  S& At(int i, int j) {
+    SWF_ASSERT(i >= j && i < np_ && j >= 0);
+    return a_[Index(i, j)];
+  }
+  S At(int i, int j) const {
+    SWF_ASSERT(i >= j && i < np_ && j >= 0);
+    return a_[Index(i, j)];
+  }
 
-  // Adds m to the block at (row, col), mirrored into the lower triangle when row < col.
+  // Adds m to the block at (row, col) of the symmetric A, mirrored into the lower triangle when
+  // row < col. Only entries on or below the diagonal are written, so a diagonal block
+  // (row == col) contributes its lower triangle (it is assumed symmetric).
   template <typename Derived>
-  void AddBlock(int row, int col, const Eigen::MatrixBase<Derived>& m) {
+  void AddBlock(int row, int col, const Eigen::MatrixBase<Derived>& block) {
     constexpr int kR = Derived::RowsAtCompileTime;
     constexpr int kC = Derived::ColsAtCompileTime;
+    const Eigen::Matrix<S, kR, kC> m = block;
+    SWF_ASSERT(row >= 0 && col >= 0 && row + kR <= n_ && col + kC <= n_);
     if (row >= col) {
-      Eigen::Map<Eigen::Matrix<S, kR, kC>, Eigen::Unaligned, Eigen::OuterStride<>> dst(
-          &At(row, col), Eigen::OuterStride<>(np_));
-      dst += m;
+      for (int c = 0; c < kC; ++c)
+        for (int r = 0; r < kR; ++r)
+          if (row + r >= col + c) a_[Index(row + r, col + c)] += m(r, c);
     } else {
-      Eigen::Map<Eigen::Matrix<S, kC, kR>, Eigen::Unaligned, Eigen::OuterStride<>> dst(
-          &At(col, row), Eigen::OuterStride<>(np_));
-      dst += m.transpose();
+      for (int c = 0; c < kC; ++c)
+        for (int r = 0; r < kR; ++r)
+          if (col + c >= row + r) a_[Index(col + c, row + r)] += m(r, c);
+    }
+  }
+
+  // Adds the lower triangle of the symmetric dim x dim matrix src (column-major, leading
+  // dimension ld) at rows/columns offset..offset+dim-1.
+  void AddSymmetric(int offset, const S* src, int ld, int dim) {
+    SWF_ASSERT(offset >= 0 && dim >= 0 && offset + dim <= n_ && ld >= dim);
+    for (int i = offset; i < offset + dim; ++i) {
+      S* row = a_ + PanelOffset(i / kBlock) + i % kBlock;
+      const S* src_row = src + (i - offset);
+      for (int j = offset; j <= i; ++j) row[j * kBlock] += src_row[(j - offset) * ld];
     }
   }
 
   // In-place factorization A = L L^T. kNumericalFailure if A is not (numerically) positive
   // definite or holds non-finite values; the object must then be Reset before reuse.
   core::Status Factorize() {
-    const int nb = np_ / kBlock;
-    for (int k = 0; k < nb; ++k) {
-      BlockMap akk(&At(k * kBlock, k * kBlock), Eigen::OuterStride<>(np_));
-      // Small dense Cholesky of the diagonal block (Eigen's fixed-size LLT allocates nothing).
-      for (int c = 0; c < kBlock; ++c) {
-        S d = akk(c, c);
-        for (int p = 0; p < c; ++p) d -= akk(c, p) * akk(c, p);
-        if (!(d > S(0)) || !std::isfinite(d)) return core::Status::kNumericalFailure;
-        const S l = std::sqrt(d);
-        akk(c, c) = l;
-        const S inv = S(1) / l;
-        for (int r = c + 1; r < kBlock; ++r) {
-          S v = akk(r, c);
-          for (int p = 0; p < c; ++p) v -= akk(r, p) * akk(c, p);
-          akk(r, c) = v * inv;
+    for (int jb = 0; jb < nb_; ++jb) {
+      const int depth = jb * kBlock;  // columns left of block column jb
+      const S* panel_j = a_ + PanelOffset(jb);
+      for (int p0 = 0; p0 < depth; p0 += kChunk) {
+        const int len = depth - p0 < kChunk ? depth - p0 : kChunk;
+        DuplicateChunk(panel_j + p0 * kBlock, len);
+        for (int ib = jb; ib < nb_; ++ib) {
+          S* panel_i = a_ + PanelOffset(ib);
+          SubtractProduct(panel_i + depth * kBlock, panel_i + p0 * kBlock, len);
         }
       }
-      const Block lkk = akk.template triangularView<Eigen::Lower>();
-      for (int i = k + 1; i < nb; ++i) {
-        BlockMap aik(&At(i * kBlock, k * kBlock), Eigen::OuterStride<>(np_));
-        // L_ik = A_ik L_kk^-T  <=>  L_kk L_ik^T = A_ik^T
-        Block t = aik.transpose();
-        lkk.template triangularView<Eigen::Lower>().solveInPlace(t);
-        aik = t.transpose();
-      }
-      for (int j = k + 1; j < nb; ++j) {
-        const BlockMap ljk(&At(j * kBlock, k * kBlock), Eigen::OuterStride<>(np_));
-        const Block ljk_t = ljk.transpose();
-        for (int i = j; i < nb; ++i) {
-          const BlockMap lik(&At(i * kBlock, k * kBlock), Eigen::OuterStride<>(np_));
-          BlockMap aij(&At(i * kBlock, j * kBlock), Eigen::OuterStride<>(np_));
-          aij.noalias() -= lik * ljk_t;
-        }
-      }
+      S* diag = a_ + PanelOffset(jb) + depth * kBlock;
+      if (!FactorDiagonal(diag, depth)) return core::Status::kNumericalFailure;
+      for (int ib = jb + 1; ib < nb_; ++ib)
+        SolveTile(diag, depth, a_ + PanelOffset(ib) + depth * kBlock);
     }
     factorized_ = true;
     return core::Status::kOk;
@@ -107,20 +154,46 @@ class DenseCholesky {
   // Solves A x = b in place (b has size() entries). Requires a successful Factorize().
   void SolveInPlace(S* b) const {
     SWF_ASSERT(factorized_);
-    // Forward: L y = b.
-    for (int i = 0; i < n_; ++i) {
-      S v = b[i];
-      const S* row = a_ + i;  // L(i, p) = a_[p * np_ + i]
-      for (int p = 0; p < i; ++p) v -= row[p * np_] * b[p];
-      b[i] = v / a_[i * np_ + i];
+    S* y = work_;
+    for (int i = 0; i < n_; ++i) y[i] = b[i];
+    for (int i = n_; i < np_; ++i) y[i] = S(0);
+    // Forward, L y = b, panel by panel: y_I -= L(I, 0..8I) y_0..8I, then the diagonal tile.
+    for (int ib = 0; ib < nb_; ++ib) {
+      const S* panel = a_ + PanelOffset(ib);
+      const int r0 = ib * kBlock;
+      S t[kBlock];
+      for (int r = 0; r < kBlock; ++r) t[r] = y[r0 + r];
+      for (int p = 0; p < r0; ++p) {
+        const S yp = y[p];
+        for (int r = 0; r < kBlock; ++r) t[r] -= panel[p * kBlock + r] * yp;
+      }
+      const S* diag = panel + r0 * kBlock;
+      for (int c = 0; c < kBlock; ++c) {
+        const S v = t[c] * inv_diag_[r0 + c];
+        y[r0 + c] = v;
+        for (int r = c + 1; r < kBlock; ++r) t[r] -= diag[c * kBlock + r] * v;
+      }
     }
-    // Backward: L^T x = y.
-    for (int i = n_ - 1; i >= 0; --i) {
-      S v = b[i];
-      const S* col = a_ + i * np_;  // L(p, i) for p > i
-      for (int p = i + 1; p < n_; ++p) v -= col[p] * b[p];
-      b[i] = v / col[i];
+    // Backward, L^T x = y: x_I from the transposed diagonal tile, then y_0..8I -= L_I^T x_I.
+    for (int ib = nb_ - 1; ib >= 0; --ib) {
+      const S* panel = a_ + PanelOffset(ib);
+      const int r0 = ib * kBlock;
+      const S* diag = panel + r0 * kBlock;
+      S x[kBlock];
+      for (int r = kBlock - 1; r >= 0; --r) {
+        S v = y[r0 + r];
+        for (int q = r + 1; q < kBlock; ++q) v -= diag[r * kBlock + q] * x[q];
+        x[r] = v * inv_diag_[r0 + r];
+        y[r0 + r] = x[r];
+      }
+      for (int p = 0; p < r0; ++p) {
+        const S* col = panel + p * kBlock;
+        S s = S(0);
+        for (int r = 0; r < kBlock; ++r) s += col[r] * x[r];
+        y[p] -= s;
+      }
     }
+    for (int i = 0; i < n_; ++i) b[i] = y[i];
   }
 
   // Column c of A^-1 into out (size() entries). O(n^2).
@@ -133,8 +206,128 @@ class DenseCholesky {
   bool IsFactorized() const { return factorized_; }
 
  private:
-  alignas(64) S a_[kMaxPadded * kMaxPadded];
+  using V = dense_detail::PairT<S>;
+
+  static constexpr int PanelOffset(int ib) { return kBlock * kBlock * ib * (ib + 1) / 2; }
+  // Unsigned arithmetic: callers guarantee 0 <= j <= i < np_ (and i / 8 becomes a shift).
+  static unsigned Index(int i, int j) {
+    const auto ui = static_cast<unsigned>(i);
+    const auto uj = static_cast<unsigned>(j);
+    const unsigned panel = ui / kBlock;
+    return kBlock * kBlock * panel * (panel + 1) / 2 + uj * kBlock + ui % kBlock;
+  }
+
+  // dup_[p][c] = {L(J, p0 + p)[c], same}, laid out strip-major: strip s (columns 2s, 2s+1)
+  // holds for each p the four scalars {l_2s, l_2s, l_2s+1, l_2s+1}.
+  void DuplicateChunk(const S* src, int len) {
+    for (int s = 0; s < kBlock / 2; ++s) {
+      S* dst = dup_ + s * 4 * kChunk;
+      for (int p = 0; p < len; ++p) {
+        const S u = src[p * kBlock + 2 * s];
+        const S w = src[p * kBlock + 2 * s + 1];
+        dst[4 * p] = u;
+        dst[4 * p + 1] = u;
+        dst[4 * p + 2] = w;
+        dst[4 * p + 3] = w;
+      }
+    }
+  }
+
+  // tile (8x8, column-major) -= A B^T over len columns, A = a (8 rows, len columns, 8 per
+  // column), B = the duplicated chunk of panel J.
+  void SubtractProduct(S* tile, const S* a, int len) const {
+    for (int s = 0; s < kBlock / 2; ++s) {
+      S* t0 = tile + 2 * s * kBlock;
+      S* t1 = t0 + kBlock;
+      V c00 = dense_detail::Load(t0);
+      V c10 = dense_detail::Load(t0 + 2);
+      V c20 = dense_detail::Load(t0 + 4);
+      V c30 = dense_detail::Load(t0 + 6);
+      V c01 = dense_detail::Load(t1);
+      V c11 = dense_detail::Load(t1 + 2);
+      V c21 = dense_detail::Load(t1 + 4);
+      V c31 = dense_detail::Load(t1 + 6);
+      const S* b = dup_ + s * 4 * kChunk;
+      for (int p = 0; p < len; ++p) {
+        const S* ap = a + p * kBlock;
+        const V a0 = dense_detail::Load(ap);
+        const V a1 = dense_detail::Load(ap + 2);
+        const V a2 = dense_detail::Load(ap + 4);
+        const V a3 = dense_detail::Load(ap + 6);
+        const V b0 = dense_detail::Load(b + 4 * p);
+        const V b1 = dense_detail::Load(b + 4 * p + 2);
+        c00 -= a0 * b0;
+        c10 -= a1 * b0;
+        c20 -= a2 * b0;
+        c30 -= a3 * b0;
+        c01 -= a0 * b1;
+        c11 -= a1 * b1;
+        c21 -= a2 * b1;
+        c31 -= a3 * b1;
+      }
+      dense_detail::Store(t0, c00);
+      dense_detail::Store(t0 + 2, c10);
+      dense_detail::Store(t0 + 4, c20);
+      dense_detail::Store(t0 + 6, c30);
+      dense_detail::Store(t1, c01);
+      dense_detail::Store(t1 + 2, c11);
+      dense_detail::Store(t1 + 4, c21);
+      dense_detail::Store(t1 + 6, c31);
+    }
+  }
+
+  // In-place Cholesky of the 8x8 diagonal tile d (lower triangle) of rows r0..r0+7; keeps
+  // 1 / L_cc in inv_diag_.
+  bool FactorDiagonal(S* d, int r0) {
+    for (int c = 0; c < kBlock; ++c) {
+      S v = d[c * kBlock + c];
+      for (int p = 0; p < c; ++p) v -= d[p * kBlock + c] * d[p * kBlock + c];
+      if (!(v > S(0)) || !std::isfinite(v)) return false;
+      const S l = std::sqrt(v);
+      d[c * kBlock + c] = l;
+      const S inv = S(1) / l;
+      inv_diag_[r0 + c] = inv;
+      for (int r = c + 1; r < kBlock; ++r) {
+        S w = d[c * kBlock + r];
+        for (int p = 0; p < c; ++p) w -= d[p * kBlock + r] * d[p * kBlock + c];
+        d[c * kBlock + r] = w * inv;
+      }
+    }
+    return true;
+  }
+
+  // X = C L_JJ^-T for the 8x8 tile x (column-major), column by column; d = L_JJ at rows r0..
+  void SolveTile(const S* d, int r0, S* x) const {
+    for (int c = 0; c < kBlock; ++c) {
+      S* xc = x + c * kBlock;
+      V v0 = dense_detail::Load(xc);
+      V v1 = dense_detail::Load(xc + 2);
+      V v2 = dense_detail::Load(xc + 4);
+      V v3 = dense_detail::Load(xc + 6);
+      for (int p = 0; p < c; ++p) {
+        const S* xp = x + p * kBlock;
+        const S l = d[p * kBlock + c];
+        const V lv = {l, l};
+        v0 -= dense_detail::Load(xp) * lv;
+        v1 -= dense_detail::Load(xp + 2) * lv;
+        v2 -= dense_detail::Load(xp + 4) * lv;
+        v3 -= dense_detail::Load(xp + 6) * lv;
+      }
+      const S inv = inv_diag_[r0 + c];
+      const V iv = {inv, inv};
+      dense_detail::Store(xc, v0 * iv);
+      dense_detail::Store(xc + 2, v1 * iv);
+      dense_detail::Store(xc + 4, v2 * iv);
+      dense_detail::Store(xc + 6, v3 * iv);
+    }
+  }
+
+  alignas(64) S a_[kStorage];
+  alignas(64) S dup_[2 * kBlock * kChunk];
+  alignas(64) S inv_diag_[kMaxPadded];
+  alignas(64) mutable S work_[kMaxPadded];
   int n_ = 0;
+  int nb_ = 0;
   int np_ = 0;
   bool factorized_ = false;
 };

@@ -780,11 +780,9 @@ class SlidingWindowFilter {
       dense_.AddBlock(lm0 + 3 * q, 0, pi_qp * jp);
       Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * q, 0) -=
           Blk<3, 1>(prior_grad_, kMaxPriorDim, 6 + 3 * q, 0);
-      for (int q2 = 0; q2 <= q; ++q2) {
-        dense_.AddBlock(lm0 + 3 * q, lm0 + 3 * q2,
-                        Blk<3, 3>(prior_, kMaxPriorDim, 6 + 3 * q, 6 + 3 * q2));
-      }
     }
+    // Landmark-landmark block of Pi, copied as a whole (it is dense: Fig. 8).
+    dense_.AddSymmetric(lm0, prior_ + 6 * kMaxPriorDim + 6, kMaxPriorDim, 3 * nq);
   }
 
   // ---- solving -----------------------------------------------------------------------------
