@@ -13,37 +13,41 @@ namespace {
 constexpr int kCensusRadius = 2;
 constexpr int kCostScale = 4;              // Hamming (0..24) x 4
 constexpr int kMaxCost = 24 * kCostScale;  // cost outside the right image
-constexpr std::uint16_t kBorder = 0x3FFF;  // sentinel around each path vector
+constexpr std::int16_t kBorder = 0x3FFF;   // sentinel around each path vector
 
 // One step of the SGM recursion for one pixel and one path. prev points at element 0 of a vector
 // with sentinels at [-1] and [n]; prev_min = min_k prev[k]. Writes out[0..n) (its sentinels are
 // set by the caller) and adds to sum; returns min_k out[k].
-inline std::uint16_t PathStep(const std::uint8_t* cost, const std::uint16_t* prev, int prev_min,
-                              int n, int p1, int p2, std::uint16_t* out, std::uint16_t* sum) {
-  const int big = prev_min + p2;
-  int out_min = 0xFFFF;
+inline std::int16_t PathStep(const std::uint8_t* cost, const std::int16_t* prev, int prev_min,
+                             int n, int p1, int p2, std::int16_t* out, std::int16_t* sum) {
+  // 16-bit arithmetic throughout (all values < 2^14) so the loop vectorizes on plain SSE2/NEON.
+  const auto big = static_cast<std::int16_t>(prev_min + p2);
+  const auto pen = static_cast<std::int16_t>(p1);
+  const auto pm = static_cast<std::int16_t>(prev_min);
+  std::int16_t out_min = 0x7FFF;
   for (int d = 0; d < n; ++d) {
-    int v = prev[d];
-    const int a = prev[d - 1] + p1;
-    const int b = prev[d + 1] + p1;
-    v = std::min(std::min(v, big), std::min(a, b));
-    const int l = cost[d] + v - prev_min;
-    out[d] = static_cast<std::uint16_t>(l);
-    sum[d] = static_cast<std::uint16_t>(sum[d] + l);
-    out_min = std::min(out_min, l);
+    const std::int16_t a = static_cast<std::int16_t>(prev[d - 1] + pen);
+    const std::int16_t b = static_cast<std::int16_t>(prev[d + 1] + pen);
+    std::int16_t v = prev[d] < big ? prev[d] : big;
+    v = a < v ? a : v;
+    v = b < v ? b : v;
+    const auto l = static_cast<std::int16_t>(cost[d] + v - pm);
+    out[d] = l;
+    sum[d] = static_cast<std::int16_t>(sum[d] + l);
+    out_min = l < out_min ? l : out_min;
   }
-  return static_cast<std::uint16_t>(out_min);
+  return out_min;
 }
 
-inline std::uint16_t PathStart(const std::uint8_t* cost, int n, std::uint16_t* out,
-                               std::uint16_t* sum) {
-  int out_min = 0xFFFF;
+inline std::int16_t PathStart(const std::uint8_t* cost, int n, std::int16_t* out,
+                              std::int16_t* sum) {
+  int out_min = 0x7FFF;
   for (int d = 0; d < n; ++d) {
     out[d] = cost[d];
-    sum[d] = static_cast<std::uint16_t>(sum[d] + cost[d]);
+    sum[d] = static_cast<std::int16_t>(sum[d] + cost[d]);
     out_min = std::min<int>(out_min, cost[d]);
   }
-  return static_cast<std::uint16_t>(out_min);
+  return static_cast<std::int16_t>(out_min);
 }
 
 inline int AdaptiveP2(int p1, int p2, int i0, int i1) {
@@ -109,7 +113,22 @@ core::Status SgmMatcher::Configure(const SgmOptions& options) {
 
 void SgmMatcher::Census(const frontend::GrayView& image, std::uint32_t* out) const {
   for (int y = 0; y < height_; ++y) {
+    const bool inner_row = y >= kCensusRadius && y < height_ - kCensusRadius;
     for (int x = 0; x < width_; ++x) {
+      if (inner_row && x >= kCensusRadius && x < width_ - kCensusRadius) {
+        // Interior: no clamping.
+        const int c = image.At(x, y);
+        std::uint32_t bits = 0;
+        for (int dy = -kCensusRadius; dy <= kCensusRadius; ++dy) {
+          const std::uint8_t* row = image.Row(y + dy) + x;
+          for (int dx = -kCensusRadius; dx <= kCensusRadius; ++dx) {
+            if (dx == 0 && dy == 0) continue;
+            bits = (bits << 1) | (row[dx] < c ? 1u : 0u);
+          }
+        }
+        out[static_cast<std::size_t>(y) * width_ + x] = bits;
+        continue;
+      }
       const int c = image.At(x, y);
       std::uint32_t bits = 0;
       for (int dy = -kCensusRadius; dy <= kCensusRadius; ++dy) {
@@ -168,21 +187,21 @@ void SgmMatcher::Aggregate(const frontend::GrayView& left) {
       const std::uint8_t* irow = left.Row(y);
       const std::uint8_t* iprev = left.Row(y0 == 0 ? y : y - dir);
       const std::uint8_t* crow = cost_.data() + static_cast<std::size_t>(y) * w * n;
-      std::uint16_t* srow = sum_.data() + static_cast<std::size_t>(y) * w * n;
+      std::int16_t* srow = sum_.data() + static_cast<std::size_t>(y) * w * n;
       // Vertical and diagonal paths.
       const bool odd = (y0 & 1) != 0;
       for (int k = 0; k < num_vertical; ++k) {
-        std::uint16_t* buf_a = path_prev_.data() + k * w * stride;
-        std::uint16_t* buf_b = path_cur_.data() + k * w * stride;
-        std::uint16_t* min_a = path_min_prev_.data() + static_cast<std::size_t>(k) * w;
-        std::uint16_t* min_b = path_min_cur_.data() + static_cast<std::size_t>(k) * w;
-        const std::uint16_t* prev = odd ? buf_a : buf_b;
-        std::uint16_t* cur = odd ? buf_b : buf_a;
-        const std::uint16_t* pmin = odd ? min_a : min_b;
-        std::uint16_t* cmin = odd ? min_b : min_a;
+        std::int16_t* buf_a = path_prev_.data() + k * w * stride;
+        std::int16_t* buf_b = path_cur_.data() + k * w * stride;
+        std::int16_t* min_a = path_min_prev_.data() + static_cast<std::size_t>(k) * w;
+        std::int16_t* min_b = path_min_cur_.data() + static_cast<std::size_t>(k) * w;
+        const std::int16_t* prev = odd ? buf_a : buf_b;
+        std::int16_t* cur = odd ? buf_b : buf_a;
+        const std::int16_t* pmin = odd ? min_a : min_b;
+        std::int16_t* cmin = odd ? min_b : min_a;
         const int dx = kDx[k] * dir;
         for (int x = 0; x < w; ++x) {
-          std::uint16_t* out = cur + x * stride + 1;
+          std::int16_t* out = cur + x * stride + 1;
           const int xp = x + dx;
           if (y0 == 0 || xp < 0 || xp >= w) {
             cmin[x] = PathStart(crow + static_cast<std::size_t>(x) * n, n, out,
@@ -195,13 +214,13 @@ void SgmMatcher::Aggregate(const frontend::GrayView& left) {
         }
       }
       // Horizontal path along this row.
-      std::uint16_t* a = row_path_.data() + 1;
-      std::uint16_t* b = row_path_.data() + stride + 1;
+      std::int16_t* a = row_path_.data() + 1;
+      std::int16_t* b = row_path_.data() + stride + 1;
       int amin = 0;
       for (int x0 = 0; x0 < w; ++x0) {
         const int x = dir > 0 ? x0 : w - 1 - x0;
         const std::uint8_t* c = crow + static_cast<std::size_t>(x) * n;
-        std::uint16_t* s = srow + static_cast<std::size_t>(x) * n;
+        std::int16_t* s = srow + static_cast<std::size_t>(x) * n;
         if (x0 == 0) {
           amin = PathStart(c, n, a, s);
         } else {
@@ -218,7 +237,7 @@ void SgmMatcher::SelectDisparities(int min_disparity) {
   const int w = width_;
   num_valid_ = 0;
   for (int y = 0; y < height_; ++y) {
-    const std::uint16_t* srow = sum_.data() + static_cast<std::size_t>(y) * w * n;
+    const std::int16_t* srow = sum_.data() + static_cast<std::size_t>(y) * w * n;
     // Right-image winners from the same volume: d_R(xr) = argmin_d S(xr + min + d, d).
     for (int xr = 0; xr < w; ++xr) {
       int best = 0xFFFFF;
@@ -239,7 +258,7 @@ void SgmMatcher::SelectDisparities(int min_disparity) {
     for (int x = 0; x < w; ++x) {
       drow[x] = kInvalid;
       qrow[x] = 0.0f;
-      const std::uint16_t* s = srow + static_cast<std::size_t>(x) * n;
+      const std::int16_t* s = srow + static_cast<std::size_t>(x) * n;
       // Only pixels whose whole search range lies in the right image (as OpenCV's SGBM).
       if (x - min_disparity - (n - 1) < 0) continue;
       const int valid_n = n;

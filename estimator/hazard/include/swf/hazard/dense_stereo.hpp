@@ -82,13 +82,13 @@ class SgmMatcher {
   int num_valid_ = 0;
   std::vector<std::uint32_t> census_left_;
   std::vector<std::uint32_t> census_right_;
-  std::vector<std::uint8_t> cost_;        // C(p, d): width * height * num_d
-  std::vector<std::uint16_t> sum_;        // S(p, d)
-  std::vector<std::uint16_t> path_prev_;  // previous row of L_r, one block per vertical path
-  std::vector<std::uint16_t> path_cur_;
-  std::vector<std::uint16_t> path_min_prev_;  // min_k L_r(p-r, k) for the previous row
-  std::vector<std::uint16_t> path_min_cur_;
-  std::vector<std::uint16_t> row_path_;  // horizontal paths: one pixel's L_r
+  std::vector<std::uint8_t> cost_;       // C(p, d): width * height * num_d
+  std::vector<std::int16_t> sum_;        // S(p, d)
+  std::vector<std::int16_t> path_prev_;  // previous row of L_r, one block per vertical path
+  std::vector<std::int16_t> path_cur_;
+  std::vector<std::int16_t> path_min_prev_;  // min_k L_r(p-r, k) for the previous row
+  std::vector<std::int16_t> path_min_cur_;
+  std::vector<std::int16_t> row_path_;  // horizontal paths: one pixel's L_r
   std::vector<float> disparity_;
   std::vector<float> confidence_;
   std::vector<float> right_disparity_;
