@@ -11,31 +11,15 @@
 namespace swf::sim {
 namespace {
 
-constexpr int kDetailOctaves = 8;
-
 double HashValue(std::uint64_t key, std::int64_t ix, std::int64_t iy) {
   const std::uint64_t h = Mix64(key ^ (static_cast<std::uint64_t>(ix) * 0x9E3779B97F4A7C15ull) ^
                                 (static_cast<std::uint64_t>(iy) * 0xC2B2AE3D27D4EB4Full));
   return static_cast<double>(h >> 11) * 0x1.0p-52 - 1.0;
 }
 
-double ValueNoise(std::uint64_t key, double x, double y) {
-  const double fx0 = std::floor(x);
-  const double fy0 = std::floor(y);
-  const auto ix = static_cast<std::int64_t>(fx0);
-  const auto iy = static_cast<std::int64_t>(fy0);
-  double fx = x - fx0;
-  double fy = y - fy0;
-  fx = fx * fx * (3.0 - 2.0 * fx);
-  fy = fy * fy * (3.0 - 2.0 * fy);
-  const double v00 = HashValue(key, ix, iy);
-  const double v10 = HashValue(key, ix + 1, iy);
-  const double v01 = HashValue(key, ix, iy + 1);
-  const double v11 = HashValue(key, ix + 1, iy + 1);
-  const double top = v00 + fx * (v10 - v00);
-  const double bottom = v01 + fx * (v11 - v01);
-  return top + fy * (bottom - top);
-}
+// Lattice coordinates are shifted by this multiple of the table size so that truncation is floor
+// for every point of any terrain the options allow (|x| / wavelength < 2^21).
+constexpr double kLatticeBias = 0x1.0p24;
 
 // Bilinear sample of an image at continuous pixel coordinates, mirror-repeated.
 double SampleMirrored(const std::vector<float>& img, std::int32_t w, std::int32_t h, double x,
@@ -93,7 +77,19 @@ core::Status Appearance::Build(const Terrain& terrain, const AppearanceOptions& 
   cell_m_ = terrain.CellM();
   const size_t n = static_cast<size_t>(size_) * size_;
   Rng rng(options.seed);
-  detail_key_ = rng.Bits();
+  const std::uint64_t detail_key = rng.Bits();
+  lattice_.resize(static_cast<size_t>(kLatticeSize * kLatticeSize));
+  for (std::int64_t b = 0; b < kLatticeSize; ++b) {
+    for (std::int64_t a = 0; a < kLatticeSize; ++a) {
+      lattice_[static_cast<size_t>(b * kLatticeSize + a)] =
+          static_cast<float>(HashValue(detail_key, a, b));
+    }
+  }
+  for (int o = 0; o < kDetailOctaves; ++o) {
+    const std::uint64_t h = Mix64(detail_key ^ Mix64(static_cast<std::uint64_t>(o) + 1));
+    octave_offset_x_[o] = static_cast<std::int64_t>(h & (kLatticeSize - 1));
+    octave_offset_y_[o] = static_cast<std::int64_t>((h >> 32) & (kLatticeSize - 1));
+  }
   albedo_.assign(n, 1.0f);
 
   // Kaguya: pick the 384 px window with the most valid, lit pixels; normalize to mean 1.
@@ -272,18 +268,36 @@ double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
   const double base = top + fy * (bottom - top);
 
   double detail = 0.0;
-  double wavelength = cell_m_;
+  double inv_wavelength = 1.0 / cell_m_;
   double amplitude = options_.detail_strength;
-  std::uint64_t key = detail_key_;
-  for (int o = 0; o < kDetailOctaves; ++o) {
-    const double ratio = wavelength / footprint_m;  // pixels per wavelength
+  double ratio = cell_m_ / footprint_m;  // pixels per wavelength
+  constexpr std::int64_t kMask = kLatticeSize - 1;
+  for (int o = 0; o < kDetailOctaves; ++o, ratio *= 0.5) {
     if (ratio < 1.5) break;
     double w = std::min(1.0, (ratio - 1.5) / 1.5);
     w = w * w * (3.0 - 2.0 * w);
-    detail += w * amplitude * ValueNoise(key, x_m / wavelength, y_m / wavelength);
-    wavelength *= 0.5;
+    const double lx = x_m * inv_wavelength + kLatticeBias;
+    const double ly = y_m * inv_wavelength + kLatticeBias;
+    const auto ix = static_cast<std::int64_t>(lx);
+    const auto iy = static_cast<std::int64_t>(ly);
+    double fx = lx - static_cast<double>(ix);
+    double fy = ly - static_cast<double>(iy);
+    fx = fx * fx * (3.0 - 2.0 * fx);
+    fy = fy * fy * (3.0 - 2.0 * fy);
+    const std::int64_t a0 = (ix + octave_offset_x_[o]) & kMask;
+    const std::int64_t a1 = (a0 + 1) & kMask;
+    const std::int64_t b0 = ((iy + octave_offset_y_[o]) & kMask) * kLatticeSize;
+    const std::int64_t b1 = (b0 + kLatticeSize) & (kMask * kLatticeSize + kMask);
+    const float* lattice = lattice_.data();
+    const double v00 = lattice[b0 + a0];
+    const double v10 = lattice[b0 + a1];
+    const double v01 = lattice[b1 + a0];
+    const double v11 = lattice[b1 + a1];
+    const double top = v00 + fx * (v10 - v00);
+    const double bottom = v01 + fx * (v11 - v01);
+    detail += w * amplitude * (top + fy * (bottom - top));
+    inv_wavelength *= 2.0;
     amplitude *= std::numbers::sqrt2 * 0.5;
-    key = Mix64(key);
   }
   return base * std::max(0.05, 1.0 + detail);
 }

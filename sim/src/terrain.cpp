@@ -282,6 +282,14 @@ core::Status Terrain::Configure(const TerrainOptions& o) {
       }
     }
   }
+  supers_ = (blocks_ + kSuper - 1) / kSuper;
+  super_max_.assign(static_cast<size_t>(supers_) * supers_, -std::numeric_limits<float>::max());
+  for (std::int32_t by = 0; by < blocks_; ++by) {
+    for (std::int32_t bx = 0; bx < blocks_; ++bx) {
+      float& m = super_max_[static_cast<size_t>(by / kSuper) * supers_ + bx / kSuper];
+      m = std::max(m, block_max_[static_cast<size_t>(by) * blocks_ + bx]);
+    }
+  }
   return core::Status::kOk;
 }
 
@@ -307,62 +315,143 @@ double Terrain::HeightAt(double x_m, double y_m) const {
   return GridHeight((x_m - origin_m_) / options_.cell_m, (y_m - origin_m_) / options_.cell_m);
 }
 
-bool Terrain::FineMarch(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_begin,
-                        double t_end, double* t) const {
-  const double inv_cell = 1.0 / options_.cell_m;
-  auto gap = [&](double s) {
-    return (o.z() + s * d.z()) - GridHeight((o.x() + s * d.x() - origin_m_) * inv_cell,
-                                            (o.y() + s * d.y() - origin_m_) * inv_cell);
-  };
-  const double horizontal = std::hypot(d.x(), d.y());
-  // Half a cell horizontally per step: a bilinear patch is crossed at most twice per step.
-  const double dt = horizontal > 0.0 ? 0.5 * options_.cell_m / horizontal : t_end - t_begin;
-  double a = t_begin;
-  double fa = gap(a);
-  if (fa <= 0.0) {
-    *t = a;
+namespace {
+
+// Per-ray constants of the Amanatides-Woo walks: border crossing parameters per grid unit.
+struct WalkRay {
+  double gx0, gy0, inv_dgx, inv_dgy;
+  std::int32_t step_i, step_j, ahead_i, ahead_j;  // ahead: 1 when the next border is above
+};
+
+// Walk over one level of the max pyramid: the cell (i, j) of `cells` grid units per side the ray
+// is in, and the parameters where it crosses the next x and y borders.
+struct LevelWalk {
+  std::int32_t i = 0;
+  std::int32_t j = 0;
+  std::int32_t n = 0;
+  double next_x = 0.0;
+  double next_y = 0.0;
+  double delta_x = 0.0;
+  double delta_y = 0.0;
+  std::int32_t step_i = 0;
+  std::int32_t step_j = 0;
+
+  // gx, gy: the grid position just after the start (nudged past a border the ray sits on).
+  LevelWalk(const WalkRay& r, double gx, double gy, std::int32_t cells, std::int32_t count)
+      : n(count), step_i(r.step_i), step_j(r.step_j) {
+    const double inv_cells = 1.0 / cells;
+    // Truncation is floor here: positions below 0 are only rounding and clamp to 0.
+    i = std::clamp(static_cast<std::int32_t>(gx * inv_cells), 0, n - 1);
+    j = std::clamp(static_cast<std::int32_t>(gy * inv_cells), 0, n - 1);
+    // inv_dg* is +-inf for a ray parallel to an axis: the border is never crossed.
+    next_x = step_i == 0 ? r.inv_dgx : ((i + r.ahead_i) * cells - r.gx0) * r.inv_dgx;
+    next_y = step_j == 0 ? r.inv_dgy : ((j + r.ahead_j) * cells - r.gy0) * r.inv_dgy;
+    delta_x = cells * std::abs(r.inv_dgx);
+    delta_y = cells * std::abs(r.inv_dgy);
+  }
+  double Exit() const { return std::min(next_x, next_y); }
+  // Steps into the next cell; false when that leaves the grid.
+  bool Advance() {
+    if (next_x < next_y) {
+      i += step_i;
+      next_x += delta_x;
+      return i >= 0 && i < n;
+    }
+    j += step_j;
+    next_y += delta_y;
+    return j >= 0 && j < n;
+  }
+};
+
+}  // namespace
+
+bool Terrain::IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j, double t0,
+                            double t1, double* t) const {
+  const float* p = &heights_[static_cast<size_t>(j) * size_ + i];
+  const double h00 = p[0];
+  const double h10 = p[1];
+  const double h01 = p[size_];
+  const double h11 = p[size_ + 1];
+  // The ray is lowest at t1 (dz < 0); a bilinear patch is highest at a corner.
+  if (ray.oz + t1 * ray.dz > std::max(std::max(h00, h10), std::max(h01, h11))) return false;
+  // With tau = t - t0 and local coordinates fx = fx0 + dgx tau, fy = fy0 + dgy tau the gap
+  // z(tau) - h(tau) = g0 + g1 tau + g2 tau^2.
+  const double fx0 = ray.gx0 + t0 * ray.dgx - i;
+  const double fy0 = ray.gy0 + t0 * ray.dgy - j;
+  const double e10 = h10 - h00;
+  const double e01 = h01 - h00;
+  const double e11 = h00 - h10 - h01 + h11;
+  const double g0 = (ray.oz + t0 * ray.dz) - (h00 + e10 * fx0 + e01 * fy0 + e11 * fx0 * fy0);
+  if (g0 <= 0.0) {  // already at or below the surface where the ray enters this cell
+    *t = t0;
     return true;
   }
-  while (a < t_end) {
-    const double b_try = std::min(a + dt, t_end);
-    const double fb_try = gap(b_try);
-    if (fb_try > 0.0) {
-      a = b_try;
-      fa = fb_try;
-      continue;
-    }
-    // Illinois regula falsi on [a, b] with gap(a) > 0 >= gap(b).
-    double b = b_try;
-    double fb = fb_try;
-    double c = b;
-    int side = 0;
-    for (int it = 0; it < 40; ++it) {
-      c = (a * fb - b * fa) / (fb - fa);
-      const double fc = gap(c);
-      if (std::abs(fc) < 1e-10 || b - a < 1e-12) break;
-      if (fc > 0.0) {
-        a = c;
-        fa = fc;
-        if (side == 1) fb *= 0.5;
-        side = 1;
-      } else {
-        b = c;
-        fb = fc;
-        if (side == -1) fa *= 0.5;
-        side = -1;
+  const double g1 =
+      ray.dz - (e10 * ray.dgx + e01 * ray.dgy + e11 * (fx0 * ray.dgy + ray.dgx * fy0));
+  const double g2 = -e11 * ray.dgx * ray.dgy;
+  const double span = t1 - t0;
+  const double limit = span + 1e-12 * (span + std::abs(t0));
+  double tau = -1.0;
+  if (g2 == 0.0) {
+    if (g1 < 0.0) tau = -g0 / g1;
+  } else {
+    // Positive at both ends: a root needs the vertex inside the span (a dip).
+    const double g_end = g0 + span * (g1 + span * g2);
+    if (g_end > 0.0 && !(g2 > 0.0 && g1 < 0.0 && -g1 < 2.0 * g2 * span)) return false;
+    const double disc = g1 * g1 - 4.0 * g2 * g0;
+    if (disc < 0.0) return false;
+    // Numerically stable pair of roots; g0 > 0 makes q != 0.
+    const double q = -0.5 * (g1 + std::copysign(std::sqrt(disc), g1));
+    const double r1 = q / g2;
+    const double r2 = g0 / q;
+    const double lo = std::min(r1, r2);
+    const double hi = std::max(r1, r2);
+    tau = lo >= 0.0 ? lo : hi;
+  }
+  if (!(tau >= 0.0 && tau <= limit)) return false;
+  *t = t0 + std::min(tau, span);
+  return true;
+}
+
+double Terrain::MaxHeightInBox(double x0_m, double y0_m, double x1_m, double y1_m) const {
+  if (size_ == 0) return max_height_m_;
+  const double to_block = 1.0 / (kBlock * options_.cell_m);
+  auto index = [&](double v_m) {
+    const double g = std::clamp((v_m - origin_m_) * to_block, 0.0, blocks_ - 1.0);
+    return static_cast<std::int32_t>(g);
+  };
+  const std::int32_t bx0 = index(std::min(x0_m, x1_m));
+  const std::int32_t bx1 = index(std::max(x0_m, x1_m));
+  const std::int32_t by0 = index(std::min(y0_m, y1_m));
+  const std::int32_t by1 = index(std::max(y0_m, y1_m));
+  float top = -std::numeric_limits<float>::max();
+  if ((bx1 - bx0 + 1) * (by1 - by0 + 1) > 4 * kSuper * kSuper) {  // large box: super blocks
+    for (std::int32_t sy = by0 / kSuper; sy <= by1 / kSuper; ++sy) {
+      for (std::int32_t sx = bx0 / kSuper; sx <= bx1 / kSuper; ++sx) {
+        top = std::max(top, super_max_[static_cast<size_t>(sy) * supers_ + sx]);
       }
     }
-    *t = c;
-    return true;
+    return top;
   }
-  return false;
+  for (std::int32_t by = by0; by <= by1; ++by) {
+    for (std::int32_t bx = bx0; bx <= bx1; ++bx) {
+      top = std::max(top, block_max_[static_cast<size_t>(by) * blocks_ + bx]);
+    }
+  }
+  return top;
 }
 
 bool Terrain::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t) const {
+  return IntersectBelow(o, d, max_height_m_, t);
+}
+
+bool Terrain::IntersectBelow(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double top_m,
+                             double* t) const {
   if (size_ == 0 || !(d.z() < 0.0)) return false;
   // Pad the height range so a perfectly flat terrain still has a non-empty interval.
   const double pad_m = 1e-3 * options_.cell_m;
-  double ta = std::max(0.0, (o.z() - max_height_m_ - pad_m) / -d.z());
+  top_m = std::min(top_m, max_height_m_);
+  double ta = std::max(0.0, (o.z() - top_m - pad_m) / -d.z());
   double tb = (o.z() - min_height_m_ + pad_m) / -d.z();
   const double lo = origin_m_;
   const double hi = -origin_m_;
@@ -379,31 +468,66 @@ bool Terrain::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, doub
   }
   if (!(ta < tb)) return false;
   const double inv_cell = 1.0 / options_.cell_m;
-  const double block_m = kBlock * options_.cell_m;
-  const double horizontal = std::hypot(d.x(), d.y());
-  const double nudge = horizontal > 0.0 ? 1e-6 * options_.cell_m / horizontal : 0.0;
-  double s = ta;
-  while (s < tb) {
-    const double px = o.x() + (s + nudge) * d.x();
-    const double py = o.y() + (s + nudge) * d.y();
-    const std::int32_t bx =
-        std::clamp(static_cast<std::int32_t>((px - origin_m_) * inv_cell) / kBlock, 0, blocks_ - 1);
-    const std::int32_t by =
-        std::clamp(static_cast<std::int32_t>((py - origin_m_) * inv_cell) / kBlock, 0, blocks_ - 1);
-    double s_exit = tb;
-    if (d.x() > 0.0) s_exit = std::min(s_exit, (origin_m_ + (bx + 1) * block_m - o.x()) / d.x());
-    if (d.x() < 0.0) s_exit = std::min(s_exit, (origin_m_ + bx * block_m - o.x()) / d.x());
-    if (d.y() > 0.0) s_exit = std::min(s_exit, (origin_m_ + (by + 1) * block_m - o.y()) / d.y());
-    if (d.y() < 0.0) s_exit = std::min(s_exit, (origin_m_ + by * block_m - o.y()) / d.y());
-    s_exit = std::max(s_exit, s + 2.0 * nudge);
-    if (s_exit > tb) s_exit = tb;
-    const double block_top = block_max_[static_cast<size_t>(by) * blocks_ + bx];
-    if (o.z() + s_exit * d.z() <= block_top) {
-      const double s_in = std::max(s, (o.z() - block_top) / -d.z());
-      if (FineMarch(o, d, s_in, s_exit, t)) return true;
+  GridRay ray{};
+  ray.gx0 = (o.x() - origin_m_) * inv_cell;
+  ray.gy0 = (o.y() - origin_m_) * inv_cell;
+  ray.dgx = d.x() * inv_cell;
+  ray.dgy = d.y() * inv_cell;
+  ray.oz = o.z();
+  ray.dz = d.z();
+  const double fastest = std::max(std::abs(ray.dgx), std::abs(ray.dgy));
+  const double nudge = fastest > 0.0 ? 1e-7 / fastest : 0.0;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  WalkRay walk_ray{};
+  walk_ray.gx0 = ray.gx0;
+  walk_ray.gy0 = ray.gy0;
+  walk_ray.inv_dgx = ray.dgx != 0.0 ? 1.0 / ray.dgx : kInf;
+  walk_ray.inv_dgy = ray.dgy != 0.0 ? 1.0 / ray.dgy : kInf;
+  walk_ray.step_i = ray.dgx > 0.0 ? 1 : (ray.dgx < 0.0 ? -1 : 0);
+  walk_ray.step_j = ray.dgy > 0.0 ? 1 : (ray.dgy < 0.0 ? -1 : 0);
+  walk_ray.ahead_i = ray.dgx > 0.0 ? 1 : 0;
+  walk_ray.ahead_j = ray.dgy > 0.0 ? 1 : 0;
+  const double inv_descent = -1.0 / ray.dz;
+  auto walk = [&](double s, std::int32_t cells, std::int32_t count) {
+    return LevelWalk(walk_ray, ray.gx0 + (s + nudge) * ray.dgx, ray.gy0 + (s + nudge) * ray.dgy,
+                     cells, count);
+  };
+  // Super blocks, then blocks, then cells: a level is entered only where the ray comes down to its
+  // maximum height (the ray is lowest where it leaves a cell, as dz < 0). A ray starting low
+  // (within one block height of the ground, the usual case below a local top_m) skips the super
+  // level.
+  auto walk_blocks = [&](double s0, double s1) {
+    double sb = s0;
+    LevelWalk block = walk(sb, kBlock, blocks_);
+    for (;;) {
+      const double block_exit = std::min(block.Exit(), s1);
+      const double block_top = block_max_[static_cast<size_t>(block.j) * blocks_ + block.i];
+      if (ray.oz + block_exit * ray.dz <= block_top) {
+        double sc = std::max(sb, (ray.oz - block_top) * inv_descent);
+        LevelWalk cell = walk(sc, 1, size_ - 1);
+        for (;;) {
+          const double cell_exit = std::min(cell.Exit(), block_exit);
+          if (IntersectCell(ray, cell.i, cell.j, sc, cell_exit, t)) return true;
+          if (cell_exit >= block_exit || !cell.Advance()) break;
+          sc = cell_exit;
+        }
+      }
+      if (block_exit >= s1 || !block.Advance()) return false;
+      sb = block_exit;
     }
-    if (s_exit <= s) break;  // no progress possible (degenerate ray)
-    s = s_exit;
+  };
+  const double horizontal_cells = (tb - ta) * fastest;
+  if (horizontal_cells < 2.0 * kBlock) return walk_blocks(ta, tb);
+  LevelWalk super = walk(ta, kBlock * kSuper, supers_);
+  double s = ta;
+  for (;;) {
+    const double super_exit = std::min(super.Exit(), tb);
+    const double super_top = super_max_[static_cast<size_t>(super.j) * supers_ + super.i];
+    if (ray.oz + super_exit * ray.dz <= super_top) {
+      if (walk_blocks(std::max(s, (ray.oz - super_top) * inv_descent), super_exit)) return true;
+    }
+    if (super_exit >= tb || !super.Advance()) break;
+    s = super_exit;
   }
   return false;
 }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -172,6 +173,41 @@ TEST(RendererTest, TrueLandmarkProjectsOntoItsPlantedFiducial) {
   EXPECT_NEAR(right.x(), z.y(), 0.1);
   EXPECT_NEAR(right.y(), z.z(), 0.1);
   EXPECT_NEAR(z.x(), 70.3, 1e-6);
+}
+
+TEST(RendererTest, TileStartHeightsNeverSkipAHit) {
+  // GIVEN rock-field terrain seen low and oblique (30 deg off nadir: rocks occlude ground), where
+  // the renderer starts each 16 x 16 tile's rays below the tile's local maximum height.
+  TerrainOptions t = TerrainPresetOptions(TerrainPreset::kRockField, 4);
+  t.size = 512;
+  Scene scene;
+  ASSERT_NO_FATAL_FAILURE(MakeScene(t, AppearanceOptions{}, &scene));
+  RenderOptions r;
+  r.rig = SmallRig();
+  r.add_noise = false;
+  Renderer renderer;
+  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
+  estimator::Pose<double> pose = NadirAt(2.0, -3.0, 6.0);
+  pose.R = Eigen::AngleAxisd(0.52, Eigen::Vector3d::UnitX()).toRotationMatrix() * pose.R;
+  StereoImages im;
+  ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, pose, 0, &im), core::Status::kOk);
+  // THEN every pixel's depth is the first hit of a ray cast from the global maximum.
+  const auto& cam = renderer.Camera();
+  int finite = 0;
+  for (int v = 0; v < im.height; ++v) {
+    for (int u = 0; u < im.width; ++u) {
+      const Eigen::Vector3d dir =
+          pose.R * Eigen::Vector3d((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+      double s = 0.0;
+      const bool hit = scene.terrain.Intersect(pose.t, dir, &s);
+      const float depth = im.depth_m[v * im.width + u];
+      ASSERT_EQ(hit, std::isfinite(depth)) << u << "," << v;
+      if (!hit) continue;
+      ++finite;
+      ASSERT_NEAR(s, depth, 1e-6 * s) << u << "," << v;  // float depth, same surface point
+    }
+  }
+  EXPECT_GT(finite, im.width * im.height / 2);
 }
 
 TEST(RendererTest, SameSeedGivesBitIdenticalImages) {

@@ -7,6 +7,7 @@
 
 #include "swf/sim/appearance.hpp"
 #include "swf/sim/hazard.hpp"
+#include "swf/sim/rng.hpp"
 
 namespace swf::sim {
 namespace {
@@ -67,6 +68,37 @@ TEST(TerrainTest, RayHitsATiltedPlaneExactly) {
   // Plane z = 0.1 x - 0.05 y along the ray: 30 - s = 0.1 (1 + 0.1 s) - 0.05 (2 - 0.07 s).
   const double expected = (30.0 - 0.1 * 1.0 + 0.05 * 2.0) / (1.0 + 0.1 * 0.1 + 0.05 * 0.07);
   EXPECT_NEAR(s, expected, 1e-6);
+}
+
+TEST(TerrainTest, IntersectFindsTheFirstHitOfRandomRaysOnRoughTerrain) {
+  // GIVEN rough terrain with rocks and craters and rays of random slant from 2-40 m up.
+  Terrain t;
+  ASSERT_EQ(t.Configure(Small(TerrainPreset::kRockField, 11)), core::Status::kOk);
+  Rng rng(5);
+  int hits = 0;
+  for (int n = 0; n < 400; ++n) {
+    const Eigen::Vector3d origin(rng.Uniform(-20.0, 20.0), rng.Uniform(-20.0, 20.0),
+                                 t.MaxHeightM() + rng.Uniform(0.5, 40.0));
+    const Eigen::Vector3d dir(rng.Uniform(-1.5, 1.5), rng.Uniform(-1.5, 1.5), -1.0);
+    double s = 0.0;
+    // WHEN the ray is cast with and without a (valid) local start height.
+    const bool hit = t.Intersect(origin, dir, &s);
+    double s_below = 0.0;
+    ASSERT_EQ(t.IntersectBelow(origin, dir, t.MaxHeightM() + 1.0, &s_below), hit);
+    if (!hit) continue;
+    ++hits;
+    EXPECT_EQ(s, s_below);
+    // THEN the hit is on the surface and a dense march (1/50 cell) finds no earlier crossing.
+    const Eigen::Vector3d p = origin + s * dir;
+    EXPECT_NEAR(p.z(), t.HeightAt(p.x(), p.y()), 1e-9);
+    const double step = 0.02 * t.CellM() / dir.head<2>().norm();
+    const double s0 = (origin.z() - t.MaxHeightM()) / -dir.z();
+    for (double q = s0; q < s - 1e-6; q += step) {
+      const Eigen::Vector3d a = origin + q * dir;
+      ASSERT_GT(a.z(), t.HeightAt(a.x(), a.y()) - 1e-9) << "ray " << n << " passes below at " << q;
+    }
+  }
+  EXPECT_GT(hits, 150);  // the others leave the 51 m square first
 }
 
 TEST(HazardTest, TruthAgreesWithTheHeightField) {

@@ -1,10 +1,14 @@
 // swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth.
 //   swf-sim [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks]
 //           [--out DIR] [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4]
+//           [--lcm URL] [--no-png]
 // Writes DIR/left_NNNN.png, right_NNNN.png, poses.csv (t_ns, position, quaternion x y z w of
 // world_T_camera), landmarks.csv + observations.csv (measurement-level truth on the same terrain),
 // craters.csv, rocks.csv, terrain_hazard.png (shaded terrain | hazard truth) and
 // contact_sheet.png (12 left frames). Progress goes to stderr.
+// --lcm URL also publishes every rendered pair as it is rendered: STEREO (stereo_frame_t), TRUTH
+// (nav_state_t) and TRUTH_LANDMARKS (landmark_map_t), see swf/sim/lcm_publisher.hpp; --no-png
+// skips the per-frame PNG files (streaming only).
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdio>
@@ -15,6 +19,7 @@
 
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/image_io.hpp"
+#include "swf/sim/lcm_publisher.hpp"
 #include "swf/sim/measurement.hpp"
 #include "swf/sim/renderer.hpp"
 #include "swf/sim/trajectory.hpp"
@@ -71,8 +76,14 @@ int main(int argc, char** argv) {
   int every = 1;
   int spp = 1;
   std::uint64_t seed = 1;
+  std::string lcm_url;
+  bool write_png = true;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
+    if (arg == "--no-png") {
+      write_png = false;
+      continue;
+    }
     const char* value = a + 1 < argc ? argv[a + 1] : nullptr;
     auto take = [&]() {
       ++a;
@@ -98,11 +109,14 @@ int main(int argc, char** argv) {
       seed = std::strtoull(take().c_str(), nullptr, 10);
     else if (arg == "--spp")
       spp = std::atoi(take().c_str());
+    else if (arg == "--lcm")
+      lcm_url = take();
     else {
       std::fprintf(
           stderr,
           "usage: swf-sim [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks] "
-          "[--out DIR] [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4]\n");
+          "[--out DIR] [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4] "
+          "[--lcm URL] [--no-png]\n");
       return arg == "--help" ? 0 : 2;
     }
   }
@@ -201,6 +215,19 @@ int main(int argc, char** argv) {
     std::fclose(f);
   }
 
+  swf::sim::SimLcmPublisher publisher;
+  if (!lcm_url.empty()) {
+    if (Status s = publisher.Open(lcm_url); s != Status::kOk) {
+      std::fprintf(stderr,
+                   "swf-sim: cannot open LCM at '%s' (udpm needs a multicast route: run inside "
+                   "`unshare -rn` with `ip route add 239.0.0.0/8 dev lo`, see RECIPES.md)\n",
+                   lcm_url.c_str());
+      return 1;
+    }
+  }
+  std::vector<std::int32_t> times_observed(measurements.Landmarks().size(), 0);
+  std::vector<swf::sim::TruthLandmark> visible;
+
   swf::sim::RenderOptions ro;
   ro.rig = rig;
   ro.seed = seed;
@@ -235,13 +262,45 @@ int main(int argc, char** argv) {
         s != Status::kOk) {
       return Fail("render", s);
     }
-    char name[64];
-    std::snprintf(name, sizeof(name), "/left_%04d.png", k);
-    (void)swf::sim::WritePng(out + name, images.left.data(), images.width, images.height, 1,
-                             images.width);
-    std::snprintf(name, sizeof(name), "/right_%04d.png", k);
-    (void)swf::sim::WritePng(out + name, images.right.data(), images.width, images.height, 1,
-                             images.width);
+    if (write_png) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "/left_%04d.png", k);
+      (void)swf::sim::WritePng(out + name, images.left.data(), images.width, images.height, 1,
+                               images.width);
+      std::snprintf(name, sizeof(name), "/right_%04d.png", k);
+      (void)swf::sim::WritePng(out + name, images.right.data(), images.width, images.height, 1,
+                               images.width);
+    }
+    if (!lcm_url.empty()) {
+      const std::int64_t utime = trajectory.FrameTimeNs(k) / 1000;
+      visible.clear();
+      if (k < measurements.NumFrames()) {
+        for (const auto& o : measurements.Frame(k).observations) {
+          const auto id = static_cast<size_t>(o.landmark_id);
+          if (o.landmark_id < 0 || id >= times_observed.size()) continue;
+          // Frames between `every` steps are not served but their observations still count.
+          visible.push_back({o.landmark_id, measurements.Landmarks()[id], 0});
+        }
+      }
+      for (int j = n == 0 ? 0 : frames[n - 1] + 1; j <= k && j < measurements.NumFrames(); ++j) {
+        for (const auto& o : measurements.Frame(j).observations) {
+          if (o.landmark_id >= 0 && static_cast<size_t>(o.landmark_id) < times_observed.size()) {
+            ++times_observed[static_cast<size_t>(o.landmark_id)];
+          }
+        }
+      }
+      for (auto& l : visible) l.num_observations = times_observed[static_cast<size_t>(l.id)];
+      if (Status s = publisher.PublishFrame(images, k, utime); s != Status::kOk) {
+        return Fail("LCM stereo frame", s);
+      }
+      if (Status s = publisher.PublishTruthPose(pose, traj.velocity_world_mps, k, utime);
+          s != Status::kOk) {
+        return Fail("LCM truth pose", s);
+      }
+      if (Status s = publisher.PublishTruthLandmarks(visible, k, utime); s != Status::kOk) {
+        return Fail("LCM truth landmarks", s);
+      }
+    }
     const Eigen::Quaterniond q(pose.R);
     std::fprintf(poses, "%d,%lld,%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f\n", k,
                  static_cast<long long>(trajectory.FrameTimeNs(k)), pose.t.x(), pose.t.y(),
@@ -273,5 +332,9 @@ int main(int argc, char** argv) {
   std::fprintf(stderr, "swf-sim: wrote %zu pairs, %d landmarks, %zu rocks, %zu craters to %s\n",
                frames.size(), measurements.Summary().num_landmarks, terrain.Rocks().size(),
                terrain.Craters().size(), out.c_str());
+  if (!lcm_url.empty()) {
+    std::fprintf(stderr, "swf-sim: published %lld LCM messages to %s\n",
+                 static_cast<long long>(publisher.Published()), lcm_url.c_str());
+  }
   return 0;
 }

@@ -3,7 +3,8 @@
 //
 // For each pixel centre (u, v) of camera c (0 left, 1 right at +baseline along camera x) the ray
 // world_R_camera * ((u - cx) / fx, (v - cy) / fy, 1) from the camera centre is intersected with the
-// bilinear height field (Terrain::Intersect: max-height blocks, half-cell march, regula falsi).
+// bilinear height field (Terrain::Intersect: two-level max-height pyramid, closed-form roots per
+// cell).
 // The hit's radiance (Appearance::Radiance, bilinear, band-limited by the pixel footprint
 // range / fx) becomes DN = exposure_dn * radiance; with samples_per_pixel = 4 the radiance is
 // averaged over a rotated 2x2 grid of sub-pixel rays (geometric anti-aliasing). Photometric noise

@@ -94,8 +94,21 @@ class Terrain final : public Surface {
   core::Status Configure(const TerrainOptions& options);
 
   double HeightAt(double x_m, double y_m) const override;
+  // Exact first hit of the ray with the bilinear surface: the ray descends a two-level max-height
+  // pyramid (8 x 8 cell blocks, 64 x 64 cell super blocks), skipping every block it passes above;
+  // in each remaining cell the height along the ray is a quadratic in t (bilinear patch), whose
+  // smallest root in the cell is solved in closed form (no iteration, no tolerance).
   bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                  double* t) const override;
+  // The same first hit for a ray whose horizontal path, from where it descends through top_m down
+  // to the lowest terrain height, only crosses ground no higher than top_m (e.g. top_m from
+  // MaxHeightInBox over a box holding that path): the walk starts at top_m instead of the global
+  // maximum. With top_m >= MaxHeightM() this is Intersect.
+  bool IntersectBelow(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double top_m,
+                      double* t) const;
+  // An upper bound of the surface height over the box [x0, x1] x [y0, y1] (metres, clamped to
+  // the terrain): the maximum of the max-pyramid blocks the box overlaps.
+  double MaxHeightInBox(double x0_m, double y0_m, double x1_m, double y1_m) const;
 
   std::int32_t Size() const { return size_; }
   double CellM() const { return options_.cell_m; }
@@ -112,13 +125,19 @@ class Terrain final : public Surface {
   const TerrainOptions& Options() const { return options_; }
 
  private:
+  // A ray in grid units: grid x = gx0 + t dgx, y = gy0 + t dgy, height z = oz + t dz.
+  struct GridRay {
+    double gx0, gy0, dgx, dgy, oz, dz;
+  };
   double NodeHeight(std::int32_t i, std::int32_t j) const { return heights_[j * size_ + i]; }
   // Bilinear height in grid coordinates (gx, gy), clamped to the grid.
   double GridHeight(double gx, double gy) const;
-  bool FineMarch(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double t_begin,
-                 double t_end, double* t) const;
+  // First root of the ray against the bilinear patch of cell (i, j) for t in [t0, t1].
+  bool IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j, double t0, double t1,
+                     double* t) const;
 
   static constexpr std::int32_t kBlock = 8;  // cells per side of a max-height block
+  static constexpr std::int32_t kSuper = 8;  // blocks per side of a max-height super block
 
   TerrainOptions options_;
   std::int32_t size_ = 0;
@@ -127,6 +146,8 @@ class Terrain final : public Surface {
   std::vector<float> base_heights_;
   std::int32_t blocks_ = 0;
   std::vector<float> block_max_;
+  std::int32_t supers_ = 0;
+  std::vector<float> super_max_;
   double min_height_m_ = 0.0;
   double max_height_m_ = 0.0;
   std::vector<Crater> craters_;
