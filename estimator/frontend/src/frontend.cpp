@@ -16,7 +16,11 @@ Status Frontend::Configure(const FrontendOptions& options) {
   if (Status s = harris_.Configure(options.harris); s != Status::kOk) return s;
   if (Status s = stereo_.Configure(options.stereo); s != Status::kOk) return s;
   if (Status s = tracker_.Configure(options.tracker); s != Status::kOk) return s;
-  if (Status s = consistency_.Configure(options.consistency); s != Status::kOk) return s;
+  ConsistencyOptions consistency = options.consistency;
+  if (!(consistency.focal_baseline_px_m > 0.0)) {
+    consistency.focal_baseline_px_m = options.camera.fx * options.camera.baseline_m;
+  }
+  if (Status s = consistency_.Configure(consistency); s != Status::kOk) return s;
   options_ = options;
   tracks_.clear();
   num_free_ = kMaxTracks;

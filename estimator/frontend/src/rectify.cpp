@@ -92,10 +92,16 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
 
   for (int c = 0; c < 2; ++c) {
     const CameraCalibration& cal = calib_[c];
+    Table& table = table_[c];
     for (int v = 0; v < h; ++v) {
+      int begin = w;
+      int end = 0;
       for (int u = 0; u < w; ++u) {
-        Entry& e = table_[c][static_cast<std::size_t>(v) * w + u];
-        e = Entry{kOutside, 0, 0, 0};
+        const std::size_t k = static_cast<std::size_t>(v) * w + u;
+        table.x[k] = kOutside;
+        table.y[k] = 0;
+        table.wx[k] = 0;
+        table.wy[k] = 0;
         double ru = 0.0;
         double rv = 0.0;
         if (!RawPixel(c, u, v, &ru, &rv)) continue;
@@ -104,35 +110,78 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
         // always stay inside the image.
         const int cu = std::min(static_cast<int>(ru), cal.width - 2);
         const int cv = std::min(static_cast<int>(rv), cal.height - 2);
-        const int ax = static_cast<int>(std::lround((ru - cu) * 256.0));
-        const int ay = static_cast<int>(std::lround((rv - cv) * 256.0));
-        e = Entry{static_cast<std::uint16_t>(cu), static_cast<std::uint16_t>(cv),
-                  static_cast<std::uint16_t>(ax), static_cast<std::uint16_t>(ay)};
+        table.x[k] = static_cast<std::uint16_t>(cu);
+        table.y[k] = static_cast<std::uint16_t>(cv);
+        table.wx[k] = static_cast<std::uint16_t>(std::lround((ru - cu) * 256.0));
+        table.wy[k] = static_cast<std::uint16_t>(std::lround((rv - cv) * 256.0));
+        begin = std::min(begin, u);
+        end = u + 1;
       }
+      bool dense = true;
+      for (int u = begin; u < end; ++u) {
+        dense = dense && table.x[static_cast<std::size_t>(v) * w + u] != kOutside;
+      }
+      table.begin[v] = begin < end ? begin : 0;
+      table.end[v] = begin < end ? end : 0;
+      table.dense[v] = dense;
     }
   }
   configured_ = true;
   return Status::kOk;
 }
 
-void StereoRectifier::RemapOne(const GrayView& raw, const Entry* table,
+void StereoRectifier::RemapOne(const GrayView& raw, const Table& table,
                                const MutableGrayView& out) const {
+  std::uint8_t p00[kMaxImageWidth];
+  std::uint8_t p01[kMaxImageWidth];
+  std::uint8_t p10[kMaxImageWidth];
+  std::uint8_t p11[kMaxImageWidth];
   for (int v = 0; v < height_; ++v) {
     std::uint8_t* o = out.Row(v);
-    const Entry* row = table + static_cast<std::size_t>(v) * width_;
-    for (int u = 0; u < width_; ++u) {
-      const Entry e = row[u];
-      if (e.x == kOutside) {
-        o[u] = 0;
-        continue;
+    const std::size_t row = static_cast<std::size_t>(v) * width_;
+    const int begin = table.begin[v];
+    const int end = table.end[v];
+    for (int u = 0; u < begin; ++u) o[u] = 0;
+    for (int u = end; u < width_; ++u) o[u] = 0;
+    const std::uint16_t* tx = table.x + row;
+    const std::uint16_t* ty = table.y + row;
+    const std::uint16_t* twx = table.wx + row;
+    const std::uint16_t* twy = table.wy + row;
+    if (!table.dense[v]) {
+      for (int u = begin; u < end; ++u) {
+        if (tx[u] == kOutside) {
+          o[u] = 0;
+          continue;
+        }
+        const std::uint8_t* s0 = raw.Row(ty[u]) + tx[u];
+        const std::uint8_t* s1 = s0 + raw.stride;
+        const int ax = twx[u];
+        const int ay = twy[u];
+        const int top = s0[0] * (256 - ax) + s0[1] * ax;
+        const int bottom = s1[0] * (256 - ax) + s1[1] * ax;
+        o[u] = static_cast<std::uint8_t>((top * (256 - ay) + bottom * ay + 32768) >> 16);
       }
-      const std::uint8_t* p0 = raw.Row(e.y) + e.x;
-      const std::uint8_t* p1 = p0 + raw.stride;
-      const int ax = e.ax;
-      const int ay = e.ay;
-      const int top = p0[0] * (256 - ax) + p0[1] * ax;
-      const int bottom = p1[0] * (256 - ax) + p1[1] * ax;
-      o[u] = static_cast<std::uint8_t>((top * (256 - ay) + bottom * ay + 32768) >> 16);
+      continue;
+    }
+    // Gather (scalar loads), then blend (vectorised; the same integer formula as above).
+    for (int u = begin; u < end; ++u) {
+      const std::uint8_t* s0 = raw.Row(ty[u]) + tx[u];
+      const std::uint8_t* s1 = s0 + raw.stride;
+      p00[u] = s0[0];
+      p01[u] = s0[1];
+      p10[u] = s1[0];
+      p11[u] = s1[1];
+    }
+    for (int u = begin; u < end; ++u) {
+      // top, bottom <= 255 * 256: 16-bit lanes; the second blend widens to 32 bits.
+      const std::uint16_t ax = twx[u];
+      const std::uint16_t ay = twy[u];
+      const auto top = static_cast<std::uint16_t>(p00[u] * (256 - ax) + p01[u] * ax);
+      const auto bottom = static_cast<std::uint16_t>(p10[u] * (256 - ax) + p11[u] * ax);
+      const std::uint32_t blend =
+          static_cast<std::uint32_t>(top) * static_cast<std::uint16_t>(256 - ay) +
+          static_cast<std::uint32_t>(bottom) * ay;
+      o[u] = static_cast<std::uint8_t>((blend + 32768u) >> 16);
     }
   }
 }

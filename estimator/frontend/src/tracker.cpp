@@ -52,7 +52,7 @@ Status PatchTracker::Configure(const TrackerOptions& options) {
   if (options.patch_radius < 1 || options.patch_radius > kMaxPatchRadius ||
       options.pyramid_levels < 1 || options.pyramid_levels > kMaxPyramidLevels ||
       options.max_iterations < 1 || !(options.epsilon_px > 0.0f) ||
-      !(options.max_prediction_error_px > 0.0f)) {
+      !(options.coarse_epsilon_px > 0.0f) || !(options.max_prediction_error_px > 0.0f)) {
     return Status::kInvalidArgument;
   }
   options_ = options;
@@ -105,7 +105,7 @@ void PatchTracker::ExtractTemplateClamped(const GrayView& image, float x, float 
 
 bool PatchTracker::Align(const GrayView& image, const float* value, const float* gx,
                          const float* gy, const float* offsets, int count, int grid_radius,
-                         bool clamped, float* cx, float* cy, float* quality) const {
+                         bool clamped, float epsilon, float* cx, float* cy, float* quality) const {
   float mean_gx = 0.0f;
   float mean_gy = 0.0f;
   float mean_t = 0.0f;
@@ -162,7 +162,7 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
     y += dy;
     sampled_at_xy = false;
     if (!(std::isfinite(x) && std::isfinite(y))) return false;
-    if (dx * dx + dy * dy < options_.epsilon_px * options_.epsilon_px) break;
+    if (dx * dx + dy * dy < epsilon * epsilon) break;
   }
   if (!sampled_at_xy) {
     if (!Sample(image, offsets, count, grid_radius, clamped, margin, x, y, samples, &mean_s))
@@ -219,8 +219,9 @@ bool PatchTracker::TrackFlow(const Pyramid& prev, const Pyramid& cur, float prev
     }
     float x = px + dx * scale;
     float y = py + dy * scale;
-    if (!Align(cur.Level(l), tmpl.value, tmpl.gx, tmpl.gy, offsets, count, r, clamped, &x, &y,
-               &q)) {
+    const float epsilon = l == 0 ? options_.epsilon_px : options_.coarse_epsilon_px;
+    if (!Align(cur.Level(l), tmpl.value, tmpl.gx, tmpl.gy, offsets, count, r, clamped, epsilon, &x,
+               &y, &q)) {
       if (l == 0) return false;
       continue;
     }
@@ -270,7 +271,10 @@ bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
   float x = x0;
   float y = y0;
   float q = 0.0f;
-  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, &x, &y, &q)) return false;
+  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, options_.epsilon_px, &x, &y,
+             &q)) {
+    return false;
+  }
   const float ex = x - x0;
   const float ey = y - y0;
   if (ex * ex + ey * ey > options_.max_prediction_error_px * options_.max_prediction_error_px) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <vector>
 
 #include "swf/testing/allocation_counter.hpp"
 #include "synthetic.hpp"
@@ -69,6 +70,47 @@ TEST(HarrisTest, BucketingCoversTheImageAndRespectsQuota) {
     EXPECT_FALSE(c.x == corners[0].x && c.y == corners[0].y);
   }
   EXPECT_LE(again.size(), corners.size() - 1);
+}
+
+// GIVEN buckets already full of tracks WHEN detecting THEN only the other buckets are searched,
+// and their corners are exactly those a search of the whole image finds there.
+TEST(HarrisTest, SearchingOnlyOpenBucketsFindsTheSameCorners) {
+  const testing::Texture texture(5);
+  const TestImage img = texture.RenderShifted<TestImage>(640, 480, 0.0, 0.0);
+  auto detector = std::make_unique<HarrisDetector>();
+  HarrisOptions options;  // 16 x 12 buckets, 2 each
+  options.quality_level = 0.0f;
+  options.min_distance_px = 0.0f;
+  ASSERT_EQ(detector->Configure(options), core::Status::kOk);
+  CornerList all;
+  ASSERT_EQ(detector->Detect(img.View(), nullptr, 0, &all), core::Status::kOk);
+  // Fill every bucket except a scattered set (2 tracks at each full bucket's centre).
+  auto open = [](int bx, int by) { return (bx * 7 + by * 3) % 5 == 0 || (bx == 15 && by == 11); };
+  std::vector<Point2f> occupied;
+  for (int by = 0; by < 12; ++by) {
+    for (int bx = 0; bx < 16; ++bx) {
+      if (open(bx, by)) continue;
+      const Point2f p{40.0f * bx + 20.0f, 40.0f * by + 20.0f};
+      occupied.push_back(p);
+      occupied.push_back(p);
+    }
+  }
+  CornerList some;
+  swf::testing::AllocationScope scope;
+  ASSERT_EQ(detector->Detect(img.View(), occupied.data(), occupied.size(), &some),
+            core::Status::kOk);
+  EXPECT_EQ(scope.Count(), 0u);
+  std::vector<Corner> expected;
+  for (const Corner& c : all) {
+    if (open(static_cast<int>(c.x) / 40, static_cast<int>(c.y) / 40)) expected.push_back(c);
+  }
+  ASSERT_GE(expected.size(), 40u);
+  ASSERT_EQ(some.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(some[i].x, expected[i].x);
+    EXPECT_EQ(some[i].y, expected[i].y);
+    EXPECT_EQ(some[i].response, expected[i].response);
+  }
 }
 
 TEST(HarrisTest, BlankImageHasNoCornersAndNoAllocation) {

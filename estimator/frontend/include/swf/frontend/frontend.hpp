@@ -96,7 +96,7 @@ struct FrontendOptions {
   HarrisOptions harris;
   StereoMatcherOptions stereo;
   TrackerOptions tracker;
-  ConsistencyOptions consistency;
+  ConsistencyOptions consistency;  // focal_baseline_px_m 0: taken from `camera`
   bool consistency_check = true;
   std::size_t min_consistency_points = 8;  // fewer tracks: skip the check (nothing to vote)
   std::size_t max_tracks = 300;            // detection tops up to this many

@@ -8,6 +8,13 @@
 // into a grid and each cell keeps its strongest corners (at most max_per_bucket, minus the tracks
 // already in it), so the features cover the whole image instead of clustering on the most textured
 // region, which keeps the estimator's geometry well conditioned.
+//
+// Only the buckets that still have a quota are searched: the response is computed over runs of
+// such buckets along each bucket row (plus the few pixels of margin the window needs), so a frame
+// whose tracks already fill most cells costs a fraction of a full pass. max(R) is then the
+// strongest response of the searched area. The response of a pixel does not depend on the area
+// it is computed in (integer sums, exact in float), so the corners of a bucket are the same
+// whichever other buckets are searched.
 #pragma once
 
 #include <cstddef>
@@ -36,7 +43,7 @@ struct Point2f {
 struct HarrisOptions {
   float k = 0.04f;
   int window_radius = 2;           // structure tensor box: (2r+1)^2 pixels
-  float quality_level = 0.00001f;  // threshold relative to the strongest response of the image
+  float quality_level = 0.00001f;  // threshold relative to the strongest searched response
   int border_px = 12;              // no corners closer than this to the edge
   int bucket_cols = 16;
   int bucket_rows = 12;
@@ -55,7 +62,8 @@ class HarrisDetector {
   core::Status Detect(const GrayView& image, const Point2f* occupied, std::size_t num_occupied,
                       CornerList* corners);
 
-  // The response image of the last call (for tests and plots).
+  // The response image of the last call (for tests and plots): valid only around the buckets
+  // that were searched (all of them when no bucket was full).
   ImageView<const float> Response() const { return response_.View(); }
 
  private:
@@ -65,7 +73,15 @@ class HarrisDetector {
     Corner candidates[kMaxCandidatesPerBucket];
   };
 
-  void ComputeResponse(const GrayView& image);
+  // Response for rows [y0, y1) and columns [x0, x1) (the caller keeps a margin of r + 1 to the
+  // image edge); returns the largest response written.
+  float ComputeResponse(const GrayView& image, int x0, int x1, int y0, int y1);
+  // 3x3 non-maximum suppression over rows [y0, y1) and columns [x0, x1); local maxima above
+  // `threshold` go into their bucket's candidate list.
+  void CollectMaxima(int x0, int x1, int y0, int y1, float threshold);
+  // Pixel bounds [begin, end) of bucket column bx / bucket row by.
+  int BucketColBegin(int bx) const;
+  int BucketRowBegin(int by) const;
   int BucketOf(float x, float y) const;
 
   HarrisOptions options_{};
@@ -75,6 +91,10 @@ class HarrisDetector {
   float ring_[3][kMaxWindow][kMaxImageWidth] = {};
   float vertical_[3][kMaxImageWidth] = {};
   float products_[3][kMaxImageWidth] = {};
+  std::uint8_t maxima_[kMaxImageWidth] = {};
+  std::int16_t bucket_col_[kMaxImageWidth] = {};  // bucket column of each pixel column
+  std::int16_t bucket_row_[kMaxImageHeight] = {};
+  bool needed_[kMaxBuckets] = {};
   Image<float> response_;
   Bucket buckets_[kMaxBuckets];
   int width_ = 0;

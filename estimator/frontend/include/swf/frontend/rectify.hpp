@@ -1,6 +1,7 @@
 // Stereo rectification from a calibrated rig (pinhole + radial-tangential distortion +
 // extrinsics), computed once at start-up as a remap table and applied per frame with bilinear
-// interpolation in 8-bit fixed point.
+// interpolation in 8-bit fixed point. Per row, the source pixels are gathered first (scalar loads)
+// and then blended in a separate, vectorisable pass.
 //
 // Rectifying rotation (Bouguet-style): with left_T_right = {R, t} (t: right centre in the left
 // frame), the common optical axis is the "half-way" rotation z_mid = Exp(Log(R)/2) e_z; the
@@ -64,14 +65,22 @@ class StereoRectifier {
   bool RawPixel(int camera, double u, double v, double* raw_u, double* raw_v) const;
 
  private:
-  struct Entry {
-    std::uint16_t x;  // top-left source pixel; kOutside = no source
-    std::uint16_t y;
-    std::uint16_t ax;  // fractional position * 256, in [0, 256]
-    std::uint16_t ay;
+  // Remap table of one camera, structure of arrays so the per-pixel arithmetic vectorises: the
+  // top-left source pixel (x, y) and the fractional position * 256 (wx, wy in [0, 256]).
+  // x == kOutside: no source pixel (output 0).
+  struct Table {
+    std::uint16_t x[kMaxPixels];
+    std::uint16_t y[kMaxPixels];
+    std::uint16_t wx[kMaxPixels];
+    std::uint16_t wy[kMaxPixels];
+    // Per output row: the columns [begin, end) with a source, and whether every column of that
+    // span has one (then the row takes the branch-free path).
+    std::int32_t begin[kMaxImageHeight];
+    std::int32_t end[kMaxImageHeight];
+    bool dense[kMaxImageHeight];
   };
   static constexpr std::uint16_t kOutside = 0xFFFF;
-  void RemapOne(const GrayView& raw, const Entry* table, const MutableGrayView& out) const;
+  void RemapOne(const GrayView& raw, const Table& table, const MutableGrayView& out) const;
 
   CameraCalibration calib_[2]{};
   estimator::Mat3<double> rect_from_cam_[2];
@@ -80,7 +89,7 @@ class StereoRectifier {
   int width_ = 0;
   int height_ = 0;
   bool configured_ = false;
-  Entry table_[2][kMaxPixels];
+  Table table_[2];
 };
 
 }  // namespace swf::frontend

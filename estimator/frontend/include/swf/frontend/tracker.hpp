@@ -28,7 +28,8 @@ struct TrackerOptions {
   int patch_radius = 6;  // (2r+1)^2 template, r <= kMaxPatchRadius
   int pyramid_levels = 3;
   int max_iterations = 20;
-  float epsilon_px = 0.005f;
+  float epsilon_px = 0.005f;              // convergence: last step shorter than this (finest level)
+  float coarse_epsilon_px = 0.03f;        // the same on coarser pyramid levels (only seed the next)
   float min_zncc = 0.75f;                 // quality gate of a tracked feature
   float max_prediction_error_px = 12.0f;  // warped tracking may not move further than this
 };
@@ -77,8 +78,8 @@ class PatchTracker {
   // grid_radius >= 0: offsets are the unwarped integer grid (fast sampling); clamped: replicate
   // the border instead of failing when the patch leaves the image.
   bool Align(const GrayView& image, const float* value, const float* gx, const float* gy,
-             const float* offsets, int count, int grid_radius, bool clamped, float* cx, float* cy,
-             float* quality) const;
+             const float* offsets, int count, int grid_radius, bool clamped, float epsilon,
+             float* cx, float* cy, float* quality) const;
 
   TrackerOptions options_{};
   bool configured_ = false;
