@@ -1,5 +1,7 @@
 // bench_sim: one full-size stereo pair (1024 x 768, the paper's EDL rig) rendered on one core
 // over the default crater-field terrain (2048 x 2048 nodes) textured with the orbital imagery.
+// The last case renders the same rig at half resolution (512 x 384, same field of view): the
+// per-pixel cost, and what size fits the 100 ms budget.
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -37,6 +39,8 @@ void BmRenderPair(benchmark::State& state) {
   }
   RenderOptions options;
   options.samples_per_pixel = static_cast<std::int32_t>(state.range(1));
+  options.rig.width_px = static_cast<std::int32_t>(state.range(2));
+  options.rig.height_px = options.rig.width_px * 3 / 4;
   Renderer renderer;
   if (renderer.Configure(options) != core::Status::kOk) {
     state.SkipWithError("configure failed");
@@ -58,11 +62,12 @@ void BmRenderPair(benchmark::State& state) {
   state.counters["altitude_m"] = static_cast<double>(state.range(0));
 }
 BENCHMARK(BmRenderPair)
-    ->ArgNames({"altitude_m", "spp"})
-    ->Args({100, 1})
-    ->Args({50, 1})
-    ->Args({10, 1})
-    ->Args({50, 4})
+    ->ArgNames({"altitude_m", "spp", "width_px"})
+    ->Args({100, 1, 1024})
+    ->Args({50, 1, 1024})
+    ->Args({10, 1, 1024})
+    ->Args({50, 4, 1024})
+    ->Args({50, 1, 512})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -256,8 +256,9 @@ core::Status Appearance::Build(const Terrain& terrain, const AppearanceOptions& 
 }
 
 double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
-  const double gx = std::clamp((x_m - origin_m_) / cell_m_, 0.0, size_ - 1.0);
-  const double gy = std::clamp((y_m - origin_m_) / cell_m_, 0.0, size_ - 1.0);
+  const double inv_cell = 1.0 / cell_m_;  // folded with the two uses below
+  const double gx = std::clamp((x_m - origin_m_) * inv_cell, 0.0, size_ - 1.0);
+  const double gy = std::clamp((y_m - origin_m_) * inv_cell, 0.0, size_ - 1.0);
   const std::int32_t i = std::min(static_cast<std::int32_t>(gx), size_ - 2);
   const std::int32_t j = std::min(static_cast<std::int32_t>(gy), size_ - 2);
   const double fx = gx - i;
@@ -268,7 +269,7 @@ double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
   const double base = top + fy * (bottom - top);
 
   double detail = 0.0;
-  double inv_wavelength = 1.0 / cell_m_;
+  double inv_wavelength = inv_cell;
   double amplitude = options_.detail_strength;
   double ratio = cell_m_ / footprint_m;  // pixels per wavelength
   constexpr std::int64_t kMask = kLatticeSize - 1;

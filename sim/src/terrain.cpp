@@ -126,6 +126,7 @@ core::Status Terrain::Configure(const TerrainOptions& o) {
   options_ = o;
   size_ = o.size;
   origin_m_ = -0.5 * (size_ - 1) * o.cell_m;
+  inv_cell_m_ = 1.0 / o.cell_m;
   const size_t n = static_cast<size_t>(size_) * size_;
   std::vector<double> h(n, 0.0);
   Rng rng(o.seed);
@@ -448,17 +449,22 @@ bool Terrain::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, doub
 bool Terrain::IntersectBelow(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double top_m,
                              double* t) const {
   if (size_ == 0 || !(d.z() < 0.0)) return false;
-  // Pad the height range so a perfectly flat terrain still has a non-empty interval.
+  // Pad the height range so a perfectly flat terrain still has a non-empty interval. Divisions
+  // are few (three per ray): reciprocals of the direction are reused below.
   const double pad_m = 1e-3 * options_.cell_m;
   top_m = std::min(top_m, max_height_m_);
-  double ta = std::max(0.0, (o.z() - top_m - pad_m) / -d.z());
-  double tb = (o.z() - min_height_m_ + pad_m) / -d.z();
+  const double inv_descent = -1.0 / d.z();
+  double ta = std::max(0.0, (o.z() - top_m - pad_m) * inv_descent);
+  double tb = (o.z() - min_height_m_ + pad_m) * inv_descent;
+  const double inv_dx = d.x() != 0.0 ? 1.0 / d.x() : 0.0;
+  const double inv_dy = d.y() != 0.0 ? 1.0 / d.y() : 0.0;
   const double lo = origin_m_;
   const double hi = -origin_m_;
   for (int axis = 0; axis < 2; ++axis) {
     if (d[axis] != 0.0) {
-      double t0 = (lo - o[axis]) / d[axis];
-      double t1 = (hi - o[axis]) / d[axis];
+      const double inv = axis == 0 ? inv_dx : inv_dy;
+      double t0 = (lo - o[axis]) * inv;
+      double t1 = (hi - o[axis]) * inv;
       if (t0 > t1) std::swap(t0, t1);
       ta = std::max(ta, t0);
       tb = std::min(tb, t1);
@@ -467,7 +473,7 @@ bool Terrain::IntersectBelow(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
     }
   }
   if (!(ta < tb)) return false;
-  const double inv_cell = 1.0 / options_.cell_m;
+  const double inv_cell = inv_cell_m_;
   GridRay ray{};
   ray.gx0 = (o.x() - origin_m_) * inv_cell;
   ray.gy0 = (o.y() - origin_m_) * inv_cell;
@@ -476,18 +482,19 @@ bool Terrain::IntersectBelow(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   ray.oz = o.z();
   ray.dz = d.z();
   const double fastest = std::max(std::abs(ray.dgx), std::abs(ray.dgy));
-  const double nudge = fastest > 0.0 ? 1e-7 / fastest : 0.0;
   constexpr double kInf = std::numeric_limits<double>::infinity();
   WalkRay walk_ray{};
   walk_ray.gx0 = ray.gx0;
   walk_ray.gy0 = ray.gy0;
-  walk_ray.inv_dgx = ray.dgx != 0.0 ? 1.0 / ray.dgx : kInf;
-  walk_ray.inv_dgy = ray.dgy != 0.0 ? 1.0 / ray.dgy : kInf;
+  walk_ray.inv_dgx = ray.dgx != 0.0 ? options_.cell_m * inv_dx : kInf;
+  walk_ray.inv_dgy = ray.dgy != 0.0 ? options_.cell_m * inv_dy : kInf;
   walk_ray.step_i = ray.dgx > 0.0 ? 1 : (ray.dgx < 0.0 ? -1 : 0);
   walk_ray.step_j = ray.dgy > 0.0 ? 1 : (ray.dgy < 0.0 ? -1 : 0);
   walk_ray.ahead_i = ray.dgx > 0.0 ? 1 : 0;
   walk_ray.ahead_j = ray.dgy > 0.0 ? 1 : 0;
-  const double inv_descent = -1.0 / ray.dz;
+  // ~1e-7 cell along the faster axis: steps past a border the ray sits on.
+  const double nudge =
+      fastest > 0.0 ? 1e-7 * std::min(std::abs(walk_ray.inv_dgx), std::abs(walk_ray.inv_dgy)) : 0.0;
   auto walk = [&](double s, std::int32_t cells, std::int32_t count) {
     return LevelWalk(walk_ray, ray.gx0 + (s + nudge) * ray.dgx, ray.gy0 + (s + nudge) * ray.dgy,
                      cells, count);

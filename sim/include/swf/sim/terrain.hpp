@@ -142,6 +142,7 @@ class Terrain final : public Surface {
   TerrainOptions options_;
   std::int32_t size_ = 0;
   double origin_m_ = 0.0;
+  double inv_cell_m_ = 1.0;
   std::vector<float> heights_;
   std::vector<float> base_heights_;
   std::int32_t blocks_ = 0;
