@@ -560,8 +560,9 @@ void HazardMapper::SelectSite() {
     const double dist = std::hypot(x - target_.x(), y - target_.y());
     const double clear = std::min<double>(clearance_m_[c], options_.clearance_cap_m);
     const double conf = 1.0 - std::min(1.0, sigma_rel_[c] / options_.max_rock_height_m);
-    return clear / options_.clearance_cap_m + 0.5 * conf -
-           options_.target_weight * dist / half_extent;
+    const double near = 1.0 - std::min(1.0, dist / half_extent);
+    return (clear / options_.clearance_cap_m + 0.5 * conf + options_.target_weight * near) /
+           (1.5 + options_.target_weight);
   };
   double best = -std::numeric_limits<double>::infinity();
   int best_i = -1;

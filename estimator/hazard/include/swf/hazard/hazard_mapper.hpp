@@ -25,9 +25,10 @@
 //     third of the threshold), kUncertain when value + k sigma exceeds the threshold otherwise,
 //     kSafe otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
-//     is not kSafe or to the grid border; candidates need clearance >= footprint radius. Score
-//     = clearance (capped) + confidence - distance to the target; the previous site is kept
-//     while still valid and within site_hysteresis of the best score.
+//     is not kSafe or to the grid border; candidates need clearance >= footprint radius. Score in
+//     [0, 1] = (min(clearance / clearance_cap, 1) + 0.5 (1 - sigma / max_rock_height) +
+//     target_weight (1 - distance to target / grid half extent)) / (1.5 + target_weight); the
+//     previous site is kept while still valid and within site_hysteresis of the best score.
 #pragma once
 
 #include <Eigen/Core>
@@ -76,8 +77,8 @@ struct HazardMapperOptions {
   double min_known_fraction = 0.6;  // of a window, for a plane fit
   // Safe site.
   double clearance_cap_m = 5.0;
-  double target_weight = 0.5;  // score lost per grid half-extent from the target
-  double site_hysteresis = 0.1;
+  double target_weight = 0.5;     // weight of closeness to the target in the score
+  double site_hysteresis = 0.05;  // score units ([0, 1])
 };
 
 // A landmark of the SWF (world frame) with its marginal covariance.
@@ -146,7 +147,8 @@ class HazardMapper {
   const HazardClass* Classes() const { return class_.data(); }
   const float* SlopeDeg() const { return slope_deg_.data(); }  // footprint plane, NaN unknown
   const float* RockHeight() const { return rock_m_.data(); }   // NaN unknown
-  const float* Roughness() const { return rough_m_.data(); }   // footprint RMS, NaN unknown
+  // RMS residual of the footprint plane fit (not the largest deviation); NaN unknown.
+  const float* Roughness() const { return rough_m_.data(); }
   const float* ClearanceM() const { return clearance_m_.data(); }
   // Cell containing world (x, y); false when outside the grid.
   bool CellOf(double x_m, double y_m, int* i, int* j) const;

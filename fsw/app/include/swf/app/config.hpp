@@ -1,0 +1,107 @@
+// The flight process's configuration file: one `key: value` per line, `#` starts a comment,
+// dotted keys group settings (`sim.width_px: 512`). Every key is known and typed; the whole file
+// is validated before anything starts, and the first problem is reported with the line and the
+// field's name ("config.cfg:12: window: 40 is outside [1, 10]"). Unknown keys are errors, so a
+// typo never silently falls back to a default. fsw/app/README.md lists every key.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "swf/app/flight_loop.hpp"
+#include "swf/app/pipeline.hpp"
+
+namespace swf::app {
+
+enum class SourceKind : std::uint8_t { kSim, kV4l2, kAravis, kLog };
+
+struct SimConfig {
+  std::string scenario = "descent";  // descent | hover | sideways | lab
+  std::string terrain = "craters";   // plains | craters | rocks
+  std::int32_t width_px = 512;
+  std::int32_t height_px = 384;
+  double hfov_deg = 25.0;
+  double baseline_m = 1.0;
+  std::int32_t frames = 0;  // 0 = the whole scenario
+  std::int32_t terrain_size = 2048;
+  std::uint64_t seed = 1;
+  std::string shared_dir;  // ../shared (or $SWF_SHARED_DIR) when empty
+  std::int32_t render_threads = 2;
+  // The lander's IMU / navigation filter as the process-model input: true relative motion plus
+  // white noise of these 1-sigma per frame (translation per axis, rotation per axis).
+  bool imu = true;
+  double imu_sigma_m = 0.02;
+  double imu_sigma_rad = 0.0005;
+};
+
+struct CameraConfig {
+  std::string left;  // device path (v4l2) or camera id / address (aravis)
+  std::string right;
+  std::string left_calibration;  // YAML (EuRoC or ROS/OpenCV); raw images are rectified
+  std::string right_calibration;
+  bool fake = false;  // aravis: Aravis's in-process fake GigE cameras (tests, no hardware)
+};
+
+struct FswConfig {
+  SourceKind source = SourceKind::kSim;
+  std::string log_path;  // source: log
+  SimConfig sim;
+  CameraConfig camera;
+
+  // Estimator.
+  std::string mode = "swf";  // swf | ekf | vo | vsdf
+  std::int32_t window = 5;
+  std::int32_t max_iterations = 10;
+  double measurement_sigma_px = 0.5;
+  double min_quality = 0.7;
+  double process_sigma_m = 0.5;
+  double process_sigma_rad = 0.01;
+  std::int32_t max_tracks = 150;
+  std::int32_t max_disparity_px = 128;
+
+  // Rate groups.
+  double rate_hz = 10.0;
+  Pacing pacing = Pacing::kRealtime;
+  std::int32_t hazard_every = 5;
+  std::int32_t health_every = 10;
+  std::int64_t max_frames = 0;
+
+  // Real time.
+  bool mlockall = true;
+  std::int32_t priority = 50;  // SCHED_FIFO of the frame group; hazard group one below
+  std::int32_t cpu = -1;       // pin the frame group (-1: no pinning)
+
+  // Outputs.
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";  // ttl=0: never leaves the host
+  bool publish = true;
+  std::string channel_prefix = "SWF_";
+  std::string record_path;  // LCM log of every input frame and output ("" = none)
+  bool record_frames = true;
+  std::string summary_path;  // JSON summary (sim: errors against truth) ("" = none)
+  std::string plot_dir;      // gnuplot data files for the demo pictures ("" = none)
+
+  // Initial pose: "truth" (the simulator's first pose; sim and replays of sim logs) or
+  // "position": x y z metres, camera pointing straight down (the navigation hand-over).
+  std::string initial = "truth";
+  double initial_position_m[3] = {0.0, 0.0, 100.0};
+
+  // Fault injection (tests).
+  std::string inject_stage;
+  std::int64_t inject_frame = -1;
+  std::int64_t inject_frames = 1;
+  double inject_ms = 0.0;
+};
+
+// Parses and validates. False with `error` = "<origin>:<line>: <field>: <problem>" (or
+// "<origin>: <field>: <problem>" for cross-field checks).
+bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,
+                 std::string* error);
+bool LoadConfig(const std::string& path, FswConfig* config, std::string* error);
+// Applies one `key: value` override (command line) with the same checks, then re-validates.
+bool OverrideConfig(const std::string& key_value, FswConfig* config, std::string* error);
+bool ValidateConfig(const FswConfig& config, const std::string& origin, std::string* error);
+
+const char* SourceName(SourceKind kind);
+int StageIndex(const std::string& name);  // -1 when unknown
+
+}  // namespace swf::app

@@ -1,0 +1,143 @@
+// FlightLoop: the rate groups of the flight process.
+//
+//   frame group (real-time thread, the caller of Run()): at camera rate
+//       acquire -> rectify -> track -> estimate -> navigation output [-> map snapshot]
+//     Pacing kRealtime: cycles start on an absolute tick grid t0 + k T (clock_nanosleep,
+//     TIMER_ABSTIME); a cycle that ends after its deadline t_k + T is an overrun ("slip") and the
+//     next cycle starts on the first grid tick after it, so the group keeps its rate.
+//     Pacing kLockstep: a cycle starts when the source delivers a pair (a camera is the clock,
+//     or a log replayed as fast as possible); a cycle whose processing exceeds T is an overrun.
+//   hazard group (second real-time thread, lower priority): every hazard_every frames the frame
+//     group snapshots the landmark map (with covariances) into a pool slot and wakes it; it runs
+//     the HazardStage (hazard mapping plugs in there) and hands the map to the output thread.
+//     Snapshots are taken at fixed frame counts, so the published maps are deterministic.
+//   output thread (normal priority, not here): drains OutputChannels (see records.hpp).
+//
+// After Run() starts nothing allocates or blocks on I/O on the real-time threads: outputs go to
+// preallocated slots, a full pool is a counted drop.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <semaphore>
+#include <thread>
+
+#include "swf/app/pipeline.hpp"
+#include "swf/app/records.hpp"
+#include "swf/app/stage_timer.hpp"
+#include "swf/core/status.hpp"
+#include "swf/drivers/stereo_source.hpp"
+
+namespace swf::app {
+
+enum class Pacing : std::uint8_t { kRealtime, kLockstep };
+
+struct LoopOptions {
+  double rate_hz = 10.0;
+  Pacing pacing = Pacing::kRealtime;
+  std::int32_t hazard_every = 5;   // frames per hazard-group cycle (>= 1)
+  std::int32_t health_every = 10;  // frames per health message (>= 1)
+  bool record_frames = true;       // copy every input pair to the output thread
+  std::int64_t max_frames = 0;     // stop after this many frames (0: until the source ends)
+  std::int8_t nav_mode = 0;        // nav_state_t.MODE_*
+  core::TimeNs acquire_timeout_ns = core::kNsPerS;  // lockstep: wait this long for a pair
+  std::int32_t max_consecutive_timeouts = 10;       // then the source is declared lost
+  // Thread set-up of the hazard group (the frame group runs on the caller's thread).
+  int hazard_priority = 0;  // SCHED_FIFO priority, 0 = normal scheduling
+  // Fault injection for tests: busy-wait inject_ms in stage inject_stage for frames
+  // [inject_first_frame, inject_first_frame + inject_frames).
+  int inject_stage = -1;
+  std::int64_t inject_first_frame = -1;
+  std::int64_t inject_frames = 1;
+  double inject_ms = 0.0;
+};
+
+// The hazard group's work on a landmark-map snapshot. The default publishes the map as it is;
+// hazard mapping implements this interface and fills its own output.
+class HazardStage {
+ public:
+  virtual ~HazardStage() = default;
+  virtual core::Status Process(const MapOutput& map) = 0;
+};
+
+// The navigation system's relative motion camera_prev_T_camera for a frame (an IMU / navigation
+// filter; the simulator; a log). Called on the real-time thread: must not allocate or block.
+class MotionProvider {
+ public:
+  virtual ~MotionProvider() = default;
+  virtual bool Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) = 0;
+};
+
+struct LoopCounters {
+  std::int64_t frames = 0;
+  std::int64_t frames_dropped = 0;  // reported by the source (dropped_before + device drops)
+  std::int64_t overruns = 0;
+  std::int64_t outputs_dropped = 0;
+  std::int64_t source_timeouts = 0;
+  std::int64_t source_errors = 0;
+  std::int64_t hazard_skipped = 0;  // snapshots not taken because the hazard group was busy
+  std::int64_t stage_errors = 0;    // frames whose rectify/track/estimate stage failed
+};
+
+class FlightLoop {
+ public:
+  FlightLoop() = default;
+  ~FlightLoop();
+  FlightLoop(const FlightLoop&) = delete;
+  FlightLoop& operator=(const FlightLoop&) = delete;
+
+  // The pointed-to objects must outlive the loop. kInvalidArgument for bad options.
+  core::Status Configure(const LoopOptions& options, Pipeline* pipeline,
+                         drivers::StereoSource* source, OutputChannels* outputs,
+                         MotionProvider* motion = nullptr, HazardStage* hazard = nullptr);
+
+  // Starts the hazard group, runs the frame group on this thread until the source ends, fails
+  // or RequestStop(); publishes a final health message; stops the hazard group. Returns kOk at
+  // the end of a finite source, else the source's error.
+  core::Status Run();
+  void RequestStop() { stop_.store(true); }
+
+  // One frame-group cycle without pacing and without the hazard thread (the map snapshot is
+  // handed over synchronously). kOk, kEmpty at the end of the source, kTimeout, or an error.
+  core::Status Step();
+  // Queues a health message now.
+  void PublishHealth();
+
+  const LoopCounters& Counters() const { return counters_; }
+  StageSummary Summary(int stage) { return stages_[stage].Summarize(); }
+
+ private:
+  core::Status Cycle(core::TimeNs acquire_timeout_ns, bool synchronous_hazard,
+                     core::TimeNs* processing_ns);
+  void Inject(int stage);
+  void Push(core::SpscQueue<RecordRef, kOrderQueueSize>* q, RecordRef ref);
+  void HazardMain();
+  void TakeSnapshot(bool synchronous);
+
+  LoopOptions options_;
+  Pipeline* pipeline_ = nullptr;
+  drivers::StereoSource* source_ = nullptr;
+  OutputChannels* out_ = nullptr;
+  HazardStage* hazard_ = nullptr;
+  MotionProvider* motion_ = nullptr;
+  bool configured_ = false;
+  core::TimeNs period_ns_ = 0;
+
+  StageStats stages_[kNumStages];
+  LoopCounters counters_;
+  std::int64_t nav_seq_ = 0;
+  std::int64_t map_seq_ = 0;
+  std::int64_t health_seq_ = 0;
+  std::int32_t consecutive_timeouts_ = 0;
+  std::int64_t last_frame_utime_ = 0;
+
+  std::atomic<bool> stop_{false};
+  std::atomic<bool> hazard_quit_{false};
+  std::atomic<std::int32_t> hazard_slot_{-1};  // snapshot waiting for / owned by the hazard group
+  std::atomic<bool> hazard_busy_{false};
+  std::counting_semaphore<1024> hazard_wake_{0};
+  std::atomic<std::int64_t> hazard_outputs_dropped_{0};
+  std::thread hazard_thread_;
+};
+
+}  // namespace swf::app

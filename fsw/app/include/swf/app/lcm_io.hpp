@@ -1,0 +1,147 @@
+// The flight process's LCM side, all on the normal-priority output thread: encoding records
+// into preallocated buffers, publishing them, recording them (with every input frame) to an LCM
+// log readable by lcm-logplayer, and reading such logs back for swf-replay with errors that name
+// the record.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "swf/app/flight_loop.hpp"
+#include "swf/app/records.hpp"
+#include "swf/drivers/stereo_source.hpp"
+
+namespace swf::app {
+
+// Channel names: prefix + suffix.
+inline constexpr const char* kStereoSuffix = "STEREO";
+inline constexpr const char* kNavSuffix = "NAV";
+inline constexpr const char* kLandmarksSuffix = "LANDMARKS";
+inline constexpr const char* kHazardSuffix = "HAZARD";
+inline constexpr const char* kHealthSuffix = "HEALTH";
+
+// Sees every output as it is published (evaluation, progress display). Output thread only.
+class OutputObserver {
+ public:
+  virtual ~OutputObserver() = default;
+  virtual void OnNav(const NavRecord& /*r*/) {}
+  virtual void OnMap(const MapRecord& /*r*/) {}
+  virtual void OnHealth(const HealthRecord& /*r*/) {}
+};
+
+struct OutputOptions {
+  std::string lcm_url;  // "" = do not publish
+  std::string channel_prefix = "SWF_";
+  std::string record_path;     // "" = do not record
+  std::int32_t max_width = 0;  // largest frame recorded (sizes the encode buffer)
+  std::int32_t max_height = 0;
+};
+
+struct OutputCounters {
+  std::int64_t published = 0;
+  std::int64_t recorded = 0;
+  std::int64_t publish_errors = 0;
+  std::int64_t record_errors = 0;
+  std::int64_t encode_errors = 0;
+};
+
+class OutputThread {
+ public:
+  OutputThread();
+  ~OutputThread();
+  OutputThread(const OutputThread&) = delete;
+  OutputThread& operator=(const OutputThread&) = delete;
+
+  // Opens LCM and the log and sizes the buffers. False with a message.
+  bool Open(const OutputOptions& options, OutputChannels* channels, std::string* error);
+  void AddObserver(OutputObserver* observer) { observers_.push_back(observer); }
+  void Start();
+  // Drains everything queued, then stops and closes the log.
+  void StopAndDrain();
+  // Drains what is queued now on the calling thread (tests and Step()-driven runs).
+  void DrainOnce();
+  const OutputCounters& Counters() const { return counters_; }
+
+ private:
+  struct Impl;
+  void Handle(const RecordRef& ref);
+  void Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data, int size);
+
+  std::unique_ptr<Impl> impl_;
+  OutputChannels* channels_ = nullptr;
+  std::vector<OutputObserver*> observers_;
+  OutputCounters counters_;
+  std::atomic<bool> quit_{false};
+  std::thread thread_;
+};
+
+// One event of an LCM log.
+struct LogEvent {
+  std::int64_t index = 0;   // 0-based record number in the file
+  std::int64_t offset = 0;  // byte offset of the record
+  std::int64_t eventnum = 0;
+  std::int64_t timestamp = 0;  // microseconds
+  std::string channel;
+  std::vector<std::uint8_t> data;
+};
+
+// Reads LCM logs record by record; a damaged record is reported, not skipped.
+class LogReader {
+ public:
+  bool Open(const std::string& path, std::string* error);
+  // 1: an event; 0: clean end of file; -1: damaged record, *error names it.
+  int Next(LogEvent* event, std::string* error);
+
+ private:
+  std::string path_;
+  std::vector<std::uint8_t> bytes_;
+  std::size_t pos_ = 0;
+  std::int64_t index_ = 0;
+};
+
+// The stereo frames of a log, decoded before start (replay is a ground tool; no file I/O on the
+// real-time thread). Loading stops at the first damaged record or undecodable frame; the frames
+// before it are replayed and the error is kept for the caller to report.
+class LogStereoSource final : public drivers::StereoSource, public MotionProvider {
+ public:
+  // False only when the file cannot be opened; a damaged record sets LoadError().
+  bool Load(const std::string& path, const std::string& channel, std::string* error);
+  const std::string& LoadError() const { return load_error_; }
+  std::int32_t Width() const { return width_; }
+  std::int32_t Height() const { return height_; }
+  bool Rectified() const { return rectified_; }
+  std::size_t NumFrames() const { return frames_.size(); }
+
+  core::Status Start() override;
+  core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override;
+  void Release(const drivers::StereoPair& /*pair*/) override {}
+  void Stop() override {}
+  drivers::SourceStats Stats() const override { return stats_; }
+  const char* Name() const override { return "log"; }
+  bool Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) override;
+
+ private:
+  struct Frame {
+    std::int64_t seq = 0;
+    std::int64_t left_ns = 0;
+    std::int64_t right_ns = 0;
+    std::int32_t dropped_before = 0;
+    bool has_motion = false;
+    estimator::Pose<double> motion;
+    std::vector<std::uint8_t> left;
+    std::vector<std::uint8_t> right;
+  };
+  std::vector<Frame> frames_;
+  std::string load_error_;
+  std::int32_t width_ = 0;
+  std::int32_t height_ = 0;
+  bool rectified_ = true;
+  std::size_t next_ = 0;
+  drivers::SourceStats stats_;
+};
+
+}  // namespace swf::app

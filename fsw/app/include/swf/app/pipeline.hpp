@@ -1,0 +1,162 @@
+// Pipeline: the frame group's computation for one stereo pair, in flight form (no allocation,
+// no exceptions, no clocks, single-threaded, deterministic):
+//   rectify (raw cameras only) -> front end (track + stereo + new landmarks) -> Sliding Window
+//   Filter (constant-velocity process factor, stereo measurements, robust Gauss-Newton) ->
+//   navigation output (pose, velocity, covariance) and, on request, the landmark map with
+//   covariances for the slower hazard group.
+//
+// The estimator's world frame is the frame `initial_world_T_camera` is expressed in (the
+// simulator's local level frame, or whatever the navigation system hands over at start).
+// Stage times are measured by the caller (FlightLoop), never inside: results must not depend on
+// the clock.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "swf/core/status.hpp"
+#include "swf/estimator/geometry.hpp"
+#include "swf/estimator/sliding_window_filter.hpp"
+#include "swf/estimator/stereo_model.hpp"
+#include "swf/frontend/frontend.hpp"
+#include "swf/frontend/rectify.hpp"
+
+namespace swf::app {
+
+// Compile-time capacities of the flight estimator (STYLE.md, memory).
+inline constexpr int kMaxWindow = 10;                                 // K
+inline constexpr int kMaxLandmarks = 1024;                            // N (active in the window)
+inline constexpr int kMaxMeasurementsPerPose = frontend::kMaxTracks;  // M
+inline constexpr int kMaxPriorLandmarks = 96;                         // P
+inline constexpr int kMaxMapLandmarks = kMaxLandmarks;  // landmarks in one published map
+
+using FlightSwf =
+    estimator::SlidingWindowFilter<estimator::StereoModel<double>, kMaxWindow, kMaxLandmarks,
+                                   kMaxMeasurementsPerPose, kMaxPriorLandmarks>;
+
+struct PipelineOptions {
+  // Raw cameras: rectify with these calibrations. Otherwise frames arrive rectified and
+  // `camera` is the rectified rig.
+  bool rectify = false;
+  frontend::CameraCalibration left_calibration;
+  frontend::CameraCalibration right_calibration;
+  estimator::StereoCamera<double> camera;
+  int width_px = 0;  // rectified image size the pipeline expects
+  int height_px = 0;
+
+  frontend::FrontendOptions frontend;  // camera is filled in by Configure
+  estimator::SwfOptions swf;
+  double measurement_sigma_px = 0.5;  // per stereo coordinate (uL, uR, v)
+  float min_quality = 0.7f;           // measurements below this ZNCC are not used
+  // Constant-velocity process model: 1-sigma of the per-frame deviation from the previous
+  // relative motion, camera frame of the previous pose.
+  double process_sigma_m = 0.5;
+  double process_sigma_rad = 0.01;
+  estimator::Pose<double> initial_world_T_camera;
+};
+
+// The navigation output of one frame (nav_state_t without the transport fields).
+struct NavOutput {
+  std::int64_t utime = 0;
+  std::int64_t frame_seq = 0;
+  double position_world_m[3] = {0, 0, 0};
+  double orientation_world_q[4] = {1, 0, 0, 0};  // w x y z
+  double velocity_world_mps[3] = {0, 0, 0};
+  double covariance[36] = {};
+  std::int8_t status = 0;
+  std::int32_t fault_bits = 0;
+  std::int32_t iterations = 0;
+  std::int32_t num_measurements = 0;
+};
+
+struct MapLandmark {
+  std::int64_t id = 0;
+  double position_world_m[3] = {0, 0, 0};
+  double covariance_m2[6] = {};  // xx xy xz yy yz zz
+  std::int32_t num_observations = 0;
+};
+
+// The landmark map handed to the hazard group (landmark_map_t without the transport fields).
+struct MapOutput {
+  std::int64_t utime = 0;
+  std::int64_t frame_seq = 0;
+  std::int32_t num_landmarks = 0;
+  MapLandmark landmarks[kMaxMapLandmarks];
+};
+
+// Where each landmark was first seen (for ground-truth evaluation and the guidance display).
+struct FirstSighting {
+  std::int64_t frame_seq = -1;
+  float u_left = 0.0f;
+  float v = 0.0f;
+};
+inline constexpr std::uint32_t kMaxSightings = 1u << 16;  // by landmark id modulo this
+
+// One stereo pair as the pipeline consumes it.
+struct PipelineFrame {
+  frontend::GrayView left;
+  frontend::GrayView right;
+  std::int64_t utime = 0;
+  std::int64_t seq = 0;
+  bool has_motion = false;
+  estimator::Pose<double> motion;  // camera_prev_T_camera from the navigation system (IMU)
+};
+
+class Pipeline {
+ public:
+  Pipeline() = default;
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  // Validates and sizes everything. kInvalidArgument for options the components refuse.
+  core::Status Configure(const PipelineOptions& options);
+
+  // Stages of one frame; call in this order. Each returns kOk or the reason it failed; a failed
+  // estimate stage leaves the filter in its local recovery (fault bits) and the frame counted.
+  core::Status Rectify(const PipelineFrame& frame);
+  core::Status Track();
+  // motion: camera_prev_T_camera from the navigation system (nullptr: constant velocity).
+  core::Status Estimate(const estimator::Pose<double>* motion);
+  // Fills the navigation output of the frame just estimated.
+  void MakeNav(NavOutput* nav);
+  // Computes covariances and fills the landmark map (hazard-group rate: O(n^3)).
+  core::Status MakeMap(MapOutput* map);
+
+  int NumFeatures() const { return static_cast<int>(output_->measurements.size()); }
+  int NumLandmarks() const { return swf_->NumLandmarks(); }
+  std::uint32_t FaultBits() const { return swf_->FaultBits(); }
+  core::Status LastStatus() const { return last_status_; }
+  const FirstSighting& Sighting(std::int64_t id) const {
+    return sightings_[static_cast<std::uint32_t>(id) % kMaxSightings];
+  }
+  const estimator::StereoCamera<double>& Camera() const { return options_.camera; }
+  std::int64_t FramesEstimated() const { return frames_estimated_; }
+  bool Rectifies() const { return options_.rectify; }
+
+ private:
+  PipelineOptions options_;
+  bool configured_ = false;
+  std::unique_ptr<frontend::StereoRectifier> rectifier_;
+  std::unique_ptr<frontend::Image<std::uint8_t>> rect_left_;
+  std::unique_ptr<frontend::Image<std::uint8_t>> rect_right_;
+  std::unique_ptr<frontend::Frontend> frontend_;
+  std::unique_ptr<frontend::FrameOutput> output_;
+  std::unique_ptr<FlightSwf> swf_;
+  std::unique_ptr<frontend::LandmarkEstimate[]> estimates_;
+  std::unique_ptr<FirstSighting[]> sightings_;
+  frontend::StereoFrame current_{};
+  std::int64_t utime_ = 0;
+  std::int64_t seq_ = 0;
+  std::int64_t previous_utime_ = 0;
+  bool has_previous_pose_ = false;
+  estimator::Pose<double> previous_pose_;
+  estimator::Pose<double> before_previous_pose_;
+  bool has_before_previous_ = false;
+  core::Status last_status_ = core::Status::kOk;
+  estimator::Mat3<double> r_sqrt_ = estimator::Mat3<double>::Identity();
+  estimator::Mat6<double> q_sqrt_ = estimator::Mat6<double>::Identity();
+  std::int64_t frames_estimated_ = 0;
+  bool covariance_valid_ = false;
+};
+
+}  // namespace swf::app

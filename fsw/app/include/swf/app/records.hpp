@@ -1,0 +1,142 @@
+// What the real-time threads hand to the output thread, and how: fixed pools of slots (sized
+// before start) passed by index through lock-free single-producer/single-consumer queues. The
+// producer acquires a free slot, fills it, and pushes {kind, slot} to its order queue; the output
+// thread encodes and publishes/records it, then returns the slot. No allocation, no blocking on
+// either side; an exhausted pool is a counted drop (health_t.outputs_dropped).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <new>
+
+#include "swf/app/pipeline.hpp"
+#include "swf/app/stage_timer.hpp"
+#include "swf/core/spsc_queue.hpp"
+#include "swf/core/status.hpp"
+
+namespace swf::app {
+
+// Frame-group stages, in order (health_t.stage_name).
+enum Stage : int {
+  kStageAcquire = 0,  // waiting for and taking the pair from the source
+  kStageRectify,
+  kStageTrack,
+  kStageEstimate,
+  kStageOutput,  // navigation output (incl. covariance) and queueing
+  kStageMap,     // landmark map snapshot for the hazard group (every hazard_every frames)
+  kStageCycle,   // the whole cycle after acquisition
+  kNumStages
+};
+const char* StageName(int stage);
+
+// An input pair copied for recording (stereo_frame_t).
+struct FrameRecord {
+  std::int64_t utime = 0;
+  std::int64_t seq = 0;
+  std::int64_t left_exposure_utime = 0;
+  std::int64_t right_exposure_utime = 0;
+  std::int32_t dropped_before = 0;
+  bool rectified = true;
+  bool has_motion = false;
+  estimator::Pose<double> motion;  // camera_prev_T_camera from the navigation system
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+  std::unique_ptr<std::uint8_t[]> left;  // capacity fixed at start (FramePoolCapacity)
+  std::unique_ptr<std::uint8_t[]> right;
+  std::int32_t capacity_bytes = 0;
+};
+
+struct NavRecord {
+  std::int64_t seq = 0;
+  std::int8_t mode = 0;
+  NavOutput nav;
+};
+
+struct MapRecord {
+  std::int64_t seq = 0;
+  MapOutput map;
+};
+
+struct HealthRecord {
+  std::int64_t utime = 0;
+  std::int64_t seq = 0;
+  std::int64_t frames = 0;
+  std::int64_t frames_dropped = 0;
+  std::int64_t overruns = 0;
+  std::int64_t outputs_dropped = 0;
+  std::int64_t allocations_after_start = 0;  // -1 when this binary does not count them
+  std::int32_t fault_bits = 0;
+  std::int8_t estimator_status = 0;
+  std::int32_t num_features = 0;
+  std::int32_t num_landmarks = 0;
+  StageSummary stages[kNumStages];
+};
+
+enum class RecordKind : std::uint8_t { kFrame, kNav, kMap, kHealth };
+struct RecordRef {
+  RecordKind kind = RecordKind::kNav;
+  std::int32_t slot = -1;
+};
+
+// N slots of T with a free list; Acquire on the producer thread, Release on the consumer.
+template <typename T, std::size_t N>
+class SlotPool {
+ public:
+  core::Status Allocate() {
+    slots_.reset(new (std::nothrow) T[N]);
+    free_.reset(new (std::nothrow) core::SpscQueue<std::int32_t, N>());
+    if (!slots_ || !free_) return core::Status::kFull;
+    for (std::size_t i = 0; i < N; ++i) (void)free_->TryPush(static_cast<std::int32_t>(i));
+    return core::Status::kOk;
+  }
+  // Producer: a free slot index, or -1 when every slot is still with the consumer.
+  std::int32_t Acquire() {
+    std::int32_t i = -1;
+    return free_->TryPop(&i) == core::Status::kOk ? i : -1;
+  }
+  // Consumer: gives a slot back.
+  void Release(std::int32_t i) { (void)free_->TryPush(i); }
+  T& operator[](std::int32_t i) { return slots_[i]; }
+  const T& operator[](std::int32_t i) const { return slots_[i]; }
+  static constexpr std::size_t capacity() { return N; }
+
+ private:
+  std::unique_ptr<T[]> slots_;
+  std::unique_ptr<core::SpscQueue<std::int32_t, N>> free_;
+};
+
+inline constexpr std::size_t kFramePoolSize = 16;
+inline constexpr std::size_t kNavPoolSize = 64;
+inline constexpr std::size_t kMapPoolSize = 4;
+inline constexpr std::size_t kHealthPoolSize = 8;
+inline constexpr std::size_t kOrderQueueSize = 128;
+
+// Everything the output thread consumes. Two producers (the frame group and the hazard group),
+// each with its own order queue; one consumer.
+struct OutputChannels {
+  SlotPool<FrameRecord, kFramePoolSize> frames;
+  SlotPool<NavRecord, kNavPoolSize> navs;
+  SlotPool<MapRecord, kMapPoolSize> maps;
+  SlotPool<HealthRecord, kHealthPoolSize> healths;
+  core::SpscQueue<RecordRef, kOrderQueueSize> frame_group;
+  core::SpscQueue<RecordRef, kOrderQueueSize> hazard_group;
+
+  // Sizes every pool; frame slots hold width*height bytes per image.
+  core::Status Allocate(std::int32_t width, std::int32_t height) {
+    if (frames.Allocate() != core::Status::kOk || navs.Allocate() != core::Status::kOk ||
+        maps.Allocate() != core::Status::kOk || healths.Allocate() != core::Status::kOk) {
+      return core::Status::kFull;
+    }
+    const std::int32_t bytes = width * height;
+    for (std::size_t i = 0; i < kFramePoolSize; ++i) {
+      FrameRecord& f = frames[static_cast<std::int32_t>(i)];
+      f.left.reset(new (std::nothrow) std::uint8_t[bytes]);
+      f.right.reset(new (std::nothrow) std::uint8_t[bytes]);
+      if (!f.left || !f.right) return core::Status::kFull;
+      f.capacity_bytes = bytes;
+    }
+    return core::Status::kOk;
+  }
+};
+
+}  // namespace swf::app

@@ -1,0 +1,77 @@
+// The simulated world behind `source: sim`: terrain, appearance, rig and trajectory built from
+// the configuration, and a StereoSource that renders the whole descent before start (rendering
+// is ~0.1-0.5 s per pair, far slower than the camera rate; a real camera delivers pairs at its
+// own rate, which the pre-rendered source emulates under the frame group's pacing). Truth
+// (poses, terrain) stays available for the evaluation after the run.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "swf/app/config.hpp"
+#include "swf/app/flight_loop.hpp"
+#include "swf/drivers/stereo_source.hpp"
+#include "swf/sim/appearance.hpp"
+#include "swf/sim/renderer.hpp"
+#include "swf/sim/terrain.hpp"
+#include "swf/sim/trajectory.hpp"
+
+namespace swf::app {
+
+// The trajectory (and rig) of a sim configuration; cheap (no terrain). For `initial: truth`.
+bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
+                   std::string* error);
+
+class SimWorld : public MotionProvider {
+ public:
+  // Builds terrain, appearance and renderer (seconds for a 2048^2 terrain).
+  bool Build(const FswConfig& config, std::string* error);
+  const sim::Terrain& Terrain() const { return terrain_; }
+  const sim::Trajectory& Trajectory() const { return trajectory_; }
+  const estimator::StereoCamera<double>& Camera() const { return renderer_.Camera(); }
+  std::int32_t Width() const { return rig_.width_px; }
+  std::int32_t Height() const { return rig_.height_px; }
+  std::int32_t NumFrames() const { return num_frames_; }
+
+  // Renders frames [0, NumFrames()) with `threads` threads; progress(done, total) is called from
+  // the calling thread.
+  bool RenderAll(int threads, void (*progress)(int done, int total), std::string* error);
+  const std::uint8_t* Left(std::int32_t k) const { return left_[k].data(); }
+  const std::uint8_t* Right(std::int32_t k) const { return right_[k].data(); }
+  // The simulated IMU: noisy true relative motion into frame seq (none for frame 0 or when
+  // sim.imu is false).
+  bool Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) override;
+
+ private:
+  sim::RigOptions rig_;
+  sim::Terrain terrain_;
+  sim::Appearance appearance_;
+  sim::Renderer renderer_;
+  sim::Trajectory trajectory_;
+  std::int32_t num_frames_ = 0;
+  std::vector<estimator::Pose<double>> motion_;
+  bool imu_ = false;
+  std::vector<std::vector<std::uint8_t>> left_;
+  std::vector<std::vector<std::uint8_t>> right_;
+};
+
+// Serves the pre-rendered pairs in order; finite (kEmpty after the last). Never allocates.
+class PrerenderedSimSource final : public drivers::StereoSource {
+ public:
+  explicit PrerenderedSimSource(const SimWorld* world) : world_(world) {}
+  core::Status Start() override;
+  core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override;
+  void Release(const drivers::StereoPair& pair) override;
+  void Stop() override { running_ = false; }
+  drivers::SourceStats Stats() const override { return stats_; }
+  const char* Name() const override { return "sim"; }
+
+ private:
+  const SimWorld* world_;
+  std::int32_t next_ = 0;
+  bool running_ = false;
+  drivers::SourceStats stats_;
+};
+
+}  // namespace swf::app

@@ -1,0 +1,453 @@
+#include "swf/app/app.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "swf/app/config.hpp"
+#include "swf/app/evaluation.hpp"
+#include "swf/app/flight_loop.hpp"
+#include "swf/app/lcm_io.hpp"
+#include "swf/app/pipeline.hpp"
+#include "swf/app/realtime.hpp"
+#include "swf/app/sim_world.hpp"
+#include "swf/image_io/image_io.hpp"
+#include "swf/sim/rig.hpp"
+
+namespace swf::app {
+
+namespace {
+
+FlightLoop* g_loop = nullptr;
+void OnSignal(int /*sig*/) {
+  if (g_loop != nullptr) g_loop->RequestStop();
+}
+
+int Usage(bool replay) {
+  if (replay) {
+    std::fprintf(stderr,
+                 "usage: swf-replay --config FILE --log IN.lcmlog [--record OUT.lcmlog] "
+                 "[--set 'key: value']... [--progress]\n");
+  } else {
+    std::fprintf(stderr, "usage: swf-fsw --config FILE [--set 'key: value']... [--progress]\n");
+  }
+  return 2;
+}
+
+// Progress on stderr: one line rewritten in place (a terminal) or every 10th frame (a file).
+class Progress : public OutputObserver {
+ public:
+  Progress(std::int64_t total, bool enabled) : total_(total), enabled_(enabled) {}
+  void OnNav(const NavRecord& r) override {
+    if (!enabled_) return;
+    ++navs_;
+    const bool tty = isatty_;
+    if (!tty && navs_ % 10 != 0 && navs_ != total_) return;
+    std::fprintf(stderr, "%sswf-fsw: frame %lld/%lld  altitude %.1f m  landmarks in map %d%s",
+                 tty ? "\r" : "", static_cast<long long>(r.nav.frame_seq + 1),
+                 static_cast<long long>(total_), r.nav.position_world_m[2], landmarks_,
+                 tty ? "   " : "\n");
+  }
+  void OnMap(const MapRecord& r) override { landmarks_ = r.map.num_landmarks; }
+  void Finish() {
+    if (enabled_ && isatty_) std::fprintf(stderr, "\n");
+  }
+  bool isatty_ = false;
+
+ private:
+  std::int64_t total_;
+  bool enabled_;
+  std::int64_t navs_ = 0;
+  int landmarks_ = 0;
+};
+
+class LastHealth : public OutputObserver {
+ public:
+  void OnHealth(const HealthRecord& r) override { last = r; }
+  HealthRecord last;
+};
+
+frontend::FrontendOptions FrontendFor(const FswConfig& c, int width, int height) {
+  frontend::FrontendOptions o;
+  o.harris.bucket_cols = std::max(1, std::min(64, width / 40));
+  o.harris.bucket_rows = std::max(1, std::min(64, height / 40));
+  o.max_tracks = static_cast<std::size_t>(c.max_tracks);
+  o.stereo.max_disparity = std::min(c.max_disparity_px, width / 2);
+  return o;
+}
+
+estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
+  estimator::SwfOptions o;
+  o.window_size = c.window;
+  o.max_iterations = c.max_iterations;
+  if (c.mode == "vo") {
+    o.mode = estimator::SwfMode::kVisualOdometry;
+    *nav_mode = 3;
+  } else if (c.mode == "vsdf") {
+    o.mode = estimator::SwfMode::kVsdf;
+    *nav_mode = 4;
+  } else {
+    o.mode = estimator::SwfMode::kSlidingWindow;
+    *nav_mode = c.mode == "ekf" ? 2 : 0;
+  }
+  return o;
+}
+
+void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
+                  const HealthRecord& health, const EvaluationResult* eval, bool locked, bool fifo,
+                  const char* result) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) {
+    std::fprintf(stderr, "swf-fsw: cannot write %s\n", path.c_str());
+    return;
+  }
+  std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"source\": \"%s\",\n", result,
+               SourceName(c.source));
+  std::fprintf(f, "  \"frames\": %lld,\n", static_cast<long long>(counters.frames));
+  std::fprintf(f, "  \"rate_hz\": %.3f,\n  \"window\": %d,\n  \"mode\": \"%s\",\n", c.rate_hz,
+               c.window, c.mode.c_str());
+  if (c.source == SourceKind::kSim) {
+    std::fprintf(f, "  \"image_width_px\": %d,\n  \"image_height_px\": %d,\n", c.sim.width_px,
+                 c.sim.height_px);
+  }
+  if (eval != nullptr) {
+    std::fprintf(f,
+                 "  \"landmark_rms_error_m\": %.6f,\n  \"landmark_median_error_m\": %.6f,\n"
+                 "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %.6f,\n"
+                 "  \"final_pose_error_m\": %.6f,\n  \"nav_outputs\": %lld,\n"
+                 "  \"landmark_maps\": %lld,\n",
+                 eval->landmark_rms_error_m, eval->landmark_median_error_m,
+                 static_cast<long long>(eval->landmarks_evaluated), eval->pose_rms_error_m,
+                 eval->final_pose_error_m, static_cast<long long>(eval->navs),
+                 static_cast<long long>(eval->maps));
+  }
+  std::fprintf(f, "  \"stages\": {\n");
+  for (int i = 0; i < kNumStages; ++i) {
+    std::fprintf(f, "    \"%s\": {\"p50_ms\": %.3f, \"p99_ms\": %.3f, \"max_ms\": %.3f}%s\n",
+                 StageName(i), health.stages[i].p50_ms, health.stages[i].p99_ms,
+                 health.stages[i].max_ms, i + 1 < kNumStages ? "," : "");
+  }
+  std::fprintf(f, "  },\n");
+  std::fprintf(f,
+               "  \"overruns\": %lld,\n  \"allocations_after_start\": %lld,\n"
+               "  \"outputs_dropped\": %lld,\n  \"frames_dropped\": %lld,\n"
+               "  \"stage_errors\": %lld,\n  \"fault_bits\": %d,\n  \"num_landmarks\": %d,\n"
+               "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n"
+               "  \"hazard\": null,\n  \"safe_site\": null\n}\n",
+               static_cast<long long>(counters.overruns),
+               static_cast<long long>(health.allocations_after_start),
+               static_cast<long long>(health.outputs_dropped),
+               static_cast<long long>(health.frames_dropped),
+               static_cast<long long>(counters.stage_errors), health.fault_bits,
+               health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
+  std::fclose(f);
+}
+
+void PrintRenderProgress(int done, int total) {
+  std::fprintf(stderr, "\rswf-fsw: rendering the descent %d/%d", done, total);
+  if (done == total) std::fprintf(stderr, "\n");
+}
+
+}  // namespace
+
+int RunFlightProcess(int argc, char** argv, bool replay) {
+  const char* tool = replay ? "swf-replay" : "swf-fsw";
+  std::string config_path;
+  std::string log_path;
+  std::string record_override;
+  bool record_given = false;
+  bool progress = false;
+  std::vector<std::string> sets;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    const bool has_value = a + 1 < argc;
+    if (arg == "--config" && has_value) {
+      config_path = argv[++a];
+    } else if (arg == "--set" && has_value) {
+      sets.emplace_back(argv[++a]);
+    } else if (replay && arg == "--log" && has_value) {
+      log_path = argv[++a];
+    } else if (replay && arg == "--record" && has_value) {
+      record_override = argv[++a];
+      record_given = true;
+    } else if (arg == "--progress") {
+      progress = true;
+    } else {
+      return Usage(replay);
+    }
+  }
+  if (config_path.empty() || (replay && log_path.empty())) return Usage(replay);
+
+  // ---- configuration: refused before anything starts ------------------------------------------
+  FswConfig config;
+  std::string error;
+  if (!LoadConfig(config_path, &config, &error)) {
+    std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
+    return 2;
+  }
+  if (replay) {
+    sets.insert(sets.begin(), "source: log");
+    sets.insert(sets.begin() + 1, "log.path: " + log_path);
+    sets.insert(sets.begin() + 2, "record.frames: false");
+    if (record_given) sets.insert(sets.begin() + 3, "record.path: " + record_override);
+  }
+  for (const std::string& s : sets) {
+    if (!OverrideConfig(s, &config, &error)) {
+      std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
+      return 2;
+    }
+  }
+
+  // ---- source and pipeline options --------------------------------------------------------------
+  PipelineOptions po;
+  std::unique_ptr<SimWorld> world;
+  std::unique_ptr<drivers::StereoSource> source;
+  LogStereoSource* log_source = nullptr;
+  std::int64_t total_frames = 0;
+  if (config.initial == "truth") {
+    sim::Trajectory trajectory;
+    sim::RigOptions rig;
+    if (!SimTrajectory(config, &trajectory, &rig, &error)) {
+      std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
+      return 2;
+    }
+    po.initial_world_T_camera = trajectory.WorldTCamera(0);
+  } else {
+    po.initial_world_T_camera.R = sim::NadirRotation(0.0);
+    po.initial_world_T_camera.t = Eigen::Vector3d(
+        config.initial_position_m[0], config.initial_position_m[1], config.initial_position_m[2]);
+  }
+  switch (config.source) {
+    case SourceKind::kSim: {
+      world = std::make_unique<SimWorld>();
+      std::fprintf(stderr, "%s: building the simulated world (terrain %s, %dx%d px) ...\n", tool,
+                   config.sim.terrain.c_str(), config.sim.width_px, config.sim.height_px);
+      if (!world->Build(config, &error) ||
+          !world->RenderAll(config.sim.render_threads, progress ? PrintRenderProgress : nullptr,
+                            &error)) {
+        std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
+        return 1;
+      }
+      po.camera = world->Camera();
+      po.width_px = world->Width();
+      po.height_px = world->Height();
+      total_frames = world->NumFrames();
+      source = std::make_unique<PrerenderedSimSource>(world.get());
+      break;
+    }
+    case SourceKind::kLog: {
+      auto log = std::make_unique<LogStereoSource>();
+      if (!log->Load(config.log_path, config.channel_prefix + kStereoSuffix, &error)) {
+        std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
+        return 1;
+      }
+      if (log->NumFrames() == 0 && !log->LoadError().empty()) {
+        std::fprintf(stderr, "%s: %s (no frame before it)\n", tool, log->LoadError().c_str());
+        return 1;
+      }
+      if (log->NumFrames() == 0) {
+        std::fprintf(stderr, "%s: %s: no %s%s records\n", tool, config.log_path.c_str(),
+                     config.channel_prefix.c_str(), kStereoSuffix);
+        return 1;
+      }
+      po.width_px = log->Width();
+      po.height_px = log->Height();
+      if (log->Rectified()) {
+        sim::Trajectory trajectory;
+        sim::RigOptions rig;
+        if (!SimTrajectory(config, &trajectory, &rig, &error)) {
+          std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
+          return 2;
+        }
+        rig.width_px = log->Width();
+        rig.height_px = log->Height();
+        po.camera = sim::MakeStereoCamera(rig);
+      } else {
+        po.rectify = true;
+      }
+      total_frames = static_cast<std::int64_t>(log->NumFrames());
+      log_source = log.get();
+      source = std::move(log);
+      break;
+    }
+    case SourceKind::kV4l2:
+    case SourceKind::kAravis:
+      std::fprintf(stderr,
+                   "%s: configuration refused: source: %s is not wired into swf-fsw in this "
+                   "build (use sim or log)\n",
+                   tool, SourceName(config.source));
+      return 2;
+  }
+  if (po.rectify) {
+    if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty()) {
+      std::fprintf(stderr,
+                   "%s: configuration refused: camera.left_calibration: raw frames need both "
+                   "calibrations\n",
+                   tool);
+      return 2;
+    }
+    if (!image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration, &error) ||
+        !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
+                                   &error)) {
+      std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", tool,
+                   error.c_str());
+      return 2;
+    }
+  }
+  po.frontend = FrontendFor(config, po.width_px, po.height_px);
+  std::int8_t nav_mode = 0;
+  po.swf = SwfFor(config, &nav_mode);
+  po.measurement_sigma_px = config.measurement_sigma_px;
+  po.min_quality = static_cast<float>(config.min_quality);
+  po.process_sigma_m = config.process_sigma_m;
+  po.process_sigma_rad = config.process_sigma_rad;
+
+  // ---- preallocation ----------------------------------------------------------------------------
+  auto pipeline = std::make_unique<Pipeline>();
+  if (const core::Status s = pipeline->Configure(po); s != core::Status::kOk) {
+    std::fprintf(stderr,
+                 "%s: configuration refused: the pipeline rejected it (%s): check window, "
+                 "max_tracks, max_disparity_px and the rig\n",
+                 tool, core::ToString(s));
+    return 2;
+  }
+  auto channels = std::make_unique<OutputChannels>();
+  if (channels->Allocate(po.width_px, po.height_px) != core::Status::kOk) {
+    std::fprintf(stderr, "%s: out of memory for the output pools\n", tool);
+    return 1;
+  }
+  OutputOptions oo;
+  oo.lcm_url = config.publish ? config.lcm_url : "";
+  oo.channel_prefix = config.channel_prefix;
+  oo.record_path = config.record_path;
+  oo.max_width = po.width_px;
+  oo.max_height = po.height_px;
+  OutputThread output;
+  if (!output.Open(oo, channels.get(), &error)) {
+    std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
+    return 1;
+  }
+  Evaluation evaluation;
+  const bool evaluate = config.source == SourceKind::kSim && world != nullptr;
+  if (evaluate) output.AddObserver(&evaluation);
+  Progress progress_display(
+      config.max_frames > 0 ? std::min(config.max_frames, total_frames) : total_frames, progress);
+  progress_display.isatty_ = isatty(2) != 0;
+  output.AddObserver(&progress_display);
+  LastHealth last_health;
+  output.AddObserver(&last_health);
+
+  LoopOptions lo;
+  lo.rate_hz = config.rate_hz;
+  lo.pacing = replay && config.pacing == Pacing::kRealtime ? Pacing::kLockstep : config.pacing;
+  lo.hazard_every = config.hazard_every;
+  lo.health_every = config.health_every;
+  lo.record_frames = config.record_frames && !config.record_path.empty();
+  lo.max_frames = config.max_frames;
+  lo.nav_mode = nav_mode;
+  lo.hazard_priority = config.priority > 1 ? config.priority - 1 : 0;
+  lo.inject_stage = config.inject_stage.empty() ? -1 : StageIndex(config.inject_stage);
+  lo.inject_first_frame = config.inject_frame;
+  lo.inject_frames = config.inject_frames;
+  lo.inject_ms = config.inject_ms;
+  FlightLoop loop;
+  MotionProvider* motion = world != nullptr ? static_cast<MotionProvider*>(world.get())
+                                            : static_cast<MotionProvider*>(log_source);
+  if (loop.Configure(lo, pipeline.get(), source.get(), channels.get(), motion) !=
+      core::Status::kOk) {
+    std::fprintf(stderr,
+                 "%s: configuration refused: rate groups (rate_hz, hazard_every, "
+                 "health_every)\n",
+                 tool);
+    return 2;
+  }
+  if (source->Start() != core::Status::kOk) {
+    std::fprintf(stderr, "%s: the %s source did not start\n", tool, source->Name());
+    return 1;
+  }
+
+  // ---- real time ----------------------------------------------------------------------------
+  char message[200];
+  bool locked = false;
+  if (config.mlockall) {
+    locked = LockMemory(message, sizeof message);
+    std::fprintf(stderr, "%s: %s\n", tool, message);
+  }
+  output.Start();
+  g_loop = &loop;
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  core::Status run_status = core::Status::kOk;
+  bool fifo = false;
+  std::thread rt([&] {
+    char m[200];
+    fifo = MakeThreadRealtime(config.priority, m, sizeof m);
+    std::fprintf(stderr, "%s: frame group: %s\n", tool, m);
+    if (config.cpu >= 0) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(config.cpu, &set);
+      if (pthread_setaffinity_np(pthread_self(), sizeof set, &set) != 0) {
+        std::fprintf(stderr, "%s: pinning to CPU %d refused: continuing unpinned\n", tool,
+                     config.cpu);
+      }
+    }
+    run_status = loop.Run();
+  });
+  rt.join();
+  g_loop = nullptr;
+  source->Stop();
+  output.StopAndDrain();
+  progress_display.Finish();
+
+  // ---- report ---------------------------------------------------------------------------------
+  const LoopCounters& counters = loop.Counters();
+  int exit_code = run_status == core::Status::kOk ? 0 : 1;
+  const char* result = run_status == core::Status::kOk ? "ok" : core::ToString(run_status);
+  if (log_source != nullptr && !log_source->LoadError().empty()) {
+    std::fprintf(stderr,
+                 "%s: stopped at a damaged log: %s (the %zu frames before it were "
+                 "replayed)\n",
+                 tool, log_source->LoadError().c_str(), log_source->NumFrames());
+    exit_code = 1;
+    result = "damaged log";
+  }
+  EvaluationResult eval;
+  if (evaluate) {
+    eval = evaluation.Evaluate(*pipeline, world->Trajectory(), world->Terrain(), config.plot_dir);
+  }
+  const HealthRecord& h = last_health.last;
+  std::fprintf(stderr,
+               "%s: %lld frames, %lld overruns, %lld outputs dropped, %lld allocations after "
+               "start, cycle p50 %.1f ms p99 %.1f ms max %.1f ms",
+               tool, static_cast<long long>(counters.frames),
+               static_cast<long long>(counters.overruns), static_cast<long long>(h.outputs_dropped),
+               static_cast<long long>(h.allocations_after_start), h.stages[kStageCycle].p50_ms,
+               h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms);
+  if (evaluate) {
+    std::fprintf(stderr, ", landmark RMS error %.3f m, pose RMS error %.3f m",
+                 eval.landmark_rms_error_m, eval.pose_rms_error_m);
+  }
+  std::fprintf(stderr, "\n");
+  if (output.Counters().record_errors > 0 || output.Counters().encode_errors > 0) {
+    std::fprintf(stderr, "%s: %lld records could not be written, %lld not encoded\n", tool,
+                 static_cast<long long>(output.Counters().record_errors),
+                 static_cast<long long>(output.Counters().encode_errors));
+    exit_code = 1;
+  }
+  if (!config.summary_path.empty()) {
+    WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr, locked, fifo,
+                 result);
+  }
+  return exit_code;
+}
+
+}  // namespace swf::app

@@ -1,0 +1,386 @@
+#include "swf/app/config.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+namespace swf::app {
+
+namespace {
+
+std::string Trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+// Each field: a setter that parses the text value or writes why not.
+using Setter = std::function<bool(const std::string& value, FswConfig* c, std::string* why)>;
+
+bool ParseDouble(const std::string& v, double* out, std::string* why) {
+  char* end = nullptr;
+  errno = 0;
+  const double d = std::strtod(v.c_str(), &end);
+  if (v.empty() || end == v.c_str() || *end != '\0' || errno != 0 || !std::isfinite(d)) {
+    *why = "'" + v + "' is not a finite number";
+    return false;
+  }
+  *out = d;
+  return true;
+}
+
+bool ParseInt(const std::string& v, std::int64_t* out, std::string* why) {
+  char* end = nullptr;
+  errno = 0;
+  const long long i = std::strtoll(v.c_str(), &end, 10);
+  if (v.empty() || end == v.c_str() || *end != '\0' || errno != 0) {
+    *why = "'" + v + "' is not an integer";
+    return false;
+  }
+  *out = i;
+  return true;
+}
+
+Setter Double(double FswConfig::*field, double lo, double hi) {
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    double d = 0.0;
+    if (!ParseDouble(v, &d, why)) return false;
+    if (d < lo || d > hi) {
+      std::ostringstream o;
+      o << v << " is outside [" << lo << ", " << hi << "]";
+      *why = o.str();
+      return false;
+    }
+    c->*field = d;
+    return true;
+  };
+}
+
+template <typename T, typename Get>
+Setter Int(Get get, std::int64_t lo, std::int64_t hi) {
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    std::int64_t i = 0;
+    if (!ParseInt(v, &i, why)) return false;
+    if (i < lo || i > hi) {
+      *why = v + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+      return false;
+    }
+    *get(c) = static_cast<T>(i);
+    return true;
+  };
+}
+
+template <typename Get>
+Setter Bool(Get get) {
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    if (v == "true" || v == "yes" || v == "1") {
+      *get(c) = true;
+    } else if (v == "false" || v == "no" || v == "0") {
+      *get(c) = false;
+    } else {
+      *why = "'" + v + "' is not true/false";
+      return false;
+    }
+    return true;
+  };
+}
+
+template <typename Get>
+Setter Text(Get get) {
+  return [=](const std::string& v, FswConfig* c, std::string*) {
+    *get(c) = v;
+    return true;
+  };
+}
+
+template <typename Get>
+Setter OneOf(Get get, std::initializer_list<const char*> allowed) {
+  std::vector<std::string> options(allowed.begin(), allowed.end());
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    for (const std::string& o : options) {
+      if (v == o) {
+        *get(c) = v;
+        return true;
+      }
+    }
+    *why = "'" + v + "' is not one of";
+    for (const std::string& o : options) *why += " " + o;
+    return false;
+  };
+}
+
+const std::map<std::string, Setter>& Fields() {
+  static const std::map<std::string, Setter> fields = [] {
+    std::map<std::string, Setter> f;
+    f["source"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      if (v == "sim")
+        c->source = SourceKind::kSim;
+      else if (v == "v4l2")
+        c->source = SourceKind::kV4l2;
+      else if (v == "aravis")
+        c->source = SourceKind::kAravis;
+      else if (v == "log")
+        c->source = SourceKind::kLog;
+      else {
+        *why = "'" + v + "' is not one of sim v4l2 aravis log";
+        return false;
+      }
+      return true;
+    };
+    f["log.path"] = Text([](FswConfig* c) { return &c->log_path; });
+    f["sim.scenario"] = OneOf([](FswConfig* c) { return &c->sim.scenario; },
+                              {"descent", "hover", "sideways", "lab"});
+    f["sim.terrain"] =
+        OneOf([](FswConfig* c) { return &c->sim.terrain; }, {"plains", "craters", "rocks"});
+    f["sim.width_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.width_px; }, 32,
+                                          frontend::kMaxImageWidth);
+    f["sim.height_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.height_px; }, 32,
+                                           frontend::kMaxImageHeight);
+    f["sim.hfov_deg"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      double d = 0;
+      if (!ParseDouble(v, &d, why)) return false;
+      if (!(d > 1.0 && d < 170.0)) {
+        *why = v + " is outside (1, 170)";
+        return false;
+      }
+      c->sim.hfov_deg = d;
+      return true;
+    };
+    f["sim.baseline_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      double d = 0;
+      if (!ParseDouble(v, &d, why)) return false;
+      if (!(d > 0.0 && d <= 100.0)) {
+        *why = v + " is outside (0, 100]";
+        return false;
+      }
+      c->sim.baseline_m = d;
+      return true;
+    };
+    f["sim.frames"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.frames; }, 0, 100000);
+    f["sim.terrain_size"] =
+        Int<std::int32_t>([](FswConfig* c) { return &c->sim.terrain_size; }, 64, 8192);
+    f["sim.seed"] =
+        Int<std::uint64_t>([](FswConfig* c) { return &c->sim.seed; }, 0, std::int64_t{1} << 62);
+    f["sim.shared"] = Text([](FswConfig* c) { return &c->sim.shared_dir; });
+    f["sim.render_threads"] =
+        Int<std::int32_t>([](FswConfig* c) { return &c->sim.render_threads; }, 1, 64);
+    f["sim.imu"] = Bool([](FswConfig* c) { return &c->sim.imu; });
+    f["sim.imu_sigma_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      double d = 0;
+      if (!ParseDouble(v, &d, why)) return false;
+      if (d < 0.0 || d > 10.0) {
+        *why = v + " is outside [0, 10]";
+        return false;
+      }
+      c->sim.imu_sigma_m = d;
+      return true;
+    };
+    f["sim.imu_sigma_rad"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      double d = 0;
+      if (!ParseDouble(v, &d, why)) return false;
+      if (d < 0.0 || d > 0.5) {
+        *why = v + " is outside [0, 0.5]";
+        return false;
+      }
+      c->sim.imu_sigma_rad = d;
+      return true;
+    };
+    f["camera.left"] = Text([](FswConfig* c) { return &c->camera.left; });
+    f["camera.right"] = Text([](FswConfig* c) { return &c->camera.right; });
+    f["camera.left_calibration"] = Text([](FswConfig* c) { return &c->camera.left_calibration; });
+    f["camera.right_calibration"] = Text([](FswConfig* c) { return &c->camera.right_calibration; });
+    f["camera.fake"] = Bool([](FswConfig* c) { return &c->camera.fake; });
+    f["mode"] = OneOf([](FswConfig* c) { return &c->mode; }, {"swf", "ekf", "vo", "vsdf"});
+    f["window"] = Int<std::int32_t>([](FswConfig* c) { return &c->window; }, 1, kMaxWindow);
+    f["max_iterations"] =
+        Int<std::int32_t>([](FswConfig* c) { return &c->max_iterations; }, 1, 100);
+    f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
+    f["min_quality"] = Double(&FswConfig::min_quality, -1.0, 1.0);
+    f["process_sigma_m"] = Double(&FswConfig::process_sigma_m, 1e-6, 1e3);
+    f["process_sigma_rad"] = Double(&FswConfig::process_sigma_rad, 1e-8, 3.0);
+    f["max_tracks"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_tracks; }, 8,
+                                        static_cast<std::int64_t>(frontend::kMaxTracks));
+    f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
+                                              frontend::kMaxDisparity);
+    f["rate_hz"] = Double(&FswConfig::rate_hz, 0.1, 1000.0);
+    f["pacing"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      if (v == "realtime")
+        c->pacing = Pacing::kRealtime;
+      else if (v == "lockstep")
+        c->pacing = Pacing::kLockstep;
+      else {
+        *why = "'" + v + "' is not one of realtime lockstep";
+        return false;
+      }
+      return true;
+    };
+    f["hazard_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->hazard_every; }, 1, 100000);
+    f["health_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->health_every; }, 1, 100000);
+    f["max_frames"] =
+        Int<std::int64_t>([](FswConfig* c) { return &c->max_frames; }, 0, std::int64_t{1} << 40);
+    f["rt.mlockall"] = Bool([](FswConfig* c) { return &c->mlockall; });
+    f["rt.priority"] = Int<std::int32_t>([](FswConfig* c) { return &c->priority; }, 0, 98);
+    f["rt.cpu"] = Int<std::int32_t>([](FswConfig* c) { return &c->cpu; }, -1, 1023);
+    f["lcm.url"] = Text([](FswConfig* c) { return &c->lcm_url; });
+    f["lcm.publish"] = Bool([](FswConfig* c) { return &c->publish; });
+    f["lcm.channel_prefix"] = Text([](FswConfig* c) { return &c->channel_prefix; });
+    f["record.path"] = Text([](FswConfig* c) { return &c->record_path; });
+    f["record.frames"] = Bool([](FswConfig* c) { return &c->record_frames; });
+    f["summary.path"] = Text([](FswConfig* c) { return &c->summary_path; });
+    f["summary.plot_dir"] = Text([](FswConfig* c) { return &c->plot_dir; });
+    f["initial"] = OneOf([](FswConfig* c) { return &c->initial; }, {"truth", "position"});
+    f["initial.position_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      std::istringstream in(v);
+      double p[3];
+      std::string rest;
+      if (!(in >> p[0] >> p[1] >> p[2]) || (in >> rest) || !std::isfinite(p[0]) ||
+          !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+        *why = "'" + v + "' is not three finite numbers (x y z)";
+        return false;
+      }
+      for (int i = 0; i < 3; ++i) c->initial_position_m[i] = p[i];
+      return true;
+    };
+    f["inject.stage"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      if (StageIndex(v) < 0 || StageIndex(v) == kStageCycle) {
+        *why = "'" + v + "' is not a stage (acquire rectify track estimate output map)";
+        return false;
+      }
+      c->inject_stage = v;
+      return true;
+    };
+    f["inject.frame"] =
+        Int<std::int64_t>([](FswConfig* c) { return &c->inject_frame; }, -1, std::int64_t{1} << 40);
+    f["inject.frames"] =
+        Int<std::int64_t>([](FswConfig* c) { return &c->inject_frames; }, 1, std::int64_t{1} << 40);
+    f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
+    return f;
+  }();
+  return fields;
+}
+
+bool ApplyLine(const std::string& raw, const std::string& where, FswConfig* config,
+               std::string* error) {
+  std::string line = raw;
+  const auto hash = line.find('#');
+  if (hash != std::string::npos) line = line.substr(0, hash);
+  line = Trim(line);
+  if (line.empty()) return true;
+  const auto colon = line.find(':');
+  if (colon == std::string::npos) {
+    *error = where + ": expected 'key: value', got '" + line + "'";
+    return false;
+  }
+  const std::string key = Trim(line.substr(0, colon));
+  const std::string value = Trim(line.substr(colon + 1));
+  const auto& fields = Fields();
+  const auto it = fields.find(key);
+  if (it == fields.end()) {
+    *error = where + ": " + key + ": unknown field";
+    return false;
+  }
+  std::string why;
+  if (!it->second(value, config, &why)) {
+    *error = where + ": " + key + ": " + why;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+const char* SourceName(SourceKind kind) {
+  switch (kind) {
+    case SourceKind::kSim: return "sim";
+    case SourceKind::kV4l2: return "v4l2";
+    case SourceKind::kAravis: return "aravis";
+    case SourceKind::kLog: return "log";
+  }
+  return "?";
+}
+
+int StageIndex(const std::string& name) {
+  for (int i = 0; i < kNumStages; ++i) {
+    if (name == StageName(i)) return i;
+  }
+  return -1;
+}
+
+bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* error) {
+  auto fail = [&](const std::string& field, const std::string& why) {
+    *error = origin + ": " + field + ": " + why;
+    return false;
+  };
+  if (c.source == SourceKind::kLog && c.log_path.empty()) {
+    return fail("log.path", "required when source is log");
+  }
+  if ((c.source == SourceKind::kV4l2 || (c.source == SourceKind::kAravis && !c.camera.fake))) {
+    if (c.camera.left.empty()) return fail("camera.left", "required for a camera source");
+    if (c.camera.right.empty()) return fail("camera.right", "required for a camera source");
+  }
+  if (c.source == SourceKind::kV4l2 || c.source == SourceKind::kAravis) {
+    if (c.camera.left_calibration.empty()) {
+      return fail("camera.left_calibration", "required for a camera source");
+    }
+    if (c.camera.right_calibration.empty()) {
+      return fail("camera.right_calibration", "required for a camera source");
+    }
+  }
+  if (c.mode == "ekf" && c.window != 1) return fail("window", "must be 1 in mode ekf");
+  if (c.source == SourceKind::kSim && c.sim.width_px % 2 != 0) {
+    return fail("sim.width_px", "must be even (principal point on a pixel boundary)");
+  }
+  if (c.max_disparity_px >= c.sim.width_px && c.source == SourceKind::kSim) {
+    return fail("max_disparity_px", "must be smaller than sim.width_px");
+  }
+  if (c.initial == "truth" && c.source != SourceKind::kSim && c.source != SourceKind::kLog) {
+    return fail("initial", "'truth' needs the simulator (source sim, or a log of a sim run)");
+  }
+  if (c.inject_ms > 0.0 && c.inject_stage.empty()) {
+    return fail("inject.stage", "required when inject.ms is set");
+  }
+  if (c.publish && c.lcm_url.empty()) return fail("lcm.url", "empty while lcm.publish is true");
+  if (c.channel_prefix.size() > 32) return fail("lcm.channel_prefix", "longer than 32 characters");
+  return true;
+}
+
+bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,
+                 std::string* error) {
+  FswConfig c;
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!ApplyLine(line, origin + ":" + std::to_string(number), &c, error)) return false;
+  }
+  if (!ValidateConfig(c, origin, error)) return false;
+  *config = c;
+  return true;
+}
+
+bool LoadConfig(const std::string& path, FswConfig* config, std::string* error) {
+  std::ifstream in(path);
+  if (!in) {
+    *error = path + ": cannot open the configuration file";
+    return false;
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return ParseConfig(text.str(), path, config, error);
+}
+
+bool OverrideConfig(const std::string& key_value, FswConfig* config, std::string* error) {
+  FswConfig c = *config;
+  if (!ApplyLine(key_value, "--set", &c, error)) return false;
+  if (!ValidateConfig(c, "--set", error)) return false;
+  *config = c;
+  return true;
+}
+
+}  // namespace swf::app

@@ -1,0 +1,290 @@
+#include "swf/app/flight_loop.hpp"
+
+#include <cstring>
+
+#include "swf/app/alloc_meter.hpp"
+#include "swf/app/realtime.hpp"
+
+namespace swf::app {
+
+using core::Status;
+using core::TimeNs;
+
+const char* StageName(int stage) {
+  switch (stage) {
+    case kStageAcquire: return "acquire";
+    case kStageRectify: return "rectify";
+    case kStageTrack: return "track";
+    case kStageEstimate: return "estimate";
+    case kStageOutput: return "output";
+    case kStageMap: return "map";
+    case kStageCycle: return "cycle";
+    default: return "?";
+  }
+}
+
+FlightLoop::~FlightLoop() {
+  if (hazard_thread_.joinable()) {
+    hazard_quit_.store(true);
+    hazard_wake_.release();
+    hazard_thread_.join();
+  }
+}
+
+Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
+                             drivers::StereoSource* source, OutputChannels* outputs,
+                             MotionProvider* motion, HazardStage* hazard) {
+  if (pipeline == nullptr || source == nullptr || outputs == nullptr ||
+      !(options.rate_hz > 0.0 && options.rate_hz <= 1000.0) || options.hazard_every < 1 ||
+      options.health_every < 1 || options.max_frames < 0 || options.acquire_timeout_ns <= 0 ||
+      options.max_consecutive_timeouts < 1) {
+    return Status::kInvalidArgument;
+  }
+  options_ = options;
+  pipeline_ = pipeline;
+  source_ = source;
+  out_ = outputs;
+  hazard_ = hazard;
+  motion_ = motion;
+  period_ns_ = static_cast<TimeNs>(1e9 / options.rate_hz + 0.5);
+  for (StageStats& s : stages_) s.Reset();
+  counters_ = LoopCounters{};
+  configured_ = true;
+  return Status::kOk;
+}
+
+void FlightLoop::Inject(int stage) {
+  if (stage != options_.inject_stage || options_.inject_ms <= 0.0) return;
+  const std::int64_t f = counters_.frames;
+  if (f < options_.inject_first_frame || f >= options_.inject_first_frame + options_.inject_frames)
+    return;
+  Spin(static_cast<TimeNs>(options_.inject_ms * 1e6));
+}
+
+void FlightLoop::Push(core::SpscQueue<RecordRef, kOrderQueueSize>* q, RecordRef ref) {
+  // The order queue is longer than all pools together, so this cannot fail while slots are
+  // accounted for; a failure would be a software bug.
+  if (q->TryPush(ref) != Status::kOk) ++counters_.outputs_dropped;
+}
+
+Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
+                         TimeNs* processing_ns) {
+  *processing_ns = 0;
+  const TimeNs t0 = core::MonotonicNs();
+  drivers::StereoPair pair;
+  Status s = source_->Next(acquire_timeout_ns, &pair);
+  const TimeNs t1 = core::MonotonicNs();
+  stages_[kStageAcquire].Add(t1 - t0);
+  if (s == Status::kTimeout) {
+    ++counters_.source_timeouts;
+    return ++consecutive_timeouts_ >= options_.max_consecutive_timeouts ? Status::kDeviceLost
+                                                                        : Status::kTimeout;
+  }
+  if (s != Status::kOk) {
+    if (s != Status::kEmpty) ++counters_.source_errors;
+    return s;
+  }
+  consecutive_timeouts_ = 0;
+  counters_.frames_dropped += pair.dropped_before;
+
+  PipelineFrame frame;
+  frame.left =
+      frontend::GrayView{pair.left.data, pair.left.width, pair.left.height, pair.left.stride_bytes};
+  frame.right = frontend::GrayView{pair.right.data, pair.right.width, pair.right.height,
+                                   pair.right.stride_bytes};
+  frame.utime = pair.left_exposure_ns / core::kNsPerUs;
+  frame.seq = static_cast<std::int64_t>(pair.seq);
+  last_frame_utime_ = frame.utime;
+  frame.has_motion = motion_ != nullptr && motion_->Motion(pair.seq, &frame.motion);
+
+  Inject(kStageRectify);
+  Status stage = pipeline_->Rectify(frame);
+  const TimeNs t2 = core::MonotonicNs();
+  stages_[kStageRectify].Add(t2 - t1);
+  Inject(kStageTrack);
+  if (stage == Status::kOk) stage = pipeline_->Track();
+  const TimeNs t3 = core::MonotonicNs();
+  stages_[kStageTrack].Add(t3 - t2);
+  Inject(kStageEstimate);
+  if (stage == Status::kOk) stage = pipeline_->Estimate(frame.has_motion ? &frame.motion : nullptr);
+  const TimeNs t4 = core::MonotonicNs();
+  stages_[kStageEstimate].Add(t4 - t3);
+  if (stage != Status::kOk) ++counters_.stage_errors;
+
+  Inject(kStageOutput);
+  if (options_.record_frames) {
+    const std::int32_t slot = out_->frames.Acquire();
+    const std::int32_t w = pair.left.width;
+    const std::int32_t h = pair.left.height;
+    if (slot < 0 || w * h > out_->frames[slot < 0 ? 0 : slot].capacity_bytes ||
+        pair.right.width != w || pair.right.height != h) {
+      ++counters_.outputs_dropped;
+    } else {
+      FrameRecord& r = out_->frames[slot];
+      r.utime = frame.utime;
+      r.seq = frame.seq;
+      r.left_exposure_utime = pair.left_exposure_ns / core::kNsPerUs;
+      r.right_exposure_utime = pair.right_exposure_ns / core::kNsPerUs;
+      r.dropped_before = static_cast<std::int32_t>(pair.dropped_before);
+      r.rectified = !pipeline_->Rectifies();
+      r.has_motion = frame.has_motion;
+      r.motion = frame.motion;
+      r.width = w;
+      r.height = h;
+      for (std::int32_t y = 0; y < h; ++y) {
+        std::memcpy(r.left.get() + static_cast<std::size_t>(y) * w,
+                    pair.left.data + static_cast<std::size_t>(y) * pair.left.stride_bytes,
+                    static_cast<std::size_t>(w));
+        std::memcpy(r.right.get() + static_cast<std::size_t>(y) * w,
+                    pair.right.data + static_cast<std::size_t>(y) * pair.right.stride_bytes,
+                    static_cast<std::size_t>(w));
+      }
+      Push(&out_->frame_group, RecordRef{RecordKind::kFrame, slot});
+    }
+  }
+  source_->Release(pair);
+  if (pipeline_->FramesEstimated() > 0 &&
+      (stage == Status::kOk || stage == Status::kNumericalFailure)) {
+    const std::int32_t slot = out_->navs.Acquire();
+    if (slot < 0) {
+      ++counters_.outputs_dropped;
+    } else {
+      NavRecord& r = out_->navs[slot];
+      r.seq = nav_seq_++;
+      r.mode = options_.nav_mode;
+      pipeline_->MakeNav(&r.nav);
+      Push(&out_->frame_group, RecordRef{RecordKind::kNav, slot});
+    }
+  }
+  const TimeNs t5 = core::MonotonicNs();
+  stages_[kStageOutput].Add(t5 - t4);
+
+  ++counters_.frames;
+  TimeNs t6 = t5;
+  if (counters_.frames % options_.hazard_every == 0) {
+    Inject(kStageMap);
+    TakeSnapshot(synchronous_hazard);
+    t6 = core::MonotonicNs();
+    stages_[kStageMap].Add(t6 - t5);
+  }
+  stages_[kStageCycle].Add(t6 - t1);
+  *processing_ns = t6 - t1;
+  if (counters_.frames % options_.health_every == 0) PublishHealth();
+  return Status::kOk;
+}
+
+void FlightLoop::TakeSnapshot(bool synchronous) {
+  if (!synchronous && hazard_busy_.load(std::memory_order_acquire)) {
+    ++counters_.hazard_skipped;
+    return;
+  }
+  const std::int32_t slot = out_->maps.Acquire();
+  if (slot < 0) {
+    ++counters_.outputs_dropped;
+    return;
+  }
+  MapRecord& r = out_->maps[slot];
+  if (pipeline_->MakeMap(&r.map) != Status::kOk) r.map.num_landmarks = 0;
+  r.seq = map_seq_++;
+  if (synchronous) {
+    if (hazard_ != nullptr) (void)hazard_->Process(r.map);
+    Push(&out_->frame_group, RecordRef{RecordKind::kMap, slot});
+    return;
+  }
+  hazard_busy_.store(true, std::memory_order_release);
+  hazard_slot_.store(slot, std::memory_order_release);
+  hazard_wake_.release();
+}
+
+void FlightLoop::HazardMain() {
+  char message[160];
+  (void)MakeThreadRealtime(options_.hazard_priority, message, sizeof message);
+  BeginRealtimeAllocationCounting();
+  for (;;) {
+    hazard_wake_.acquire();
+    const std::int32_t slot = hazard_slot_.exchange(-1, std::memory_order_acq_rel);
+    if (slot >= 0) {
+      if (hazard_ != nullptr) (void)hazard_->Process(out_->maps[slot].map);
+      if (out_->hazard_group.TryPush(RecordRef{RecordKind::kMap, slot}) != Status::kOk) {
+        hazard_outputs_dropped_.fetch_add(1, std::memory_order_relaxed);
+      }
+      hazard_busy_.store(false, std::memory_order_release);
+    }
+    if (hazard_quit_.load(std::memory_order_acquire) && hazard_slot_.load() < 0) return;
+  }
+}
+
+void FlightLoop::PublishHealth() {
+  const std::int32_t slot = out_->healths.Acquire();
+  if (slot < 0) {
+    ++counters_.outputs_dropped;
+    return;
+  }
+  HealthRecord& h = out_->healths[slot];
+  h.utime = last_frame_utime_;
+  h.seq = health_seq_++;
+  h.frames = counters_.frames;
+  h.frames_dropped =
+      counters_.frames_dropped + static_cast<std::int64_t>(source_->Stats().frames_dropped);
+  h.overruns = counters_.overruns;
+  h.outputs_dropped = counters_.outputs_dropped + hazard_outputs_dropped_.load();
+  h.allocations_after_start = RealtimeAllocations();
+  h.fault_bits = static_cast<std::int32_t>(pipeline_->FaultBits());
+  if (counters_.source_errors > 0 || counters_.source_timeouts > 0) h.fault_bits |= 64;
+  if (h.outputs_dropped > 0) h.fault_bits |= 32;
+  h.estimator_status = static_cast<std::int8_t>(pipeline_->LastStatus());
+  h.num_features = pipeline_->NumFeatures();
+  h.num_landmarks = pipeline_->NumLandmarks();
+  for (int i = 0; i < kNumStages; ++i) h.stages[i] = stages_[i].Summarize();
+  Push(&out_->frame_group, RecordRef{RecordKind::kHealth, slot});
+}
+
+Status FlightLoop::Step() {
+  if (!configured_) return Status::kNotConfigured;
+  TimeNs processing = 0;
+  const Status s = Cycle(options_.acquire_timeout_ns, true, &processing);
+  if (s == Status::kOk && processing > period_ns_) ++counters_.overruns;
+  return s;
+}
+
+Status FlightLoop::Run() {
+  if (!configured_) return Status::kNotConfigured;
+  stop_.store(false);
+  hazard_quit_.store(false);
+  hazard_thread_ = std::thread([this] { HazardMain(); });
+  BeginRealtimeAllocationCounting();
+  Status result = Status::kOk;
+  TimeNs next = core::MonotonicNs();
+  const bool realtime = options_.pacing == Pacing::kRealtime;
+  while (!stop_.load(std::memory_order_relaxed)) {
+    if (options_.max_frames > 0 && counters_.frames >= options_.max_frames) break;
+    if (realtime) SleepUntil(next);
+    const TimeNs tick = realtime ? next : core::MonotonicNs();
+    TimeNs processing = 0;
+    const Status s = Cycle(realtime ? period_ns_ : options_.acquire_timeout_ns, false, &processing);
+    const TimeNs end = core::MonotonicNs();
+    if (s == Status::kEmpty) break;
+    if (s != Status::kOk && s != Status::kTimeout) {
+      result = s;
+      break;
+    }
+    if (realtime) {
+      if (s == Status::kOk && end > tick + period_ns_) {
+        ++counters_.overruns;
+        next = tick + ((end - tick) / period_ns_ + 1) * period_ns_;  // first grid tick after end
+      } else {
+        next = tick + period_ns_;
+      }
+    } else if (s == Status::kOk && processing > period_ns_) {
+      ++counters_.overruns;
+    }
+  }
+  // Let the hazard group finish its last snapshot, then report.
+  hazard_quit_.store(true, std::memory_order_release);
+  hazard_wake_.release();
+  hazard_thread_.join();
+  PublishHealth();
+  return result;
+}
+
+}  // namespace swf::app

@@ -1,0 +1,406 @@
+#include "swf/app/lcm_io.hpp"
+
+#include <Eigen/Geometry>
+
+#include <lcm/eventlog.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <lcm/lcm-cpp.hpp>
+
+#include "swf_msgs/hazard_map_t.hpp"
+#include "swf_msgs/health_t.hpp"
+#include "swf_msgs/landmark_map_t.hpp"
+#include "swf_msgs/nav_state_t.hpp"
+#include "swf_msgs/stereo_frame_t.hpp"
+
+namespace swf::app {
+
+struct OutputThread::Impl {
+  std::unique_ptr<lcm::LCM> lcm;
+  lcm_eventlog_t* log = nullptr;
+  std::string prefix;
+  std::vector<std::uint8_t> buffer;  // encode target, sized at Open
+  std::string channel;               // reused: capacity reserved at Open
+  swf_msgs::stereo_frame_t frame;
+  swf_msgs::nav_state_t nav;
+  swf_msgs::landmark_map_t map;
+  swf_msgs::health_t health;
+};
+
+OutputThread::OutputThread() : impl_(new Impl()) {}
+
+OutputThread::~OutputThread() {
+  StopAndDrain();
+  if (impl_->log != nullptr) lcm_eventlog_destroy(impl_->log);
+}
+
+bool OutputThread::Open(const OutputOptions& options, OutputChannels* channels,
+                        std::string* error) {
+  channels_ = channels;
+  impl_->prefix = options.channel_prefix;
+  impl_->channel.reserve(64);
+  if (!options.lcm_url.empty()) {
+    impl_->lcm = std::make_unique<lcm::LCM>(options.lcm_url);
+    if (!impl_->lcm->good()) {
+      *error = "lcm.url: cannot open LCM at '" + options.lcm_url +
+               "' (udpm needs a multicast route; see RECIPES.md)";
+      return false;
+    }
+  }
+  if (!options.record_path.empty()) {
+    impl_->log = lcm_eventlog_create(options.record_path.c_str(), "w");
+    if (impl_->log == nullptr) {
+      *error = "record.path: cannot create '" + options.record_path + "'";
+      return false;
+    }
+  }
+  // Worst cases: a frame of the largest size, a full landmark map; reserve every vector now.
+  const std::size_t pixels = static_cast<std::size_t>(options.max_width) * options.max_height;
+  impl_->frame.left.reserve(pixels);
+  impl_->frame.right.reserve(pixels);
+  impl_->map.id.reserve(kMaxMapLandmarks);
+  impl_->map.position_world_m.reserve(kMaxMapLandmarks);
+  impl_->map.covariance_m2.reserve(kMaxMapLandmarks);
+  impl_->map.num_observations.reserve(kMaxMapLandmarks);
+  impl_->health.stage_name.reserve(kNumStages);
+  impl_->health.stage_p50_ms.reserve(kNumStages);
+  impl_->health.stage_p99_ms.reserve(kNumStages);
+  impl_->health.stage_max_ms.reserve(kNumStages);
+  impl_->buffer.assign(2 * pixels + 128 * kMaxMapLandmarks + 65536, 0);
+  return true;
+}
+
+void OutputThread::Start() {
+  quit_.store(false);
+  thread_ = std::thread([this] {
+    while (!quit_.load(std::memory_order_acquire)) {
+      DrainOnce();
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    DrainOnce();
+  });
+}
+
+void OutputThread::StopAndDrain() {
+  if (thread_.joinable()) {
+    quit_.store(true, std::memory_order_release);
+    thread_.join();
+  }
+  if (channels_ != nullptr) DrainOnce();
+  if (impl_->log != nullptr) std::fflush(impl_->log->f);
+}
+
+void OutputThread::DrainOnce() {
+  RecordRef ref;
+  while (channels_->frame_group.TryPop(&ref) == core::Status::kOk) Handle(ref);
+  while (channels_->hazard_group.TryPop(&ref) == core::Status::kOk) Handle(ref);
+}
+
+void OutputThread::Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data,
+                        int size) {
+  impl_->channel.assign(impl_->prefix);
+  impl_->channel.append(suffix);
+  if (impl_->lcm) {
+    if (impl_->lcm->publish(impl_->channel, data, static_cast<unsigned>(size)) == 0) {
+      ++counters_.published;
+    } else {
+      ++counters_.publish_errors;
+    }
+  }
+  if (impl_->log != nullptr) {
+    lcm_eventlog_event_t event{};
+    event.timestamp = utime;  // the data's own time: logs of identical runs are identical
+    event.channellen = static_cast<std::int32_t>(impl_->channel.size());
+    event.datalen = size;
+    event.channel = impl_->channel.data();
+    event.data = const_cast<std::uint8_t*>(data);
+    if (lcm_eventlog_write_event(impl_->log, &event) == 0) {
+      ++counters_.recorded;
+    } else {
+      ++counters_.record_errors;
+    }
+  }
+}
+
+void OutputThread::Handle(const RecordRef& ref) {
+  std::uint8_t* buf = impl_->buffer.data();
+  const int max = static_cast<int>(impl_->buffer.size());
+  switch (ref.kind) {
+    case RecordKind::kFrame: {
+      const FrameRecord& r = channels_->frames[ref.slot];
+      swf_msgs::stereo_frame_t& m = impl_->frame;
+      m.utime = r.utime;
+      m.seq = r.seq;
+      m.left_exposure_utime = r.left_exposure_utime;
+      m.right_exposure_utime = r.right_exposure_utime;
+      m.dropped_before = r.dropped_before;
+      m.rectified = r.rectified;
+      m.has_motion = r.has_motion;
+      {
+        const Eigen::AngleAxisd aa(r.motion.R);
+        const Eigen::Vector3d rv = aa.angle() * aa.axis();
+        for (int i = 0; i < 3; ++i) {
+          m.motion_translation_m[i] = r.has_motion ? r.motion.t[i] : 0.0;
+          m.motion_rotation_rad[i] = r.has_motion ? rv[i] : 0.0;
+        }
+      }
+      m.width = r.width;
+      m.height = r.height;
+      m.num_bytes = r.width * r.height;
+      m.left.assign(r.left.get(), r.left.get() + m.num_bytes);
+      m.right.assign(r.right.get(), r.right.get() + m.num_bytes);
+      const int n = m.encode(buf, 0, max);
+      channels_->frames.Release(ref.slot);
+      if (n < 0) {
+        ++counters_.encode_errors;
+        return;
+      }
+      Emit(kStereoSuffix, m.utime, buf, n);
+      return;
+    }
+    case RecordKind::kNav: {
+      const NavRecord& r = channels_->navs[ref.slot];
+      swf_msgs::nav_state_t& m = impl_->nav;
+      m.utime = r.nav.utime;
+      m.seq = r.seq;
+      m.frame_seq = r.nav.frame_seq;
+      std::memcpy(m.position_world_m, r.nav.position_world_m, sizeof m.position_world_m);
+      std::memcpy(m.orientation_world_q, r.nav.orientation_world_q, sizeof m.orientation_world_q);
+      std::memcpy(m.velocity_world_mps, r.nav.velocity_world_mps, sizeof m.velocity_world_mps);
+      std::memcpy(m.covariance, r.nav.covariance, sizeof m.covariance);
+      m.mode = r.mode;
+      m.status = r.nav.status;
+      m.fault_bits = r.nav.fault_bits;
+      m.iterations = r.nav.iterations;
+      m.num_measurements = r.nav.num_measurements;
+      for (OutputObserver* o : observers_) o->OnNav(r);
+      const int n = m.encode(buf, 0, max);
+      channels_->navs.Release(ref.slot);
+      if (n < 0) {
+        ++counters_.encode_errors;
+        return;
+      }
+      Emit(kNavSuffix, m.utime, buf, n);
+      return;
+    }
+    case RecordKind::kMap: {
+      const MapRecord& r = channels_->maps[ref.slot];
+      swf_msgs::landmark_map_t& m = impl_->map;
+      m.utime = r.map.utime;
+      m.seq = r.seq;
+      m.frame_seq = r.map.frame_seq;
+      m.num_landmarks = r.map.num_landmarks;
+      m.id.resize(m.num_landmarks);
+      m.position_world_m.resize(m.num_landmarks);
+      m.covariance_m2.resize(m.num_landmarks);
+      m.num_observations.resize(m.num_landmarks);
+      for (int i = 0; i < m.num_landmarks; ++i) {
+        const MapLandmark& l = r.map.landmarks[i];
+        m.id[i] = l.id;
+        m.position_world_m[i].assign(l.position_world_m, l.position_world_m + 3);
+        m.covariance_m2[i].assign(l.covariance_m2, l.covariance_m2 + 6);
+        m.num_observations[i] = l.num_observations;
+      }
+      for (OutputObserver* o : observers_) o->OnMap(r);
+      const int n = m.encode(buf, 0, max);
+      channels_->maps.Release(ref.slot);
+      if (n < 0) {
+        ++counters_.encode_errors;
+        return;
+      }
+      Emit(kLandmarksSuffix, m.utime, buf, n);
+      return;
+    }
+    case RecordKind::kHealth: {
+      const HealthRecord& r = channels_->healths[ref.slot];
+      swf_msgs::health_t& m = impl_->health;
+      m.utime = r.utime;
+      m.seq = r.seq;
+      m.frames = r.frames;
+      m.frames_dropped = r.frames_dropped;
+      m.overruns = r.overruns;
+      m.outputs_dropped = r.outputs_dropped;
+      m.allocations_after_start = r.allocations_after_start;
+      m.fault_bits = r.fault_bits;
+      m.estimator_status = r.estimator_status;
+      m.num_features = r.num_features;
+      m.num_landmarks = r.num_landmarks;
+      m.num_stages = kNumStages;
+      m.stage_name.resize(kNumStages);
+      m.stage_p50_ms.resize(kNumStages);
+      m.stage_p99_ms.resize(kNumStages);
+      m.stage_max_ms.resize(kNumStages);
+      for (int i = 0; i < kNumStages; ++i) {
+        m.stage_name[i] = StageName(i);
+        m.stage_p50_ms[i] = r.stages[i].p50_ms;
+        m.stage_p99_ms[i] = r.stages[i].p99_ms;
+        m.stage_max_ms[i] = r.stages[i].max_ms;
+      }
+      for (OutputObserver* o : observers_) o->OnHealth(r);
+      const int n = m.encode(buf, 0, max);
+      channels_->healths.Release(ref.slot);
+      if (n < 0) {
+        ++counters_.encode_errors;
+        return;
+      }
+      Emit(kHealthSuffix, m.utime, buf, n);
+      return;
+    }
+  }
+}
+
+// ---- reading logs ------------------------------------------------------------------------------
+
+namespace {
+constexpr std::uint32_t kLogMagic = 0xEDA1DA01u;
+std::uint32_t Be32(const std::uint8_t* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         std::uint32_t{p[3]};
+}
+std::int64_t Be64(const std::uint8_t* p) {
+  return static_cast<std::int64_t>((std::uint64_t{Be32(p)} << 32) | Be32(p + 4));
+}
+}  // namespace
+
+bool LogReader::Open(const std::string& path, std::string* error) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = path + ": cannot open the log";
+    return false;
+  }
+  bytes_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  path_ = path;
+  pos_ = 0;
+  index_ = 0;
+  return true;
+}
+
+int LogReader::Next(LogEvent* event, std::string* error) {
+  if (pos_ == bytes_.size()) return 0;
+  const std::size_t left = bytes_.size() - pos_;
+  auto fail = [&](const std::string& why) {
+    *error = path_ + ": record " + std::to_string(index_) + " at byte " + std::to_string(pos_) +
+             ": " + why;
+    return -1;
+  };
+  constexpr std::size_t kHeader = 4 + 8 + 8 + 4 + 4;
+  if (left < kHeader) {
+    return fail("truncated header (" + std::to_string(left) + " of " + std::to_string(kHeader) +
+                " bytes)");
+  }
+  const std::uint8_t* p = bytes_.data() + pos_;
+  if (Be32(p) != kLogMagic) return fail("bad sync word (corrupt record)");
+  const std::int64_t eventnum = Be64(p + 4);
+  const std::int64_t timestamp = Be64(p + 12);
+  const std::int64_t channel_len = static_cast<std::int32_t>(Be32(p + 20));
+  const std::int64_t data_len = static_cast<std::int32_t>(Be32(p + 24));
+  if (channel_len <= 0 || channel_len > 256) {
+    return fail("bad channel length " + std::to_string(channel_len));
+  }
+  if (data_len < 0) return fail("bad data length " + std::to_string(data_len));
+  const std::uint64_t need =
+      kHeader + static_cast<std::uint64_t>(channel_len) + static_cast<std::uint64_t>(data_len);
+  if (need > left) {
+    return fail("truncated (" + std::to_string(left) + " of " + std::to_string(need) + " bytes)");
+  }
+  event->index = index_;
+  event->offset = static_cast<std::int64_t>(pos_);
+  event->eventnum = eventnum;
+  event->timestamp = timestamp;
+  event->channel.assign(reinterpret_cast<const char*>(p + kHeader),
+                        static_cast<std::size_t>(channel_len));
+  event->data.assign(p + kHeader + channel_len, p + need);
+  pos_ += need;
+  ++index_;
+  return 1;
+}
+
+bool LogStereoSource::Load(const std::string& path, const std::string& channel,
+                           std::string* error) {
+  LogReader reader;
+  if (!reader.Open(path, error)) return false;
+  frames_.clear();
+  load_error_.clear();
+  LogEvent event;
+  swf_msgs::stereo_frame_t msg;
+  for (;;) {
+    std::string why;
+    const int r = reader.Next(&event, &why);
+    if (r == 0) break;
+    if (r < 0) {
+      load_error_ = why;
+      break;
+    }
+    if (event.channel != channel) continue;
+    const int n = msg.decode(event.data.data(), 0, static_cast<int>(event.data.size()));
+    const std::string where = path + ": record " + std::to_string(event.index) + " (" +
+                              event.channel + ", event " + std::to_string(event.eventnum) + ")";
+    if (n < 0 || n != static_cast<int>(event.data.size())) {
+      load_error_ = where + ": stereo_frame_t does not decode (corrupt or wrong type)";
+      break;
+    }
+    if (msg.width <= 0 || msg.height <= 0 || msg.num_bytes != msg.width * msg.height ||
+        static_cast<int>(msg.left.size()) != msg.num_bytes ||
+        static_cast<int>(msg.right.size()) != msg.num_bytes) {
+      load_error_ = where + ": inconsistent image size";
+      break;
+    }
+    if (!frames_.empty() && (msg.width != width_ || msg.height != height_)) {
+      load_error_ = where + ": image size changed within the log";
+      break;
+    }
+    width_ = msg.width;
+    height_ = msg.height;
+    rectified_ = msg.rectified;
+    Frame f;
+    f.seq = msg.seq;
+    f.left_ns = msg.left_exposure_utime * core::kNsPerUs;
+    f.right_ns = msg.right_exposure_utime * core::kNsPerUs;
+    f.dropped_before = msg.dropped_before;
+    f.has_motion = msg.has_motion;
+    if (f.has_motion) {
+      f.motion.t = Eigen::Vector3d(msg.motion_translation_m[0], msg.motion_translation_m[1],
+                                   msg.motion_translation_m[2]);
+      f.motion.R = estimator::ExpSO3<double>(Eigen::Vector3d(
+          msg.motion_rotation_rad[0], msg.motion_rotation_rad[1], msg.motion_rotation_rad[2]));
+    }
+    f.left = std::move(msg.left);
+    f.right = std::move(msg.right);
+    frames_.push_back(std::move(f));
+  }
+  return true;
+}
+
+bool LogStereoSource::Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) {
+  // Frames are served in order; the one just served is next_ - 1.
+  if (next_ == 0 || frames_[next_ - 1].seq != static_cast<std::int64_t>(seq)) return false;
+  if (!frames_[next_ - 1].has_motion) return false;
+  *camera_prev_T_camera = frames_[next_ - 1].motion;
+  return true;
+}
+
+core::Status LogStereoSource::Start() {
+  next_ = 0;
+  stats_ = drivers::SourceStats{};
+  return core::Status::kOk;
+}
+
+core::Status LogStereoSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoPair* pair) {
+  if (next_ >= frames_.size()) return core::Status::kEmpty;
+  const Frame& f = frames_[next_];
+  pair->left = drivers::ImageView{f.left.data(), width_, height_, width_};
+  pair->right = drivers::ImageView{f.right.data(), width_, height_, width_};
+  pair->left_exposure_ns = f.left_ns;
+  pair->right_exposure_ns = f.right_ns;
+  pair->seq = static_cast<std::uint64_t>(f.seq);
+  pair->dropped_before = static_cast<std::uint32_t>(f.dropped_before);
+  pair->handle = static_cast<std::int32_t>(next_);
+  ++next_;
+  ++stats_.pairs_served;
+  return core::Status::kOk;
+}
+
+}  // namespace swf::app

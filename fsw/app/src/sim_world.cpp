@@ -1,0 +1,181 @@
+#include "swf/app/sim_world.hpp"
+
+#include <atomic>
+#include <cstdlib>
+#include <random>
+#include <thread>
+
+namespace swf::app {
+
+using core::Status;
+
+namespace {
+
+std::string SharedDir(const FswConfig& config) {
+  if (!config.sim.shared_dir.empty()) return config.sim.shared_dir;
+  if (const char* env = std::getenv("SWF_SHARED_DIR")) return env;
+  return "../shared";
+}
+
+}  // namespace
+
+bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
+                   std::string* error) {
+  *rig = config.sim.scenario == "lab" ? sim::LabRig() : sim::EdlRig();
+  rig->width_px = config.sim.width_px;
+  rig->height_px = config.sim.height_px;
+  rig->horizontal_fov_deg = config.sim.hfov_deg;
+  rig->baseline_m = config.sim.baseline_m;
+  sim::TrajectoryOptions t;
+  if (config.sim.scenario == "descent") {
+    t = sim::DescentTrajectory(config.rate_hz);
+  } else if (config.sim.scenario == "hover") {
+    t = sim::HoverTrajectory(50.0, 60);
+    t.rate_hz = config.rate_hz;
+  } else if (config.sim.scenario == "sideways") {
+    t = sim::SidewaysTrajectory(*rig, 50.0, 0.85, 40);
+  } else {
+    t = sim::LabTrajectory(config.rate_hz);
+  }
+  t.seed = config.sim.seed;
+  if (config.sim.frames > 0 && config.sim.frames < t.num_frames) t.num_frames = config.sim.frames;
+  if (trajectory->Configure(t) != Status::kOk) {
+    *error = "sim.scenario: the trajectory was refused (rate_hz or frames)";
+    return false;
+  }
+  return true;
+}
+
+bool SimWorld::Build(const FswConfig& config, std::string* error) {
+  if (!SimTrajectory(config, &trajectory_, &rig_, error)) return false;
+  num_frames_ = trajectory_.NumFrames();
+  sim::TerrainPreset preset;
+  if (!sim::ParseTerrainPreset(config.sim.terrain.c_str(), &preset)) {
+    *error = "sim.terrain: unknown preset";
+    return false;
+  }
+  const double scale = config.sim.scenario == "lab" ? 0.1 : 1.0;
+  sim::TerrainOptions to =
+      sim::ScaleTerrain(sim::TerrainPresetOptions(preset, config.sim.seed), scale);
+  // A smaller grid keeps the same cell size (the terrain shrinks, the texture stays).
+  to.size = config.sim.terrain_size;
+  if (terrain_.Configure(to) != Status::kOk) {
+    *error = "sim.terrain_size: the terrain was refused";
+    return false;
+  }
+  sim::AppearanceOptions look = sim::DefaultImagery(SharedDir(config));
+  look.image_pixel_m *= scale;
+  look.seed = config.sim.seed;
+  const Status a = appearance_.Configure(terrain_, look);
+  if (a != Status::kOk) {
+    *error = "sim.shared: the terrain imagery under '" + SharedDir(config) + "' cannot be read (" +
+             core::ToString(a) + ")";
+    return false;
+  }
+  // The simulated IMU, drawn once from the seed: same configuration, same motion inputs.
+  imu_ = config.sim.imu;
+  motion_.assign(num_frames_, estimator::Pose<double>::Identity());
+  std::mt19937_64 rng(config.sim.seed * 7919u + 17u);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (std::int32_t k = 1; k < num_frames_; ++k) {
+    estimator::Pose<double> u =
+        trajectory_.WorldTCamera(k - 1).Inverse() * trajectory_.WorldTCamera(k);
+    Eigen::Vector3d dt;
+    Eigen::Vector3d dr;
+    for (int i = 0; i < 3; ++i) dt[i] = config.sim.imu_sigma_m * gauss(rng);
+    for (int i = 0; i < 3; ++i) dr[i] = config.sim.imu_sigma_rad * gauss(rng);
+    u.t += dt;
+    u.R = u.R * estimator::ExpSO3<double>(dr);
+    motion_[k] = u;
+  }
+  sim::RenderOptions ro;
+  ro.rig = rig_;
+  ro.seed = config.sim.seed;
+  if (renderer_.Configure(ro) != Status::kOk) {
+    *error = "sim.width_px: the renderer refused the rig";
+    return false;
+  }
+  return true;
+}
+
+bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std::string* error) {
+  const std::size_t n = static_cast<std::size_t>(rig_.width_px) * rig_.height_px;
+  left_.assign(num_frames_, std::vector<std::uint8_t>(n));
+  right_.assign(num_frames_, std::vector<std::uint8_t>(n));
+  std::atomic<int> next{0};
+  std::atomic<int> done{0};
+  std::atomic<bool> failed{false};
+  auto worker = [&] {
+    sim::StereoImages images;
+    for (int k = next++; k < num_frames_; k = next++) {
+      if (renderer_.Render(terrain_, appearance_, trajectory_.WorldTCamera(k),
+                           static_cast<std::uint64_t>(k), &images) != Status::kOk ||
+          images.left.size() != n) {
+        failed = true;
+        return;
+      }
+      left_[k] = images.left;
+      right_[k] = images.right;
+      ++done;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
+  // The calling thread renders too and reports progress between its frames.
+  {
+    sim::StereoImages images;
+    for (int k = next++; k < num_frames_; k = next++) {
+      if (renderer_.Render(terrain_, appearance_, trajectory_.WorldTCamera(k),
+                           static_cast<std::uint64_t>(k), &images) != Status::kOk ||
+          images.left.size() != n) {
+        failed = true;
+        break;
+      }
+      left_[k] = images.left;
+      right_[k] = images.right;
+      ++done;
+      if (progress != nullptr) progress(done.load(), num_frames_);
+    }
+  }
+  for (std::thread& t : pool) t.join();
+  if (progress != nullptr) progress(done.load(), num_frames_);
+  if (failed) {
+    *error = "sim: rendering failed";
+    return false;
+  }
+  return true;
+}
+
+bool SimWorld::Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) {
+  if (!imu_ || seq == 0 || seq >= motion_.size()) return false;
+  *camera_prev_T_camera = motion_[seq];
+  return true;
+}
+
+Status PrerenderedSimSource::Start() {
+  next_ = 0;
+  stats_ = drivers::SourceStats{};
+  running_ = true;
+  return Status::kOk;
+}
+
+Status PrerenderedSimSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoPair* pair) {
+  if (!running_ || pair == nullptr) return Status::kNotConfigured;
+  if (next_ >= world_->NumFrames()) return Status::kEmpty;
+  const std::int32_t w = world_->Width();
+  const std::int32_t h = world_->Height();
+  pair->left = drivers::ImageView{world_->Left(next_), w, h, w};
+  pair->right = drivers::ImageView{world_->Right(next_), w, h, w};
+  pair->left_exposure_ns = world_->Trajectory().FrameTimeNs(next_);
+  pair->right_exposure_ns = pair->left_exposure_ns;
+  pair->seq = static_cast<std::uint64_t>(next_);
+  pair->dropped_before = 0;
+  pair->handle = next_;
+  ++next_;
+  ++stats_.pairs_served;
+  return Status::kOk;
+}
+
+void PrerenderedSimSource::Release(const drivers::StereoPair& /*pair*/) {}
+
+}  // namespace swf::app
