@@ -218,3 +218,46 @@ TEST(HazardMapperTest, LandmarksEnterTheMap) {
 
 }  // namespace
 }  // namespace swf::hazard
+
+namespace swf::hazard {
+namespace {
+
+// GIVEN the flight configuration's 2x and 4x reductions THEN updates still allocate nothing and
+// the flat plane is still measured (range prediction, reduction and resampling on the way down).
+TEST(HazardMapperTest, ReducedResolutionDescentAllocatesNothing) {
+  for (const int ds : {2, 4}) {
+    HazardMapperOptions o = Options();
+    o.downsample = ds;
+    auto mapper = std::make_unique<HazardMapper>();
+    ASSERT_EQ(mapper->Configure(o), core::Status::kOk);
+    std::vector<SceneRun> frames(2);
+    const double altitudes[2] = {8.0, 4.0};
+    for (int k = 0; k < 2; ++k) {
+      estimator::Pose<double> pose;
+      pose.R = testing::Nadir();
+      pose.t = {0.0, 0.0, altitudes[k]};
+      testing::Render(Scene{}, o.camera, kW, kH, pose, &frames[k].pair);
+      frames[k].frame.left = frontend::GrayView{frames[k].pair.left.data(), kW, kH, kW};
+      frames[k].frame.right = frontend::GrayView{frames[k].pair.right.data(), kW, kH, kW};
+      frames[k].frame.world_T_camera = pose;
+      frames[k].frame.pose_covariance.diagonal() << 1e-4, 1e-4, 1e-4, 1e-8, 1e-8, 1e-8;
+    }
+    int valid[2] = {0, 0};
+    std::uint64_t allocations = 0;
+    {
+      swf::testing::AllocationScope scope;
+      for (int k = 0; k < 2; ++k) {
+        ASSERT_EQ(mapper->Update(frames[k].frame), core::Status::kOk);
+        valid[k] = mapper->Stats().valid_pixels;
+      }
+      allocations = scope.Count();
+    }
+    EXPECT_EQ(allocations, 0u) << "ds " << ds;
+    // Small images: the left strip without a full search range is large at 4 m.
+    for (int k = 0; k < 2; ++k) EXPECT_GT(valid[k], kW * kH / (ds * ds) / 8) << "ds " << ds;
+    EXPECT_EQ(mapper->Stats().rock_cells, 0) << "ds " << ds;
+  }
+}
+
+}  // namespace
+}  // namespace swf::hazard
