@@ -2,6 +2,7 @@
 // and on kitti-vo, and writes one JSON file per experiment plus gnuplot data under OUT/.
 //   swf-eval paper OUT [--runs N] [--shared DIR]
 // tools/run eval renders the plots and rebuilds docs/results.md from these files.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -12,10 +13,13 @@
 #include <string>
 #include <vector>
 
-#include "../../estimator/test/synthetic_scene.hpp"
+#include "euroc.hpp"
+#include "experiments.hpp"
 #include "kitti_vo.hpp"
+#include "run_filter.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
+#include "swf/frontend/config.hpp"
 
 namespace {
 
@@ -29,76 +33,10 @@ using swf::estimator::SwfOptions;
 using swf::estimator::Vec3;
 using swf::estimator::testing::SceneOptions;
 using swf::estimator::testing::SyntheticScene;
-
-// Per-frame record of one run.
-struct Trace {
-  std::vector<double> mse_m2;     // mean squared landmark error of every landmark seen so far
-  std::vector<double> update_ms;  // wall time of Update()
-  std::vector<double> state_dim;  // 6 * poses + 3 * active landmarks
-  double final_rms_m = 0.0;
-};
-
-template <typename Filter>
-Trace RunFilter(const SyntheticScene& scene, SwfMode mode, int window, double q_t, double q_r,
-                std::uint64_t seed) {
-  auto swf = std::make_unique<Filter>();
-  StereoModel<double> model;
-  model.camera = scene.camera();
-  SwfOptions options;
-  options.mode = mode;
-  options.window_size = window;
-  options.first_pose_sigma_m = 1e-3;
-  options.first_pose_sigma_rad = 1e-5;
-  if (swf->Configure(model, options) != swf::core::Status::kOk) std::abort();
-  Mat6<double> q_sqrt = Mat6<double>::Zero();
-  q_sqrt.diagonal() << Vec3<double>::Constant(1 / q_t), Vec3<double>::Constant(1 / q_r);
-  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options().sigma_px;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::vector<Vec3<double>> estimate(scene.landmarks().size());
-  std::vector<bool> known(scene.landmarks().size(), false);
-  Trace trace;
-  for (std::size_t j = 0; j < scene.frames().size(); ++j) {
-    const auto& f = scene.frames()[j];
-    if (j == 0) {
-      (void)swf->AddPose(f.truth);
-    } else {
-      Pose<double> u = scene.frames()[j - 1].truth.Inverse() * f.truth;
-      swf::estimator::Vec6<double> noise;
-      for (int k = 0; k < 6; ++k) noise[k] = (k < 3 ? q_t : q_r) * gauss(rng);
-      (void)swf->AddPoseWithMotion(u.Retract(noise), q_sqrt);
-    }
-    for (const auto& o : f.obs) (void)swf->AddObservation(o.id, o.z, r_sqrt);
-    const auto start = std::chrono::steady_clock::now();
-    (void)swf->Update();
-    trace.update_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-            .count());
-    trace.state_dim.push_back(swf->Summary().state_dimension);
-    for (const auto& r : swf->Retired()) {
-      estimate[r.id] = r.position;
-      known[r.id] = true;
-    }
-    swf->ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int) {
-      estimate[id] = p;
-      known[id] = true;
-    });
-    double sum = 0.0;
-    int n = 0;
-    for (std::size_t i = 0; i < estimate.size(); ++i) {
-      if (!known[i]) continue;
-      sum += (estimate[i] - scene.landmarks()[i]).squaredNorm();
-      ++n;
-    }
-    trace.mse_m2.push_back(n > 0 ? sum / n : 0.0);
-  }
-  trace.final_rms_m = std::sqrt(trace.mse_m2.back());
-  return trace;
-}
-
-// Capacities: windows up to 40 poses, 300 landmarks active, 200 per frame, 300 in the prior.
-using Filter = SlidingWindowFilter<StereoModel<double>, 40, 300, 200, 160>;
-using BigBatch = SlidingWindowFilter<StereoModel<double>, 160, 4000, 64, 1>;
+using swf::eval::BigBatch;
+using swf::eval::Filter;
+using swf::eval::RunFilter;
+using swf::eval::Trace;
 
 // Cramer-Rao bound of the landmark MSE after m frames: trace of the landmark marginal
 // covariances of the batch problem evaluated at the true state (noise-free measurements keep the
@@ -165,8 +103,10 @@ Series MonteCarlo(const std::string& name, SceneOptions so, int runs,
   return s;
 }
 
+// x: the abscissa of every row (default 1, 2, 3, ...).
 bool WriteExperiment(const std::string& out, const std::string& name, const std::string& x_label,
-                     const std::vector<Series>& series, const std::string& extra_json) {
+                     const std::vector<Series>& series, const std::string& extra_json,
+                     const std::vector<double>& x = {}) {
   std::ofstream dat(out + "/" + name + ".dat");
   std::ofstream json(out + "/" + name + ".json");
   if (!dat || !json) return false;
@@ -175,12 +115,21 @@ bool WriteExperiment(const std::string& out, const std::string& name, const std:
   dat << "\n";
   const std::size_t n = series.empty() ? 0 : series[0].y.size();
   for (std::size_t k = 0; k < n; ++k) {
-    dat << k + 1;
+    if (k < x.size()) {
+      dat << x[k];
+    } else {
+      dat << k + 1;
+    }
     for (const Series& s : series) dat << " " << (k < s.y.size() ? s.y[k] : NAN);
     dat << "\n";
   }
   json << "{\n  \"experiment\": \"" << name << "\",\n  \"x\": \"" << x_label << "\",\n";
   if (!extra_json.empty()) json << extra_json << ",\n";
+  if (!x.empty()) {
+    json << "  \"x_values\": [";
+    for (std::size_t k = 0; k < x.size(); ++k) json << (k ? ", " : "") << x[k];
+    json << "],\n";
+  }
   json << "  \"series\": {\n";
   for (std::size_t i = 0; i < series.size(); ++i) {
     json << "    \"" << series[i].name << "\": [";
@@ -197,6 +146,11 @@ double Mean(const std::vector<double>& v) {
   for (double x : v) s += x;
   return v.empty() ? 0.0 : s / v.size();
 }
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
 double Std(const std::vector<double>& v) {
   const double m = Mean(v);
   double s = 0;
@@ -205,42 +159,486 @@ double Std(const std::vector<double>& v) {
 }
 
 int Usage() {
-  std::fprintf(stderr, "usage: swf-eval paper OUT [--runs N] [--shared DIR]\n");
+  std::fprintf(
+      stderr,
+      "usage: swf-eval paper OUT [--runs N] [--nees-runs N] [--shared DIR] [--only LIST]\n"
+      "       swf-eval euroc DIR [--out OUT] [--window K] [--max-tracks N] [--predict 0|1]\n"
+      "                      [--motion-sigma M,RAD]\n"
+      "  LIST: comma-separated subset of fig12,fig13,fig14,fig15,fig16,fig17,nees,kitti\n");
   return 2;
+}
+
+// "consistent" / "overconfident" / "conservative" from the frame-averaged NEES against the
+// 95% band of a single frame's run average.
+std::string NeesVerdict(const char* what, double mean, double dof, double lower, double upper,
+                        double fraction_inside) {
+  char text[512];
+  if (mean >= lower && mean <= upper) {
+    std::snprintf(text, sizeof(text),
+                  "%s NEES averages %.2f (expected %.0f, 95%% band [%.2f, %.2f]): consistent; "
+                  "%.0f%% of frames inside the band",
+                  what, mean, dof, lower, upper, 100.0 * fraction_inside);
+  } else if (mean > upper) {
+    std::snprintf(text, sizeof(text),
+                  "%s NEES averages %.2f (expected %.0f, 95%% band [%.2f, %.2f]): overconfident, "
+                  "the errors are %.2fx larger in variance (%.2fx in standard deviation) than the "
+                  "covariance states; %.0f%% of frames inside the band",
+                  what, mean, dof, lower, upper, mean / dof, std::sqrt(mean / dof),
+                  100.0 * fraction_inside);
+  } else {
+    std::snprintf(text, sizeof(text),
+                  "%s NEES averages %.2f (expected %.0f, 95%% band [%.2f, %.2f]): conservative, "
+                  "the covariance is %.2fx larger in variance than the errors; %.0f%% of frames "
+                  "inside the band",
+                  what, mean, dof, lower, upper, dof / mean, 100.0 * fraction_inside);
+  }
+  return text;
+}
+
+bool AddNees(const std::string& out, int runs, std::string* md) {
+  using swf::eval::NeesOptions;
+  using swf::eval::NeesResult;
+  // The Fig. 15 scene (sideways at 50 m, ~25 features per frame, landmarks entering and leaving)
+  // exercises pose and landmark marginalization; the descent scene with 40 landmarks is the EDL
+  // case.
+  SceneOptions sideways;
+  sideways.motion = SceneOptions::Motion::kSideways;
+  sideways.start_altitude_m = 50.0;
+  sideways.step_m = 3.3;
+  sideways.landmark_density_per_m2 = 0.07;
+  sideways.frames = 40;
+  SceneOptions descent;
+  descent.frames = 40;
+  descent.num_landmarks = 40;
+  SceneOptions descent_low = descent;  // same descent, 3.3x closer: 3.3x the disparity
+  descent_low.start_altitude_m = 30.0;
+  descent_low.step_m = 0.5;
+  struct Config {
+    std::string name;
+    SceneOptions scene;
+    SwfMode mode;
+    int window;
+  };
+  const std::vector<Config> configs = {
+      {"SWF(2) sideways", sideways, SwfMode::kSlidingWindow, 2},
+      {"SWF(5) sideways", sideways, SwfMode::kSlidingWindow, 5},
+      {"SWF(10) sideways", sideways, SwfMode::kSlidingWindow, 10},
+      {"SWF(5) descent", descent, SwfMode::kSlidingWindow, 5},
+      {"SWF(10) descent", descent, SwfMode::kSlidingWindow, 10},
+      {"batch descent", descent, SwfMode::kBatch, 40},
+      {"SWF(5) descent from 30 m", descent_low, SwfMode::kSlidingWindow, 5},
+  };
+  std::vector<NeesResult> results;
+  for (const Config& c : configs) {
+    NeesOptions o;
+    o.scene = c.scene;
+    o.mode = c.mode;
+    o.window = c.window;
+    o.runs = runs;
+    results.push_back(swf::eval::RunNees(c.name, o));
+  }
+  const NeesResult& first = results.front();
+  std::vector<Series> pose;
+  std::vector<Series> landmark;
+  std::string summary = "  \"runs\": " + std::to_string(runs) + ",\n  \"configs\": [";
+  char buf[2048];
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const NeesResult& r = results[i];
+    pose.push_back({r.name, r.pose_nees});
+    landmark.push_back({r.name, r.landmark_nees});
+    std::snprintf(
+        buf, sizeof(buf),
+        "%s\n    {\"name\": \"%s\", \"mean_pose_nees\": %.6g, \"mean_landmark_nees\": %.6g, "
+        "\"pose_fraction_inside\": %.4g, \"landmark_fraction_inside\": %.4g, "
+        "\"pose_consistent\": %s, \"landmark_consistent\": %s, \"covariance_failures\": %d, "
+        "\"update_failures\": %d}",
+        i ? "," : "", r.name.c_str(), r.mean_pose_nees, r.mean_landmark_nees,
+        r.pose_fraction_inside, r.landmark_fraction_inside,
+        r.mean_pose_nees >= r.pose_lower && r.mean_pose_nees <= r.pose_upper ? "true" : "false",
+        r.mean_landmark_nees >= r.landmark_lower && r.mean_landmark_nees <= r.landmark_upper
+            ? "true"
+            : "false",
+        r.covariance_failures, r.update_failures);
+    summary += buf;
+  }
+  std::snprintf(buf, sizeof(buf),
+                "\n  ],\n  \"pose_dof\": 6, \"pose_lower_95\": %.6g, \"pose_upper_95\": %.6g,\n"
+                "  \"landmark_dof\": 3, \"landmark_lower_95\": %.6g, \"landmark_upper_95\": %.6g",
+                first.pose_lower, first.pose_upper, first.landmark_lower, first.landmark_upper);
+  summary += buf;
+  const std::size_t frames = first.pose_nees.size();
+  pose.push_back({"95% lower", std::vector<double>(frames, first.pose_lower)});
+  pose.push_back({"95% upper", std::vector<double>(frames, first.pose_upper)});
+  landmark.push_back({"95% lower", std::vector<double>(frames, first.landmark_lower)});
+  landmark.push_back({"95% upper", std::vector<double>(frames, first.landmark_upper)});
+  if (!WriteExperiment(out, "nees_pose", "frame", pose, summary)) return false;
+  if (!WriteExperiment(out, "nees_landmark", "frame", landmark, summary)) return false;
+  auto add = [md](const std::string& line) { *md += line + "\n"; };
+  add("## Consistency: NEES over " + std::to_string(runs) + " Monte Carlo runs");
+  add("");
+  add("![nees pose](eval/nees_pose.png) ![nees landmark](eval/nees_landmark.png)");
+  add("");
+  add("Normalized estimation error squared of the newest pose (6 dof, error in the estimator's "
+      "own retraction, against `ComputeCovariances`' marginal) and of the active landmarks (3 "
+      "dof, averaged over the landmarks of a run), averaged over the runs at every frame. The "
+      "bounds are the two-sided 95% chi-square bounds of that run average, chi2(dof*runs)/runs "
+      "(for landmarks conservative: landmarks of one run share the pose errors). Each run draws "
+      "a new scene, new pixel noise (0.5 px, as R states) and new motion-input noise (as Q "
+      "states); the first pose's prior is centred on the truth. Averages below are over frames "
+      "2-40 (`out/eval/nees_pose.json`).");
+  add("");
+  for (const NeesResult& r : results) {
+    add("- " + r.name + ": " +
+        NeesVerdict("pose", r.mean_pose_nees, 6, r.pose_lower, r.pose_upper,
+                    r.pose_fraction_inside) +
+        ". " +
+        NeesVerdict("Landmark", r.mean_landmark_nees, 3, r.landmark_lower, r.landmark_upper,
+                    r.landmark_fraction_inside) +
+        ".");
+  }
+  add("");
+  auto find = [&results](const char* name) -> const NeesResult& {
+    for (const NeesResult& r : results)
+      if (r.name == name) return r;
+    return results.front();
+  };
+  const NeesResult& s5 = find("SWF(5) sideways");
+  const NeesResult& s2 = find("SWF(2) sideways");
+  const NeesResult& d5 = find("SWF(5) descent");
+  const NeesResult& d10 = find("SWF(10) descent");
+  const NeesResult& db = find("batch descent");
+  const NeesResult& d30 = find("SWF(5) descent from 30 m");
+  std::string over;
+  for (const NeesResult& r : results) {
+    if (r.mean_pose_nees <= r.pose_upper && r.mean_landmark_nees <= r.landmark_upper) continue;
+    std::snprintf(buf, sizeof(buf), "%s%s (pose %.2fx, landmarks %.2fx in variance)",
+                  over.empty() ? "" : "; ", r.name.c_str(), r.mean_pose_nees / 6,
+                  r.mean_landmark_nees / 3);
+    over += buf;
+  }
+  std::snprintf(buf, sizeof(buf),
+                "Summary, measured: on the sideways scene SWF(2)/SWF(5)/SWF(10) pose NEES "
+                "%.2f/%.2f/%.2f (expected 6), landmarks %.2f/%.2f/%.2f (expected 3). "
+                "Overconfident beyond the 95%% bound: %s. ",
+                s2.mean_pose_nees, s5.mean_pose_nees, find("SWF(10) sideways").mean_pose_nees,
+                s2.mean_landmark_nees, s5.mean_landmark_nees,
+                find("SWF(10) sideways").mean_landmark_nees, over.empty() ? "none" : over.c_str());
+  std::string summary_text = buf;
+  if (d5.mean_pose_nees > d5.pose_upper) {
+    std::snprintf(
+        buf, sizeof(buf),
+        "On the descent from 100 m the pose NEES falls with the window (SWF(5) %.2fx, SWF(10) "
+        "%.2fx, batch %.2fx) and the same descent started at 30 m gives %.2fx: the excess comes "
+        "from linearizing at long range (23 px disparity at 100 m against 0.5 px noise) and is "
+        "frozen into the prior the shorter the window is.",
+        d5.mean_pose_nees / 6, d10.mean_pose_nees / 6, db.mean_pose_nees / 6,
+        d30.mean_pose_nees / 6);
+    summary_text += buf;
+  }
+  add(summary_text);
+
+  add("");
+  return true;
+}
+
+bool AddFig16(const std::string& out, int runs, std::string* md) {
+  swf::eval::TrackLengthOptions o;
+  o.runs = runs;
+  const auto points = swf::eval::RunTrackLengthStudy(o);
+  std::vector<double> x;
+  std::vector<Series> series;
+  for (std::size_t w = 0; w < o.windows.size(); ++w) {
+    series.push_back({"SWF(" + std::to_string(o.windows[w]) + ")", {}});
+  }
+  std::string rows;
+  char buf[2048];
+  double features = 0.0;
+  for (const auto& p : points) {
+    x.push_back(p.mean_track_length);
+    features += p.mean_features_per_frame / static_cast<double>(points.size());
+    for (std::size_t w = 0; w < o.windows.size(); ++w) series[w].y.push_back(p.final_mse_m2[w]);
+    std::string mse;
+    for (std::size_t w = 0; w < o.windows.size(); ++w) {
+      mse += (w ? ", " : "") + std::to_string(p.final_mse_m2[w]);
+    }
+    std::snprintf(buf, sizeof(buf),
+                  "%s\n    {\"step_m\": %.4g, \"mean_track_length\": %.4g, "
+                  "\"features_per_frame\": %.4g, \"final_mse_m2\": [",
+                  rows.empty() ? "" : ",", p.step_m, p.mean_track_length,
+                  p.mean_features_per_frame);
+    rows += buf + mse + "]}";
+  }
+  std::string windows;
+  for (int k : o.windows) windows += (windows.empty() ? "" : ", ") + std::to_string(k);
+  // How much each axis moves the MSE: the largest max/min ratio along a row (window, fixed track
+  // length) and along a column (track length, fixed window).
+  double across_windows = 1.0;
+  for (const auto& p : points) {
+    const auto [lo, hi] = std::minmax_element(p.final_mse_m2.begin(), p.final_mse_m2.end());
+    across_windows = std::max(across_windows, *hi / *lo);
+  }
+  double across_tracks = 1.0;
+  for (const Series& s : series) {
+    const auto [lo, hi] = std::minmax_element(s.y.begin(), s.y.end());
+    across_tracks = std::max(across_tracks, *hi / *lo);
+  }
+  std::snprintf(buf, sizeof(buf),
+                "  \"runs\": %d, \"frames\": %d, \"windows\": [%s],\n"
+                "  \"max_ratio_across_windows\": %.4g, \"max_ratio_across_track_lengths\": %.4g,\n"
+                "  \"points\": [",
+                runs, o.frames, windows.c_str(), across_windows, across_tracks);
+  if (!WriteExperiment(out, "fig16_track_length", "average track length (frames)", series,
+                       std::string(buf) + rows + "\n  ]", x)) {
+    return false;
+  }
+  auto add = [md](const std::string& line) { *md += line + "\n"; };
+  add("## Fig. 16: final map MSE against average track length and window size");
+  add("");
+  add("![fig16](eval/fig16_track_length.png)");
+  add("");
+  std::string table = "| track length |";
+  for (int k : o.windows) table += " SWF(" + std::to_string(k) + ") |";
+  add(table);
+  table = "|---|";
+  for (std::size_t w = 0; w < o.windows.size(); ++w) table += "---|";
+  add(table);
+  for (const auto& p : points) {
+    std::snprintf(buf, sizeof(buf), "| %.1f |", p.mean_track_length);
+    table = buf;
+    for (double v : p.final_mse_m2) {
+      std::snprintf(buf, sizeof(buf), " %.3g |", v);
+      table += buf;
+    }
+    add(table);
+  }
+  add("");
+  // Where the window matters: the window ratio at long tracks (>= 8 frames) and the largest
+  // ratio of the shortest window over the longest.
+  double long_ratio = 1.0;
+  double short_ratio = 1.0;
+  double short_length = 0.0;
+  for (const auto& p : points) {
+    const auto [lo, hi] = std::minmax_element(p.final_mse_m2.begin(), p.final_mse_m2.end());
+    if (p.mean_track_length >= 8.0) long_ratio = std::max(long_ratio, *hi / *lo);
+    const double r = p.final_mse_m2.front() / p.final_mse_m2.back();
+    if (r > short_ratio) {
+      short_ratio = r;
+      short_length = p.mean_track_length;
+    }
+  }
+  std::snprintf(
+      buf, sizeof(buf),
+      "Sideways flight at 50 m, %d frames, %.0f features per frame on average (paper: ~30), the "
+      "frame step setting the track length; final MSE (m^2) of every landmark seen, %d runs per "
+      "point. Changing the track length moves the MSE by up to %.0fx at a fixed window; with "
+      "tracks of 8 frames or more the window moves it by at most %.2fx. Paper: MSE largely "
+      "independent of window size, track length matters more. ",
+      o.frames, features, runs, across_tracks, long_ratio);
+  std::string text = buf;
+  if (short_ratio > 2.0) {
+    std::snprintf(buf, sizeof(buf),
+                  "Different from the paper: with short tracks the window matters here, SWF(%d) "
+                  "ends %.1fx worse than SWF(%d) at %.1f-frame tracks (early marginalization of "
+                  "poses whose landmarks have little parallax yet; see the NEES section for "
+                  "whether the short window is also overconfident).",
+                  o.windows.front(), short_ratio, o.windows.back(), short_length);
+  } else {
+    std::snprintf(buf, sizeof(buf),
+                  "As in the paper: the shortest window is never worse than %.2fx the longest.",
+                  std::max(short_ratio, 1.0));
+  }
+  text += buf;
+  add(text);
+  add("");
+  return true;
+}
+
+int RunEurocCommand(int argc, char** argv) {
+  const std::string dir = argv[2];
+  std::string out = "out/eval";
+  swf::eval::EurocOptions options;
+  for (int i = 3; i < argc; i += 2) {
+    const std::string a = argv[i];
+    if (i + 1 >= argc) return Usage();
+    if (a == "--out") {
+      out = argv[i + 1];
+    } else if (a == "--window") {
+      options.window = std::atoi(argv[i + 1]);
+    } else if (a == "--max-tracks") {
+      options.max_tracks = static_cast<std::size_t>(std::atoi(argv[i + 1]));
+    } else if (a == "--motion-sigma") {
+      // "M,RAD": the constant-velocity process noise per frame.
+      if (std::sscanf(argv[i + 1], "%lf,%lf", &options.motion_sigma_m, &options.motion_sigma_rad) !=
+              2 ||
+          !(options.motion_sigma_m > 0.0) || !(options.motion_sigma_rad > 0.0)) {
+        return Usage();
+      }
+    } else if (a == "--predict") {
+      options.predict = std::atoi(argv[i + 1]) != 0;
+    } else {
+      return Usage();
+    }
+  }
+  if (options.window < 2 || options.window > 20 || options.max_tracks < 10 ||
+      options.max_tracks > swf::frontend::kMaxTracks) {
+    return Usage();
+  }
+  swf::eval::EurocResult result;
+  std::string error;
+  if (!swf::eval::RunEuroc(dir, options, &result, &error)) {
+    std::fprintf(stderr, "swf-eval euroc: %s\n", error.c_str());
+    return 1;
+  }
+  std::vector<Series> errors;
+  std::string methods;
+  std::string ate;
+  char buf[1024];
+  for (const auto& run : result.runs) {
+    const std::string key = run.mode == SwfMode::kSlidingWindow ? "swf" : "vo";
+    const std::string tum = "euroc_" + key + "_tum.txt";
+    if (!swf::eval::WriteTum(out + "/" + tum, run.estimate)) {
+      std::fprintf(stderr, "swf-eval euroc: cannot write %s/%s\n", out.c_str(), tum.c_str());
+      return 1;
+    }
+    errors.push_back({run.name + " position error (m)", run.error_m});
+    std::snprintf(buf, sizeof(buf),
+                  ",\n  \"%s\": {\"name\": \"%s\", \"ate_rmse_m\": %.6g, \"ate_max_m\": %.6g, "
+                  "\"final_error_m\": %.6g, \"update_failures\": %d, "
+                  "\"measurements_per_frame\": %.4g, \"seconds\": %.3g, \"trajectory\": \"%s\"}",
+                  key.c_str(), run.name.c_str(), run.ate_rmse_m, run.ate_max_m, run.final_error_m,
+                  run.update_failures, run.mean_measurements, run.seconds, tum.c_str());
+    methods += buf;
+    std::snprintf(buf, sizeof(buf), "%s\"%s\": %.6g", ate.empty() ? "" : ", ", key.c_str(),
+                  run.ate_rmse_m);
+    ate += buf;
+  }
+  {
+    std::ofstream json(out + "/euroc.json");
+    std::snprintf(buf, sizeof(buf),
+                  "{\n  \"experiment\": \"euroc\",\n  \"dataset\": \"%s\",\n  \"frames\": %d, "
+                  "\"window\": %d, \"max_tracks\": %zu,\n  \"rectified_focal_px\": %.6g, "
+                  "\"baseline_m\": %.6g,\n  \"gt_path_length_m\": %.6g, \"gt_extent_m\": %.6g,\n"
+                  "  \"alignment\": \"SE(3), Horn/Umeyama without scale, all frames\",\n"
+                  "  \"ate_rmse_m\": {%s}",
+                  dir.c_str(), result.frames, options.window, options.max_tracks, result.focal_px,
+                  result.baseline_m, result.gt_path_length_m, result.gt_extent_m, ate.c_str());
+    json << buf << methods << "\n}\n";
+    if (!json) {
+      std::fprintf(stderr, "swf-eval euroc: cannot write %s/euroc.json\n", out.c_str());
+      return 1;
+    }
+    std::printf("swf-eval: wrote %s/euroc.json\n", out.c_str());
+  }
+  if (!WriteExperiment(out, "euroc_error", "frame", errors, "  \"dataset\": \"" + dir + "\"")) {
+    return 1;
+  }
+  const auto& s = result.runs[0];
+  const auto& v = result.runs[1];
+  std::string md;
+  auto add = [&md](const std::string& line) { md += line + "\n"; };
+  add("## Real data: EuRoC (`swf-eval euroc DIR`)");
+  add("");
+  add("![euroc](eval/euroc_error.png)");
+  add("");
+  std::snprintf(
+      buf, sizeof(buf),
+      "The whole pipeline on `%s` (%d stereo frames): rectification from `sensor.yaml` (f = "
+      "%.1f px, baseline %.4f m), the flight front end (at most %zu tracks, the estimator's "
+      "predicted pose and landmarks passed back for warped tracking), and the filter with a "
+      "constant-velocity process model (no IMU), window %d. The online estimate (newest pose "
+      "after each frame) is written in TUM format (`out/eval/euroc_swf_tum.txt`, "
+      "`euroc_vo_tum.txt`) and compared with `groundtruth_tum.txt` after an SE(3) alignment "
+      "(Horn/Umeyama, no scale).",
+      dir.c_str(), result.frames, result.focal_px, result.baseline_m, options.max_tracks,
+      options.window);
+  add(buf);
+  add("");
+  add("| method | ATE RMSE (m) | max (m) | last frame (m) | measurements/frame | run time (s) |");
+  add("|---|---|---|---|---|---|");
+  for (const auto& run : result.runs) {
+    std::snprintf(buf, sizeof(buf), "| %s | %.4f | %.4f | %.4f | %.0f | %.1f |", run.name.c_str(),
+                  run.ate_rmse_m, run.ate_max_m, run.final_error_m, run.mean_measurements,
+                  run.seconds);
+    add(buf);
+  }
+  add("");
+  std::snprintf(
+      buf, sizeof(buf),
+      "The ground-truth path over these frames is %.3f m long and never more than %.3f m from "
+      "its start: the sample is the nearly stationary start of V1_01, so the ATE measures "
+      "stationary drift and jitter, not tracking over distance. SWF ATE %.2f mm against VO "
+      "%.2f mm (%s). The paper has no EuRoC experiment.",
+      result.gt_path_length_m, result.gt_extent_m, 1e3 * s.ate_rmse_m, 1e3 * v.ate_rmse_m,
+      s.ate_rmse_m < 0.8 * v.ate_rmse_m
+          ? "SWF clearly lower, consistent with the paper's point that the SWF does not suffer "
+            "from VO's stationary drift"
+          : "within 20% of each other: this short static sample does not separate them");
+  add(buf);
+  add("");
+  std::snprintf(
+      buf, sizeof(buf),
+      "Median per-frame position error after alignment: SWF %.2f mm, VO %.2f mm; at "
+      "the last frame %.1f mm and %.1f mm. %s",
+      1e3 * Median(s.error_m), 1e3 * Median(v.error_m), 1e3 * s.final_error_m,
+      1e3 * v.final_error_m,
+      s.final_error_m > 3.0 * Median(s.error_m)
+          ? "The error is concentrated at the end: over the last frames the estimate "
+            "moves by centimetres while the ground truth and the raw images (flow "
+            "below 0.1 px between frames, measured with swf-track) are static, in both "
+            "modes and also with a 1 m process noise; an open estimator/front-end issue, not "
+            "a property of the data."
+          : "");
+  add(buf);
+  add("");
+  std::ofstream md_file(out + "/euroc.md");
+  md_file << md;
+  if (!md_file) return 1;
+  std::printf("swf-eval: wrote %s/euroc.md\n", out.c_str());
+  return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 3 && std::string(argv[1]) == "euroc") return RunEurocCommand(argc, argv);
   if (argc < 3 || std::string(argv[1]) != "paper") return Usage();
   const std::string out = argv[2];
   int runs = 5;
+  int nees_runs = 50;
   std::string shared = "../shared";
-  for (int i = 3; i + 1 < argc; i += 2) {
+  std::string only;
+  for (int i = 3; i < argc; i += 2) {
     const std::string a = argv[i];
+    if (i + 1 >= argc) return Usage();
     if (a == "--runs") {
       runs = std::atoi(argv[i + 1]);
+    } else if (a == "--nees-runs") {
+      nees_runs = std::atoi(argv[i + 1]);
     } else if (a == "--shared") {
       shared = argv[i + 1];
+    } else if (a == "--only") {
+      only = "," + std::string(argv[i + 1]) + ",";
     } else {
       return Usage();
     }
   }
-  if (runs < 1) return Usage();
-  const double qt = 0.1;  // IMU-like relative motion: 10 cm, 2 mrad per frame (1 sigma)
-  const double qr = 0.002;
+  if (runs < 1 || nees_runs < 2) return Usage();
+  auto want = [&only](const char* name) {
+    return only.empty() || only.find("," + std::string(name) + ",") != std::string::npos;
+  };
   auto swf = [&](SwfMode mode, int k) {
     return [=](const SyntheticScene& s, std::uint64_t seed) {
-      return RunFilter<Filter>(s, mode, k, qt, qr, seed);
+      return RunFilter<Filter>(s, mode, k, seed);
     };
   };
-  char buf[512];
+  char buf[2048];
   std::string md;  // docs/results.md, written from the same numbers as the JSON files
   auto add = [&md](const std::string& line) { md += line + "\n"; };
   add("# Results: the paper's experiments rerun");
   add("");
   add("Generated by `tools/run eval` (`swf-eval paper out/eval --runs " + std::to_string(runs) +
-      "`); every number below is in a JSON file under `out/eval/` from the same run. Scenes are "
+      "` and `swf-eval euroc`); every number below is in a JSON file under `out/eval/` from the "
+      "same run. Scenes are "
       "measurement-level (the estimator's synthetic scene: EDL rig, 1 m baseline, ~25 deg FOV, "
       "1024x768, 0.5 px noise, IMU-like motion input 10 cm / 2 mrad per frame). Errors are mean "
       "squared landmark error against truth over every landmark seen so far, averaged over the "
@@ -248,7 +646,7 @@ int main(int argc, char** argv) {
   add("");
 
   // Fig. 12: static cameras, 30 landmarks.
-  {
+  if (want("fig12")) {
     SceneOptions so;
     so.motion = SceneOptions::Motion::kStatic;
     so.start_altitude_m = 30.0;
@@ -269,25 +667,34 @@ int main(int argc, char** argv) {
     add("");
     add("![fig12](eval/fig12_static.png)");
     add("");
-    std::snprintf(buf, sizeof(buf),
-                  "SWF(5) MSE after 40 frames %.3g m^2; the 1/m curve from frame 1 gives %.3g m^2; "
-                  "CRLB %.3g m^2. Paper: convergence close to 1/m with stationary cameras.",
-                  swf5.y.back(), one_over_m.y.back(), crlb.y.back());
+    const double vs_one_over_m = swf5.y.back() / one_over_m.y.back();
+    std::snprintf(
+        buf, sizeof(buf),
+        "SWF(5) MSE after 40 frames %.3g m^2; the 1/m curve from frame 1 gives %.3g m^2; CRLB "
+        "%.3g m^2. Paper: convergence close to 1/m with stationary cameras. Ours: %.2fx the 1/m "
+        "value and %.2fx the CRLB after 40 frames (%s).",
+        swf5.y.back(), one_over_m.y.back(), crlb.y.back(), vs_one_over_m,
+        swf5.y.back() / crlb.y.back(),
+        vs_one_over_m < 1.5 && vs_one_over_m > 0.67
+            ? "matches the paper"
+            : "differs from the paper: the 1/m line is anchored at one noisy first frame, the "
+              "CRLB is the measured reference");
     add(buf);
     add("");
   }
   // Fig. 13: descent with 150 landmarks tracked throughout.
-  {
+  if (want("fig13")) {
     SceneOptions so;
     so.frames = 40;
     std::vector<Series> s;
-    std::vector<double> rms_batch, rms_vo, rms_s3, rms_s10;
+    std::vector<double> rms_batch, rms_vo, rms_vo2, rms_s3, rms_s10;
     s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40), &rms_batch));
     s.push_back(MonteCarlo("SWF(3)", so, runs, swf(SwfMode::kSlidingWindow, 3), &rms_s3));
     s.push_back(MonteCarlo("SWF(4)", so, runs, swf(SwfMode::kSlidingWindow, 4)));
     s.push_back(MonteCarlo("SWF(5)", so, runs, swf(SwfMode::kSlidingWindow, 5)));
     s.push_back(MonteCarlo("SWF(10)", so, runs, swf(SwfMode::kSlidingWindow, 10), &rms_s10));
     s.push_back(MonteCarlo("VO(10)", so, runs, swf(SwfMode::kVisualOdometry, 10), &rms_vo));
+    s.push_back(MonteCarlo("VO(2)", so, runs, swf(SwfMode::kVisualOdometry, 2), &rms_vo2));
     so.seed = 100;
     s.push_back(Series{"CRLB", CramerRao(so)});
     // The paper's claim: over 10 frames SWF error ~76% below VO, std ~3.5x smaller.
@@ -295,9 +702,12 @@ int main(int argc, char** argv) {
         buf, sizeof(buf),
         "  \"runs\": %d, \"final_rms_m\": {\"batch\": %.6g, \"swf3\": %.6g, \"swf10\": %.6g, "
         "\"vo10\": %.6g},\n  \"swf10_error_below_vo10_percent\": %.3g,\n"
-        "  \"vo10_std_over_swf10_std\": %.3g",
+        "  \"vo10_std_over_swf10_std\": %.3g,\n  \"vo2_final_rms_m\": %.6g, "
+        "\"swf10_error_below_vo2_percent\": %.3g, \"vo2_std_over_swf10_std\": %.3g",
         runs, Mean(rms_batch), Mean(rms_s3), Mean(rms_s10), Mean(rms_vo),
-        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)), Std(rms_vo) / std::max(Std(rms_s10), 1e-12));
+        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)), Std(rms_vo) / std::max(Std(rms_s10), 1e-12),
+        Mean(rms_vo2), 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
+        Std(rms_vo2) / std::max(Std(rms_s10), 1e-12));
     WriteExperiment(out, "fig13_descent", "frame", s, buf);
     add("## Fig. 13: descent, 150 landmarks tracked throughout (100 m to 41.5 m)");
     add("");
@@ -306,24 +716,36 @@ int main(int argc, char** argv) {
     std::snprintf(
         buf, sizeof(buf),
         "Final landmark RMS: batch %.3f m, SWF(3) %.3f m, SWF(10) %.3f m, VO(10) %.3f m. "
-        "Paper: 3-, 4-, 5-frame SWFs come close to batch. Ours: SWF(10) matches batch, "
-        "short windows carry linearization error frozen into the prior from far altitude "
-        "(with 0.01 px noise every window equals batch to 1e-5 m; see estimator/README.md).",
-        Mean(rms_batch), Mean(rms_s3), Mean(rms_s10), Mean(rms_vo));
+        "Paper: 3-, 4-, 5-frame SWFs come close to batch. Ours: SWF(3) ends %+.0f%% and SWF(10) "
+        "%+.0f%% from batch in RMS. What short windows lose is linearization error frozen into "
+        "the prior at far altitude: the NEES section measures SWF(5) on this descent "
+        "overconfident while batch and the same descent from 30 m are not (and with 0.01 px "
+        "noise every window equals batch to 1e-5 m; estimator/README.md).",
+        Mean(rms_batch), Mean(rms_s3), Mean(rms_s10), Mean(rms_vo),
+        100.0 * (Mean(rms_s3) / Mean(rms_batch) - 1.0),
+        100.0 * (Mean(rms_s10) / Mean(rms_batch) - 1.0));
     add(buf);
     add("");
     std::snprintf(
         buf, sizeof(buf),
-        "Paper claim (4.2.4): over 10 frames SWF error ~76%% below VO, standard deviation ~3.5x "
-        "smaller. Ours, K=10 on this descent: %.0f%% below VO, standard deviation ratio %.2f over "
-        "%d runs.",
-        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)), Std(rms_vo) / std::max(Std(rms_s10), 1e-12),
-        runs);
+        "**Paper claim (4.2.4): over 10 frames SWF error ~76%% below VO, standard deviation "
+        "~3.5x smaller.** Ours on this descent (final landmark RMS, %d runs): SWF(10) is %.0f%% "
+        "below VO(10) (a 10-pose window that deletes instead of marginalizing), standard "
+        "deviation ratio %.2f; against VO(2) (frame-to-frame, the paper's k=1 deleting "
+        "filter) %.0f%% below, standard deviation ratio %.2f. %s",
+        runs, 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)),
+        Std(rms_vo) / std::max(Std(rms_s10), 1e-12), 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
+        Std(rms_vo2) / std::max(Std(rms_s10), 1e-12),
+        runs < 10 ? "The standard deviations come from fewer than 10 runs and are only "
+                    "indicative. The paper does not state its VO's window or scene, so the "
+                    "remaining gap to 76% is not attributable further."
+                  : "The paper does not state its VO's window or scene, so the remaining gap to "
+                    "76% is not attributable further.");
     add(buf);
     add("");
   }
   // Fig. 14: run time per frame and state-vector size.
-  {
+  if (want("fig14")) {
     SceneOptions so;
     so.motion = SceneOptions::Motion::kSideways;
     so.frames = 150;
@@ -332,9 +754,13 @@ int main(int argc, char** argv) {
     so.landmark_density_per_m2 = 0.055;
     so.seed = 7;
     const SyntheticScene scene(so);
-    const Trace batch = RunFilter<BigBatch>(scene, SwfMode::kBatch, 150, qt, qr, 1);
-    const Trace s10 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 10, qt, qr, 1);
-    const Trace s20 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 20, qt, qr, 1);
+    const Trace batch = RunFilter<BigBatch>(scene, SwfMode::kBatch, 150, 1);
+    double features_per_frame = 0.0;
+    for (const auto& f : scene.frames()) {
+      features_per_frame += static_cast<double>(f.obs.size()) / scene.frames().size();
+    }
+    const Trace s10 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 10, 1);
+    const Trace s20 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 20, 1);
     std::snprintf(buf, sizeof(buf), "  \"note\": \"wall-clock ms of Update() on the 2-core VM\"");
     WriteExperiment(
         out, "fig14a_runtime", "frame",
@@ -343,8 +769,8 @@ int main(int argc, char** argv) {
     so.landmark_density_per_m2 = 0.08;
     so.frames = 100;
     const SyntheticScene scene_b(so);
-    const Trace with = RunFilter<Filter>(scene_b, SwfMode::kSlidingWindow, 2, qt, qr, 1);
-    const Trace without = RunFilter<BigBatch>(scene_b, SwfMode::kBatch, 100, qt, qr, 1);
+    const Trace with = RunFilter<Filter>(scene_b, SwfMode::kSlidingWindow, 2, 1);
+    const Trace without = RunFilter<BigBatch>(scene_b, SwfMode::kBatch, 100, 1);
     std::snprintf(buf, sizeof(buf),
                   "  \"mean_state_dim_swf2\": %.4g, \"final_state_dim_batch\": %.4g",
                   Mean(with.state_dim), without.state_dim.back());
@@ -358,17 +784,19 @@ int main(int argc, char** argv) {
     add("");
     std::snprintf(
         buf, sizeof(buf),
-        "Per-frame update (wall clock, shared VM): SWF(10) median-ish %.2f ms, SWF(20) %.2f ms at "
-        "the last frame, batch %.1f ms at frame 150 and growing. State size with a 2-frame "
-        "window: mean %.0f, without marginalization %.0f after 100 frames (paper: bounded vs "
-        "growing). Benchmarks with medians: docs/benchmarks.md.",
-        s10.update_ms.back(), s20.update_ms.back(), batch.update_ms.back(), Mean(with.state_dim),
-        without.state_dim.back());
+        "Per-frame update (wall clock, shared VM, one run): median over the 150 frames SWF(10) "
+        "%.2f ms, SWF(20) %.2f ms; batch %.1f ms at frame 150 and growing. Mean state size "
+        "SWF(10) %.0f, SWF(20) %.0f (paper: ~132 and ~172 with 76 landmarks and ~20 features "
+        "per frame; ours sees %.0f features per frame). State size with a 2-frame window: mean "
+        "%.0f, without marginalization %.0f after 100 frames (paper: bounded vs growing). "
+        "Benchmarks with medians: docs/benchmarks.md.",
+        Median(s10.update_ms), Median(s20.update_ms), batch.update_ms.back(), Mean(s10.state_dim),
+        Mean(s20.state_dim), features_per_frame, Mean(with.state_dim), without.state_dim.back());
     add(buf);
     add("");
   }
   // Fig. 15: sideways motion, ~85% overlap, ~25 features per frame.
-  {
+  if (want("fig15")) {
     SceneOptions so;
     so.motion = SceneOptions::Motion::kSideways;
     so.start_altitude_m = 50.0;
@@ -388,13 +816,20 @@ int main(int argc, char** argv) {
     std::snprintf(
         buf, sizeof(buf),
         "Final MSE: batch %.3g, SWF(2) %.3g, SWF(10) %.3g m^2. Paper: the 2-frame SWF suffers "
-        "from early marginalization, the 10-frame SWF follows batch.",
-        s[0].y.back(), s[1].y.back(), s[2].y.back());
+        "from early marginalization, the 10-frame SWF follows batch. Ours: SWF(2) %.2fx and "
+        "SWF(10) %.2fx the batch MSE (%s).",
+        s[0].y.back(), s[1].y.back(), s[2].y.back(), s[1].y.back() / s[0].y.back(),
+        s[2].y.back() / s[0].y.back(),
+        s[1].y.back() > 1.5 * s[0].y.back() && s[2].y.back() < 1.2 * s[0].y.back()
+            ? "reproduced"
+            : "not reproduced at this run count");
     add(buf);
     add("");
   }
+  // Fig. 16: final map MSE against average track length and window size.
+  if (want("fig16") && !AddFig16(out, runs, &md)) return 1;
   // Fig. 17: VSDF against SWF with three active frames, every landmark in every frame.
-  {
+  if (want("fig17")) {
     SceneOptions so;
     so.frames = 40;
     so.num_landmarks = 100;
@@ -411,14 +846,21 @@ int main(int argc, char** argv) {
     std::snprintf(
         buf, sizeof(buf),
         "Final MSE: SWF(3) %.3g, VSDF(3) %.3g, batch %.3g m^2. Paper: VSDF converges worse. "
-        "Ours: this difference is not reproduced on our scenes (an open question, see the "
-        "estimator issue).",
-        s[0].y.back(), s[1].y.back(), s[2].y.back());
+        "Ours: VSDF(3) ends at %.2fx the SWF(3) MSE, %s",
+        s[0].y.back(), s[1].y.back(), s[2].y.back(), s[1].y.back() / s[0].y.back(),
+        s[1].y.back() > 1.2 * s[0].y.back()
+            ? "reproducing the paper's ordering."
+            : "so the paper's difference is not reproduced on this scene. The cause is not "
+              "established here (open question for the estimator: the diagonal-only Schur "
+              "term of eq. 12 is implemented in the estimator's kVsdf mode, not in this "
+              "tool).");
     add(buf);
     add("");
   }
+  // Consistency: NEES over Monte Carlo runs.
+  if (want("nees") && !AddNees(out, nees_runs, &md)) return 1;
   // Real data: kitti-vo batch against sliding windows on the same global cost.
-  {
+  if (want("kitti")) {
     swf::tools::KittiVoProblem problem;
     std::string error;
     const std::string dir = shared + "/data/kitti-vo/";
@@ -460,10 +902,6 @@ int main(int argc, char** argv) {
     add(buf);
     add("");
   }
-  add("## Not yet evaluated");
-  add("");
-  add("Fig. 16 (MSE against track length and window), NEES consistency over 50 Monte Carlo runs, "
-      "and EuRoC (`swf-eval euroc DIR`) are not implemented yet.");
   std::ofstream md_file(out + "/results.md");
   md_file << md;
   if (!md_file) {
