@@ -194,10 +194,14 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     return 2;
   }
   if (replay) {
-    sets.insert(sets.begin(), "source: log");
-    sets.insert(sets.begin() + 1, "log.path: " + log_path);
-    sets.insert(sets.begin() + 2, "record.frames: false");
-    if (record_given) sets.insert(sets.begin() + 3, "record.path: " + record_override);
+    config.source = SourceKind::kLog;
+    config.log_path = log_path;
+    config.record_frames = false;
+    config.record_path = record_given ? record_override : "";
+    if (!ValidateConfig(config, config_path, &error)) {
+      std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
+      return 2;
+    }
   }
   for (const std::string& s : sets) {
     if (!OverrideConfig(s, &config, &error)) {

@@ -115,7 +115,7 @@ Setter OneOf(Get get, std::initializer_list<const char*> allowed) {
 }
 
 const std::map<std::string, Setter>& Fields() {
-  static const std::map<std::string, Setter> fields = [] {
+  static const std::map<std::string, Setter> kFields = [] {
     std::map<std::string, Setter> f;
     f["source"] = [](const std::string& v, FswConfig* c, std::string* why) {
       if (v == "sim")
@@ -261,7 +261,7 @@ const std::map<std::string, Setter>& Fields() {
     f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
     return f;
   }();
-  return fields;
+  return kFields;
 }
 
 bool ApplyLine(const std::string& raw, const std::string& where, FswConfig* config,

@@ -95,7 +95,14 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   frame.utime = pair.left_exposure_ns / core::kNsPerUs;
   frame.seq = static_cast<std::int64_t>(pair.seq);
   last_frame_utime_ = frame.utime;
-  frame.has_motion = motion_ != nullptr && motion_->Motion(pair.seq, &frame.motion);
+  MotionInput motion;
+  frame.has_motion = motion_ != nullptr && motion_->Motion(pair.seq, &motion);
+  if (frame.has_motion) {
+    frame.motion.t = estimator::Vec3<double>(motion.translation_m[0], motion.translation_m[1],
+                                             motion.translation_m[2]);
+    frame.motion.R = estimator::ExpSO3<double>(estimator::Vec3<double>(
+        motion.rotation_rad[0], motion.rotation_rad[1], motion.rotation_rad[2]));
+  }
 
   Inject(kStageRectify);
   Status stage = pipeline_->Rectify(frame);
@@ -128,7 +135,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
       r.dropped_before = static_cast<std::int32_t>(pair.dropped_before);
       r.rectified = !pipeline_->Rectifies();
       r.has_motion = frame.has_motion;
-      r.motion = frame.motion;
+      r.motion = motion;
       r.width = w;
       r.height = h;
       for (std::int32_t y = 0; y < h; ++y) {

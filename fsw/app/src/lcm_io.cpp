@@ -139,13 +139,9 @@ void OutputThread::Handle(const RecordRef& ref) {
       m.dropped_before = r.dropped_before;
       m.rectified = r.rectified;
       m.has_motion = r.has_motion;
-      {
-        const Eigen::AngleAxisd aa(r.motion.R);
-        const Eigen::Vector3d rv = aa.angle() * aa.axis();
-        for (int i = 0; i < 3; ++i) {
-          m.motion_translation_m[i] = r.has_motion ? r.motion.t[i] : 0.0;
-          m.motion_rotation_rad[i] = r.has_motion ? rv[i] : 0.0;
-        }
+      for (int i = 0; i < 3; ++i) {
+        m.motion_translation_m[i] = r.has_motion ? r.motion.translation_m[i] : 0.0;
+        m.motion_rotation_rad[i] = r.has_motion ? r.motion.rotation_rad[i] : 0.0;
       }
       m.width = r.width;
       m.height = r.height;
@@ -361,11 +357,9 @@ bool LogStereoSource::Load(const std::string& path, const std::string& channel,
     f.right_ns = msg.right_exposure_utime * core::kNsPerUs;
     f.dropped_before = msg.dropped_before;
     f.has_motion = msg.has_motion;
-    if (f.has_motion) {
-      f.motion.t = Eigen::Vector3d(msg.motion_translation_m[0], msg.motion_translation_m[1],
-                                   msg.motion_translation_m[2]);
-      f.motion.R = estimator::ExpSO3<double>(Eigen::Vector3d(
-          msg.motion_rotation_rad[0], msg.motion_rotation_rad[1], msg.motion_rotation_rad[2]));
+    for (int i = 0; i < 3; ++i) {
+      f.motion.translation_m[i] = msg.motion_translation_m[i];
+      f.motion.rotation_rad[i] = msg.motion_rotation_rad[i];
     }
     f.left = std::move(msg.left);
     f.right = std::move(msg.right);
@@ -374,11 +368,11 @@ bool LogStereoSource::Load(const std::string& path, const std::string& channel,
   return true;
 }
 
-bool LogStereoSource::Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) {
+bool LogStereoSource::Motion(std::uint64_t seq, MotionInput* input) {
   // Frames are served in order; the one just served is next_ - 1.
   if (next_ == 0 || frames_[next_ - 1].seq != static_cast<std::int64_t>(seq)) return false;
   if (!frames_[next_ - 1].has_motion) return false;
-  *camera_prev_T_camera = frames_[next_ - 1].motion;
+  *input = frames_[next_ - 1].motion;
   return true;
 }
 

@@ -1,5 +1,6 @@
 #include "swf/app/sim_world.hpp"
 
+#include <Eigen/Geometry>
 #include <atomic>
 #include <cstdlib>
 #include <random>
@@ -74,7 +75,7 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
   }
   // The simulated IMU, drawn once from the seed: same configuration, same motion inputs.
   imu_ = config.sim.imu;
-  motion_.assign(num_frames_, estimator::Pose<double>::Identity());
+  motion_.assign(num_frames_, MotionInput{});
   std::mt19937_64 rng(config.sim.seed * 7919u + 17u);
   std::normal_distribution<double> gauss(0.0, 1.0);
   for (std::int32_t k = 1; k < num_frames_; ++k) {
@@ -84,9 +85,12 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
     Eigen::Vector3d dr;
     for (int i = 0; i < 3; ++i) dt[i] = config.sim.imu_sigma_m * gauss(rng);
     for (int i = 0; i < 3; ++i) dr[i] = config.sim.imu_sigma_rad * gauss(rng);
-    u.t += dt;
-    u.R = u.R * estimator::ExpSO3<double>(dr);
-    motion_[k] = u;
+    const Eigen::AngleAxisd aa(Eigen::Matrix3d(u.R * estimator::ExpSO3<double>(dr)));
+    const Eigen::Vector3d rv = aa.angle() * aa.axis();
+    for (int i = 0; i < 3; ++i) {
+      motion_[k].translation_m[i] = u.t[i] + dt[i];
+      motion_[k].rotation_rad[i] = rv[i];
+    }
   }
   sim::RenderOptions ro;
   ro.rig = rig_;
@@ -146,9 +150,9 @@ bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std
   return true;
 }
 
-bool SimWorld::Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) {
+bool SimWorld::Motion(std::uint64_t seq, MotionInput* input) {
   if (!imu_ || seq == 0 || seq >= motion_.size()) return false;
-  *camera_prev_T_camera = motion_[seq];
+  *input = motion_[seq];
   return true;
 }
 

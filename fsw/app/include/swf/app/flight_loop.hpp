@@ -22,6 +22,7 @@
 #include <semaphore>
 #include <thread>
 
+#include "swf/app/motion.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/records.hpp"
 #include "swf/app/stage_timer.hpp"
@@ -58,14 +59,6 @@ class HazardStage {
  public:
   virtual ~HazardStage() = default;
   virtual core::Status Process(const MapOutput& map) = 0;
-};
-
-// The navigation system's relative motion camera_prev_T_camera for a frame (an IMU / navigation
-// filter; the simulator; a log). Called on the real-time thread: must not allocate or block.
-class MotionProvider {
- public:
-  virtual ~MotionProvider() = default;
-  virtual bool Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) = 0;
 };
 
 struct LoopCounters {

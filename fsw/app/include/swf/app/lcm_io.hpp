@@ -122,7 +122,7 @@ class LogStereoSource final : public drivers::StereoSource, public MotionProvide
   void Stop() override {}
   drivers::SourceStats Stats() const override { return stats_; }
   const char* Name() const override { return "log"; }
-  bool Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) override;
+  bool Motion(std::uint64_t seq, MotionInput* input) override;
 
  private:
   struct Frame {
@@ -131,7 +131,7 @@ class LogStereoSource final : public drivers::StereoSource, public MotionProvide
     std::int64_t right_ns = 0;
     std::int32_t dropped_before = 0;
     bool has_motion = false;
-    estimator::Pose<double> motion;
+    MotionInput motion;
     std::vector<std::uint8_t> left;
     std::vector<std::uint8_t> right;
   };

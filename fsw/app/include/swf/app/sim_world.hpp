@@ -41,7 +41,7 @@ class SimWorld : public MotionProvider {
   const std::uint8_t* Right(std::int32_t k) const { return right_[k].data(); }
   // The simulated IMU: noisy true relative motion into frame seq (none for frame 0 or when
   // sim.imu is false).
-  bool Motion(std::uint64_t seq, estimator::Pose<double>* camera_prev_T_camera) override;
+  bool Motion(std::uint64_t seq, MotionInput* input) override;
 
  private:
   sim::RigOptions rig_;
@@ -50,7 +50,7 @@ class SimWorld : public MotionProvider {
   sim::Renderer renderer_;
   sim::Trajectory trajectory_;
   std::int32_t num_frames_ = 0;
-  std::vector<estimator::Pose<double>> motion_;
+  std::vector<MotionInput> motion_;
   bool imu_ = false;
   std::vector<std::vector<std::uint8_t>> left_;
   std::vector<std::vector<std::uint8_t>> right_;

@@ -1,0 +1,129 @@
+// The frame group over a simulated descent: no heap allocation on the real-time path (counted
+// with tests/support's counter around every cycle), and an injected slow stage is an overrun
+// while the group keeps its rate.
+#include "swf/app/flight_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "swf/app/config.hpp"
+#include "swf/app/lcm_io.hpp"
+#include "swf/app/sim_world.hpp"
+#include "swf/testing/allocation_counter.hpp"
+
+namespace swf::app {
+namespace {
+
+struct Rig {
+  FswConfig config;
+  std::unique_ptr<SimWorld> world = std::make_unique<SimWorld>();
+  std::unique_ptr<PrerenderedSimSource> source;
+  std::unique_ptr<Pipeline> pipeline = std::make_unique<Pipeline>();
+  std::unique_ptr<OutputChannels> channels = std::make_unique<OutputChannels>();
+  OutputThread output;
+  LoopOptions loop_options;
+
+  explicit Rig(const std::string& text) {
+    std::string error;
+    EXPECT_TRUE(ParseConfig(text, "test", &config, &error)) << error;
+    EXPECT_TRUE(world->Build(config, &error)) << error;
+    EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
+    source = std::make_unique<PrerenderedSimSource>(world.get());
+    PipelineOptions po;
+    po.camera = world->Camera();
+    po.width_px = world->Width();
+    po.height_px = world->Height();
+    po.frontend.harris.bucket_cols = po.width_px / 40;
+    po.frontend.harris.bucket_rows = po.height_px / 40;
+    po.frontend.max_tracks = 100;
+    po.frontend.stereo.max_disparity = 64;
+    po.swf.window_size = 5;
+    po.process_sigma_m = 0.05;
+    po.process_sigma_rad = 0.001;
+    po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
+    EXPECT_EQ(pipeline->Configure(po), core::Status::kOk);
+    EXPECT_EQ(channels->Allocate(po.width_px, po.height_px), core::Status::kOk);
+    OutputOptions oo;  // no LCM, no log: the outputs are only drained
+    EXPECT_TRUE(output.Open(oo, channels.get(), &error)) << error;
+    EXPECT_EQ(source->Start(), core::Status::kOk);
+  }
+};
+
+// GIVEN the whole simulated descent (100 m -> 10 m, 91 frames) WHEN every frame-group cycle runs
+// inside an allocation-counting scope THEN not one allocation happens, and the estimate stays
+// within a metre of the truth.
+TEST(FlightLoopTest, NoAllocationOnTheRealTimePathOverAWholeDescent) {
+  Rig rig(
+      "source: sim\nsim.width_px: 256\nsim.height_px: 192\nsim.terrain_size: 1024\n"
+      "rate_hz: 10\n");
+  ASSERT_EQ(rig.world->NumFrames(), 91);
+  FlightLoop loop;
+  rig.loop_options.rate_hz = 10.0;
+  rig.loop_options.hazard_every = 5;
+  rig.loop_options.health_every = 10;
+  ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
+                           rig.channels.get(), rig.world.get()),
+            core::Status::kOk);
+  std::uint64_t allocations = 0;
+  int frames = 0;
+  for (;;) {
+    core::Status s;
+    {
+      testing::AllocationScope scope;
+      s = loop.Step();
+      allocations += scope.Count();
+    }
+    rig.output.DrainOnce();  // the output thread's work, outside the counted scope
+    if (s == core::Status::kEmpty) break;
+    ASSERT_EQ(s, core::Status::kOk);
+    ++frames;
+  }
+  EXPECT_EQ(frames, 91);
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(loop.Counters().stage_errors, 0);
+  EXPECT_EQ(loop.Counters().outputs_dropped, 0);
+  NavOutput nav;
+  rig.pipeline->MakeNav(&nav);
+  const Eigen::Vector3d truth = rig.world->Trajectory().WorldTCamera(90).t;
+  const Eigen::Vector3d estimate(nav.position_world_m[0], nav.position_world_m[1],
+                                 nav.position_world_m[2]);
+  EXPECT_LT((estimate - truth).norm(), 1.0) << estimate.transpose();
+}
+
+// GIVEN a 20 Hz frame group on a hover (fast cycles) WHEN the track stage of frame 10 takes
+// 75 ms (1.5 periods) THEN that cycle is counted as an overrun, the next cycle starts on the
+// next free tick of the original grid, and the run lasts N periods plus the one slipped tick.
+TEST(FlightLoopTest, InjectedSlowStageIsAnOverrunAndTheGroupKeepsItsRate) {
+  Rig rig(
+      "source: sim\nsim.scenario: hover\nsim.frames: 40\nsim.width_px: 128\nsim.height_px: 96\n"
+      "sim.terrain_size: 512\nmax_disparity_px: 40\nrate_hz: 20\n");
+  FlightLoop loop;
+  rig.loop_options.rate_hz = 20.0;
+  rig.loop_options.pacing = Pacing::kRealtime;
+  rig.loop_options.inject_stage = kStageTrack;
+  rig.loop_options.inject_first_frame = 10;
+  rig.loop_options.inject_frames = 1;
+  rig.loop_options.inject_ms = 75.0;
+  ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
+                           rig.channels.get(), rig.world.get()),
+            core::Status::kOk);
+  rig.output.Start();
+  const core::TimeNs start = core::MonotonicNs();
+  ASSERT_EQ(loop.Run(), core::Status::kOk);
+  const double elapsed_ms = core::NsToMs(core::MonotonicNs() - start);
+  rig.output.StopAndDrain();
+  EXPECT_EQ(loop.Counters().frames, 40);
+  // Exactly one on a quiet machine; a shared CI machine may add a late cycle or two.
+  EXPECT_GE(loop.Counters().overruns, 1);
+  EXPECT_LE(loop.Counters().overruns, 3);
+  EXPECT_GE(loop.Summary(kStageTrack).max_ms, 75.0f);
+  // 40 cycles on a 50 ms grid with one slipped tick: the last cycle starts at 40 * 50 ms.
+  EXPECT_GE(elapsed_ms, 40 * 50.0 - 5.0);
+  EXPECT_LE(elapsed_ms, 40 * 50.0 + 4 * 50.0);
+  std::printf("40 cycles at 20 Hz with a 75 ms stall: %.1f ms, %lld overruns\n", elapsed_ms,
+              static_cast<long long>(loop.Counters().overruns));
+}
+
+}  // namespace
+}  // namespace swf::app

@@ -1,0 +1,76 @@
+#include "guidance_monitor.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace swf::guidance {
+
+GuidanceMonitor::GuidanceMonitor(lcm::LCM* lcm, const std::string& prefix, bool print)
+    : print_(print) {
+  lcm->subscribe(prefix + "NAV", &GuidanceMonitor::OnNav, this);
+  lcm->subscribe(prefix + "LANDMARKS", &GuidanceMonitor::OnLandmarks, this);
+  lcm->subscribe(prefix + "HEALTH", &GuidanceMonitor::OnHealth, this);
+}
+
+template <typename Msg>
+bool GuidanceMonitor::Decode(const lcm::ReceiveBuffer* buffer, Msg* msg, ChannelStats* stats) {
+  const int size = static_cast<int>(buffer->data_size);
+  if (msg->decode(buffer->data, 0, size) != size) {
+    ++stats->malformed;
+    return false;
+  }
+  return true;
+}
+
+void GuidanceMonitor::Sequence(std::int64_t seq, ChannelStats* stats) {
+  if (stats->received > 0 && seq < stats->next_seq) {
+    ++stats->out_of_order;
+  } else {
+    if (seq > stats->next_seq) stats->lost += seq - stats->next_seq;
+    stats->next_seq = seq + 1;
+  }
+  ++stats->received;
+}
+
+void GuidanceMonitor::OnNav(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+  swf_msgs::nav_state_t msg;
+  if (!Decode(buffer, &msg, &nav_)) return;
+  Sequence(msg.seq, &nav_);
+  last_nav_ = msg;
+  if (print_) {
+    std::printf(
+        "nav %lld frame %lld  position %.2f %.2f %.2f m  velocity %.2f %.2f %.2f m/s  "
+        "sigma_z %.3f m  status %d faults %d\n",
+        static_cast<long long>(msg.seq), static_cast<long long>(msg.frame_seq),
+        msg.position_world_m[0], msg.position_world_m[1], msg.position_world_m[2],
+        msg.velocity_world_mps[0], msg.velocity_world_mps[1], msg.velocity_world_mps[2],
+        msg.covariance[14] > 0 ? std::sqrt(msg.covariance[14]) : 0.0, msg.status, msg.fault_bits);
+  }
+}
+
+void GuidanceMonitor::OnLandmarks(const lcm::ReceiveBuffer* buffer,
+                                  const std::string& /*channel*/) {
+  swf_msgs::landmark_map_t msg;
+  if (!Decode(buffer, &msg, &landmarks_)) return;
+  Sequence(msg.seq, &landmarks_);
+  last_map_ = msg;
+  if (print_) {
+    std::printf("landmarks %lld frame %lld: %d landmarks\n", static_cast<long long>(msg.seq),
+                static_cast<long long>(msg.frame_seq), msg.num_landmarks);
+  }
+}
+
+void GuidanceMonitor::OnHealth(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+  swf_msgs::health_t msg;
+  if (!Decode(buffer, &msg, &health_)) return;
+  Sequence(msg.seq, &health_);
+  last_health_ = msg;
+  if (print_) {
+    std::printf("health %lld: %lld frames, %lld overruns, %lld allocations, faults %d\n",
+                static_cast<long long>(msg.seq), static_cast<long long>(msg.frames),
+                static_cast<long long>(msg.overruns),
+                static_cast<long long>(msg.allocations_after_start), msg.fault_bits);
+  }
+}
+
+}  // namespace swf::guidance

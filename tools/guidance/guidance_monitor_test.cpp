@@ -1,0 +1,44 @@
+// The guidance consumer over in-process LCM (memq://): sequence gaps are counted as lost, and a
+// malformed or foreign message on a subscribed channel is counted and ignored.
+#include "guidance_monitor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace swf::guidance {
+namespace {
+
+void PublishNav(lcm::LCM* lcm, std::int64_t seq) {
+  swf_msgs::nav_state_t nav{};
+  nav.seq = seq;
+  nav.frame_seq = seq;
+  nav.position_world_m[2] = 100.0 - seq;
+  ASSERT_EQ(lcm->publish("SWF_NAV", &nav), 0);
+}
+
+TEST(GuidanceMonitorTest, CountsLostAndMalformedAndKeepsGoing) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  GuidanceMonitor monitor(&lcm, "SWF_", false);
+  PublishNav(&lcm, 0);
+  PublishNav(&lcm, 1);
+  const std::vector<std::uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+  ASSERT_EQ(lcm.publish("SWF_NAV", garbage.data(), static_cast<unsigned>(garbage.size())), 0);
+  swf_msgs::health_t foreign{};  // the right channel, the wrong type
+  ASSERT_EQ(lcm.publish("SWF_NAV", &foreign), 0);
+  PublishNav(&lcm, 4);  // 2 and 3 lost
+  PublishNav(&lcm, 5);
+  PublishNav(&lcm, 3);  // late
+  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
+  }
+  EXPECT_EQ(monitor.Nav().received, 5);
+  EXPECT_EQ(monitor.Nav().malformed, 2);
+  EXPECT_EQ(monitor.Nav().lost, 2);
+  EXPECT_EQ(monitor.Nav().out_of_order, 1);
+  EXPECT_EQ(monitor.LastNav().seq, 3);
+  EXPECT_DOUBLE_EQ(monitor.LastNav().position_world_m[2], 97.0);
+}
+
+}  // namespace
+}  // namespace swf::guidance
