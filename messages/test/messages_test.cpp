@@ -31,9 +31,15 @@ TEST(Messages, StereoFrameRoundTripsAndRejectsTruncation) {
   frame.num_bytes = 8;
   frame.left.assign(8, 7);
   frame.right.assign(8, 9);
+  frame.has_motion = true;
+  frame.motion_translation_m[2] = -1.0;
+  frame.motion_rotation_rad[0] = 1e-3;
   std::vector<std::uint8_t> buffer;
   const swf_msgs::stereo_frame_t out = RoundTrip(frame, &buffer);
   EXPECT_EQ(out.seq, 42);
+  EXPECT_TRUE(out.has_motion);
+  EXPECT_EQ(out.motion_translation_m[2], -1.0);
+  EXPECT_EQ(out.motion_rotation_rad[0], 1e-3);
   EXPECT_EQ(out.right[7], 9);
   // A truncated record must fail to decode (negative), never read past the end.
   swf_msgs::stereo_frame_t broken;
@@ -57,7 +63,9 @@ TEST(Messages, NavStateLandmarksHazardHealthRoundTrip) {
   map.position_world_m = {{1, 2, 3}, {4, 5, 6}};
   map.covariance_m2 = {{1, 0, 0, 1, 0, 1}, {2, 0, 0, 2, 0, 2}};
   map.num_observations = {3, 4};
+  map.frame_seq = 17;
   EXPECT_EQ(RoundTrip(map, &buffer).position_world_m[1][2], 6.0);
+  EXPECT_EQ(RoundTrip(map, &buffer).frame_seq, 17);
 
   swf_msgs::hazard_map_t hazard{};
   hazard.rows = 1;
