@@ -20,10 +20,9 @@ using testing::StereoSwf;
 using testing::SyntheticScene;
 
 // Paper Fig. 13 setting (scaled): 150 landmarks tracked over a 100 m -> 41.5 m descent with an
-// IMU-like relative-motion input. Measured (seeds 1, 2): batch 0.154 m, SWF(10) within 10%,
-// SWF(5) 0.180 m (+17%), SWF(3) 0.372 m (2.4x): short windows lock linearization error into the
-// prior (paper section 4.2.5). With 0.01 px noise every window matches batch to 1e-5 m, which
-// shows the marginalization itself is exact; see estimator/README.md.
+// IMU-like relative-motion input. Measured (seeds 1, 2, first-estimate Jacobians): batch 0.154 m,
+// SWF(3) 0.147 m, SWF(5) 0.153 m. Without them (the paper's plain relinearization) SWF(3) was
+// 0.372 m (2.4x batch) and SWF(5) 0.180 m: see estimator/README.md.
 TEST(SwfScenario, DescentWindowOfTenApproachesBatchAndBeatsVisualOdometry) {
   double batch = 0, swf3 = 0, swf5 = 0, swf10 = 0, vo5 = 0, vsdf5 = 0;
   for (std::uint64_t seed : {1u, 2u}) {
@@ -58,9 +57,11 @@ TEST(SwfScenario, DescentWindowOfTenApproachesBatchAndBeatsVisualOdometry) {
       "descent landmark RMS (m): batch %.4f  SWF(3) %.4f  SWF(5) %.4f  SWF(10) %.4f  "
       "VO(5) %.4f  VSDF(5) %.4f\n",
       batch, swf3, swf5, swf10, vo5, vsdf5);
+  EXPECT_LE(swf3, 1.10 * batch);
+  EXPECT_LE(swf5, 1.10 * batch);
   EXPECT_LE(swf10, 1.10 * batch);
   EXPECT_GT(vo5, 1.5 * swf5);
-  EXPECT_GT(swf3, 0.9 * batch);  // a window cannot beat the full smoother by more than noise
+  EXPECT_GT(swf3, 0.85 * batch);  // a window cannot beat the full smoother by more than noise
 }
 
 // Paper section 4.2.4 on the static rig (every landmark seen in every frame): deleting instead
