@@ -278,7 +278,9 @@ Status FlightLoop::Run() {
     if (realtime) {
       if (s == Status::kOk && end > tick + period_ns_) {
         ++counters_.overruns;
-        next = tick + ((end - tick) / period_ns_ + 1) * period_ns_;  // first grid tick after end
+        const TimeNs ticks = (end - tick) / period_ns_ + 1;  // to the first grid tick after end
+        counters_.ticks_skipped += ticks - 1;
+        next = tick + ticks * period_ns_;
       } else {
         next = tick + period_ns_;
       }

@@ -65,6 +65,7 @@ struct LoopCounters {
   std::int64_t frames = 0;
   std::int64_t frames_dropped = 0;  // reported by the source (dropped_before + device drops)
   std::int64_t overruns = 0;
+  std::int64_t ticks_skipped = 0;  // grid ticks passed over after overruns (realtime pacing)
   std::int64_t outputs_dropped = 0;
   std::int64_t source_timeouts = 0;
   std::int64_t source_errors = 0;
