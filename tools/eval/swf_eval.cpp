@@ -822,7 +822,8 @@ int main(int argc, char** argv) {
         s[2].y.back() / s[0].y.back(),
         s[1].y.back() > 1.5 * s[0].y.back() && s[2].y.back() < 1.2 * s[0].y.back()
             ? "reproduced"
-            : "not reproduced at this run count");
+            : "not reproduced on this scene; the NEES section measures whether SWF(2) is "
+              "overconfident here");
     add(buf);
     add("");
   }
