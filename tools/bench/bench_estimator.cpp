@@ -3,6 +3,11 @@
 //     frame and tracks of ~10 frames (paper Fig. 14a): sliding windows flat, batch growing.
 //   Fig13Update/K=10: full update (robust Gauss-Newton + marginalization) with 150 landmarks
 //     tracked through the whole descent, at steady state (every landmark in the prior).
+//   Cholesky/<impl>/<n>: the reduced system's dense factorization alone (fill + factor of an SPD
+//     n x n matrix): DenseCholesky (flight) and Eigen::LLT<MatrixXd> (reference, heap-allocating,
+//     benchmark only), with GFlop/s = (n^3 / 3) / CPU time. n = 510 is Fig13Update's dense_dim.
+//   CholeskyRatio/<n>: both in the same iteration, interleaved; ratio = Eigen CPU / Dense CPU,
+//     so machine load cancels out.
 //   KittiVo/swf, KittiVo/ceres: the kitti-vo batch problem solved by swf-vo's solver and by Ceres
 //     (SPARSE_SCHUR, same cost, same tolerances), same process, same run.
 // The estimator is single-threaded; run on an idle core and read medians (the JSON keeps all
@@ -10,13 +15,17 @@
 #include <benchmark/benchmark.h>
 #include <ceres/ceres.h>
 
+#include <Eigen/Cholesky>
 #include <cstdlib>
+#include <ctime>
 #include <map>
 #include <memory>
+#include <random>
 #include <string>
 
 #include "../../estimator/test/synthetic_scene.hpp"
 #include "kitti_vo.hpp"
+#include "swf/estimator/dense_cholesky.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
 
@@ -34,7 +43,7 @@ using swf::estimator::testing::SceneOptions;
 using swf::estimator::testing::SyntheticScene;
 
 const SyntheticScene& Fig14Scene() {
-  static const SyntheticScene scene = [] {
+  static const SyntheticScene kScene = [] {
     SceneOptions so;
     so.motion = SceneOptions::Motion::kSideways;
     so.frames = 160;
@@ -44,22 +53,22 @@ const SyntheticScene& Fig14Scene() {
     so.seed = 3;
     return SyntheticScene(so);
   }();
-  return scene;
+  return kScene;
 }
 
 const SyntheticScene& Fig13Scene() {
-  static const SyntheticScene scene = [] {
+  static const SyntheticScene kScene = [] {
     SceneOptions so;  // 150 landmarks, 100 m descent, 1.5 m per frame
     so.frames = 40;
     return SyntheticScene(so);
   }();
-  return scene;
+  return kScene;
 }
 
 // Feeds frame j (motion input = true relative motion, as from an IMU).
 template <typename Filter>
 void AddFrame(Filter* swf, const SyntheticScene& scene, std::size_t j) {
-  static const Mat6<double> q_sqrt = [] {
+  static const Mat6<double> kQSqrt = [] {
     Mat6<double> q = Mat6<double>::Zero();
     q.diagonal() << Vec3<double>::Constant(10.0), Vec3<double>::Constant(500.0);
     return q;
@@ -68,7 +77,7 @@ void AddFrame(Filter* swf, const SyntheticScene& scene, std::size_t j) {
   if (j == 0) {
     (void)swf->AddPose(f.truth);
   } else {
-    (void)swf->AddPoseWithMotion(scene.frames()[j - 1].truth.Inverse() * f.truth, q_sqrt);
+    (void)swf->AddPoseWithMotion(scene.frames()[j - 1].truth.Inverse() * f.truth, kQSqrt);
   }
   const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options().sigma_px;
   for (const auto& o : f.obs) (void)swf->AddObservation(o.id, o.z, r_sqrt);
@@ -113,8 +122,11 @@ using Swf10 = SlidingWindowFilter<StereoModel<double>, 10, 600, 64, 128>;
 using Swf20 = SlidingWindowFilter<StereoModel<double>, 20, 600, 64, 128>;
 using Batch = SlidingWindowFilter<StereoModel<double>, 128, 4000, 64, 1>;
 
+// NOLINTNEXTLINE(readability-identifier-naming)
 void BM_Fig14a_Swf10(benchmark::State& s) { Fig14a<Swf10>(s, SwfMode::kSlidingWindow); }
+// NOLINTNEXTLINE(readability-identifier-naming)
 void BM_Fig14a_Swf20(benchmark::State& s) { Fig14a<Swf20>(s, SwfMode::kSlidingWindow); }
+// NOLINTNEXTLINE(readability-identifier-naming)
 void BM_Fig14a_Batch(benchmark::State& s) { Fig14a<Batch>(s, SwfMode::kBatch); }
 BENCHMARK(BM_Fig14a_Swf10)
     ->Arg(25)
@@ -140,6 +152,7 @@ BENCHMARK(BM_Fig14a_Batch)
     ->Iterations(3)
     ->Repetitions(3);
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Fig13Update_K10(benchmark::State& state) {
   using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
   const SyntheticScene& scene = Fig13Scene();
@@ -162,8 +175,95 @@ void BM_Fig13Update_K10(benchmark::State& state) {
 }
 BENCHMARK(BM_Fig13Update_K10)->Unit(benchmark::kMillisecond)->Iterations(5)->Repetitions(5);
 
+// ---- the dense factorization alone ----------------------------------------------------------
+
+using Dense540 = swf::estimator::DenseCholesky<double, 540>;
+
+Eigen::MatrixXd RandomSpd(int n) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd a(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) a(i, j) = u(rng);
+  return a * a.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+}
+
+double FlopsOfCholesky(int n) { return static_cast<double>(n) * n * n / 3.0; }
+
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+void FactorDense(Dense540* chol, const Eigen::MatrixXd& a) {
+  chol->Reset(static_cast<int>(a.rows()));
+  chol->AddSymmetric(0, a.data(), static_cast<int>(a.rows()), static_cast<int>(a.rows()));
+  if (chol->Factorize() != swf::core::Status::kOk) std::abort();
+}
+
+void FactorEigen(Eigen::LLT<Eigen::MatrixXd>* llt, const Eigen::MatrixXd& a) {
+  llt->compute(a);
+  if (llt->info() != Eigen::Success) std::abort();
+}
+
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_Cholesky_Dense(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Eigen::MatrixXd a = RandomSpd(n);
+  auto chol = std::make_unique<Dense540>();
+  for (auto _ : state) {
+    FactorDense(chol.get(), a);
+    benchmark::ClobberMemory();
+  }
+  state.counters["GFlop/s"] =
+      benchmark::Counter(FlopsOfCholesky(n) * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Cholesky_Dense)->Arg(120)->Arg(510)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_Cholesky_EigenLlt(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Eigen::MatrixXd a = RandomSpd(n);
+  Eigen::LLT<Eigen::MatrixXd> llt(n);
+  for (auto _ : state) {
+    FactorEigen(&llt, a);
+    benchmark::ClobberMemory();
+  }
+  state.counters["GFlop/s"] =
+      benchmark::Counter(FlopsOfCholesky(n) * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_Cholesky_EigenLlt)->Arg(120)->Arg(510)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_CholeskyRatio(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Eigen::MatrixXd a = RandomSpd(n);
+  auto chol = std::make_unique<Dense540>();
+  Eigen::LLT<Eigen::MatrixXd> llt(n);
+  double dense_s = 0.0;
+  double eigen_s = 0.0;
+  for (auto _ : state) {
+    const double t0 = ThreadCpuSeconds();
+    FactorDense(chol.get(), a);
+    const double t1 = ThreadCpuSeconds();
+    FactorEigen(&llt, a);
+    const double t2 = ThreadCpuSeconds();
+    dense_s += t1 - t0;
+    eigen_s += t2 - t1;
+    benchmark::ClobberMemory();
+  }
+  const auto iterations = static_cast<double>(state.iterations());
+  state.counters["dense_ms"] = 1e3 * dense_s / iterations;
+  state.counters["eigen_ms"] = 1e3 * eigen_s / iterations;
+  state.counters["dense_GFlop/s"] = FlopsOfCholesky(n) * 1e-9 * iterations / dense_s;
+  state.counters["eigen_GFlop/s"] = FlopsOfCholesky(n) * 1e-9 * iterations / eigen_s;
+  state.counters["ratio_eigen_over_dense"] = eigen_s / dense_s;
+}
+BENCHMARK(BM_CholeskyRatio)->Arg(120)->Arg(510)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
 const swf::tools::KittiVoProblem& Kitti() {
-  static const swf::tools::KittiVoProblem problem = [] {
+  static const swf::tools::KittiVoProblem kProblem = [] {
     const char* shared = std::getenv("SWF_SHARED_DIR");
     const std::string dir =
         std::string(shared != nullptr ? shared : "../shared") + "/data/kitti-vo/";
@@ -176,9 +276,10 @@ const swf::tools::KittiVoProblem& Kitti() {
     }
     return p;
   }();
-  return problem;
+  return kProblem;
 }
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_KittiVo_Swf(benchmark::State& state) {
   double cost = 0;  // kept observable so the solve is not optimized away
   for (auto _ : state) {
@@ -207,6 +308,7 @@ struct StereoResidual {
   Vec3<double> z;
 };
 
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_KittiVo_Ceres(benchmark::State& state) {
   const auto& problem = Kitti();
   double cost = 0;  // kept observable so the solve is not optimized away
