@@ -15,10 +15,12 @@
 #include "swf/app/config.hpp"
 #include "swf/app/evaluation.hpp"
 #include "swf/app/flight_loop.hpp"
+#include "swf/app/hazard_stage.hpp"
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/realtime.hpp"
 #include "swf/app/sim_world.hpp"
+#include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/image_io/image_io.hpp"
 #include "swf/sim/rig.hpp"
 
@@ -69,6 +71,16 @@ class Progress : public OutputObserver {
   int landmarks_ = 0;
 };
 
+class HazardCounter : public OutputObserver {
+ public:
+  void OnHazard(const HazardRecord& r) override {
+    ++maps;
+    last_site_valid = r.safe_site_valid;
+  }
+  std::int64_t maps = 0;
+  bool last_site_valid = false;
+};
+
 class LastHealth : public OutputObserver {
  public:
   void OnHealth(const HealthRecord& r) override { last = r; }
@@ -102,7 +114,8 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
 }
 
 void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
-                  const HealthRecord& health, const EvaluationResult* eval, bool locked, bool fifo,
+                  const HealthRecord& health, const EvaluationResult* eval,
+                  const HazardEvaluation* hazard, std::int64_t hazard_maps, bool locked, bool fifo,
                   const char* result) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) {
@@ -140,14 +153,42 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                "  \"overruns\": %lld,\n  \"allocations_after_start\": %lld,\n"
                "  \"outputs_dropped\": %lld,\n  \"frames_dropped\": %lld,\n"
                "  \"stage_errors\": %lld,\n  \"fault_bits\": %d,\n  \"num_landmarks\": %d,\n"
-               "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n"
-               "  \"hazard\": null,\n  \"safe_site\": null\n}\n",
+               "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n",
                static_cast<long long>(counters.overruns),
                static_cast<long long>(health.allocations_after_start),
                static_cast<long long>(health.outputs_dropped),
                static_cast<long long>(health.frames_dropped),
                static_cast<long long>(counters.stage_errors), health.fault_bits,
                health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
+  if (hazard == nullptr) {
+    std::fprintf(f, "  \"hazard_maps\": %lld,\n  \"hazard\": null,\n  \"safe_site\": null\n}\n",
+                 static_cast<long long>(hazard_maps));
+  } else {
+    const HazardEvaluation& h = *hazard;
+    std::fprintf(f, "  \"hazard_maps\": %lld,\n", static_cast<long long>(hazard_maps));
+    std::fprintf(f,
+                 "  \"hazard\": {\"known_cells\": %d, \"rocks_resolved\": %d, "
+                 "\"rocks_detected\": %d, ",
+                 h.known_cells, h.rocks_resolved, h.rocks_detected);
+    if (h.detection_probability >= 0.0) {
+      std::fprintf(f, "\"detection_probability\": %.4f, ", h.detection_probability);
+    } else {
+      std::fprintf(f, "\"detection_probability\": null, ");
+    }
+    std::fprintf(f,
+                 "\"rock_free_cells\": %d, \"false_rock_cells\": %d, "
+                 "\"false_alarm_rate\": %.5f},\n",
+                 h.rock_free_cells, h.false_rock_cells, h.false_alarm_rate);
+    if (h.site_valid) {
+      std::fprintf(f,
+                   "  \"safe_site\": {\"x_m\": %.3f, \"y_m\": %.3f, \"score\": %.4f, "
+                   "\"clearance_to_truth_hazard_m\": %.3f, \"on_truth_hazard\": %s}\n}\n",
+                   h.site_x_m, h.site_y_m, h.site_score, h.site_clearance_m,
+                   h.site_on_hazard ? "true" : "false");
+    } else {
+      std::fprintf(f, "  \"safe_site\": null\n}\n");
+    }
+  }
   std::fclose(f);
 }
 
@@ -323,8 +364,26 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                  tool, core::ToString(s));
     return 2;
   }
+  // Hazard mapping on the rectified pair (all of its memory now).
+  auto hazard_stage = std::make_unique<MapperHazardStage>();
+  {
+    hazard::HazardMapperOptions ho;
+    ho.camera = pipeline->Camera();
+    ho.image_width = po.width_px;
+    ho.image_height = po.height_px;
+    ho.max_disparities = config.hazard_max_disparities;
+    ho.downsample = config.hazard_downsample;
+    if (const core::Status s = hazard_stage->Configure(ho); s != core::Status::kOk) {
+      std::fprintf(stderr,
+                   "%s: configuration refused: hazard.max_disparities / hazard.downsample: the "
+                   "hazard mapper rejected them for %dx%d images (%s)\n",
+                   tool, po.width_px, po.height_px, core::ToString(s));
+      return 2;
+    }
+  }
   auto channels = std::make_unique<OutputChannels>();
-  if (channels->Allocate(po.width_px, po.height_px) != core::Status::kOk) {
+  if (channels->Allocate(po.width_px, po.height_px, hazard_stage->GridCells()) !=
+      core::Status::kOk) {
     std::fprintf(stderr, "%s: out of memory for the output pools\n", tool);
     return 1;
   }
@@ -334,6 +393,7 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   oo.record_path = config.record_path;
   oo.max_width = po.width_px;
   oo.max_height = po.height_px;
+  oo.max_hazard_cells = hazard_stage->GridCells();
   OutputThread output;
   if (!output.Open(oo, channels.get(), &error)) {
     std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
@@ -348,6 +408,8 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   output.AddObserver(&progress_display);
   LastHealth last_health;
   output.AddObserver(&last_health);
+  HazardCounter hazard_counter;
+  output.AddObserver(&hazard_counter);
 
   LoopOptions lo;
   lo.rate_hz = config.rate_hz;
@@ -365,8 +427,8 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   FlightLoop loop;
   MotionProvider* motion = world != nullptr ? static_cast<MotionProvider*>(world.get())
                                             : static_cast<MotionProvider*>(log_source);
-  if (loop.Configure(lo, pipeline.get(), source.get(), channels.get(), motion) !=
-      core::Status::kOk) {
+  if (loop.Configure(lo, pipeline.get(), source.get(), channels.get(), motion,
+                     hazard_stage.get()) != core::Status::kOk) {
     std::fprintf(stderr,
                  "%s: configuration refused: rate groups (rate_hz, hazard_every, "
                  "health_every)\n",
@@ -428,6 +490,16 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   if (evaluate) {
     eval = evaluation.Evaluate(*pipeline, world->Trajectory(), world->Terrain(), config.plot_dir);
   }
+  HazardEvaluation hazard_eval;
+  if (evaluate) {
+    hazard_eval = EvaluateHazard(hazard_stage->Mapper(), world->Terrain(), hazard_counter.maps);
+  }
+  if (!config.plot_dir.empty() && hazard_counter.maps > 0) {
+    const std::string png = config.plot_dir + "/hazard.png";
+    if (hazard_eval::WriteHazardMapPng(hazard_stage->Mapper(), png) != core::Status::kOk) {
+      std::fprintf(stderr, "%s: cannot write %s\n", tool, png.c_str());
+    }
+  }
   const HealthRecord& h = last_health.last;
   std::fprintf(stderr,
                "%s: %lld frames, %lld overruns, %lld outputs dropped, %lld allocations after "
@@ -440,6 +512,10 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     std::fprintf(stderr, ", landmark RMS error %.3f m, pose RMS error %.3f m",
                  eval.landmark_rms_error_m, eval.pose_rms_error_m);
   }
+  std::fprintf(stderr, ", %lld hazard maps (%lld skipped, %lld failed), hazard p50 %.1f ms",
+               static_cast<long long>(hazard_counter.maps),
+               static_cast<long long>(counters.hazard_skipped),
+               static_cast<long long>(loop.HazardErrors()), h.stages[kStageHazard].p50_ms);
   std::fprintf(stderr, "\n");
   if (output.Counters().record_errors > 0 || output.Counters().encode_errors > 0) {
     std::fprintf(stderr, "%s: %lld records could not be written, %lld not encoded\n", tool,
@@ -448,8 +524,9 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     exit_code = 1;
   }
   if (!config.summary_path.empty()) {
-    WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr, locked, fifo,
-                 result);
+    WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr,
+                 evaluate && hazard_counter.maps > 0 ? &hazard_eval : nullptr, hazard_counter.maps,
+                 locked, fifo, result);
   }
   return exit_code;
 }

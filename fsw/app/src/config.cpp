@@ -220,6 +220,16 @@ const std::map<std::string, Setter>& Fields() {
       return true;
     };
     f["hazard_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->hazard_every; }, 1, 100000);
+    f["hazard.max_disparities"] =
+        Int<std::int32_t>([](FswConfig* c) { return &c->hazard_max_disparities; }, 16, 256);
+    f["hazard.downsample"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      if (v == "1" || v == "2" || v == "4") {
+        c->hazard_downsample = v[0] - '0';
+        return true;
+      }
+      *why = "'" + v + "' is not one of 1 2 4";
+      return false;
+    };
     f["health_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->health_every; }, 1, 100000);
     f["max_frames"] =
         Int<std::int64_t>([](FswConfig* c) { return &c->max_frames; }, 0, std::int64_t{1} << 40);
@@ -247,7 +257,7 @@ const std::map<std::string, Setter>& Fields() {
       return true;
     };
     f["inject.stage"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      if (StageIndex(v) < 0 || StageIndex(v) == kStageCycle) {
+      if (StageIndex(v) < 0 || StageIndex(v) >= kStageCycle) {
         *why = "'" + v + "' is not a stage (acquire rectify track estimate output map)";
         return false;
       }

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "swf/sim/hazard.hpp"
+
 namespace swf::app {
 
 void Evaluation::OnNav(const NavRecord& r) {
@@ -117,6 +119,99 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
     }
   }
   return result;
+}
+
+}  // namespace swf::app
+
+namespace swf::app {
+
+HazardEvaluation EvaluateHazard(const hazard::HazardMapper& m, const sim::Terrain& terrain,
+                                std::int64_t maps_published) {
+  HazardEvaluation r;
+  r.maps = maps_published;
+  const hazard::HazardMapperOptions& o = m.Options();
+  sim::HazardOptions ho;
+  ho.max_slope_deg = o.max_slope_deg;
+  ho.max_rock_height_m = o.max_rock_height_m;
+  sim::HazardMap truth;
+  if (m.GridCells() <= 0 || sim::ComputeHazardTruth(terrain, ho, &truth) != core::Status::kOk) {
+    return r;
+  }
+  const int n = m.GridCells();
+  const double cell = m.CellM();
+  const int tn = truth.size;
+  const double tcell = terrain.CellM();
+  // Truth nodes within radius of (x, y); f(node index) for each.
+  const auto for_nodes_near = [&](double x, double y, double radius, auto&& f) {
+    const int ci = static_cast<int>(std::lround((x - terrain.NodeX(0)) / tcell));
+    const int cj = static_cast<int>(std::lround((y - terrain.NodeY(0)) / tcell));
+    const int rn = static_cast<int>(std::ceil(radius / tcell));
+    for (int j = std::max(0, cj - rn); j <= std::min(tn - 1, cj + rn); ++j) {
+      for (int i = std::max(0, ci - rn); i <= std::min(tn - 1, ci + rn); ++i) {
+        const double d = std::hypot(terrain.NodeX(i) - x, terrain.NodeY(j) - y);
+        if (d <= radius) f(static_cast<std::size_t>(j) * tn + i, d);
+      }
+    }
+  };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n + i;
+      if (std::isnan(m.Elevation()[c])) continue;
+      ++r.known_cells;
+      float rock = 0.0f;
+      for_nodes_near(m.CornerX() + (i + 0.5) * cell, m.CornerY() + (j + 0.5) * cell,
+                     0.5 * cell + 0.3,
+                     [&](std::size_t k, double) { rock = std::max(rock, truth.rock_height_m[k]); });
+      if (rock >= 0.5 * o.max_rock_height_m) continue;
+      ++r.rock_free_cells;
+      r.false_rock_cells += m.Classes()[c] == hazard::HazardClass::kRock;
+    }
+  }
+  if (r.rock_free_cells > 0) {
+    r.false_alarm_rate = static_cast<double>(r.false_rock_cells) / r.rock_free_cells;
+  }
+  for (const sim::Rock& rock : terrain.Rocks()) {
+    if (rock.height_m < o.max_rock_height_m) continue;
+    int ci = 0;
+    int cj = 0;
+    if (!m.CellOf(rock.center_m.x(), rock.center_m.y(), &ci, &cj)) continue;
+    const float sigma = m.Sigma()[static_cast<std::size_t>(cj) * n + ci];
+    if (!(3.0 * sigma <= o.max_rock_height_m)) continue;
+    ++r.rocks_resolved;
+    const double radius = 0.5 * rock.diameter_m + cell;
+    const int rc = static_cast<int>(std::ceil(radius / cell));
+    bool found = false;
+    for (int j = std::max(0, cj - rc); j <= std::min(n - 1, cj + rc) && !found; ++j) {
+      for (int i = std::max(0, ci - rc); i <= std::min(n - 1, ci + rc); ++i) {
+        const double dx = m.CornerX() + (i + 0.5) * cell - rock.center_m.x();
+        const double dy = m.CornerY() + (j + 0.5) * cell - rock.center_m.y();
+        if (std::hypot(dx, dy) <= radius &&
+            m.Classes()[static_cast<std::size_t>(j) * n + i] == hazard::HazardClass::kRock) {
+          found = true;
+          break;
+        }
+      }
+    }
+    r.rocks_detected += found;
+  }
+  if (r.rocks_resolved > 0) {
+    r.detection_probability = static_cast<double>(r.rocks_detected) / r.rocks_resolved;
+  }
+  const hazard::SafeSite& site = m.Site();
+  r.site_valid = site.valid;
+  if (site.valid) {
+    r.site_x_m = site.position_world_m.x();
+    r.site_y_m = site.position_world_m.y();
+    r.site_score = site.score;
+    constexpr double kSearchM = 20.0;
+    double nearest = kSearchM;
+    for_nodes_near(r.site_x_m, r.site_y_m, kSearchM, [&](std::size_t k, double d) {
+      if (truth.hazard[k] != 0) nearest = std::min(nearest, d);
+    });
+    r.site_clearance_m = nearest;
+    r.site_on_hazard = nearest <= o.footprint_radius_m;
+  }
+  return r;
 }
 
 }  // namespace swf::app

@@ -1,5 +1,6 @@
 #include "swf/app/flight_loop.hpp"
 
+#include <chrono>
 #include <cstring>
 
 #include "swf/app/alloc_meter.hpp"
@@ -19,6 +20,7 @@ const char* StageName(int stage) {
     case kStageOutput: return "output";
     case kStageMap: return "map";
     case kStageCycle: return "cycle";
+    case kStageHazard: return "hazard";
     default: return "?";
   }
 }
@@ -48,6 +50,9 @@ Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
   motion_ = motion;
   period_ns_ = static_cast<TimeNs>(1e9 / options.rate_hz + 0.5);
   for (StageStats& s : stages_) s.Reset();
+  hazard_stage_.Reset();
+  hazard_spare_slot_ = -1;
+  hazard_summary_ = StageSummary{};
   counters_ = LoopCounters{};
   configured_ = true;
   return Status::kOk;
@@ -149,6 +154,13 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
       Push(&out_->frame_group, RecordRef{RecordKind::kFrame, slot});
     }
   }
+  // The hazard snapshot's images are copied before the source gets its buffer back.
+  const bool snapshot_frame = (counters_.frames + 1) % options_.hazard_every == 0;
+  std::int32_t hazard_slot = -1;
+  if (snapshot_frame && hazard_ != nullptr && stage == Status::kOk) {
+    hazard_slot = AcquireHazardInput(synchronous_hazard || options_.pacing == Pacing::kLockstep);
+    if (hazard_slot >= 0) CopyRectified(&out_->hazard_inputs[hazard_slot]);
+  }
   source_->Release(pair);
   if (pipeline_->FramesEstimated() > 0 &&
       (stage == Status::kOk || stage == Status::kNumericalFailure)) {
@@ -168,9 +180,9 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
 
   ++counters_.frames;
   TimeNs t6 = t5;
-  if (counters_.frames % options_.hazard_every == 0) {
+  if (snapshot_frame) {
     Inject(kStageMap);
-    TakeSnapshot(synchronous_hazard);
+    TakeSnapshot(synchronous_hazard, hazard_slot);
     t6 = core::MonotonicNs();
     stages_[kStageMap].Add(t6 - t5);
   }
@@ -180,44 +192,128 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   return Status::kOk;
 }
 
-void FlightLoop::TakeSnapshot(bool synchronous) {
-  if (!synchronous && hazard_busy_.load(std::memory_order_acquire)) {
-    ++counters_.hazard_skipped;
+std::int32_t FlightLoop::AcquireHazardInput(bool wait) {
+  std::int32_t slot = out_->hazard_inputs.Acquire();
+  // Lockstep: wait for the hazard group (bounded) so every snapshot frame is mapped.
+  for (int i = 0; slot < 0 && wait && i < 200000; ++i) {
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+    slot = out_->hazard_inputs.Acquire();
+  }
+  if (slot < 0) ++counters_.hazard_skipped;
+  return slot;
+}
+
+void FlightLoop::CopyRectified(HazardInput* h) {
+  const frontend::GrayView& l = pipeline_->RectifiedLeft();
+  const frontend::GrayView& r = pipeline_->RectifiedRight();
+  h->width = 0;
+  h->height = 0;
+  if (!l.Valid() || !r.Valid() || l.width != r.width || l.height != r.height ||
+      l.width * l.height > h->capacity_bytes) {
     return;
   }
+  h->width = l.width;
+  h->height = l.height;
+  for (std::int32_t y = 0; y < l.height; ++y) {
+    std::memcpy(h->left.get() + static_cast<std::size_t>(y) * l.width,
+                l.data + static_cast<std::size_t>(y) * l.stride, static_cast<std::size_t>(l.width));
+    std::memcpy(h->right.get() + static_cast<std::size_t>(y) * r.width,
+                r.data + static_cast<std::size_t>(y) * r.stride, static_cast<std::size_t>(r.width));
+  }
+}
+
+void FlightLoop::TakeSnapshot(bool synchronous, std::int32_t hazard_slot) {
   const std::int32_t slot = out_->maps.Acquire();
   if (slot < 0) {
     ++counters_.outputs_dropped;
+    if (hazard_slot >= 0) out_->hazard_inputs.Release(hazard_slot);
     return;
   }
   MapRecord& r = out_->maps[slot];
   if (pipeline_->MakeMap(&r.map) != Status::kOk) r.map.num_landmarks = 0;
   r.seq = map_seq_++;
+  if (hazard_slot >= 0) {
+    HazardInput& h = out_->hazard_inputs[hazard_slot];
+    h.utime = r.map.utime;
+    h.frame_seq = r.map.frame_seq;
+    estimator::Mat6<double> cov;
+    h.pose_valid = h.width > 0 && pipeline_->NewestPose(&h.world_T_camera, &cov) == Status::kOk;
+    h.pose_covariance = cov;
+    h.num_landmarks = 0;
+    for (std::int32_t i = 0; i < r.map.num_landmarks && i < kMaxMapLandmarks; ++i) {
+      const MapLandmark& l = r.map.landmarks[i];
+      hazard::HazardLandmark& d = h.landmarks[h.num_landmarks++];
+      d.position_world_m =
+          Eigen::Vector3d(l.position_world_m[0], l.position_world_m[1], l.position_world_m[2]);
+      const double* c = l.covariance_m2;
+      d.covariance << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+    }
+  }
+  Push(&out_->frame_group, RecordRef{RecordKind::kMap, slot});
+  if (hazard_slot < 0) return;
   if (synchronous) {
-    if (hazard_ != nullptr) (void)hazard_->Process(r.map);
-    Push(&out_->frame_group, RecordRef{RecordKind::kMap, slot});
+    RunHazard(hazard_slot, &out_->frame_group, true);
     return;
   }
-  hazard_busy_.store(true, std::memory_order_release);
-  hazard_slot_.store(slot, std::memory_order_release);
+  if (out_->hazard_work.TryPush(hazard_slot) != Status::kOk) {
+    out_->hazard_inputs.Release(hazard_slot);  // cannot happen: the queue holds every slot
+    ++counters_.hazard_skipped;
+    return;
+  }
   hazard_wake_.release();
+}
+
+void FlightLoop::RunHazard(std::int32_t input_slot, core::SpscQueue<RecordRef, kOrderQueueSize>* q,
+                           bool wait) {
+  // A slot kept from a failed update first (only the output thread may give slots back).
+  std::int32_t slot = hazard_spare_slot_;
+  hazard_spare_slot_ = -1;
+  if (slot < 0) slot = out_->hazards.Acquire();
+  for (int i = 0; slot < 0 && wait && i < 200000; ++i) {
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+    slot = out_->hazards.Acquire();
+  }
+  const HazardInput& in = out_->hazard_inputs[input_slot];
+  if (slot < 0) {
+    hazard_outputs_dropped_.fetch_add(1, std::memory_order_relaxed);
+    out_->hazard_inputs.Release(input_slot);
+    return;
+  }
+  HazardRecord& rec = out_->hazards[slot];
+  const TimeNs t0 = core::MonotonicNs();
+  const Status s = hazard_->Process(in, &rec);
+  const TimeNs t1 = core::MonotonicNs();
+  out_->hazard_inputs.Release(input_slot);
+  hazard_stage_.Add(t1 - t0);
+  const StageSummary summary = hazard_stage_.Summarize();
+  while (hazard_summary_lock_.test_and_set(std::memory_order_acquire)) {
+  }
+  hazard_summary_ = summary;
+  hazard_summary_lock_.clear(std::memory_order_release);
+  if (s != Status::kOk) {
+    hazard_errors_.fetch_add(1, std::memory_order_relaxed);
+    hazard_spare_slot_ = slot;
+    return;
+  }
+  rec.update_ms = static_cast<float>(core::NsToMs(t1 - t0));
+  rec.seq = hazard_seq_++;
+  if (q->TryPush(RecordRef{RecordKind::kHazard, slot}) != Status::kOk) {
+    hazard_outputs_dropped_.fetch_add(1, std::memory_order_relaxed);
+  }
 }
 
 void FlightLoop::HazardMain() {
   char message[160];
   (void)MakeThreadRealtime(options_.hazard_priority, message, sizeof message);
   BeginRealtimeAllocationCounting();
+  const bool wait = options_.pacing == Pacing::kLockstep;
   for (;;) {
     hazard_wake_.acquire();
-    const std::int32_t slot = hazard_slot_.exchange(-1, std::memory_order_acq_rel);
-    if (slot >= 0) {
-      if (hazard_ != nullptr) (void)hazard_->Process(out_->maps[slot].map);
-      if (out_->hazard_group.TryPush(RecordRef{RecordKind::kMap, slot}) != Status::kOk) {
-        hazard_outputs_dropped_.fetch_add(1, std::memory_order_relaxed);
-      }
-      hazard_busy_.store(false, std::memory_order_release);
+    std::int32_t slot = -1;
+    while (out_->hazard_work.TryPop(&slot) == Status::kOk) {
+      RunHazard(slot, &out_->hazard_group, wait);
     }
-    if (hazard_quit_.load(std::memory_order_acquire) && hazard_slot_.load() < 0) return;
+    if (hazard_quit_.load(std::memory_order_acquire) && out_->hazard_work.SizeApprox() == 0) return;
   }
 }
 
@@ -234,7 +330,8 @@ void FlightLoop::PublishHealth() {
   h.frames_dropped =
       counters_.frames_dropped + static_cast<std::int64_t>(source_->Stats().frames_dropped);
   h.overruns = counters_.overruns;
-  h.outputs_dropped = counters_.outputs_dropped + hazard_outputs_dropped_.load();
+  h.outputs_dropped =
+      counters_.outputs_dropped + hazard_outputs_dropped_.load() + counters_.hazard_skipped;
   h.allocations_after_start = RealtimeAllocations();
   h.fault_bits = static_cast<std::int32_t>(pipeline_->FaultBits());
   if (counters_.source_errors > 0 || counters_.source_timeouts > 0) h.fault_bits |= 64;
@@ -242,7 +339,13 @@ void FlightLoop::PublishHealth() {
   h.estimator_status = static_cast<std::int8_t>(pipeline_->LastStatus());
   h.num_features = pipeline_->NumFeatures();
   h.num_landmarks = pipeline_->NumLandmarks();
-  for (int i = 0; i < kNumStages; ++i) h.stages[i] = stages_[i].Summarize();
+  for (int i = 0; i < kNumStages; ++i) {
+    if (i != kStageHazard) h.stages[i] = stages_[i].Summarize();
+  }
+  while (hazard_summary_lock_.test_and_set(std::memory_order_acquire)) {
+  }
+  h.stages[kStageHazard] = hazard_summary_;
+  hazard_summary_lock_.clear(std::memory_order_release);
   Push(&out_->frame_group, RecordRef{RecordKind::kHealth, slot});
 }
 

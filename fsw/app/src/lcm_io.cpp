@@ -4,6 +4,7 @@
 
 #include <lcm/eventlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -28,6 +29,7 @@ struct OutputThread::Impl {
   swf_msgs::nav_state_t nav;
   swf_msgs::landmark_map_t map;
   swf_msgs::health_t health;
+  swf_msgs::hazard_map_t hazard;
 };
 
 OutputThread::OutputThread() : impl_(new Impl()) {}
@@ -69,7 +71,14 @@ bool OutputThread::Open(const OutputOptions& options, OutputChannels* channels,
   impl_->health.stage_p50_ms.reserve(kNumStages);
   impl_->health.stage_p99_ms.reserve(kNumStages);
   impl_->health.stage_max_ms.reserve(kNumStages);
-  impl_->buffer.assign(2 * pixels + 128 * kMaxMapLandmarks + 65536, 0);
+  const std::size_t cells =
+      static_cast<std::size_t>(options.max_hazard_cells) * options.max_hazard_cells;
+  impl_->hazard.elevation_m.reserve(cells);
+  impl_->hazard.sigma_m.reserve(cells);
+  impl_->hazard.slope_deg.reserve(cells);
+  impl_->hazard.roughness_m.reserve(cells);
+  impl_->hazard.hazard_class.reserve(cells);
+  impl_->buffer.assign(std::max(2 * pixels, 17 * cells) + 128 * kMaxMapLandmarks + 65536, 0);
   return true;
 }
 
@@ -208,6 +217,40 @@ void OutputThread::Handle(const RecordRef& ref) {
         return;
       }
       Emit(kLandmarksSuffix, m.utime, buf, n);
+      return;
+    }
+    case RecordKind::kHazard: {
+      const HazardRecord& r = channels_->hazards[ref.slot];
+      swf_msgs::hazard_map_t& m = impl_->hazard;
+      m.utime = r.utime;
+      m.seq = r.seq;
+      m.frame_seq = r.frame_seq;
+      m.origin_world_m[0] = r.origin_world_m[0];
+      m.origin_world_m[1] = r.origin_world_m[1];
+      m.up_world[0] = 0.0;  // the estimator's world frame is local level, z up
+      m.up_world[1] = 0.0;
+      m.up_world[2] = 1.0;
+      m.cell_size_m = r.cell_size_m;
+      m.rows = r.cells_per_side;
+      m.cols = r.cells_per_side;
+      m.num_cells = r.cells_per_side * r.cells_per_side;
+      m.elevation_m.assign(r.elevation_m.get(), r.elevation_m.get() + m.num_cells);
+      m.sigma_m.assign(r.sigma_m.get(), r.sigma_m.get() + m.num_cells);
+      m.slope_deg.assign(r.slope_deg.get(), r.slope_deg.get() + m.num_cells);
+      m.roughness_m.assign(r.roughness_m.get(), r.roughness_m.get() + m.num_cells);
+      m.hazard_class.assign(r.hazard_class.get(), r.hazard_class.get() + m.num_cells);
+      m.safe_site_valid = r.safe_site_valid;
+      m.safe_site_world_m[0] = r.safe_site_world_m[0];
+      m.safe_site_world_m[1] = r.safe_site_world_m[1];
+      m.safe_site_score = r.safe_site_score;
+      for (OutputObserver* o : observers_) o->OnHazard(r);
+      const int n = m.encode(buf, 0, max);
+      channels_->hazards.Release(ref.slot);
+      if (n < 0) {
+        ++counters_.encode_errors;
+        return;
+      }
+      Emit(kHazardSuffix, m.utime, buf, n);
       return;
     }
     case RecordKind::kHealth: {

@@ -183,6 +183,18 @@ void Pipeline::MakeNav(NavOutput* nav) {
   nav->num_measurements = swf_->Summary().num_measurements;
 }
 
+Status Pipeline::NewestPose(Pose<double>* pose, estimator::Mat6<double>* covariance) {
+  if (swf_->NumPoses() == 0) return Status::kEmpty;
+  if (!covariance_valid_) {
+    const Status s = swf_->ComputeCovariances();
+    if (s != Status::kOk) return s;
+    covariance_valid_ = true;
+  }
+  *pose = swf_->NewestPose();
+  *covariance = swf_->NewestPoseCovariance();
+  return Status::kOk;
+}
+
 Status Pipeline::MakeMap(MapOutput* map) {
   map->utime = utime_;
   map->frame_seq = seq_;

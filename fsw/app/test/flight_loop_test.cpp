@@ -1,13 +1,18 @@
 // The frame group over a simulated descent: no heap allocation on the real-time path (counted
-// with tests/support's counter around every cycle), and an injected slow stage is an overrun
+// with tests/support's counter around every cycle, hazard mapping included), hazard maps of the
+// threaded hazard group identical to synchronous ones, and an injected slow stage is an overrun
 // while the group keeps its rate.
 #include "swf/app/flight_loop.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <memory>
+#include <vector>
 
 #include "swf/app/config.hpp"
+#include "swf/app/hazard_stage.hpp"
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/sim_world.hpp"
 #include "swf/testing/allocation_counter.hpp"
@@ -21,6 +26,7 @@ struct Rig {
   std::unique_ptr<PrerenderedSimSource> source;
   std::unique_ptr<Pipeline> pipeline = std::make_unique<Pipeline>();
   std::unique_ptr<OutputChannels> channels = std::make_unique<OutputChannels>();
+  std::unique_ptr<MapperHazardStage> hazard = std::make_unique<MapperHazardStage>();
   OutputThread output;
   LoopOptions loop_options;
 
@@ -43,27 +49,67 @@ struct Rig {
     po.process_sigma_rad = 0.001;
     po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
     EXPECT_EQ(pipeline->Configure(po), core::Status::kOk);
-    EXPECT_EQ(channels->Allocate(po.width_px, po.height_px), core::Status::kOk);
+    hazard::HazardMapperOptions ho;
+    ho.camera = pipeline->Camera();
+    ho.image_width = po.width_px;
+    ho.image_height = po.height_px;
+    ho.max_disparities = 64;
+    EXPECT_EQ(hazard->Configure(ho), core::Status::kOk);
+    EXPECT_EQ(channels->Allocate(po.width_px, po.height_px, hazard->GridCells()),
+              core::Status::kOk);
     OutputOptions oo;  // no LCM, no log: the outputs are only drained
+    oo.max_hazard_cells = hazard->GridCells();
     EXPECT_TRUE(output.Open(oo, channels.get(), &error)) << error;
     EXPECT_EQ(source->Start(), core::Status::kOk);
   }
 };
 
+// Copies of the published hazard maps (output thread).
+class HazardCollector : public OutputObserver {
+ public:
+  void OnHazard(const HazardRecord& r) override {
+    Map m;
+    m.frame_seq = r.frame_seq;
+    m.seq = r.seq;
+    m.site_valid = r.safe_site_valid;
+    const std::size_t n = static_cast<std::size_t>(r.cells_per_side) * r.cells_per_side;
+    m.elevation.assign(r.elevation_m.get(), r.elevation_m.get() + n);
+    m.classes.assign(r.hazard_class.get(), r.hazard_class.get() + n);
+    maps.push_back(std::move(m));
+  }
+  struct Map {
+    std::int64_t frame_seq = 0;
+    std::int64_t seq = 0;
+    bool site_valid = false;
+    std::vector<float> elevation;
+    std::vector<std::int8_t> classes;
+  };
+  std::vector<Map> maps;
+};
+
+int KnownCells(const HazardCollector::Map& m) {
+  int known = 0;
+  for (float e : m.elevation) known += std::isnan(e) ? 0 : 1;
+  return known;
+}
+
 // GIVEN the whole simulated descent (100 m -> 10 m, 91 frames) WHEN every frame-group cycle runs
-// inside an allocation-counting scope THEN not one allocation happens, and the estimate stays
-// within a metre of the truth.
+// inside an allocation-counting scope, hazard mapping every 5th frame included, THEN not one
+// allocation happens, every snapshot frame gives a hazard map, and the estimate stays within a
+// metre of the truth.
 TEST(FlightLoopTest, NoAllocationOnTheRealTimePathOverAWholeDescent) {
   Rig rig(
       "source: sim\nsim.width_px: 256\nsim.height_px: 192\nsim.terrain_size: 1024\n"
       "rate_hz: 10\n");
   ASSERT_EQ(rig.world->NumFrames(), 91);
+  HazardCollector hazards;
+  rig.output.AddObserver(&hazards);
   FlightLoop loop;
   rig.loop_options.rate_hz = 10.0;
   rig.loop_options.hazard_every = 5;
   rig.loop_options.health_every = 10;
   ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
-                           rig.channels.get(), rig.world.get()),
+                           rig.channels.get(), rig.world.get(), rig.hazard.get()),
             core::Status::kOk);
   std::uint64_t allocations = 0;
   int frames = 0;
@@ -83,12 +129,69 @@ TEST(FlightLoopTest, NoAllocationOnTheRealTimePathOverAWholeDescent) {
   EXPECT_EQ(allocations, 0u);
   EXPECT_EQ(loop.Counters().stage_errors, 0);
   EXPECT_EQ(loop.Counters().outputs_dropped, 0);
+  EXPECT_EQ(loop.Counters().hazard_skipped, 0);
+  EXPECT_EQ(loop.HazardErrors(), 0);
+  ASSERT_EQ(hazards.maps.size(), 18u);  // frames 4, 9, ..., 89
+  EXPECT_EQ(hazards.maps.back().frame_seq, 89);
+  EXPECT_EQ(hazards.maps.back().seq, 17);
+  EXPECT_GT(KnownCells(hazards.maps.back()), 1000);
   NavOutput nav;
   rig.pipeline->MakeNav(&nav);
   const Eigen::Vector3d truth = rig.world->Trajectory().WorldTCamera(90).t;
   const Eigen::Vector3d estimate(nav.position_world_m[0], nav.position_world_m[1],
                                  nav.position_world_m[2]);
   EXPECT_LT((estimate - truth).norm(), 1.0) << estimate.transpose();
+}
+
+// GIVEN a short descent WHEN it runs once with the hazard group on its own thread (lockstep
+// pacing) and once synchronously (Step) THEN every snapshot frame is mapped in both runs and the
+// hazard maps are bit-identical (snapshot frames are fixed by frame count; a busy hazard group
+// makes the frame group wait under lockstep instead of skipping).
+TEST(FlightLoopTest, ThreadedHazardMapsAreIdenticalToSynchronousOnes) {
+  const char* text =
+      "source: sim\nsim.frames: 30\nsim.width_px: 192\nsim.height_px: 144\n"
+      "sim.terrain_size: 1024\nmax_disparity_px: 60\nrate_hz: 10\n";
+  HazardCollector threaded;
+  HazardCollector synchronous;
+  {
+    Rig rig(text);
+    rig.output.AddObserver(&threaded);
+    FlightLoop loop;
+    rig.loop_options.pacing = Pacing::kLockstep;
+    rig.loop_options.hazard_every = 3;
+    ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
+                             rig.channels.get(), rig.world.get(), rig.hazard.get()),
+              core::Status::kOk);
+    rig.output.Start();
+    ASSERT_EQ(loop.Run(), core::Status::kOk);
+    rig.output.StopAndDrain();
+    EXPECT_EQ(loop.Counters().hazard_skipped, 0);
+    EXPECT_EQ(loop.Summary(kStageCycle).samples, 30u);
+  }
+  {
+    Rig rig(text);
+    rig.output.AddObserver(&synchronous);
+    FlightLoop loop;
+    rig.loop_options.hazard_every = 3;
+    ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
+                             rig.channels.get(), rig.world.get(), rig.hazard.get()),
+              core::Status::kOk);
+    while (loop.Step() == core::Status::kOk) rig.output.DrainOnce();
+    rig.output.DrainOnce();
+  }
+  ASSERT_EQ(threaded.maps.size(), 10u);
+  ASSERT_EQ(synchronous.maps.size(), 10u);
+  for (std::size_t k = 0; k < threaded.maps.size(); ++k) {
+    const HazardCollector::Map& a = threaded.maps[k];
+    const HazardCollector::Map& b = synchronous.maps[k];
+    EXPECT_EQ(a.frame_seq, static_cast<std::int64_t>(3 * k + 2));
+    EXPECT_EQ(a.frame_seq, b.frame_seq);
+    ASSERT_EQ(a.elevation.size(), b.elevation.size());
+    EXPECT_EQ(std::memcmp(a.elevation.data(), b.elevation.data(), a.elevation.size() * 4), 0)
+        << "map " << k;
+    EXPECT_EQ(a.classes, b.classes) << "map " << k;
+  }
+  EXPECT_GT(KnownCells(threaded.maps.back()), 500);
 }
 
 // GIVEN a 20 Hz frame group on a hover (fast cycles) WHEN the track stage of frame 10 takes

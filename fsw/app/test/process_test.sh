@@ -1,7 +1,8 @@
 #!/bin/sh
 # The flight process as separate executables on a short simulated descent (config/test.cfg):
-#  1. determinism: the live run's recording replayed twice gives bit-identical SWF_NAV and
-#     SWF_LANDMARKS messages, identical to the live run's own outputs;
+#  1. determinism: the live run's recording replayed twice gives bit-identical SWF_NAV,
+#     SWF_LANDMARKS and SWF_HAZARD messages, identical to the live run's own outputs (one hazard
+#     map per hazard_every = 5 frames: 6 maps);
 #  2. a truncated log: swf-replay stops with an error naming the damaged record, after publishing
 #     the outputs of every frame before it;
 #  3. a bad configuration is refused before start, naming the field.
@@ -19,11 +20,13 @@ echo "== live run"
 echo "== replays"
 "$replay" --config "$cfg" --log "$dir/live.lcmlog" --record "$dir/r1.lcmlog" || fail "replay 1"
 "$replay" --config "$cfg" --log "$dir/live.lcmlog" --record "$dir/r2.lcmlog" || fail "replay 2"
-$cmp SWF_NAV,SWF_LANDMARKS "$dir/r1.lcmlog" "$dir/r2.lcmlog" "$dir/live.lcmlog" ||
+$cmp SWF_NAV,SWF_LANDMARKS,SWF_HAZARD "$dir/r1.lcmlog" "$dir/r2.lcmlog" "$dir/live.lcmlog" ||
   fail "outputs are not bit-identical"
 frames=$($cmp --count SWF_STEREO "$dir/live.lcmlog")
 navs=$($cmp --count SWF_NAV "$dir/live.lcmlog")
-[ "$frames" -eq 30 ] && [ "$navs" -eq 30 ] || fail "live log holds $frames frames, $navs navs"
+hazards=$($cmp --count SWF_HAZARD "$dir/live.lcmlog")
+[ "$frames" -eq 30 ] && [ "$navs" -eq 30 ] && [ "$hazards" -eq 6 ] ||
+  fail "live log holds $frames frames, $navs navs, $hazards hazard maps"
 
 echo "== truncated log"
 size=$(stat -c %s "$dir/live.lcmlog")

@@ -63,6 +63,8 @@ struct FswConfig {
   double rate_hz = 10.0;
   Pacing pacing = Pacing::kRealtime;
   std::int32_t hazard_every = 5;
+  std::int32_t hazard_max_disparities = 64;  // hazard mapper's SGM range (working resolution)
+  std::int32_t hazard_downsample = 2;        // hazard mapper's image reduction: 1, 2 or 4
   std::int32_t health_every = 10;
   std::int64_t max_frames = 0;
 

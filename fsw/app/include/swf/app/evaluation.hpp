@@ -11,6 +11,7 @@
 
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/pipeline.hpp"
+#include "swf/hazard/hazard_mapper.hpp"
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
 
@@ -25,6 +26,28 @@ struct EvaluationResult {
   double landmark_median_error_m = 0.0;  // the last published map
   std::int64_t landmarks_evaluated = 0;  // in the last map
 };
+
+// The final hazard map against the simulator's hazard truth (sim/hazard.hpp, same thresholds).
+struct HazardEvaluation {
+  std::int64_t maps = 0;  // hazard maps published
+  int known_cells = 0;
+  int rocks_resolved = 0;               // truth rocks >= the threshold whose cell resolves it
+                                        // (sigma <= threshold / 3)
+  int rocks_detected = 0;               // ... with a rock cell within the rock's radius + one cell
+  double detection_probability = -1.0;  // detected / resolved (-1: none resolved)
+  int rock_free_cells = 0;              // known cells without a truth rock >= threshold / 2 nearby
+  int false_rock_cells = 0;             // ... classified rock
+  double false_alarm_rate = 0.0;        // false_rock_cells / rock_free_cells
+  bool site_valid = false;
+  double site_x_m = 0.0;
+  double site_y_m = 0.0;
+  double site_score = 0.0;
+  bool site_on_hazard = false;     // a truth hazard node within the footprint of the site
+  double site_clearance_m = -1.0;  // site to the nearest truth hazard node (capped at 20 m)
+};
+
+HazardEvaluation EvaluateHazard(const hazard::HazardMapper& mapper, const sim::Terrain& terrain,
+                                std::int64_t maps_published);
 
 // Keeps copies of the outputs (output thread) for the evaluation after the run.
 class Evaluation : public OutputObserver {

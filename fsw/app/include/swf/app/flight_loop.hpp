@@ -8,9 +8,12 @@
 //     Pacing kLockstep: a cycle starts when the source delivers a pair (a camera is the clock,
 //     or a log replayed as fast as possible); a cycle whose processing exceeds T is an overrun.
 //   hazard group (second real-time thread, lower priority): every hazard_every frames the frame
-//     group snapshots the landmark map (with covariances) into a pool slot and wakes it; it runs
-//     the HazardStage (hazard mapping plugs in there) and hands the map to the output thread.
-//     Snapshots are taken at fixed frame counts, so the published maps are deterministic.
+//     group publishes the landmark map and copies the rectified pair, the newest pose with its
+//     covariance and the landmarks into a HazardInput slot and queues it; the hazard thread runs
+//     the HazardStage on every queued snapshot in order and hands the hazard map to the output
+//     thread. Snapshots are taken at fixed frame counts; under lockstep pacing the frame group
+//     waits for a free snapshot slot instead of skipping, so published hazard maps are
+//     deterministic (realtime pacing skips and counts, LoopCounters::hazard_skipped).
 //   output thread (normal priority, not here): drains OutputChannels (see records.hpp).
 //
 // After Run() starts nothing allocates or blocks on I/O on the real-time threads: outputs go to
@@ -53,12 +56,13 @@ struct LoopOptions {
   double inject_ms = 0.0;
 };
 
-// The hazard group's work on a landmark-map snapshot. The default publishes the map as it is;
-// hazard mapping implements this interface and fills its own output.
+// The hazard group's work on a snapshot (rectified pair, newest pose + covariance, landmarks with
+// covariances of one frame); fills the hazard_map_t record. MapperHazardStage (hazard_stage.hpp)
+// runs the hazard mapper. Called on the hazard thread (or inline by Step()); must not allocate.
 class HazardStage {
  public:
   virtual ~HazardStage() = default;
-  virtual core::Status Process(const MapOutput& map) = 0;
+  virtual core::Status Process(const HazardInput& input, HazardRecord* out) = 0;
 };
 
 struct LoopCounters {
@@ -69,7 +73,7 @@ struct LoopCounters {
   std::int64_t outputs_dropped = 0;
   std::int64_t source_timeouts = 0;
   std::int64_t source_errors = 0;
-  std::int64_t hazard_skipped = 0;  // snapshots not taken because the hazard group was busy
+  std::int64_t hazard_skipped = 0;  // realtime pacing: snapshots not taken, hazard group busy
   std::int64_t stage_errors = 0;    // frames whose rectify/track/estimate stage failed
 };
 
@@ -98,6 +102,7 @@ class FlightLoop {
   void PublishHealth();
 
   const LoopCounters& Counters() const { return counters_; }
+  std::int64_t HazardErrors() const { return hazard_errors_.load(); }
   StageSummary Summary(int stage) { return stages_[stage].Summarize(); }
 
  private:
@@ -106,7 +111,11 @@ class FlightLoop {
   void Inject(int stage);
   void Push(core::SpscQueue<RecordRef, kOrderQueueSize>* q, RecordRef ref);
   void HazardMain();
-  void TakeSnapshot(bool synchronous);
+  void TakeSnapshot(bool synchronous, std::int32_t hazard_slot);
+  std::int32_t AcquireHazardInput(bool wait);
+  void CopyRectified(HazardInput* h);
+  void RunHazard(std::int32_t input_slot, core::SpscQueue<RecordRef, kOrderQueueSize>* q,
+                 bool wait);
 
   LoopOptions options_;
   Pipeline* pipeline_ = nullptr;
@@ -121,14 +130,19 @@ class FlightLoop {
   LoopCounters counters_;
   std::int64_t nav_seq_ = 0;
   std::int64_t map_seq_ = 0;
+  std::int64_t hazard_seq_ = 0;          // hazard thread (or Step()) only
+  std::int32_t hazard_spare_slot_ = -1;  // hazards slot kept after a failed update
   std::int64_t health_seq_ = 0;
   std::int32_t consecutive_timeouts_ = 0;
   std::int64_t last_frame_utime_ = 0;
 
   std::atomic<bool> stop_{false};
   std::atomic<bool> hazard_quit_{false};
-  std::atomic<std::int32_t> hazard_slot_{-1};  // snapshot waiting for / owned by the hazard group
-  std::atomic<bool> hazard_busy_{false};
+  // Hazard-group timing: written by the hazard thread, read by PublishHealth under the flag.
+  StageStats hazard_stage_;
+  StageSummary hazard_summary_;
+  std::atomic_flag hazard_summary_lock_ = ATOMIC_FLAG_INIT;
+  std::atomic<std::int64_t> hazard_errors_{0};
   std::counting_semaphore<1024> hazard_wake_{0};
   std::atomic<std::int64_t> hazard_outputs_dropped_{0};
   std::thread hazard_thread_;

@@ -31,6 +31,7 @@ class OutputObserver {
   virtual void OnNav(const NavRecord& /*r*/) {}
   virtual void OnMap(const MapRecord& /*r*/) {}
   virtual void OnHealth(const HealthRecord& /*r*/) {}
+  virtual void OnHazard(const HazardRecord& /*r*/) {}
 };
 
 struct OutputOptions {
@@ -39,6 +40,7 @@ struct OutputOptions {
   std::string record_path;     // "" = do not record
   std::int32_t max_width = 0;  // largest frame recorded (sizes the encode buffer)
   std::int32_t max_height = 0;
+  std::int32_t max_hazard_cells = 0;  // cells per side of the largest hazard map
 };
 
 struct OutputCounters {

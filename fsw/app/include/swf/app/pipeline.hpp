@@ -122,6 +122,14 @@ class Pipeline {
   // Computes covariances and fills the landmark map (hazard-group rate: O(n^3)).
   core::Status MakeMap(MapOutput* map);
 
+  // The newest pose and its 6x6 marginal covariance ([rho, phi]); computes the covariances when
+  // MakeNav/MakeMap have not. kEmpty before the first estimate, else the solver's status.
+  core::Status NewestPose(estimator::Pose<double>* pose, estimator::Mat6<double>* covariance);
+  // The rectified pair of the current frame (valid after Rectify() succeeded, until the source
+  // buffer is released when the frames arrive rectified).
+  const frontend::GrayView& RectifiedLeft() const { return current_.left; }
+  const frontend::GrayView& RectifiedRight() const { return current_.right; }
+
   int NumFeatures() const { return static_cast<int>(output_->measurements.size()); }
   int NumLandmarks() const { return swf_->NumLandmarks(); }
   std::uint32_t FaultBits() const { return swf_->FaultBits(); }

@@ -14,6 +14,7 @@
 #include "swf/app/stage_timer.hpp"
 #include "swf/core/spsc_queue.hpp"
 #include "swf/core/status.hpp"
+#include "swf/hazard/hazard_mapper.hpp"
 
 namespace swf::app {
 
@@ -26,6 +27,7 @@ enum Stage : int {
   kStageOutput,  // navigation output (incl. covariance) and queueing
   kStageMap,     // landmark map snapshot for the hazard group (every hazard_every frames)
   kStageCycle,   // the whole cycle after acquisition
+  kStageHazard,  // hazard group: HazardStage::Process (dense stereo + map + site), its own thread
   kNumStages
 };
 const char* StageName(int stage);
@@ -73,7 +75,45 @@ struct HealthRecord {
   StageSummary stages[kNumStages];
 };
 
-enum class RecordKind : std::uint8_t { kFrame, kNav, kMap, kHealth };
+// What the frame group hands to the hazard group every hazard_every frames: the rectified pair
+// (copied into buffers sized at start), the newest pose with its 6x6 covariance and the landmark
+// map with covariances, all of the same frame.
+struct HazardInput {
+  std::int64_t utime = 0;
+  std::int64_t frame_seq = 0;
+  std::int32_t width = 0;
+  std::int32_t height = 0;
+  std::unique_ptr<std::uint8_t[]> left;  // width * height, capacity fixed at start
+  std::unique_ptr<std::uint8_t[]> right;
+  std::int32_t capacity_bytes = 0;
+  bool pose_valid = false;
+  estimator::Pose<double> world_T_camera;
+  Eigen::Matrix<double, 6, 6> pose_covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  std::int32_t num_landmarks = 0;
+  hazard::HazardLandmark landmarks[kMaxMapLandmarks];
+};
+
+// hazard_map_t without the transport fields; arrays sized at start (cells = grid_cells^2).
+struct HazardRecord {
+  std::int64_t seq = 0;
+  std::int64_t utime = 0;
+  std::int64_t frame_seq = 0;
+  double origin_world_m[2] = {0.0, 0.0};
+  double cell_size_m = 0.0;
+  std::int32_t cells_per_side = 0;
+  std::int32_t capacity_cells = 0;
+  std::unique_ptr<float[]> elevation_m;
+  std::unique_ptr<float[]> sigma_m;
+  std::unique_ptr<float[]> slope_deg;
+  std::unique_ptr<float[]> roughness_m;
+  std::unique_ptr<std::int8_t[]> hazard_class;
+  bool safe_site_valid = false;
+  double safe_site_world_m[2] = {0.0, 0.0};
+  double safe_site_score = 0.0;
+  float update_ms = 0.0f;  // wall time of the hazard update (not published; not deterministic)
+};
+
+enum class RecordKind : std::uint8_t { kFrame, kNav, kMap, kHealth, kHazard };
 struct RecordRef {
   RecordKind kind = RecordKind::kNav;
   std::int32_t slot = -1;
@@ -110,6 +150,8 @@ inline constexpr std::size_t kFramePoolSize = 16;
 inline constexpr std::size_t kNavPoolSize = 64;
 inline constexpr std::size_t kMapPoolSize = 4;
 inline constexpr std::size_t kHealthPoolSize = 8;
+inline constexpr std::size_t kHazardInputPoolSize = 2;
+inline constexpr std::size_t kHazardPoolSize = 3;
 inline constexpr std::size_t kOrderQueueSize = 128;
 
 // Everything the output thread consumes. Two producers (the frame group and the hazard group),
@@ -119,16 +161,41 @@ struct OutputChannels {
   SlotPool<NavRecord, kNavPoolSize> navs;
   SlotPool<MapRecord, kMapPoolSize> maps;
   SlotPool<HealthRecord, kHealthPoolSize> healths;
+  SlotPool<HazardInput, kHazardInputPoolSize> hazard_inputs;  // frame group -> hazard group
+  SlotPool<HazardRecord, kHazardPoolSize> hazards;            // hazard group -> output thread
+  core::SpscQueue<std::int32_t, kHazardInputPoolSize + 1> hazard_work;  // filled HazardInputs
   core::SpscQueue<RecordRef, kOrderQueueSize> frame_group;
   core::SpscQueue<RecordRef, kOrderQueueSize> hazard_group;
 
-  // Sizes every pool; frame slots hold width*height bytes per image.
-  core::Status Allocate(std::int32_t width, std::int32_t height) {
+  // Sizes every pool; frame slots hold width*height bytes per image, hazard maps
+  // hazard_cells^2 cells (0: no hazard mapping).
+  core::Status Allocate(std::int32_t width, std::int32_t height, std::int32_t hazard_cells = 0) {
     if (frames.Allocate() != core::Status::kOk || navs.Allocate() != core::Status::kOk ||
-        maps.Allocate() != core::Status::kOk || healths.Allocate() != core::Status::kOk) {
+        maps.Allocate() != core::Status::kOk || healths.Allocate() != core::Status::kOk ||
+        hazard_inputs.Allocate() != core::Status::kOk || hazards.Allocate() != core::Status::kOk) {
       return core::Status::kFull;
     }
     const std::int32_t bytes = width * height;
+    for (std::size_t i = 0; i < kHazardInputPoolSize; ++i) {
+      HazardInput& h = hazard_inputs[static_cast<std::int32_t>(i)];
+      h.left.reset(new (std::nothrow) std::uint8_t[bytes]);
+      h.right.reset(new (std::nothrow) std::uint8_t[bytes]);
+      if (!h.left || !h.right) return core::Status::kFull;
+      h.capacity_bytes = bytes;
+    }
+    const std::int32_t cells = hazard_cells * hazard_cells;
+    for (std::size_t i = 0; i < kHazardPoolSize && cells > 0; ++i) {
+      HazardRecord& h = hazards[static_cast<std::int32_t>(i)];
+      h.elevation_m.reset(new (std::nothrow) float[cells]);
+      h.sigma_m.reset(new (std::nothrow) float[cells]);
+      h.slope_deg.reset(new (std::nothrow) float[cells]);
+      h.roughness_m.reset(new (std::nothrow) float[cells]);
+      h.hazard_class.reset(new (std::nothrow) std::int8_t[cells]);
+      if (!h.elevation_m || !h.sigma_m || !h.slope_deg || !h.roughness_m || !h.hazard_class) {
+        return core::Status::kFull;
+      }
+      h.capacity_cells = cells;
+    }
     for (std::size_t i = 0; i < kFramePoolSize; ++i) {
       FrameRecord& f = frames[static_cast<std::int32_t>(i)];
       f.left.reset(new (std::nothrow) std::uint8_t[bytes]);
