@@ -10,6 +10,7 @@ GuidanceMonitor::GuidanceMonitor(lcm::LCM* lcm, const std::string& prefix, bool 
   lcm->subscribe(prefix + "NAV", &GuidanceMonitor::OnNav, this);
   lcm->subscribe(prefix + "LANDMARKS", &GuidanceMonitor::OnLandmarks, this);
   lcm->subscribe(prefix + "HEALTH", &GuidanceMonitor::OnHealth, this);
+  lcm->subscribe(prefix + "HAZARD", &GuidanceMonitor::OnHazard, this);
 }
 
 template <typename Msg>
@@ -71,6 +72,37 @@ void GuidanceMonitor::OnHealth(const lcm::ReceiveBuffer* buffer, const std::stri
                 static_cast<long long>(msg.overruns),
                 static_cast<long long>(msg.allocations_after_start), msg.fault_bits);
   }
+}
+
+void GuidanceMonitor::OnHazard(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+  swf_msgs::hazard_map_t msg;
+  if (!Decode(buffer, &msg, &hazard_)) return;
+  // Decodes but is inconsistent: counted as malformed, like a message that does not decode.
+  bool consistent = msg.rows >= 0 && msg.cols >= 0 &&
+                    static_cast<std::int64_t>(msg.rows) * msg.cols == msg.num_cells;
+  int safe = 0;
+  int hazards = 0;
+  for (std::int8_t c : msg.hazard_class) {
+    consistent = consistent && c >= swf_msgs::hazard_map_t::CLASS_UNKNOWN &&
+                 c <= swf_msgs::hazard_map_t::CLASS_UNCERTAIN;
+    safe += c == swf_msgs::hazard_map_t::CLASS_SAFE;
+    hazards += c == swf_msgs::hazard_map_t::CLASS_ROCK || c == swf_msgs::hazard_map_t::CLASS_SLOPE;
+  }
+  if (!consistent) {
+    ++hazard_.malformed;
+    return;
+  }
+  Sequence(msg.seq, &hazard_);
+  if (print_) {
+    std::printf("hazard %lld frame %lld: %dx%d cells of %.3f m, %d safe, %d hazard, site %s",
+                static_cast<long long>(msg.seq), static_cast<long long>(msg.frame_seq), msg.cols,
+                msg.rows, msg.cell_size_m, safe, hazards, msg.safe_site_valid ? "" : "none\n");
+    if (msg.safe_site_valid) {
+      std::printf("%.2f %.2f m score %.3f\n", msg.safe_site_world_m[0], msg.safe_site_world_m[1],
+                  msg.safe_site_score);
+    }
+  }
+  last_hazard_ = std::move(msg);
 }
 
 }  // namespace swf::guidance

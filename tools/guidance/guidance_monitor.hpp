@@ -8,6 +8,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <string>
 
+#include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
@@ -29,19 +30,25 @@ class GuidanceMonitor {
   const ChannelStats& Nav() const { return nav_; }
   const ChannelStats& Landmarks() const { return landmarks_; }
   const ChannelStats& Health() const { return health_; }
+  const ChannelStats& Hazard() const { return hazard_; }
   const swf_msgs::nav_state_t& LastNav() const { return last_nav_; }
   const swf_msgs::landmark_map_t& LastMap() const { return last_map_; }
   const swf_msgs::health_t& LastHealth() const { return last_health_; }
+  // The last hazard map that decoded and was consistent (num_cells = rows * cols, classes known).
+  const swf_msgs::hazard_map_t& LastHazard() const { return last_hazard_; }
   std::int64_t Malformed() const {
-    return nav_.malformed + landmarks_.malformed + health_.malformed;
+    return nav_.malformed + landmarks_.malformed + health_.malformed + hazard_.malformed;
   }
-  std::int64_t Lost() const { return nav_.lost + landmarks_.lost + health_.lost; }
-  std::int64_t Received() const { return nav_.received + landmarks_.received + health_.received; }
+  std::int64_t Lost() const { return nav_.lost + landmarks_.lost + health_.lost + hazard_.lost; }
+  std::int64_t Received() const {
+    return nav_.received + landmarks_.received + health_.received + hazard_.received;
+  }
 
   // Raw handlers (this LCM version does not take lambdas).
   void OnNav(const lcm::ReceiveBuffer* buffer, const std::string& channel);
   void OnLandmarks(const lcm::ReceiveBuffer* buffer, const std::string& channel);
   void OnHealth(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void OnHazard(const lcm::ReceiveBuffer* buffer, const std::string& channel);
 
  private:
   template <typename Msg>
@@ -52,9 +59,11 @@ class GuidanceMonitor {
   ChannelStats nav_;
   ChannelStats landmarks_;
   ChannelStats health_;
+  ChannelStats hazard_;
   swf_msgs::nav_state_t last_nav_{};
   swf_msgs::landmark_map_t last_map_{};
   swf_msgs::health_t last_health_{};
+  swf_msgs::hazard_map_t last_hazard_{};
 };
 
 }  // namespace swf::guidance

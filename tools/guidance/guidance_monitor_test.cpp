@@ -40,5 +40,44 @@ TEST(GuidanceMonitorTest, CountsLostAndMalformedAndKeepsGoing) {
   EXPECT_DOUBLE_EQ(monitor.LastNav().position_world_m[2], 97.0);
 }
 
+// GIVEN hazard maps on SWF_HAZARD WHEN one is consistent, one claims more cells than rows x cols
+// and one carries an unknown class THEN only the first is accepted, the others are counted as
+// malformed, and the sequence check sees no gap.
+TEST(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  GuidanceMonitor monitor(&lcm, "SWF_", false);
+  swf_msgs::hazard_map_t good{};
+  good.seq = 0;
+  good.frame_seq = 4;
+  good.rows = 1;
+  good.cols = 2;
+  good.num_cells = 2;
+  good.elevation_m = {0.5f, 0.25f};
+  good.sigma_m = {0.1f, 0.1f};
+  good.slope_deg = {1.0f, 2.0f};
+  good.roughness_m = {0.0f, 0.3f};
+  good.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_UNCERTAIN};
+  ASSERT_EQ(lcm.publish("SWF_HAZARD", &good), 0);
+  swf_msgs::hazard_map_t wrong_size = good;
+  wrong_size.seq = 1;
+  wrong_size.rows = 2;
+  ASSERT_EQ(lcm.publish("SWF_HAZARD", &wrong_size), 0);
+  swf_msgs::hazard_map_t bad_class = good;
+  bad_class.seq = 1;
+  bad_class.hazard_class[1] = 42;
+  ASSERT_EQ(lcm.publish("SWF_HAZARD", &bad_class), 0);
+  swf_msgs::hazard_map_t next = good;
+  next.seq = 1;
+  next.frame_seq = 9;
+  ASSERT_EQ(lcm.publish("SWF_HAZARD", &next), 0);
+  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
+  }
+  EXPECT_EQ(monitor.Hazard().received, 2);
+  EXPECT_EQ(monitor.Hazard().malformed, 2);
+  EXPECT_EQ(monitor.Hazard().lost, 0);
+  EXPECT_EQ(monitor.LastHazard().frame_seq, 9);
+}
+
 }  // namespace
 }  // namespace swf::guidance

@@ -1,6 +1,6 @@
 // swf-guidance: the guidance-side consumer of the flight process's LCM outputs. Prints every
-// navigation state, landmark map and health message (--quiet: only the summary), checks sequence
-// numbers, counts malformed messages, and exits after --idle seconds without traffic (once
+// navigation state, landmark map, hazard map and health message (--quiet: only the summary), checks
+// sequence numbers, counts malformed messages, and exits after --idle seconds without traffic (once
 // something arrived) or --timeout seconds in all, printing a JSON summary on stdout.
 //   swf-guidance [--url URL] [--prefix SWF_] [--idle S] [--timeout S] [--quiet]
 //                [--map-out FILE]   (the last landmark map as "x y z" lines, for plotting)
@@ -13,7 +13,8 @@
 #include "guidance_monitor.hpp"
 
 int main(int argc, char** argv) {
-  std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  // The receive buffer holds a whole hazard map (~1.1 MB in fragments).
+  std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
   std::string prefix = "SWF_";
   std::string map_out;
   double idle_s = 2.0;
@@ -78,21 +79,28 @@ int main(int argc, char** argv) {
   const auto& n = monitor.Nav();
   const auto& l = monitor.Landmarks();
   const auto& h = monitor.Health();
+  const auto& z = monitor.Hazard();
   std::printf(
       "{\"nav\": {\"received\": %lld, \"lost\": %lld, \"out_of_order\": %lld, \"malformed\": "
       "%lld},\n \"landmarks\": {\"received\": %lld, \"lost\": %lld, \"out_of_order\": %lld, "
       "\"malformed\": %lld},\n \"health\": {\"received\": %lld, \"lost\": %lld, \"malformed\": "
-      "%lld},\n \"last_frame\": %lld, \"last_position_m\": [%.3f, %.3f, %.3f], "
+      "%lld},\n \"hazard\": {\"received\": %lld, \"lost\": %lld, \"out_of_order\": %lld, "
+      "\"malformed\": %lld, \"last_frame\": %lld, \"last_site_valid\": %s},\n"
+      " \"last_frame\": %lld, \"last_position_m\": [%.3f, %.3f, %.3f], "
       "\"last_map_landmarks\": %d, \"overruns\": %lld, \"allocations_after_start\": %lld}\n",
       static_cast<long long>(n.received), static_cast<long long>(n.lost),
       static_cast<long long>(n.out_of_order), static_cast<long long>(n.malformed),
       static_cast<long long>(l.received), static_cast<long long>(l.lost),
       static_cast<long long>(l.out_of_order), static_cast<long long>(l.malformed),
       static_cast<long long>(h.received), static_cast<long long>(h.lost),
-      static_cast<long long>(h.malformed), static_cast<long long>(monitor.LastNav().frame_seq),
-      monitor.LastNav().position_world_m[0], monitor.LastNav().position_world_m[1],
-      monitor.LastNav().position_world_m[2], monitor.LastMap().num_landmarks,
-      static_cast<long long>(monitor.LastHealth().overruns),
+      static_cast<long long>(h.malformed), static_cast<long long>(z.received),
+      static_cast<long long>(z.lost), static_cast<long long>(z.out_of_order),
+      static_cast<long long>(z.malformed),
+      static_cast<long long>(z.received > 0 ? monitor.LastHazard().frame_seq : -1),
+      monitor.LastHazard().safe_site_valid ? "true" : "false",
+      static_cast<long long>(monitor.LastNav().frame_seq), monitor.LastNav().position_world_m[0],
+      monitor.LastNav().position_world_m[1], monitor.LastNav().position_world_m[2],
+      monitor.LastMap().num_landmarks, static_cast<long long>(monitor.LastHealth().overruns),
       static_cast<long long>(monitor.LastHealth().allocations_after_start));
   return 0;
 }
