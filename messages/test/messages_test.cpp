@@ -77,6 +77,9 @@ TEST(Messages, NavStateLandmarksHazardHealthRoundTrip) {
   hazard.roughness_m = {0.0f, 0.3f};
   hazard.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_ROCK};
   EXPECT_EQ(RoundTrip(hazard, &buffer).hazard_class[1], swf_msgs::hazard_map_t::CLASS_ROCK);
+  hazard.hazard_class[1] = swf_msgs::hazard_map_t::CLASS_UNCERTAIN;  // its own class, not safe
+  EXPECT_EQ(RoundTrip(hazard, &buffer).hazard_class[1], swf_msgs::hazard_map_t::CLASS_UNCERTAIN);
+  EXPECT_NE(swf_msgs::hazard_map_t::CLASS_UNCERTAIN, swf_msgs::hazard_map_t::CLASS_SAFE);
 
   swf_msgs::health_t health{};
   health.num_stages = 1;

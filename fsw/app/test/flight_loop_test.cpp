@@ -16,6 +16,7 @@
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/sim_world.hpp"
 #include "swf/testing/allocation_counter.hpp"
+#include "swf_msgs/hazard_map_t.hpp"
 
 namespace swf::app {
 namespace {
@@ -91,6 +92,17 @@ int KnownCells(const HazardCollector::Map& m) {
   int known = 0;
   for (float e : m.elevation) known += std::isnan(e) ? 0 : 1;
   return known;
+}
+
+// GIVEN every class of the hazard mapper THEN each maps to its hazard_map_t constant and
+// "uncertain" is never published as safe.
+TEST(FlightLoopTest, HazardClassesMapToTheSchema) {
+  using M = swf_msgs::hazard_map_t;
+  EXPECT_EQ(HazardClassCode(hazard::HazardClass::kUnknown), M::CLASS_UNKNOWN);
+  EXPECT_EQ(HazardClassCode(hazard::HazardClass::kSafe), M::CLASS_SAFE);
+  EXPECT_EQ(HazardClassCode(hazard::HazardClass::kSlope), M::CLASS_SLOPE);
+  EXPECT_EQ(HazardClassCode(hazard::HazardClass::kRock), M::CLASS_ROCK);
+  EXPECT_EQ(HazardClassCode(hazard::HazardClass::kUncertain), M::CLASS_UNCERTAIN);
 }
 
 // GIVEN the whole simulated descent (100 m -> 10 m, 91 frames) WHEN every frame-group cycle runs
