@@ -25,6 +25,9 @@
 
 #include "swf/drivers/aravis_stereo_source.hpp"
 #endif
+#if SWF_APP_HAVE_V4L2
+#include "swf/app/v4l2_source.hpp"
+#endif
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/image_io/image_io.hpp"
 #include "swf/sim/rig.hpp"
@@ -265,6 +268,8 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   std::string aravis_left_id;
   std::string aravis_right_id;
   (void)aravis_source;  // used only when built with Aravis
+  drivers::StereoSource* v4l2_source = nullptr;
+  (void)v4l2_source;  // used only when built with V4L2
 #if SWF_APP_HAVE_ARAVIS
   struct FakeCameras {
     std::vector<ArvGvFakeCamera*> cameras;
@@ -399,12 +404,40 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
       return 2;
 #endif
     }
-    case SourceKind::kV4l2:
+    case SourceKind::kV4l2: {
+#if SWF_APP_HAVE_V4L2
+      // Raw cameras: the calibrations give the size; the pipeline rectifies.
+      if (!image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration,
+                                     &error) ||
+          !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
+                                     &error)) {
+        std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", tool,
+                     error.c_str());
+        return 2;
+      }
+      // The device paths stay in `config`, which outlives the source.
+      std::unique_ptr<drivers::V4l2StereoSource> v4l2 =
+          MakeV4l2Source(config, po.left_calibration.width, po.left_calibration.height,
+                         drivers::LinuxV4l2Kernel(), &error);
+      if (v4l2 == nullptr) {
+        std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
+        return 2;
+      }
+      po.rectify = true;
+      po.width_px = po.left_calibration.width;
+      po.height_px = po.left_calibration.height;
+      total_frames = config.max_frames;
+      v4l2_source = v4l2.get();
+      source = std::move(v4l2);
+      break;
+#else
       std::fprintf(stderr,
-                   "%s: configuration refused: source: %s is not wired into swf-fsw in this "
-                   "build (use sim, aravis or log)\n",
-                   tool, SourceName(config.source));
+                   "%s: configuration refused: source: v4l2: this build has no V4L2 "
+                   "(SWF_WITH_V4L2=OFF)\n",
+                   tool);
       return 2;
+#endif
+    }
   }
   if (po.rectify) {
     if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty()) {
@@ -518,6 +551,13 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
       return 1;
     }
 #endif
+#if SWF_APP_HAVE_V4L2
+    if (v4l2_source != nullptr) {
+      std::fprintf(stderr, "%s: the v4l2 source did not start: %s\n", tool,
+                   static_cast<drivers::V4l2StereoSource*>(v4l2_source)->LastError());
+      return 1;
+    }
+#endif
     std::fprintf(stderr, "%s: the %s source did not start\n", tool, source->Name());
     return 1;
   }
@@ -573,6 +613,12 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     exit_code = 1;
     result = "damaged log";
   }
+#if SWF_APP_HAVE_V4L2
+  if (v4l2_source != nullptr && run_status != core::Status::kOk) {
+    std::fprintf(stderr, "%s: the v4l2 source failed: %s\n", tool,
+                 static_cast<drivers::V4l2StereoSource*>(v4l2_source)->LastError());
+  }
+#endif
   EvaluationResult eval;
   if (evaluate) {
     eval = evaluation.Evaluate(*pipeline, world->Trajectory(), world->Terrain(), config.plot_dir);

@@ -195,6 +195,20 @@ const std::map<std::string, Setter>& Fields() {
     f["camera.left_calibration"] = Text([](FswConfig* c) { return &c->camera.left_calibration; });
     f["camera.right_calibration"] = Text([](FswConfig* c) { return &c->camera.right_calibration; });
     f["camera.fake"] = Bool([](FswConfig* c) { return &c->camera.fake; });
+    f["camera.format"] =
+        OneOf([](FswConfig* c) { return &c->camera.format; }, {"grey", "y16", "yuyv"});
+    // The V4L2 source holds up to 2 pairs and the kernel needs 2 more buffers to keep streaming.
+    f["camera.buffers"] = Int<std::int32_t>([](FswConfig* c) { return &c->camera.buffers; }, 4, 16);
+    f["camera.pair_tolerance_ms"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      double d = 0;
+      if (!ParseDouble(v, &d, why)) return false;
+      if (!(d >= 0.0 && d <= 1000.0)) {
+        *why = v + " is outside [0, 1000]";
+        return false;
+      }
+      c->camera.pair_tolerance_ms = d;
+      return true;
+    };
     f["mode"] = OneOf([](FswConfig* c) { return &c->mode; }, {"swf", "ekf", "vo", "vsdf"});
     f["window"] = Int<std::int32_t>([](FswConfig* c) { return &c->window; }, 1, kMaxWindow);
     f["max_iterations"] =
@@ -340,6 +354,12 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
     if (c.camera.right_calibration.empty()) {
       return fail("camera.right_calibration", "required for a camera source");
     }
+  }
+  if (c.source == SourceKind::kV4l2 && c.camera.fake) {
+    return fail("camera.fake", "only for source aravis (v4l2 tests script the kernel)");
+  }
+  if (c.source == SourceKind::kV4l2 && c.camera.left == c.camera.right) {
+    return fail("camera.right", "the same device as camera.left");
   }
   if (c.mode == "ekf" && c.window != 1) return fail("window", "must be 1 in mode ekf");
   if (c.source == SourceKind::kSim && c.sim.width_px % 2 != 0) {

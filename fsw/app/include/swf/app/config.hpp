@@ -40,6 +40,11 @@ struct CameraConfig {
   std::string left_calibration;  // YAML (EuRoC or ROS/OpenCV); raw images are rectified
   std::string right_calibration;
   bool fake = false;  // aravis: Aravis's in-process fake GigE cameras (tests, no hardware)
+  // v4l2: requested pixel format (grey | y16 | yuyv), driver buffers per device, and the largest
+  // kernel time-stamp difference of a left/right pair.
+  std::string format = "grey";
+  std::int32_t buffers = 4;
+  double pair_tolerance_ms = 2.0;
 };
 
 struct FswConfig {

@@ -1,0 +1,273 @@
+// The flight pipeline on source: v4l2 — swf-fsw's V4L2 source (MakeV4l2Source, the same factory
+// swf-fsw uses over the Linux kernel) over drivers' scripted kernel, because this machine has no
+// /dev/video devices. The scripted kernel's uniform frames get a texture seen by a stereo rig
+// (right view = left view shifted by a fixed disparity, the scene sliding one pixel per frame),
+// so the front end tracks and the filter estimates on real pixel data: 10 pairs in, 10 navigation
+// outputs out, no allocation on the frame path after start, and an unplugged camera stops the
+// flight loop with the device named.
+#include <gtest/gtest.h>
+#include <linux/videodev2.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scripted_v4l2_kernel.hpp"
+#include "swf/app/config.hpp"
+#include "swf/app/flight_loop.hpp"
+#include "swf/app/hazard_stage.hpp"
+#include "swf/app/lcm_io.hpp"
+#include "swf/app/pipeline.hpp"
+#include "swf/app/v4l2_source.hpp"
+#include "swf/testing/allocation_counter.hpp"
+
+namespace swf::app {
+namespace {
+
+using drivers::testing::KernelEvent;
+using drivers::testing::ScriptedDevice;
+using drivers::testing::ScriptedV4l2Kernel;
+
+constexpr int kWidth = 256;
+constexpr int kHeight = 192;
+constexpr int kDisparityPx = 8;
+constexpr double kFocalPx = 200.0;
+constexpr double kBaselineM = 0.2;
+
+// Random gray blocks of 6 px: corners everywhere, unambiguous along the epipolar lines.
+std::uint8_t Texture(int x, int y) {
+  std::uint32_t h = static_cast<std::uint32_t>((x + 4096) / 6) * 73856093U ^
+                    static_cast<std::uint32_t>((y + 4096) / 6) * 19349663U;
+  h ^= h >> 13;
+  h *= 0x5bd1e995U;
+  h ^= h >> 15;
+  return static_cast<std::uint8_t>(40 + (h % 176));
+}
+
+// Forwards to the scripted kernel and paints every dequeued GREY frame with the textured scene
+// (left or right view by device, shifted by the frame's sequence number). Allocates only while
+// buffers are mapped (before start).
+class TexturingKernel final : public drivers::V4l2Kernel {
+ public:
+  TexturingKernel(ScriptedV4l2Kernel* inner, std::string left_path)
+      : inner_(inner), left_path_(std::move(left_path)) {}
+
+  int Open(const char* path) override {
+    const int fd = inner_->Open(path);
+    if (fd >= 0) fds_.push_back({fd, left_path_ == path});
+    return fd;
+  }
+  int Close(int fd) override { return inner_->Close(fd); }
+  int Map(int fd, std::size_t length, std::int64_t offset, void** address) override {
+    const int r = inner_->Map(fd, length, offset, address);
+    if (r >= 0) maps_.push_back({fd, offset, static_cast<std::uint8_t*>(*address), length});
+    return r;
+  }
+  int Unmap(void* address, std::size_t length) override { return inner_->Unmap(address, length); }
+  int Poll(pollfd* fds, int count, int timeout_ms) override {
+    return inner_->Poll(fds, count, timeout_ms);
+  }
+  int Ioctl(int fd, unsigned long request, void* arg) override {
+    const int r = inner_->Ioctl(fd, request, arg);
+    if (r < 0) return r;
+    if (request == VIDIOC_QUERYBUF) {
+      const auto* b = static_cast<const v4l2_buffer*>(arg);
+      offsets_.push_back({fd, b->index, static_cast<std::int64_t>(b->m.offset)});
+    } else if (request == VIDIOC_DQBUF) {
+      Paint(fd, *static_cast<const v4l2_buffer*>(arg));
+    }
+    return r;
+  }
+
+ private:
+  struct FdSide {
+    int fd;
+    bool left;
+  };
+  struct Offset {
+    int fd;
+    std::uint32_t index;
+    std::int64_t offset;
+  };
+  struct Mapping {
+    int fd;
+    std::int64_t offset;
+    std::uint8_t* data;
+    std::size_t length;
+  };
+
+  void Paint(int fd, const v4l2_buffer& b) {
+    if ((b.flags & V4L2_BUF_FLAG_ERROR) != 0U) return;
+    bool left = false;
+    for (const FdSide& s : fds_) {
+      if (s.fd == fd) left = s.left;
+    }
+    std::int64_t offset = -1;
+    for (const Offset& o : offsets_) {
+      if (o.fd == fd && o.index == b.index) offset = o.offset;
+    }
+    for (const Mapping& m : maps_) {
+      if (m.fd != fd || m.offset != offset) continue;
+      if (m.length < static_cast<std::size_t>(kWidth) * kHeight) return;
+      const int shift = static_cast<int>(b.sequence) + (left ? 0 : kDisparityPx);
+      for (int y = 0; y < kHeight; ++y) {
+        for (int x = 0; x < kWidth; ++x) m.data[y * kWidth + x] = Texture(x + shift, y);
+      }
+      return;
+    }
+  }
+
+  ScriptedV4l2Kernel* inner_;
+  std::string left_path_;
+  std::vector<FdSide> fds_;
+  std::vector<Offset> offsets_;
+  std::vector<Mapping> maps_;
+};
+
+frontend::CameraCalibration Calibration(double x_m) {
+  frontend::CameraCalibration c;
+  c.width = kWidth;
+  c.height = kHeight;
+  c.fx = kFocalPx;
+  c.fy = kFocalPx;
+  c.cx = kWidth / 2.0;
+  c.cy = kHeight / 2.0;
+  c.body_T_camera.t = Eigen::Vector3d(x_m, 0.0, 0.0);
+  return c;
+}
+
+class NavCollector : public OutputObserver {
+ public:
+  void OnNav(const NavRecord& r) override { navs.push_back(r.nav); }
+  std::vector<NavOutput> navs;
+};
+
+struct V4l2Rig {
+  FswConfig config;
+  ScriptedV4l2Kernel scripted;
+  std::unique_ptr<TexturingKernel> kernel;
+  std::unique_ptr<drivers::V4l2StereoSource> source;
+  std::unique_ptr<Pipeline> pipeline = std::make_unique<Pipeline>();
+  std::unique_ptr<OutputChannels> channels = std::make_unique<OutputChannels>();
+  std::unique_ptr<MapperHazardStage> hazard = std::make_unique<MapperHazardStage>();
+  OutputThread output;
+  NavCollector navs;
+  FlightLoop loop;
+  int left_device = -1;
+
+  V4l2Rig() {
+    std::string error;
+    EXPECT_TRUE(ParseConfig(
+        "source: v4l2\ncamera.left: /dev/video0\ncamera.right: /dev/video1\n"
+        "camera.left_calibration: left.yaml\ncamera.right_calibration: right.yaml\n"
+        "camera.format: grey\ncamera.buffers: 4\ncamera.pair_tolerance_ms: 2\ninitial: position\n",
+        "test", &config, &error))
+        << error;
+    ScriptedDevice d;
+    d.width = kWidth;
+    d.height = kHeight;
+    d.path = "/dev/video0";
+    left_device = scripted.AddDevice(d);
+    d.path = "/dev/video1";
+    d.first_timestamp_ns += 300'000;  // the right camera's shutter 0.3 ms later
+    scripted.AddDevice(d);
+    kernel = std::make_unique<TexturingKernel>(&scripted, "/dev/video0");
+    source = MakeV4l2Source(config, kWidth, kHeight, *kernel, &error);
+    EXPECT_NE(source, nullptr) << error;
+
+    PipelineOptions po;
+    po.rectify = true;
+    po.left_calibration = Calibration(0.0);
+    po.right_calibration = Calibration(kBaselineM);
+    po.width_px = kWidth;
+    po.height_px = kHeight;
+    po.frontend.harris.bucket_cols = po.width_px / 40;
+    po.frontend.harris.bucket_rows = po.height_px / 40;
+    po.frontend.max_tracks = 100;
+    po.frontend.stereo.max_disparity = 64;
+    po.swf.window_size = 5;
+    EXPECT_EQ(pipeline->Configure(po), core::Status::kOk);
+    hazard::HazardMapperOptions ho;
+    ho.camera = pipeline->Camera();
+    ho.image_width = po.width_px;
+    ho.image_height = po.height_px;
+    ho.max_disparities = 64;
+    EXPECT_EQ(hazard->Configure(ho), core::Status::kOk);
+    EXPECT_EQ(channels->Allocate(po.width_px, po.height_px, hazard->GridCells()),
+              core::Status::kOk);
+    OutputOptions oo;  // no LCM, no log: the outputs are only drained
+    oo.max_hazard_cells = hazard->GridCells();
+    EXPECT_TRUE(output.Open(oo, channels.get(), &error)) << error;
+    output.AddObserver(&navs);
+    LoopOptions lo;
+    lo.rate_hz = 20.0;
+    lo.pacing = Pacing::kLockstep;
+    lo.hazard_every = 5;
+    lo.acquire_timeout_ns = core::kNsPerS / 10;
+    lo.max_consecutive_timeouts = 2;
+    EXPECT_EQ(
+        loop.Configure(lo, pipeline.get(), source.get(), channels.get(), nullptr, hazard.get()),
+        core::Status::kOk);
+  }
+};
+
+// GIVEN swf-fsw's V4L2 source over two scripted GREY cameras WHEN the frame group runs 10 cycles
+// (allocations counted around each) THEN 10 pairs go in, 10 navigation outputs come out with a
+// finite estimate, nothing was dropped and not one allocation happened after start.
+TEST(AppV4l2Test, TenPairsInTenNavsOutWithoutAllocation) {
+  V4l2Rig rig;
+  ASSERT_NE(rig.source, nullptr);
+  ASSERT_EQ(rig.source->Start(), core::Status::kOk) << rig.source->LastError();
+  std::uint64_t allocations = 0;
+  for (int i = 0; i < 10; ++i) {
+    core::Status s;
+    {
+      testing::AllocationScope scope;
+      s = rig.loop.Step();
+      allocations += scope.Count();
+    }
+    rig.output.DrainOnce();
+    ASSERT_EQ(s, core::Status::kOk) << "cycle " << i << ": " << rig.source->LastError();
+  }
+  rig.source->Stop();
+  EXPECT_EQ(allocations, 0U);
+  EXPECT_EQ(rig.loop.Counters().frames, 10);
+  EXPECT_EQ(rig.loop.Counters().frames_dropped, 0);
+  EXPECT_EQ(rig.loop.Counters().stage_errors, 0);
+  EXPECT_EQ(rig.loop.Counters().outputs_dropped, 0);
+  ASSERT_EQ(rig.navs.navs.size(), 10U);
+  for (const NavOutput& nav : rig.navs.navs) {
+    for (double p : nav.position_world_m) EXPECT_TRUE(std::isfinite(p));
+  }
+  EXPECT_GT(rig.pipeline->NumLandmarks(), 20);
+}
+
+// GIVEN the same rig WHEN the left camera is unplugged at its 5th dequeue (ENODEV) THEN the
+// frame group stops with kDeviceLost after the pairs before it, and the source names the device.
+TEST(AppV4l2Test, UnpluggedCameraStopsTheLoopNamingTheDevice) {
+  V4l2Rig rig;
+  ASSERT_NE(rig.source, nullptr);
+  rig.scripted.Script(rig.left_device, 4, KernelEvent::kUnplug);
+  ASSERT_EQ(rig.source->Start(), core::Status::kOk) << rig.source->LastError();
+  core::Status s = core::Status::kOk;
+  int frames = 0;
+  for (int i = 0; i < 10 && s == core::Status::kOk; ++i) {
+    s = rig.loop.Step();
+    rig.output.DrainOnce();
+    if (s == core::Status::kOk) ++frames;
+  }
+  rig.source->Stop();
+  EXPECT_EQ(s, core::Status::kDeviceLost);
+  EXPECT_GE(frames, 3);
+  EXPECT_LE(frames, 4);
+  EXPECT_NE(std::strstr(rig.source->LastError(), "/dev/video0"), nullptr)
+      << rig.source->LastError();
+  EXPECT_EQ(rig.scripted.OpenFds(), 0);
+  EXPECT_EQ(rig.scripted.MappedBuffers(), 0);
+}
+
+}  // namespace
+}  // namespace swf::app
