@@ -293,6 +293,21 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     po.initial_world_T_camera.t = Eigen::Vector3d(
         config.initial_position_m[0], config.initial_position_m[1], config.initial_position_m[2]);
   }
+  // Raw cameras (aravis, v4l2): the calibrations give the image size and the pipeline rectifies.
+  [[maybe_unused]] auto use_camera_calibrations = [&]() {
+    if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty() ||
+        !image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration, &error) ||
+        !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
+                                   &error)) {
+      std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", tool,
+                   error.empty() ? "both calibration files are required" : error.c_str());
+      return false;
+    }
+    po.rectify = true;
+    po.width_px = po.left_calibration.width;
+    po.height_px = po.left_calibration.height;
+    return true;
+  };
   switch (config.source) {
     case SourceKind::kSim: {
       world = std::make_unique<SimWorld>();
@@ -348,16 +363,7 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     }
     case SourceKind::kAravis: {
 #if SWF_APP_HAVE_ARAVIS
-      // Raw cameras: the calibrations give the size; the pipeline rectifies.
-      if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty() ||
-          !image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration,
-                                     &error) ||
-          !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
-                                     &error)) {
-        std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", tool,
-                     error.c_str());
-        return 2;
-      }
+      if (!use_camera_calibrations()) return 2;
       // The source keeps the id pointers: the strings live as long as this function.
       aravis_left_id = config.camera.left.empty() ? "127.0.0.1" : config.camera.left;
       aravis_right_id = config.camera.right.empty() ? "127.0.0.2" : config.camera.right;
@@ -389,9 +395,6 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                      core::ToString(s), aravis->LastError());
         return 2;
       }
-      po.rectify = true;
-      po.width_px = po.left_calibration.width;
-      po.height_px = po.left_calibration.height;
       total_frames = config.max_frames;
       aravis_source = aravis.get();
       source = std::move(aravis);
@@ -406,15 +409,7 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     }
     case SourceKind::kV4l2: {
 #if SWF_APP_HAVE_V4L2
-      // Raw cameras: the calibrations give the size; the pipeline rectifies.
-      if (!image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration,
-                                     &error) ||
-          !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
-                                     &error)) {
-        std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", tool,
-                     error.c_str());
-        return 2;
-      }
+      if (!use_camera_calibrations()) return 2;
       // The device paths stay in `config`, which outlives the source.
       std::unique_ptr<drivers::V4l2StereoSource> v4l2 =
           MakeV4l2Source(config, po.left_calibration.width, po.left_calibration.height,
@@ -423,9 +418,6 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
         std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
         return 2;
       }
-      po.rectify = true;
-      po.width_px = po.left_calibration.width;
-      po.height_px = po.left_calibration.height;
       total_frames = config.max_frames;
       v4l2_source = v4l2.get();
       source = std::move(v4l2);
