@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace swf::frontend {
 
@@ -10,6 +11,33 @@ using estimator::Mat3;
 using estimator::Vec3;
 
 namespace {
+
+// Fixed point of the source coordinates and bilinear weights: 1/128 px.
+constexpr int kWeightBits = 7;
+constexpr int kWeightOne = 1 << kWeightBits;
+constexpr float kWeightOneF = static_cast<float>(kWeightOne);
+
+// GCC vector extensions (SSE2 / NEON).
+using V4f [[gnu::vector_size(16)]] = float;
+using V4i [[gnu::vector_size(16)]] = std::int32_t;
+using V8s [[gnu::vector_size(16)]] = std::int16_t;
+using V8u [[gnu::vector_size(16)]] = std::uint16_t;
+using V8b [[gnu::vector_size(8)]] = std::uint8_t;
+
+// Low 16 bits of 8 int32 lanes.
+inline V8s Narrow(V4i lo, V4i hi) {
+  return __builtin_shufflevector(reinterpret_cast<V8s>(lo), reinterpret_cast<V8s>(hi), 0, 2, 4, 6,
+                                 8, 10, 12, 14);
+}
+
+inline std::uint16_t Load16(const std::uint8_t* p) {
+  std::uint16_t v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
+
+// The segment's quadratic; the vector code in RemapOne performs the same float operations.
+inline float EvalSegment(const float* c, float k) { return c[0] + k * (c[1] + k * c[2]); }
 
 bool ValidCalibration(const CameraCalibration& c) {
   return c.width > 1 && c.height > 1 && c.fx > 0.0 && c.fy > 0.0 && std::isfinite(c.cx) &&
@@ -43,8 +71,10 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
   }
   const int w = options.width > 0 ? options.width : left.width;
   const int h = options.height > 0 ? options.height : left.height;
-  if (w > kMaxImageWidth || h > kMaxImageHeight || left.width >= kOutside ||
-      right.width >= kOutside || left.height >= kOutside || right.height >= kOutside) {
+  // Raw sizes are bounded so that source offsets fit 32 bits.
+  constexpr int kMaxRawSide = 1 << 15;
+  if (w > kMaxImageWidth || h > kMaxImageHeight || left.width >= kMaxRawSide ||
+      right.width >= kMaxRawSide || left.height >= kMaxRawSide || right.height >= kMaxRawSide) {
     return Status::kInvalidArgument;
   }
   calib_[0] = left;
@@ -89,99 +119,214 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
   rectified_in_body_ = left.body_T_camera * left_T_rect;
   width_ = w;
   height_ = h;
+  segments_per_row_ = (w + kSegment - 1) / kSegment;
 
+  max_table_error_px_ = 0.0;
+  identity_ = left.width == w && left.height == h && right.width == w && right.height == h;
   for (int c = 0; c < 2; ++c) {
     const CameraCalibration& cal = calib_[c];
     Table& table = table_[c];
+    // Fixed-point limits (1/128 px): the fast path needs both taps inside (X <= (w-1)*128 - 1);
+    // a pixel has a source when 0 <= X <= (w-1)*128.
+    const auto fast_x = static_cast<float>((cal.width - 1) * kWeightOne);
+    const auto fast_y = static_cast<float>((cal.height - 1) * kWeightOne);
     for (int v = 0; v < h; ++v) {
-      int begin = w;
-      int end = 0;
-      for (int u = 0; u < w; ++u) {
-        const std::size_t k = static_cast<std::size_t>(v) * w + u;
-        table.x[k] = kOutside;
-        table.y[k] = 0;
-        table.wx[k] = 0;
-        table.wy[k] = 0;
-        double ru = 0.0;
-        double rv = 0.0;
-        if (!RawPixel(c, u, v, &ru, &rv)) continue;
-        if (!(ru >= 0.0 && rv >= 0.0 && ru <= cal.width - 1 && rv <= cal.height - 1)) continue;
-        // The last row/column is reached with weight 256 on the second tap, so the 2x2 taps
-        // always stay inside the image.
-        const int cu = std::min(static_cast<int>(ru), cal.width - 2);
-        const int cv = std::min(static_cast<int>(rv), cal.height - 2);
-        table.x[k] = static_cast<std::uint16_t>(cu);
-        table.y[k] = static_cast<std::uint16_t>(cv);
-        table.wx[k] = static_cast<std::uint16_t>(std::lround((ru - cu) * 256.0));
-        table.wy[k] = static_cast<std::uint16_t>(std::lround((rv - cv) * 256.0));
-        begin = std::min(begin, u);
-        end = u + 1;
+      for (int s = 0; s < segments_per_row_; ++s) {
+        const std::size_t index = static_cast<std::size_t>(v) * segments_per_row_ + s;
+        Segment& seg = table.segment[index];
+        const int u0 = s * kSegment;
+        const int len = std::min(kSegment, w - u0);
+        double ex[kSegment] = {};
+        double ey[kSegment] = {};
+        bool visible = true;
+        for (int k = 0; k < len; ++k) visible = visible && RawPixel(c, u0 + k, v, &ex[k], &ey[k]);
+        const double last = len - 1;
+        const double mid = 0.5 * last;
+        double mx = 0.0;
+        double my = 0.0;
+        visible = visible && RawPixel(c, u0 + mid, v, &mx, &my);
+        if (!visible) {  // part of the segment is behind the camera: no source at all
+          seg = Segment{};
+          table.kind[index] = SegmentKind::kOutside;
+          identity_ = false;
+          continue;
+        }
+        // Quadratic through k = 0, last / 2, last (Newton form converted to monomials).
+        auto fit = [&](double f0, double fm, double fl, float* coef) {
+          double c1 = 0.0;
+          double c2 = 0.0;
+          if (len > 1) {
+            const double slope_m = (fm - f0) / mid;
+            const double slope_l = (fl - f0) / last;
+            c2 = (slope_l - slope_m) / (last - mid);
+            c1 = slope_m - c2 * mid;
+          }
+          // Stored in 1/128 px with the rounding offset folded in: truncation rounds.
+          coef[0] = static_cast<float>(f0 * kWeightOne + 0.5);
+          coef[1] = static_cast<float>(c1 * kWeightOne);
+          coef[2] = static_cast<float>(c2 * kWeightOne);
+        };
+        fit(ex[0], mx, ex[len - 1], seg.x);
+        fit(ey[0], my, ey[len - 1], seg.y);
+        bool all_fast = true;
+        bool any_source = false;
+        for (int k = 0; k < len; ++k) {
+          const float fx = EvalSegment(seg.x, static_cast<float>(k));
+          const float fy = EvalSegment(seg.y, static_cast<float>(k));
+          const double tx = (fx - 0.5) / kWeightOne;
+          const double ty = (fy - 0.5) / kWeightOne;
+          const bool source = fx >= 0.0f && fy >= 0.0f && fx < fast_x + 1.0f && fy < fast_y + 1.0f;
+          all_fast = all_fast && fx >= 0.0f && fy >= 0.0f && fx < fast_x && fy < fast_y;
+          any_source = any_source || source;
+          identity_ = identity_ && source && static_cast<int>(fx) == (u0 + k) * kWeightOne &&
+                      static_cast<int>(fy) == v * kWeightOne;
+          if (ex[k] >= 0.0 && ey[k] >= 0.0 && ex[k] <= cal.width - 1 && ey[k] <= cal.height - 1) {
+            max_table_error_px_ = std::max(max_table_error_px_, std::hypot(tx - ex[k], ty - ey[k]));
+          }
+        }
+        table.kind[index] = all_fast     ? SegmentKind::kInside
+                            : any_source ? SegmentKind::kMixed
+                                         : SegmentKind::kOutside;
       }
-      bool dense = true;
-      for (int u = begin; u < end; ++u) {
-        dense = dense && table.x[static_cast<std::size_t>(v) * w + u] != kOutside;
-      }
-      table.begin[v] = begin < end ? begin : 0;
-      table.end[v] = begin < end ? end : 0;
-      table.dense[v] = dense;
     }
   }
   configured_ = true;
   return Status::kOk;
 }
 
+bool StereoRectifier::TablePixel(int camera, int u, int v, float* raw_u, float* raw_v) const {
+  if (!configured_ || camera < 0 || camera > 1 || u < 0 || v < 0 || u >= width_ || v >= height_) {
+    return false;
+  }
+  const std::size_t index = static_cast<std::size_t>(v) * segments_per_row_ + u / kSegment;
+  if (table_[camera].kind[index] == SegmentKind::kOutside) return false;
+  const Segment& seg = table_[camera].segment[index];
+  const auto k = static_cast<float>(u % kSegment);
+  const float fx = EvalSegment(seg.x, k);
+  const float fy = EvalSegment(seg.y, k);
+  *raw_u = (fx - 0.5f) / kWeightOneF;
+  *raw_v = (fy - 0.5f) / kWeightOneF;
+  return fx >= 0.0f && fy >= 0.0f &&
+         fx < static_cast<float>((calib_[camera].width - 1) * kWeightOne) + 1.0f &&
+         fy < static_cast<float>((calib_[camera].height - 1) * kWeightOne) + 1.0f;
+}
+
 void StereoRectifier::RemapOne(const GrayView& raw, const Table& table,
                                const MutableGrayView& out) const {
-  std::uint8_t p00[kMaxImageWidth];
-  std::uint8_t p01[kMaxImageWidth];
-  std::uint8_t p10[kMaxImageWidth];
-  std::uint8_t p11[kMaxImageWidth];
+  constexpr int kRow = kMaxSegmentsPerRow * kSegment;
+  alignas(16) std::int32_t offset[kRow];
+  alignas(16) std::int16_t wx[kRow];
+  alignas(16) std::int16_t wy[kRow];
+  alignas(16) std::uint8_t blended[kRow];
+  const int w = width_;
+  const int padded = segments_per_row_ * kSegment;
+  const std::int32_t stride = raw.stride;
+  const V4i stride4 = {stride, stride, stride, stride};
+  const V4f lane = {0.0f, 1.0f, 2.0f, 3.0f};
+  const int max_x = raw.width - 1;
+  const int max_y = raw.height - 1;
   for (int v = 0; v < height_; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * segments_per_row_;
+    const Segment* segs = table.segment + row;
+    const SegmentKind* kinds = table.kind + row;
+    // 1. Source coordinates of the row in 1/128 px: offset of the top-left tap and the weights.
+    for (int s = 0; s < segments_per_row_; ++s) {
+      const int u0 = s * kSegment;
+      if (kinds[s] != SegmentKind::kInside) {
+        for (int k = 0; k < kSegment; ++k) {
+          offset[u0 + k] = 0;  // a harmless tap; the pixels are redone in step 4
+          wx[u0 + k] = 0;
+          wy[u0 + k] = 0;
+        }
+        continue;
+      }
+      const Segment& seg = segs[s];
+      const V4f x0 = {seg.x[0], seg.x[0], seg.x[0], seg.x[0]};
+      const V4f x1 = {seg.x[1], seg.x[1], seg.x[1], seg.x[1]};
+      const V4f x2 = {seg.x[2], seg.x[2], seg.x[2], seg.x[2]};
+      const V4f y0 = {seg.y[0], seg.y[0], seg.y[0], seg.y[0]};
+      const V4f y1 = {seg.y[1], seg.y[1], seg.y[1], seg.y[1]};
+      const V4f y2 = {seg.y[2], seg.y[2], seg.y[2], seg.y[2]};
+      for (int q = 0; q < kSegment; q += 8) {
+        const V4f k_lo = lane + static_cast<float>(q);
+        const V4f k_hi = k_lo + 4.0f;
+        // The same operations as EvalSegment, 4 lanes at a time; truncation rounds.
+        const V4i fx_lo = __builtin_convertvector(x0 + k_lo * (x1 + k_lo * x2), V4i);
+        const V4i fx_hi = __builtin_convertvector(x0 + k_hi * (x1 + k_hi * x2), V4i);
+        const V4i fy_lo = __builtin_convertvector(y0 + k_lo * (y1 + k_lo * y2), V4i);
+        const V4i fy_hi = __builtin_convertvector(y0 + k_hi * (y1 + k_hi * y2), V4i);
+        const V4i off_lo = (fy_lo >> kWeightBits) * stride4 + (fx_lo >> kWeightBits);
+        const V4i off_hi = (fy_hi >> kWeightBits) * stride4 + (fx_hi >> kWeightBits);
+        const V8s ax = Narrow(fx_lo, fx_hi) & (kWeightOne - 1);
+        const V8s ay = Narrow(fy_lo, fy_hi) & (kWeightOne - 1);
+        std::memcpy(offset + u0 + q, &off_lo, sizeof(off_lo));
+        std::memcpy(offset + u0 + q + 4, &off_hi, sizeof(off_hi));
+        std::memcpy(wx + u0 + q, &ax, sizeof(ax));
+        std::memcpy(wy + u0 + q, &ay, sizeof(ay));
+      }
+    }
+    for (int u = w; u < padded; ++u) offset[u] = 0;  // lanes past the last pixel
+    // 2. Gather the two source bytes of the top and of the bottom row (one 16-bit load each,
+    // straight into a vector lane) and 3. blend, 8 lanes of 16 bits (exact; file comment).
+    const std::uint8_t* src = raw.data;
+    for (int u = 0; u < padded; u += 8) {
+      const std::int32_t* off = offset + u;
+      const V8u t = {Load16(src + off[0]), Load16(src + off[1]), Load16(src + off[2]),
+                     Load16(src + off[3]), Load16(src + off[4]), Load16(src + off[5]),
+                     Load16(src + off[6]), Load16(src + off[7])};
+      const std::uint8_t* below = src + stride;
+      const V8u b = {Load16(below + off[0]), Load16(below + off[1]), Load16(below + off[2]),
+                     Load16(below + off[3]), Load16(below + off[4]), Load16(below + off[5]),
+                     Load16(below + off[6]), Load16(below + off[7])};
+      V8s ax;
+      V8s ay;
+      std::memcpy(&ax, wx + u, sizeof(ax));
+      std::memcpy(&ay, wy + u, sizeof(ay));
+      const V8s bx = kWeightOne - ax;
+      const V8s upper = reinterpret_cast<V8s>(t & 0xFF) * bx + reinterpret_cast<V8s>(t >> 8) * ax;
+      const V8s lower = reinterpret_cast<V8s>(b & 0xFF) * bx + reinterpret_cast<V8s>(b >> 8) * ax;
+      // upper + (lower - upper) ay / 128 with 16-bit products: split the difference into its
+      // high (signed) and low (unsigned) byte.
+      const V8s d = lower - upper;
+      const V8s mid = upper + (((d >> 8) * ay) << 1) + (((d & 0xFF) * ay) >> kWeightBits);
+      const V8s result = (mid + (kWeightOne / 2)) >> kWeightBits;
+      const V8b bytes = __builtin_convertvector(result, V8b);
+      std::memcpy(blended + u, &bytes, sizeof(bytes));
+    }
     std::uint8_t* o = out.Row(v);
-    const std::size_t row = static_cast<std::size_t>(v) * width_;
-    const int begin = table.begin[v];
-    const int end = table.end[v];
-    for (int u = 0; u < begin; ++u) o[u] = 0;
-    for (int u = end; u < width_; ++u) o[u] = 0;
-    const std::uint16_t* tx = table.x + row;
-    const std::uint16_t* ty = table.y + row;
-    const std::uint16_t* twx = table.wx + row;
-    const std::uint16_t* twy = table.wy + row;
-    if (!table.dense[v]) {
-      for (int u = begin; u < end; ++u) {
-        if (tx[u] == kOutside) {
-          o[u] = 0;
+    std::memcpy(o, blended, static_cast<std::size_t>(w));
+    // 4. Segments not entirely inside: per-pixel checks with the same arithmetic in scalar.
+    for (int s = 0; s < segments_per_row_; ++s) {
+      if (kinds[s] == SegmentKind::kInside) continue;
+      const int u0 = s * kSegment;
+      const int len = std::min(kSegment, w - u0);
+      if (kinds[s] == SegmentKind::kOutside) {
+        std::memset(o + u0, 0, static_cast<std::size_t>(len));
+        continue;
+      }
+      for (int k = 0; k < len; ++k) {
+        const float fx = EvalSegment(segs[s].x, static_cast<float>(k));
+        const float fy = EvalSegment(segs[s].y, static_cast<float>(k));
+        if (!(fx >= 0.0f && fy >= 0.0f && fx < static_cast<float>(max_x * kWeightOne) + 1.0f &&
+              fy < static_cast<float>(max_y * kWeightOne) + 1.0f)) {
+          o[u0 + k] = 0;
           continue;
         }
-        const std::uint8_t* s0 = raw.Row(ty[u]) + tx[u];
-        const std::uint8_t* s1 = s0 + raw.stride;
-        const int ax = twx[u];
-        const int ay = twy[u];
-        const int top = s0[0] * (256 - ax) + s0[1] * ax;
-        const int bottom = s1[0] * (256 - ax) + s1[1] * ax;
-        o[u] = static_cast<std::uint8_t>((top * (256 - ay) + bottom * ay + 32768) >> 16);
+        const int ix = static_cast<int>(fx);
+        const int iy = static_cast<int>(fy);
+        // The last row/column is reached with the full weight on the second tap.
+        const int cx = std::min(ix >> kWeightBits, max_x - 1);
+        const int cy = std::min(iy >> kWeightBits, max_y - 1);
+        const int ax = ix - cx * kWeightOne;
+        const int ay = iy - cy * kWeightOne;
+        const std::uint8_t* s0 = raw.Row(cy) + cx;
+        const std::uint8_t* s1 = s0 + stride;
+        const int upper = s0[0] * (kWeightOne - ax) + s0[1] * ax;
+        const int lower = s1[0] * (kWeightOne - ax) + s1[1] * ax;
+        o[u0 + k] = static_cast<std::uint8_t>(
+            (upper * (kWeightOne - ay) + lower * ay + kWeightOne * kWeightOne / 2) >>
+            (2 * kWeightBits));
       }
-      continue;
-    }
-    // Gather (scalar loads), then blend (vectorised; the same integer formula as above).
-    for (int u = begin; u < end; ++u) {
-      const std::uint8_t* s0 = raw.Row(ty[u]) + tx[u];
-      const std::uint8_t* s1 = s0 + raw.stride;
-      p00[u] = s0[0];
-      p01[u] = s0[1];
-      p10[u] = s1[0];
-      p11[u] = s1[1];
-    }
-    for (int u = begin; u < end; ++u) {
-      // top, bottom <= 255 * 256: 16-bit lanes; the second blend widens to 32 bits.
-      const std::uint16_t ax = twx[u];
-      const std::uint16_t ay = twy[u];
-      const auto top = static_cast<std::uint16_t>(p00[u] * (256 - ax) + p01[u] * ax);
-      const auto bottom = static_cast<std::uint16_t>(p10[u] * (256 - ax) + p11[u] * ax);
-      const std::uint32_t blend =
-          static_cast<std::uint32_t>(top) * static_cast<std::uint16_t>(256 - ay) +
-          static_cast<std::uint32_t>(bottom) * ay;
-      o[u] = static_cast<std::uint8_t>((blend + 32768u) >> 16);
     }
   }
 }
@@ -196,6 +341,13 @@ Status StereoRectifier::Rectify(const GrayView& left_raw, const GrayView& right_
       left_out.height != height_ || right_out.width != width_ || right_out.height != height_ ||
       left_out.data == nullptr || right_out.data == nullptr) {
     return Status::kInvalidArgument;
+  }
+  if (identity_) {  // already rectified: the table would return every source pixel unchanged
+    for (int v = 0; v < height_; ++v) {
+      std::memcpy(left_out.Row(v), left_raw.Row(v), static_cast<std::size_t>(width_));
+      std::memcpy(right_out.Row(v), right_raw.Row(v), static_cast<std::size_t>(width_));
+    }
+    return Status::kOk;
   }
   RemapOne(left_raw, table_[0], left_out);
   RemapOne(right_raw, table_[1], right_out);
