@@ -10,7 +10,8 @@ namespace swf::sim {
 namespace {
 
 constexpr std::size_t kGaussianTableSize = 1u << 16;
-constexpr std::int32_t kTile = 16;  // pixels per side of a tile sharing one ray start height
+constexpr std::int32_t kTile = 8;  // pixels per side of a tile sharing one height range
+constexpr int kRangeRounds = 4;    // box / height-range refinements per tile
 // Rotated-grid 2x2 supersampling offsets (pixels).
 constexpr double kSubPixel[4][2] = {
     {-0.125, -0.375}, {0.375, -0.125}, {0.125, 0.375}, {-0.375, 0.125}};
@@ -97,22 +98,41 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
   const Eigen::Vector3d step_v = r.col(1) * inv_fy;
   const double top_m = terrain.MaxHeightM();
   const double bottom_m = terrain.MinHeightM();
-  const double pad_m = 2.0 * terrain.CellM();
+  const double pad_m = 0.01 * terrain.CellM();
 
-  // The ground a tile of pixels can see lies in the box spanned by its corner rays between the
-  // terrain's lowest and highest heights; the rays of the tile start below that box's highest
-  // block instead of the global maximum (Terrain::IntersectBelow).
-  auto tile_top = [&](std::int32_t u0, std::int32_t v0, std::int32_t u1, std::int32_t v1) {
-    double x_lo = std::numeric_limits<double>::max();
-    double y_lo = x_lo;
-    double x_hi = -x_lo;
-    double y_hi = -x_lo;
+  // The first hit of every ray of a tile of pixels lies, by induction, at a height in [lo, hi]
+  // (at first the terrain's lowest and highest heights), so in the box spanned by the tile's
+  // corner rays between lo and hi (the rays of the tile are positive combinations of the corner
+  // rays); the height range of the max/min pyramid over that box is then a tighter [lo, hi].
+  // A few rounds shrink box and range together; the rays of the tile walk only that stretch
+  // (Terrain::IntersectBetween).
+  // inside: the box of the last round lies at least a cell inside the terrain, so no ray of the
+  // tile needs clipping to the terrain's extent (Terrain::IntersectSpan directly).
+  struct TileRange {
+    double lo = 0.0;
+    double hi = 0.0;
+    bool inside = false;
+  };
+  const double half_extent_m = terrain.HalfExtentM() - terrain.CellM();
+  auto tile_range = [&](std::int32_t u0, std::int32_t v0, std::int32_t u1, std::int32_t v1) {
+    TileRange range{bottom_m, top_m, false};
+    Eigen::Vector3d corner[4];
+    int c = 0;
     for (const double cu : {u0 - 0.5, u1 + 0.5}) {
       for (const double cv : {v0 - 0.5, v1 + 0.5}) {
-        const Eigen::Vector3d d =
+        corner[c] =
             r * Eigen::Vector3d((cu - camera_.cx) * inv_fx, (cv - camera_.cy) * inv_fy, 1.0);
-        if (!(d.z() < 0.0)) return top_m;  // a corner looks up: no useful box
-        for (const double z : {top_m, bottom_m}) {
+        if (!(corner[c].z() < 0.0)) return range;  // a corner looks up: no useful box
+        ++c;
+      }
+    }
+    for (int round = 0; round < kRangeRounds; ++round) {
+      double x_lo = std::numeric_limits<double>::max();
+      double y_lo = x_lo;
+      double x_hi = -x_lo;
+      double y_hi = -x_lo;
+      for (const Eigen::Vector3d& d : corner) {
+        for (const double z : {range.hi, range.lo}) {
           const double s = std::max(0.0, (center.z() - z) / -d.z());
           x_lo = std::min(x_lo, center.x() + s * d.x());
           x_hi = std::max(x_hi, center.x() + s * d.x());
@@ -120,11 +140,33 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
           y_hi = std::max(y_hi, center.y() + s * d.y());
         }
       }
+      range.inside = x_lo > -half_extent_m && x_hi < half_extent_m && y_lo > -half_extent_m &&
+                     y_hi < half_extent_m;
+      double box_lo = 0.0;
+      double box_hi = 0.0;
+      terrain.HeightRangeInBox(x_lo - pad_m, y_lo - pad_m, x_hi + pad_m, y_hi + pad_m, &box_lo,
+                               &box_hi);
+      if (box_lo <= range.lo && box_hi >= range.hi) break;  // no progress
+      range.lo = std::max(range.lo, box_lo);
+      range.hi = std::min(range.hi, box_hi);
     }
-    return terrain.MaxHeightInBox(x_lo - pad_m, y_lo - pad_m, x_hi + pad_m, y_hi + pad_m);
+    return range;
+  };
+  // The first hit of the ray center + t d (d.z() < 0 inside a tile whose corners look down).
+  const double inv_cell = 1.0 / terrain.CellM();
+  const double gx0 = (center.x() - terrain.NodeX(0)) * inv_cell;
+  const double gy0 = (center.y() - terrain.NodeY(0)) * inv_cell;
+  const double height_pad_m = 1e-3 * terrain.CellM();  // as Terrain::IntersectBetween
+  auto cast = [&](const Eigen::Vector3d& d, const TileRange& tile, double* t) {
+    if (!tile.inside) return terrain.IntersectBetween(center, d, tile.hi, tile.lo, t);
+    const double inv_descent = -1.0 / d.z();
+    const double ta = std::max(0.0, (center.z() - tile.hi - height_pad_m) * inv_descent);
+    const double tb = (center.z() - tile.lo + height_pad_m) * inv_descent;
+    const Terrain::GridRay ray{gx0, gy0, d.x() * inv_cell, d.y() * inv_cell, center.z(), d.z()};
+    return terrain.IntersectSpan(ray, ta, tb, t);
   };
 
-  auto render_pixel = [&](std::int32_t u, std::int32_t v, double tile_top_m) {
+  auto render_pixel = [&](std::int32_t u, std::int32_t v, const TileRange& tile) {
     const size_t k = static_cast<size_t>(v) * w + u;
     const double xn = (u - camera_.cx) * inv_fx;
     const double yn = (v - camera_.cy) * inv_fy;
@@ -132,7 +174,7 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
     double t = 0.0;
     double dn = 0.0;
     double depth = nan;
-    if (terrain.IntersectBelow(center, dir, tile_top_m, &t)) {
+    if (cast(dir, tile, &t)) {
       depth = t;  // the camera-frame ray has z == 1: t is the camera-frame depth
       const double footprint_m = t * std::sqrt(xn * xn + yn * yn + 1.0) * inv_fx;
       double radiance = 0.0;
@@ -142,7 +184,7 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
         for (const auto& offset : kSubPixel) {
           const Eigen::Vector3d sub = dir + offset[0] * step + offset[1] * step_v;
           double ts = 0.0;
-          if (terrain.IntersectBelow(center, sub, tile_top_m, &ts)) {
+          if (cast(sub, tile, &ts)) {
             radiance += 0.25 * Shade(appearance, center + ts * sub, 0.5 * footprint_m);
           }
         }
@@ -166,9 +208,9 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
     const std::int32_t v1 = std::min(h, v0 + kTile) - 1;
     for (std::int32_t u0 = 0; u0 < w; u0 += kTile) {
       const std::int32_t u1 = std::min(w, u0 + kTile) - 1;
-      const double tile_top_m = tile_top(u0, v0, u1, v1);
+      const TileRange tile = tile_range(u0, v0, u1, v1);
       for (std::int32_t v = v0; v <= v1; ++v) {
-        for (std::int32_t u = u0; u <= u1; ++u) render_pixel(u, v, tile_top_m);
+        for (std::int32_t u = u0; u <= u1; ++u) render_pixel(u, v, tile);
       }
     }
   }

@@ -261,9 +261,10 @@ core::Status Terrain::Configure(const TerrainOptions& o) {
     }
   }
 
-  // Bounds for ray casting: per-block maxima over the block's nodes (borders shared).
+  // Bounds for ray casting: per-block minima and maxima over the block's nodes (borders shared).
   blocks_ = (size_ - 1 + kBlock - 1) / kBlock;
   block_max_.assign(static_cast<size_t>(blocks_) * blocks_, -std::numeric_limits<float>::max());
+  block_min_.assign(static_cast<size_t>(blocks_) * blocks_, std::numeric_limits<float>::max());
   min_height_m_ = std::numeric_limits<double>::max();
   max_height_m_ = -std::numeric_limits<double>::max();
   for (std::int32_t j = 0; j < size_; ++j) {
@@ -277,18 +278,22 @@ core::Status Terrain::Configure(const TerrainOptions& o) {
       const std::int32_t by_hi = std::min(blocks_ - 1, j / kBlock);
       for (std::int32_t by = by_lo; by <= by_hi; ++by) {
         for (std::int32_t bx = bx_lo; bx <= bx_hi; ++bx) {
-          float& m = block_max_[static_cast<size_t>(by) * blocks_ + bx];
-          m = std::max(m, v);
+          const size_t b = static_cast<size_t>(by) * blocks_ + bx;
+          block_max_[b] = std::max(block_max_[b], v);
+          block_min_[b] = std::min(block_min_[b], v);
         }
       }
     }
   }
   supers_ = (blocks_ + kSuper - 1) / kSuper;
   super_max_.assign(static_cast<size_t>(supers_) * supers_, -std::numeric_limits<float>::max());
+  super_min_.assign(static_cast<size_t>(supers_) * supers_, std::numeric_limits<float>::max());
   for (std::int32_t by = 0; by < blocks_; ++by) {
     for (std::int32_t bx = 0; bx < blocks_; ++bx) {
-      float& m = super_max_[static_cast<size_t>(by / kSuper) * supers_ + bx / kSuper];
-      m = std::max(m, block_max_[static_cast<size_t>(by) * blocks_ + bx]);
+      const size_t s = static_cast<size_t>(by / kSuper) * supers_ + bx / kSuper;
+      const size_t b = static_cast<size_t>(by) * blocks_ + bx;
+      super_max_[s] = std::max(super_max_[s], block_max_[b]);
+      super_min_[s] = std::min(super_min_[s], block_min_[b]);
     }
   }
   return core::Status::kOk;
@@ -366,8 +371,8 @@ struct LevelWalk {
 
 }  // namespace
 
-bool Terrain::IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j, double t0,
-                            double t1, double* t) const {
+inline bool Terrain::IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j, double t0,
+                                   double t1, double* t) const {
   const float* p = &heights_[static_cast<size_t>(j) * size_ + i];
   const double h00 = p[0];
   const double h10 = p[1];
@@ -414,8 +419,11 @@ bool Terrain::IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j, 
   return true;
 }
 
-double Terrain::MaxHeightInBox(double x0_m, double y0_m, double x1_m, double y1_m) const {
-  if (size_ == 0) return max_height_m_;
+void Terrain::HeightRangeInBox(double x0_m, double y0_m, double x1_m, double y1_m, double* lo_m,
+                               double* hi_m) const {
+  *lo_m = min_height_m_;
+  *hi_m = max_height_m_;
+  if (size_ == 0) return;
   const double to_block = 1.0 / (kBlock * options_.cell_m);
   auto index = [&](double v_m) {
     const double g = std::clamp((v_m - origin_m_) * to_block, 0.0, blocks_ - 1.0);
@@ -426,36 +434,41 @@ double Terrain::MaxHeightInBox(double x0_m, double y0_m, double x1_m, double y1_
   const std::int32_t by0 = index(std::min(y0_m, y1_m));
   const std::int32_t by1 = index(std::max(y0_m, y1_m));
   float top = -std::numeric_limits<float>::max();
+  float bottom = std::numeric_limits<float>::max();
   if ((bx1 - bx0 + 1) * (by1 - by0 + 1) > 4 * kSuper * kSuper) {  // large box: super blocks
     for (std::int32_t sy = by0 / kSuper; sy <= by1 / kSuper; ++sy) {
       for (std::int32_t sx = bx0 / kSuper; sx <= bx1 / kSuper; ++sx) {
         top = std::max(top, super_max_[static_cast<size_t>(sy) * supers_ + sx]);
+        bottom = std::min(bottom, super_min_[static_cast<size_t>(sy) * supers_ + sx]);
       }
     }
-    return top;
-  }
-  for (std::int32_t by = by0; by <= by1; ++by) {
-    for (std::int32_t bx = bx0; bx <= bx1; ++bx) {
-      top = std::max(top, block_max_[static_cast<size_t>(by) * blocks_ + bx]);
+  } else {
+    for (std::int32_t by = by0; by <= by1; ++by) {
+      for (std::int32_t bx = bx0; bx <= bx1; ++bx) {
+        top = std::max(top, block_max_[static_cast<size_t>(by) * blocks_ + bx]);
+        bottom = std::min(bottom, block_min_[static_cast<size_t>(by) * blocks_ + bx]);
+      }
     }
   }
-  return top;
+  *lo_m = bottom;
+  *hi_m = top;
 }
 
 bool Terrain::Intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double* t) const {
-  return IntersectBelow(o, d, max_height_m_, t);
+  return IntersectBetween(o, d, max_height_m_, min_height_m_, t);
 }
 
-bool Terrain::IntersectBelow(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double top_m,
-                             double* t) const {
+bool Terrain::IntersectBetween(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double top_m,
+                               double bottom_m, double* t) const {
   if (size_ == 0 || !(d.z() < 0.0)) return false;
   // Pad the height range so a perfectly flat terrain still has a non-empty interval. Divisions
   // are few (three per ray): reciprocals of the direction are reused below.
   const double pad_m = 1e-3 * options_.cell_m;
   top_m = std::min(top_m, max_height_m_);
+  bottom_m = std::max(bottom_m, min_height_m_);
   const double inv_descent = -1.0 / d.z();
   double ta = std::max(0.0, (o.z() - top_m - pad_m) * inv_descent);
-  double tb = (o.z() - min_height_m_ + pad_m) * inv_descent;
+  double tb = (o.z() - bottom_m + pad_m) * inv_descent;
   const double inv_dx = d.x() != 0.0 ? 1.0 / d.x() : 0.0;
   const double inv_dy = d.y() != 0.0 ? 1.0 / d.y() : 0.0;
   const double lo = origin_m_;
@@ -481,13 +494,36 @@ bool Terrain::IntersectBelow(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   ray.dgy = d.y() * inv_cell;
   ray.oz = o.z();
   ray.dz = d.z();
+  return IntersectSpan(ray, ta, tb, t);
+}
+
+bool Terrain::IntersectSpan(const GridRay& ray, double ta, double tb, double* t) const {
+  // Short stretches (local height bounds): the cells the segment [ta, tb] touches are read off its
+  // end points; one cell, or two neighbours split where the ray crosses their border, need no walk.
+  {
+    const std::int32_t last = size_ - 2;
+    const std::int32_t ia = std::clamp(static_cast<std::int32_t>(ray.gx0 + ta * ray.dgx), 0, last);
+    const std::int32_t ib = std::clamp(static_cast<std::int32_t>(ray.gx0 + tb * ray.dgx), 0, last);
+    const std::int32_t ja = std::clamp(static_cast<std::int32_t>(ray.gy0 + ta * ray.dgy), 0, last);
+    const std::int32_t jb = std::clamp(static_cast<std::int32_t>(ray.gy0 + tb * ray.dgy), 0, last);
+    if (ia == ib && ja == jb) return IntersectCell(ray, ia, ja, ta, tb, t);
+    if (ja == jb && (ib - ia == 1 || ia - ib == 1)) {
+      const double tm = std::clamp((std::max(ia, ib) - ray.gx0) * (1.0 / ray.dgx), ta, tb);
+      return IntersectCell(ray, ia, ja, ta, tm, t) || IntersectCell(ray, ib, ja, tm, tb, t);
+    }
+    if (ia == ib && (jb - ja == 1 || ja - jb == 1)) {
+      const double tm = std::clamp((std::max(ja, jb) - ray.gy0) * (1.0 / ray.dgy), ta, tb);
+      return IntersectCell(ray, ia, ja, ta, tm, t) || IntersectCell(ray, ia, jb, tm, tb, t);
+    }
+  }
+  const double inv_descent = -1.0 / ray.dz;
   const double fastest = std::max(std::abs(ray.dgx), std::abs(ray.dgy));
   constexpr double kInf = std::numeric_limits<double>::infinity();
   WalkRay walk_ray{};
   walk_ray.gx0 = ray.gx0;
   walk_ray.gy0 = ray.gy0;
-  walk_ray.inv_dgx = ray.dgx != 0.0 ? options_.cell_m * inv_dx : kInf;
-  walk_ray.inv_dgy = ray.dgy != 0.0 ? options_.cell_m * inv_dy : kInf;
+  walk_ray.inv_dgx = ray.dgx != 0.0 ? 1.0 / ray.dgx : kInf;
+  walk_ray.inv_dgy = ray.dgy != 0.0 ? 1.0 / ray.dgy : kInf;
   walk_ray.step_i = ray.dgx > 0.0 ? 1 : (ray.dgx < 0.0 ? -1 : 0);
   walk_ray.step_j = ray.dgy > 0.0 ? 1 : (ray.dgy < 0.0 ? -1 : 0);
   walk_ray.ahead_i = ray.dgx > 0.0 ? 1 : 0;
@@ -524,6 +560,16 @@ bool Terrain::IntersectBelow(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
     }
   };
   const double horizontal_cells = (tb - ta) * fastest;
+  if (horizontal_cells < kBlock) {  // a short walk (local height bounds): cells only
+    double sc = ta;
+    LevelWalk cell = walk(sc, 1, size_ - 1);
+    for (;;) {
+      const double cell_exit = std::min(cell.Exit(), tb);
+      if (IntersectCell(ray, cell.i, cell.j, sc, cell_exit, t)) return true;
+      if (cell_exit >= tb || !cell.Advance()) return false;
+      sc = cell_exit;
+    }
+  }
   if (horizontal_cells < 2.0 * kBlock) return walk_blocks(ta, tb);
   LevelWalk super = walk(ta, kBlock * kSuper, supers_);
   double s = ta;

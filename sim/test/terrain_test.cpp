@@ -84,7 +84,8 @@ TEST(TerrainTest, IntersectFindsTheFirstHitOfRandomRaysOnRoughTerrain) {
     // WHEN the ray is cast with and without a (valid) local start height.
     const bool hit = t.Intersect(origin, dir, &s);
     double s_below = 0.0;
-    ASSERT_EQ(t.IntersectBelow(origin, dir, t.MaxHeightM() + 1.0, &s_below), hit);
+    ASSERT_EQ(t.IntersectBetween(origin, dir, t.MaxHeightM() + 1.0, t.MinHeightM() - 1.0, &s_below),
+              hit);
     if (!hit) continue;
     ++hits;
     EXPECT_EQ(s, s_below);

@@ -100,15 +100,25 @@ class Terrain final : public Surface {
   // smallest root in the cell is solved in closed form (no iteration, no tolerance).
   bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                  double* t) const override;
-  // The same first hit for a ray whose horizontal path, from where it descends through top_m down
-  // to the lowest terrain height, only crosses ground no higher than top_m (e.g. top_m from
-  // MaxHeightInBox over a box holding that path): the walk starts at top_m instead of the global
-  // maximum. With top_m >= MaxHeightM() this is Intersect.
-  bool IntersectBelow(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double top_m,
-                      double* t) const;
-  // An upper bound of the surface height over the box [x0, x1] x [y0, y1] (metres, clamped to
-  // the terrain): the maximum of the max-pyramid blocks the box overlaps.
-  double MaxHeightInBox(double x0_m, double y0_m, double x1_m, double y1_m) const;
+  // The same first hit for a ray whose path between the heights top_m and bottom_m only crosses
+  // ground with heights in [bottom_m, top_m] (e.g. the range HeightRangeInBox gives for a box
+  // holding that path): the walk covers only that stretch of the ray, at cell level when it is
+  // short, instead of the whole range from the global maximum down to the global minimum. With
+  // top_m >= MaxHeightM() and bottom_m <= MinHeightM() this is Intersect.
+  bool IntersectBetween(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                        double top_m, double bottom_m, double* t) const;
+  // A ray in grid units: grid x = gx0 + t dgx, y = gy0 + t dgy, height z = oz + t dz.
+  struct GridRay {
+    double gx0, gy0, dgx, dgy, oz, dz;
+  };
+  // The first hit of a descending ray (dz < 0) with t in [ta, tb], ta < tb, for a segment that
+  // lies inside the grid (IntersectBetween after its clipping; a renderer that clipped whole
+  // tiles calls it directly).
+  bool IntersectSpan(const GridRay& ray, double ta, double tb, double* t) const;
+  // Bounds of the surface height over the box [x0, x1] x [y0, y1] (metres, clamped to the
+  // terrain): the minimum and maximum of the max/min-pyramid blocks the box overlaps.
+  void HeightRangeInBox(double x0_m, double y0_m, double x1_m, double y1_m, double* lo_m,
+                        double* hi_m) const;
 
   std::int32_t Size() const { return size_; }
   double CellM() const { return options_.cell_m; }
@@ -125,19 +135,15 @@ class Terrain final : public Surface {
   const TerrainOptions& Options() const { return options_; }
 
  private:
-  // A ray in grid units: grid x = gx0 + t dgx, y = gy0 + t dgy, height z = oz + t dz.
-  struct GridRay {
-    double gx0, gy0, dgx, dgy, oz, dz;
-  };
   double NodeHeight(std::int32_t i, std::int32_t j) const { return heights_[j * size_ + i]; }
   // Bilinear height in grid coordinates (gx, gy), clamped to the grid.
   double GridHeight(double gx, double gy) const;
   // First root of the ray against the bilinear patch of cell (i, j) for t in [t0, t1].
-  bool IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j, double t0, double t1,
-                     double* t) const;
+  [[gnu::always_inline]] bool IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j,
+                                            double t0, double t1, double* t) const;
 
-  static constexpr std::int32_t kBlock = 8;  // cells per side of a max-height block
-  static constexpr std::int32_t kSuper = 8;  // blocks per side of a max-height super block
+  static constexpr std::int32_t kBlock = 2;   // cells per side of a min/max-height block
+  static constexpr std::int32_t kSuper = 32;  // blocks per side of a min/max-height super block
 
   TerrainOptions options_;
   std::int32_t size_ = 0;
@@ -147,8 +153,10 @@ class Terrain final : public Surface {
   std::vector<float> base_heights_;
   std::int32_t blocks_ = 0;
   std::vector<float> block_max_;
+  std::vector<float> block_min_;
   std::int32_t supers_ = 0;
   std::vector<float> super_max_;
+  std::vector<float> super_min_;
   double min_height_m_ = 0.0;
   double max_height_m_ = 0.0;
   std::vector<Crater> craters_;
