@@ -1,5 +1,7 @@
 #include "swf/frontend/stereo_matcher.hpp"
 
+#include "swf/frontend/tracker.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -12,6 +14,7 @@ using core::Status;
 Status StereoMatcher::Configure(const StereoMatcherOptions& options) {
   configured_ = false;
   if (options.patch_radius < 1 || options.patch_radius > kMaxPatchRadius ||
+      options.lk_patch_radius < 1 || options.lk_patch_radius > kMaxPatchRadius ||
       options.min_disparity < 0 || options.max_disparity <= options.min_disparity ||
       options.max_disparity > kMaxDisparity || options.lr_tolerance_px < 0 ||
       options.lk_iterations < 0 || !(options.lk_epsilon_px > 0.0f) ||
@@ -97,7 +100,7 @@ int StereoMatcher::SearchRow(const GrayView& from, const GrayView& to, int x, in
 
 bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right, float x, float y,
                                     float* disparity, float* quality) const {
-  const int r = options_.patch_radius;
+  const int r = options_.lk_patch_radius;
   const float margin = static_cast<float>(r) + 1.0f;
   if (!InsideForSampling(left, x, y, margin)) return false;
   const int side = 2 * r + 1;
@@ -107,7 +110,7 @@ bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right,
   float tmpl_mean = 0.0f;
   float grad_mean = 0.0f;
   {
-    // One grid a pixel larger than the patch: values and row-wise central differences.
+    // One grid a pixel larger than the patch: values and row-wise Scharr derivatives.
     constexpr int kExt = 2 * kMaxPatchRadius + 3;
     float grid[kExt * kExt];
     const int ext = side + 2;
@@ -116,7 +119,7 @@ bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right,
       const float* g = grid + (j + 1) * ext + 1;
       for (int i = 0; i < side; ++i, ++k) {
         tmpl[k] = g[i];
-        grad[k] = 0.5f * (g[i + 1] - g[i - 1]);
+        grad[k] = ScharrX(g + i, ext);
         tmpl_mean += tmpl[k];
         grad_mean += grad[k];
       }
@@ -124,6 +127,10 @@ bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right,
   }
   tmpl_mean /= static_cast<float>(count);
   grad_mean /= static_cast<float>(count);
+  // Constant brightness: nothing is centred (see StereoMatcherOptions::brightness_offset).
+  const float centre = options_.brightness_offset ? 1.0f : 0.0f;
+  grad_mean *= centre;
+  const float offset_t = centre * tmpl_mean;
   float hessian = 0.0f;
   for (int k = 0; k < count; ++k) {
     grad[k] -= grad_mean;
@@ -144,7 +151,8 @@ bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right,
     mean /= static_cast<float>(count);
     if (it == options_.lk_iterations) break;  // last pass only refreshes samples for the score
     float b = 0.0f;
-    for (int k = 0; k < count; ++k) b += grad[k] * ((samples[k] - mean) - (tmpl[k] - tmpl_mean));
+    const float offset_s = centre * mean;
+    for (int k = 0; k < count; ++k) b += grad[k] * ((samples[k] - offset_s) - (tmpl[k] - offset_t));
     // R(x - d - dd) ~ R(x - d) - g dd  =>  residual falls when dd = sum(g e) / sum(g^2).
     const float step = b / hessian;
     d += step;

@@ -35,6 +35,20 @@ bool Sample(const GrayView& image, const float* offsets, int count, int grid_rad
 
 }  // namespace
 
+float ScharrX(const float* g, int stride) {
+  const float* up = g - stride;
+  const float* down = g + stride;
+  return (3.0f * (up[1] - up[-1]) + 10.0f * (g[1] - g[-1]) + 3.0f * (down[1] - down[-1])) *
+         (1.0f / 32.0f);
+}
+
+float ScharrY(const float* g, int stride) {
+  const float* up = g - stride;
+  const float* down = g + stride;
+  return (3.0f * (down[-1] - up[-1]) + 10.0f * (down[0] - up[0]) + 3.0f * (down[1] - up[1])) *
+         (1.0f / 32.0f);
+}
+
 Eigen::Matrix3d PlaneHomography(const estimator::StereoCamera<double>& camera,
                                 const estimator::Pose<double>& cur_T_ref, double depth_ref_m) {
   Eigen::Matrix3d k;
@@ -64,7 +78,7 @@ bool PatchTracker::ExtractTemplate(const GrayView& image, float x, float y,
                                    PatchTemplate* tmpl) const {
   const int r = options_.patch_radius;
   if (!InsideForSampling(image, x, y, static_cast<float>(r) + 1.0f)) return false;
-  // One grid one pixel larger than the patch gives values and central differences.
+  // One grid one pixel larger than the patch gives values and Scharr derivatives.
   constexpr int kExt = 2 * kMaxPatchRadius + 3;
   float grid[kExt * kExt];
   const int side = 2 * r + 1;
@@ -77,8 +91,8 @@ bool PatchTracker::ExtractTemplate(const GrayView& image, float x, float y,
     const float* g = grid + (j + 1) * ext + 1;
     for (int i = 0; i < side; ++i, ++k) {
       tmpl->value[k] = g[i];
-      tmpl->gx[k] = 0.5f * (g[i + 1] - g[i - 1]);
-      tmpl->gy[k] = 0.5f * (g[i + ext] - g[i - ext]);
+      tmpl->gx[k] = ScharrX(g + i, ext);
+      tmpl->gy[k] = ScharrY(g + i, ext);
     }
   }
   return true;
@@ -94,11 +108,16 @@ void PatchTracker::ExtractTemplateClamped(const GrayView& image, float x, float 
     for (int i = -r; i <= r; ++i, ++k) {
       const float px = x + static_cast<float>(i);
       const float py = y + static_cast<float>(j);
-      tmpl->value[k] = SampleBilinearClamped(image, px, py);
-      tmpl->gx[k] = 0.5f * (SampleBilinearClamped(image, px + 1.0f, py) -
-                            SampleBilinearClamped(image, px - 1.0f, py));
-      tmpl->gy[k] = 0.5f * (SampleBilinearClamped(image, px, py + 1.0f) -
-                            SampleBilinearClamped(image, px, py - 1.0f));
+      float g[9];  // 3x3 neighbourhood, row-major
+      for (int dy = -1, n = 0; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx, ++n) {
+          g[n] = SampleBilinearClamped(image, px + static_cast<float>(dx),
+                                       py + static_cast<float>(dy));
+        }
+      }
+      tmpl->value[k] = g[4];
+      tmpl->gx[k] = ScharrX(g + 4, 3);
+      tmpl->gy[k] = ScharrY(g + 4, 3);
     }
   }
 }
@@ -115,9 +134,13 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
     mean_t += value[k];
   }
   const float inv_n = 1.0f / static_cast<float>(count);
-  mean_gx *= inv_n;
-  mean_gy *= inv_n;
   mean_t *= inv_n;
+  // With the offset b eliminated the gradients and residuals are centred; with constant
+  // brightness they are not (a ramp across the patch then also constrains the translation).
+  const float centre = options_.brightness_offset ? inv_n : 0.0f;
+  mean_gx *= centre;
+  mean_gy *= centre;
+  const float offset_t = options_.brightness_offset ? mean_t : 0.0f;
   float cgx[kMaxPatchPixels];
   float cgy[kMaxPatchPixels];
   float hxx = 0.0f;
@@ -149,10 +172,11 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
     if (!Sample(image, offsets, count, grid_radius, clamped, margin, x, y, samples, &mean_s))
       return false;
     sampled_at_xy = true;
+    const float offset_s = options_.brightness_offset ? mean_s : 0.0f;
     float bx = 0.0f;
     float by = 0.0f;
     for (int k = 0; k < count; ++k) {
-      const float e = (value[k] - mean_t) - (samples[k] - mean_s);
+      const float e = (value[k] - offset_t) - (samples[k] - offset_s);
       bx += cgx[k] * e;
       by += cgy[k] * e;
     }

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <memory>
 
 #include "swf/testing/allocation_counter.hpp"
@@ -36,8 +37,9 @@ CornerList Detect(const TestImage& img) {
 
 class StereoSubpixelTest : public ::testing::TestWithParam<double> {};
 
-// GIVEN an exactly known subpixel disparity WHEN matching THEN median error <= 0.1 px.
-TEST_P(StereoSubpixelTest, MedianErrorBelowTenthPixel) {
+// GIVEN an exactly known subpixel disparity WHEN matching THEN median error <= 0.015 px
+// (measured 0.006-0.008 px).
+TEST_P(StereoSubpixelTest, MedianErrorBelowFifteenThousandthsPixel) {
   const double truth = GetParam();
   const Pair pair = MakePair(truth, 7);
   const CornerList corners = Detect(pair.left);
@@ -54,7 +56,8 @@ TEST_P(StereoSubpixelTest, MedianErrorBelowTenthPixel) {
   std::vector<double> errors;
   for (const StereoMatch& m : matches) errors.push_back(std::fabs(m.disparity - truth));
   const double median = Median(errors);
-  EXPECT_LE(median, 0.1) << "disparity " << truth;
+  std::printf("disparity %.2f: %zu matched, median error %.4f px\n", truth, matches.size(), median);
+  EXPECT_LE(median, 0.015) << "disparity " << truth;
   std::sort(errors.begin(), errors.end());
   EXPECT_LE(errors[errors.size() * 9 / 10], 0.3);
 }

@@ -4,10 +4,12 @@
 // Refinement (1-D LK with an additive brightness offset b): minimise over (d, b)
 //   E = sum_i ( R(x_i - d, y_i) + b - L(x_i, y_i) )^2
 // over the (2r+1)^2 patch, R sampled bilinearly. Linearising R(x - d - dd) ~ R(x - d) - g dd
-// with g the template gradient dL/dx (equal to dR/dx at the solution), and eliminating b (centred
-// g and centred residual e), each Gauss-Newton step is
+// with g the template gradient dL/dx (Scharr: the central difference smoothed [3 10 3] / 16
+// across rows), and eliminating b (centred g and centred residual e), each Gauss-Newton step is
 //   dd = sum(gc * ec) / sum(gc^2).
-// The gradient only steers the iteration; the fixed point (e = const) does not depend on it.
+// The fixed point, sum(gc * ec) = 0, weights the residual by the gradient: with bilinear sampling
+// and noise the residual never vanishes, and the smoothed gradient weights the low frequencies,
+// which bilinear sampling shifts least (measured: docs/benchmarks.md, Front end).
 #pragma once
 
 #include <cstddef>
@@ -21,7 +23,8 @@
 namespace swf::frontend {
 
 struct StereoMatcherOptions {
-  int patch_radius = 4;     // SAD and LK patch: (2r+1)^2
+  int patch_radius = 4;     // SAD patch: (2r+1)^2
+  int lk_patch_radius = 5;  // LK refinement patch: 11 x 11
   int min_disparity = 0;    // pixels
   int max_disparity = 128;  // pixels, <= kMaxDisparity
   int lr_tolerance_px = 1;  // left-right check: |d_lr - d_rl| <= this
@@ -29,6 +32,9 @@ struct StereoMatcherOptions {
   float lk_epsilon_px = 0.002f;
   float max_lk_shift_px = 1.5f;  // refinement may not move further from the SAD optimum
   float min_zncc = 0.8f;         // quality gate after refinement
+  // Solve for an additive offset between the cameras (independent exposures). Off: constant
+  // brightness (see TrackerOptions::brightness_offset).
+  bool brightness_offset = true;
 };
 
 struct StereoMatch {

@@ -8,7 +8,9 @@
 // Gauss-Newton with the template gradient mapped into the current image, g_i = A^-T grad T_i
 // (A = dH/dp at p_ref), centred to eliminate b:
 //   [sum g g^T] dc = sum g_i (e_i - mean e),     e_i = T_i - I(c + o_i).
-// As in the stereo refinement, the gradient only steers; the fixed point is exact.
+// The fixed point, sum g_i (e_i - mean e) = 0, weights the residual by the gradient; with
+// bilinear sampling and noise the residual never vanishes, so the gradient operator (Scharr,
+// ScharrX below) and the brightness model (TrackerOptions::brightness_offset) set the accuracy.
 //
 // Plane homography: the landmark lies on a plane with the reference camera's optical axis as
 // normal, n = (0,0,1), at the landmark's depth z_ref. For p_cur = R p_ref + t (cur_T_ref) and
@@ -32,9 +34,14 @@ struct TrackerOptions {
   float coarse_epsilon_px = 0.03f;        // the same on coarser pyramid levels (only seed the next)
   float min_zncc = 0.75f;                 // quality gate of a tracked feature
   float max_prediction_error_px = 12.0f;  // warped tracking may not move further than this
+  // Solve for an additive brightness offset per patch (independent exposures, EuRoC). Off: constant
+  // brightness, as OpenCV's LK assumes; where that holds it is more accurate, because a linear
+  // intensity ramp across the patch moved by a translation is indistinguishable from an offset,
+  // so with the offset the patch's strongest (low-frequency) content carries no information.
+  bool brightness_offset = true;
 };
 
-// A reference patch with its (central-difference) gradients, taken where a landmark was first
+// A reference patch with its (Scharr) gradients, taken where a landmark was first
 // seen.
 struct PatchTemplate {
   int radius = 0;
@@ -44,6 +51,13 @@ struct PatchTemplate {
   float gx[kMaxPatchPixels] = {};
   float gy[kMaxPatchPixels] = {};
 };
+
+// Scharr derivative at *g of a float grid with the given row stride, scaled like a central
+// difference (d/dx = (g[1] - g[-1]) / 2 for a linear ramp): [-3 0 3; -10 0 10; -3 0 3] / 32 and its
+// transpose. The [3 10 3] smoothing across the derivative weights low frequencies, which bilinear
+// sampling shifts least, more than the plain central difference does.
+float ScharrX(const float* g, int stride);
+float ScharrY(const float* g, int stride);
 
 // H mapping reference-frame pixels to current-frame pixels for the plane through the landmark
 // facing the reference camera (file comment). depth_ref_m is the landmark's z in the reference
