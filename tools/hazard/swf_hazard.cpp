@@ -328,6 +328,150 @@ int Map(const std::string& path, const EvalOptions& eo, swf::sim::TerrainPreset 
   return swf::hazard_eval::WriteHazardMapPng(*mapper, path) == swf::core::Status::kOk ? 0 : 1;
 }
 
+// Disparity error of the mapper's last SGM against the rendered exact depth (working pixels).
+struct SgmError {
+  int valid = 0;
+  double median_abs = NAN, robust_sigma = NAN, rms_clipped = NAN, frac_over_1px = NAN;
+  double corr[4] = {NAN, NAN, NAN, NAN};  // error autocorrelation at lags 1, 2, 4, 8 px (|e|<1)
+};
+SgmError MeasureSgm(const World& w, const swf::hazard::HazardMapper& m) {
+  SgmError r;
+  const swf::sim::StereoImages& im = w.Images();
+  const swf::hazard::HazardMapperOptions& o = m.Options();
+  const int ds = o.downsample;
+  const double fb = o.camera.fx / ds * o.camera.baseline_m;
+  std::vector<double> e;
+  const swf::hazard::SgmMatcher& s = m.Stereo();
+  std::vector<float> img(static_cast<std::size_t>(s.Width()) * s.Height(), NAN);
+  for (int v = 0; v < s.Height(); ++v) {
+    for (int u = 0; u < s.Width(); ++u) {
+      const float d = s.DisparityAt(u, v);
+      if (!(d > 0.5f) || s.ConfidenceAt(u, v) < o.min_confidence) continue;
+      const int fu = std::min(u * ds, im.width - 1);
+      const int fv = std::min(v * ds, im.height - 1);
+      const float z = im.depth_m[static_cast<std::size_t>(fv) * im.width + fu];
+      if (!std::isfinite(z)) continue;
+      e.push_back(d - fb / z);
+      if (std::fabs(e.back()) < 1.0) img[static_cast<std::size_t>(v) * s.Width() + u] = e.back();
+    }
+  }
+  const int lags[4] = {1, 2, 4, 8};
+  for (int l = 0; l < 4; ++l) {
+    double sab = 0, saa = 0, sbb = 0, sa = 0, sb = 0;
+    int cnt = 0;
+    for (int v = 0; v < s.Height(); ++v) {
+      for (int u = 0; u + lags[l] < s.Width(); ++u) {
+        const float a = img[static_cast<std::size_t>(v) * s.Width() + u];
+        const float b = img[static_cast<std::size_t>(v) * s.Width() + u + lags[l]];
+        if (std::isnan(a) || std::isnan(b)) continue;
+        sab += a * b;
+        saa += a * a;
+        sbb += b * b;
+        sa += a;
+        sb += b;
+        ++cnt;
+      }
+    }
+    if (cnt > 10) {
+      const double ma = sa / cnt, mb = sb / cnt;
+      r.corr[l] = (sab / cnt - ma * mb) / std::sqrt((saa / cnt - ma * ma) * (sbb / cnt - mb * mb));
+    }
+  }
+  r.valid = static_cast<int>(e.size());
+  if (e.empty()) return r;
+  std::vector<double> a(e.size());
+  int over = 0;
+  double ss = 0.0;
+  int n = 0;
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    a[i] = std::fabs(e[i]);
+    over += a[i] > 1.0;
+    if (a[i] <= 1.0) {
+      ss += e[i] * e[i];
+      ++n;
+    }
+  }
+  r.median_abs = Acc::Quantile(a, 0.5);
+  r.robust_sigma = 1.4826 * r.median_abs;
+  r.rms_clipped = n > 0 ? std::sqrt(ss / n) : NAN;
+  r.frac_over_1px = double(over) / e.size();
+  return r;
+}
+
+// The flight demo's geometry without the flight process: a vertical descent over one terrain
+// (preset, seed, size as in swf-fsw's sim source) from 100 to 10 m, one hazard update every
+// `step` metres, per-update measurements printed as a table (and OUTDIR/flight.dat).
+int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPreset preset,
+           std::uint64_t seed, double x0, double y0, double step) {
+  World world;
+  if (world.Configure(preset, seed, eo) != swf::core::Status::kOk) return 1;
+  auto mapper = std::make_unique<swf::hazard::HazardMapper>();
+  if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+  FILE* dat = std::fopen((out + "/flight.dat").c_str(), "w");
+  if (dat == nullptr) return 1;
+  const char* head =
+      "# alt cell known safe unc slope rock in1s in2s sig_med err_med slope_err_med "
+      "sgm_valid sgm_med_abs sgm_robust_sigma sgm_rms_clip sgm_over1 site clear rocks_res "
+      "rocks_det far c1 c2 c4 c8 dscale ncal\n";
+  std::fputs(head, dat);
+  std::fputs(head, stdout);
+  int f = 0;
+  for (double alt = 100.0; alt > 10.0 - 1e-9; alt -= step) {
+    // The demo's trajectory: heading 0, nadir, absolute height 100 m at the start.
+    swf::estimator::Pose<double> pose;
+    pose.R = swf::sim::NadirRotation(0.0);
+    pose.t = {x0, y0, alt};
+    double ms = 0.0;
+    if (world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms) != swf::core::Status::kOk) {
+      return 1;
+    }
+    ++f;
+    const double agl = alt - world.Terrain().HeightAt(x0, y0);
+    FrameMetrics m = world.Evaluate(*mapper, agl);
+    Acc acc;
+    acc.Add(m);
+    const SgmError se = MeasureSgm(world, *mapper);
+    const swf::hazard::HazardStats& st = mapper->Stats();
+    const double k = std::max(1, st.known_cells);
+    const std::string line = [&] {
+      char b[512];
+      std::snprintf(b, sizeof b,
+                    "%.1f %.3f %d %.3f %.3f %.3f %.4f %.3f %.3f %.4f %.4f %.2f %d %.3f %.3f %.3f "
+                    "%.4f %d %.2f %d %d %.5f %.2f %.2f %.2f %.2f %.2f %d\n",
+                    agl, mapper->CellM(), st.known_cells, st.safe_cells / k, st.uncertain_cells / k,
+                    st.slope_cells / k, st.rock_cells / k, acc.WithinSigma(1.0),
+                    acc.WithinSigma(2.0), Acc::Quantile(acc.elev_sigma, 0.5),
+                    Acc::Quantile(acc.elev_err, 0.5), Acc::Quantile(acc.slope_err, 0.5), se.valid,
+                    se.median_abs, se.robust_sigma, se.rms_clipped, se.frac_over_1px,
+                    m.site_valid ? 1 : 0, m.site_valid ? m.site_clearance_m : NAN, m.rocks_in_view,
+                    m.rocks_detected, acc.Far(), se.corr[0], se.corr[1], se.corr[2], se.corr[3],
+                    st.disparity_scale, st.calibration_landmarks);
+      return std::string(b);
+    }();
+    std::fputs(line.c_str(), dat);
+    std::fputs(line.c_str(), stdout);
+    std::fflush(stdout);
+  }
+  std::fclose(dat);
+  // Truth rocks above the threshold inside the final grid, with the map's sigma at their centre.
+  for (const swf::sim::Rock& rock : world.Terrain().Rocks()) {
+    int ci = 0;
+    int cj = 0;
+    if (rock.height_m < eo.max_rock_height_m ||
+        !mapper->CellOf(rock.center_m.x(), rock.center_m.y(), &ci, &cj)) {
+      continue;
+    }
+    const std::size_t c = static_cast<std::size_t>(cj) * mapper->GridCells() + ci;
+    std::printf("rock at (%.2f, %.2f) height %.2f m diameter %.2f m: sigma %.3f m class %d\n",
+                rock.center_m.x(), rock.center_m.y(), rock.height_m, rock.diameter_m,
+                mapper->Sigma()[c], static_cast<int>(mapper->Classes()[c]));
+  }
+  return swf::hazard_eval::WriteHazardMapPng(*mapper, out + "/flight_map.png") ==
+                 swf::core::Status::kOk
+             ? 0
+             : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -357,6 +501,17 @@ int main(int argc, char** argv) {
       return 1;
     }
     return Map(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10));
+  }
+  if (verb == "flight") {
+    swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kCraterField;
+    if (!swf::sim::ParseTerrainPreset(Arg(argc, argv, "--preset", "craters"), &preset)) {
+      std::fprintf(stderr, "unknown preset\n");
+      return 1;
+    }
+    eo.terrain_size = std::atoi(Arg(argc, argv, "--terrain-size", "2048"));
+    return Flight(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10),
+                  std::atof(Arg(argc, argv, "--x", "0")), std::atof(Arg(argc, argv, "--y", "0")),
+                  std::atof(Arg(argc, argv, "--step", "5")));
   }
   std::fprintf(stderr, "unknown verb %s\n", verb.c_str());
   return 1;

@@ -65,12 +65,14 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
       o.grid_cells < 16 || o.grid_cells > 2048 || !positive(o.min_cell_m) ||
       !positive(o.max_cell_m) || o.min_cell_m > o.max_cell_m || !positive(o.pixels_per_cell) ||
       !positive(o.disparity_sigma_px) || o.max_independent_pixels < 1 ||
+      !(o.pixels_per_independent >= 1.0) ||
+      !(o.frame_error_correlation >= 0.0 && o.frame_error_correlation < 1.0) ||
       !positive(o.max_slope_deg) || !positive(o.max_rock_height_m) ||
       !positive(o.footprint_radius_m) || !positive(o.rock_window_radius_m) ||
       !(o.confidence_k >= 0.0) || !(o.min_known_fraction >= 0.0 && o.min_known_fraction <= 1.0) ||
       !positive(o.clearance_cap_m) || !(o.target_weight >= 0.0) || !(o.site_hysteresis >= 0.0) ||
-      o.max_landmarks < 0 || !std::isfinite(o.ground_z_hint_m) || !o.target_world_m.allFinite() ||
-      !(o.min_confidence >= 0.0f && o.min_confidence <= 1.0f)) {
+      o.max_landmarks < 0 || o.min_calibration_landmarks < 3 || !std::isfinite(o.ground_z_hint_m) ||
+      !o.target_world_m.allFinite() || !(o.min_confidence >= 0.0f && o.min_confidence <= 1.0f)) {
     return core::Status::kInvalidArgument;
   }
   options_ = o;
@@ -99,11 +101,17 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   info_.assign(cells, 0.0);
   info_z_.assign(cells, 0.0);
   info_rel_.assign(cells, 0.0);
+  min_var_.assign(cells, 0.0);
+  min_var_rel_.assign(cells, 0.0);
   count_.assign(cells, 0);
   f_w_.assign(cells, 0.0);
   f_wz_.assign(cells, 0.0);
   f_pc_.assign(3 * cells, 0.0);
   f_n_.assign(cells, 0);
+  const std::size_t nl = static_cast<std::size_t>(std::max(o.max_landmarks, 1));
+  calib_abs_.assign(nl, 0.0);
+  calib_var_.assign(nl, 0.0);
+  calib_model_.assign(nl, 0.0);
   elevation_.assign(cells, kNaN);
   sigma_.assign(cells, kNaN);
   sigma_rel_.assign(cells, kNaN);
@@ -129,6 +137,8 @@ void HazardMapper::Reset() {
   std::fill(info_.begin(), info_.end(), 0.0);
   std::fill(info_z_.begin(), info_z_.end(), 0.0);
   std::fill(info_rel_.begin(), info_rel_.end(), 0.0);
+  std::fill(min_var_.begin(), min_var_.end(), 0.0);
+  std::fill(min_var_rel_.begin(), min_var_rel_.end(), 0.0);
   std::fill(count_.begin(), count_.end(), 0);
   std::fill(elevation_.begin(), elevation_.end(), kNaN);
   std::fill(sigma_.begin(), sigma_.end(), kNaN);
@@ -249,6 +259,9 @@ void HazardMapper::MaybeRefine(double altitude_m) {
   std::copy(info_.begin(), info_.end(), f_w_.begin());
   std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
   std::copy(info_rel_.begin(), info_rel_.end(), f_pc_.begin());
+  std::copy(min_var_.begin(), min_var_.end(), f_pc_.begin() + static_cast<std::ptrdiff_t>(cells));
+  std::copy(min_var_rel_.begin(), min_var_rel_.end(),
+            f_pc_.begin() + static_cast<std::ptrdiff_t>(2 * cells));
   for (std::size_t c = 0; c < cells; ++c) f_n_[c] = count_[c];
   const double old_cell = cell_m_;
   const double old_cx = corner_x_;
@@ -266,7 +279,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       const double x = corner_x_ + (i + 0.5) * cell_m_;
       const int oi = static_cast<int>(std::floor((x - old_cx) / old_cell));
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
-        info_[c] = info_z_[c] = info_rel_[c] = 0.0;
+        info_[c] = info_z_[c] = info_rel_[c] = min_var_[c] = min_var_rel_[c] = 0.0;
         count_[c] = 0;
         continue;
       }
@@ -274,11 +287,62 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       info_[c] = f_w_[o] * scale;
       info_z_[c] = f_wz_[o] * scale;
       info_rel_[c] = f_pc_[o] * scale;
+      min_var_[c] = f_pc_[cells + o] / scale;
+      min_var_rel_[c] = f_pc_[2 * cells + o] / scale;
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
     }
   }
   site_.valid = site_.valid && CellOf(site_.position_world_m.x(), site_.position_world_m.y(),
                                       &dt_v_[0], &dt_v_[0]);
+}
+
+void HazardMapper::CalibrateDisparitySigma(const HazardFrame& frame) {
+  disparity_scale_ = 1.0;
+  stats_.calibration_landmarks = 0;
+  stats_.disparity_scale = 1.0;
+  if (!options_.calibrate_disparity_sigma) return;
+  const double ds = options_.downsample;
+  const double fxw = options_.camera.fx / ds;
+  const double fb = fxw * options_.camera.baseline_m;
+  const Eigen::Matrix3d& world_R_camera = frame.world_T_camera.R;
+  const Eigen::Vector3d& t = frame.world_T_camera.t;
+  const int nl = std::min(frame.num_landmarks, options_.max_landmarks);
+  int m = 0;
+  for (int k = 0; k < nl; ++k) {
+    const HazardLandmark& l = frame.landmarks[k];
+    if (!l.position_world_m.allFinite() || !l.covariance.allFinite()) continue;
+    const Eigen::Vector3d pc = world_R_camera.transpose() * (l.position_world_m - t);
+    if (!(pc.z() > 0.1)) continue;
+    const int u = static_cast<int>(
+        std::lround((options_.camera.cx + options_.camera.fx * pc.x() / pc.z()) / ds));
+    const int v = static_cast<int>(
+        std::lround((options_.camera.cy + options_.camera.fy * pc.y() / pc.z()) / ds));
+    if (u < 0 || v < 0 || u >= sgm_.Width() || v >= sgm_.Height()) continue;
+    const float d = sgm_.DisparityAt(u, v);
+    const float q = sgm_.ConfidenceAt(u, v);
+    if (!(d > 0.5f) || q < options_.min_confidence) continue;
+    const double dl = fb / pc.z();
+    // Depth variance of the landmark (camera z), mapped to disparity: sigma_d = d sigma_z / z.
+    const Eigen::Vector3d ez = world_R_camera.col(2);
+    const double var_z = std::max(0.0, ez.dot(l.covariance * ez));
+    calib_abs_[m] = std::fabs(d - dl);
+    calib_var_[m] = var_z * (dl / pc.z()) * (dl / pc.z());
+    calib_model_[m] = options_.disparity_sigma_px * (2.0 - q);
+    ++m;
+  }
+  stats_.calibration_landmarks = m;
+  if (m < options_.min_calibration_landmarks) return;
+  const auto median = [m](std::vector<double>* v) {
+    auto mid = v->begin() + m / 2;
+    std::nth_element(v->begin(), mid, v->begin() + m);
+    return *mid;
+  };
+  const double spread = 1.4826 * median(&calib_abs_);
+  const double own = median(&calib_var_);
+  const double model = median(&calib_model_);
+  const double measured = std::sqrt(std::max(0.0, spread * spread - own));
+  disparity_scale_ = std::max(1.0, measured / std::max(model, 1e-6));
+  stats_.disparity_scale = disparity_scale_;
 }
 
 void HazardMapper::FuseStereo(const HazardFrame& frame) {
@@ -310,7 +374,7 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
       int i = 0;
       int j = 0;
       if (!CellOf(pw.x(), pw.y(), &i, &j)) continue;
-      const double sigma_d = options_.disparity_sigma_px * (2.0 - q);
+      const double sigma_d = disparity_scale_ * options_.disparity_sigma_px * (2.0 - q);
       const double sigma_z = z * z * sigma_d / fb;
       const double vertical = std::fabs(world_R_camera.row(2).dot(ray));
       const double sigma_e = std::max(vertical * sigma_z, 1e-4);
@@ -332,8 +396,9 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
     const int n = f_n_[c];
     if (n == 0) continue;
     const double zf = f_wz_[c] / f_w_[c];
-    const double var_st =
-        (1.0 / f_w_[c]) * static_cast<double>(n) / std::min(n, options_.max_independent_pixels);
+    const double n_ind = std::clamp(n / options_.pixels_per_independent, 1.0,
+                                    static_cast<double>(options_.max_independent_pixels));
+    const double var_st = (1.0 / f_w_[c]) * static_cast<double>(n) / std::min<double>(n, n_ind);
     const Eigen::Vector3d p(f_pc_[3 * c] / n, f_pc_[3 * c + 1] / n, f_pc_[3 * c + 2] / n);
     Eigen::Matrix<double, 1, 6> jac;
     jac << 0.0, 0.0, 1.0, -(world_R_camera.row(2) * estimator::Skew<double>(p));
@@ -342,6 +407,8 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
     info_[c] += 1.0 / var;
     info_z_[c] += zf / var;
     info_rel_[c] += 1.0 / var_st;
+    min_var_[c] = min_var_[c] > 0.0 ? std::min(min_var_[c], var) : var;
+    min_var_rel_[c] = min_var_rel_[c] > 0.0 ? std::min(min_var_rel_[c], var_st) : var_st;
     if (count_[c] < kMaxCount) ++count_[c];
     ++fused;
   }
@@ -381,8 +448,12 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   for (std::size_t c = 0; c < cells; ++c) {
     if (info_[c] > 0.0) {
       elevation_[c] = static_cast<float>(info_z_[c] / info_[c]);
-      sigma_[c] = static_cast<float>(1.0 / std::sqrt(info_[c]));
-      sigma_rel_[c] = static_cast<float>(1.0 / std::sqrt(info_rel_[c]));
+      // Frames share part of their error (frame_error_correlation); landmarks only add
+      // information. Never below the single-frame variance times rho.
+      const double rho = min_var_[c] > 0.0 ? options_.frame_error_correlation : 0.0;
+      sigma_[c] = static_cast<float>(std::sqrt((1.0 - rho) / info_[c] + rho * min_var_[c]));
+      sigma_rel_[c] =
+          static_cast<float>(std::sqrt((1.0 - rho) / info_rel_[c] + rho * min_var_rel_[c]));
       sum += elevation_[c];
       ++known;
     } else {
@@ -647,6 +718,7 @@ core::Status HazardMapper::Update(const HazardFrame& frame) {
   }
   MaybeRefine(range_m);
   started_ = true;
+  CalibrateDisparitySigma(frame);
   FuseStereo(frame);
   FuseLandmarks(frame);
   Analyze(frame);

@@ -8,11 +8,15 @@
 //     SGM (dense_stereo.hpp) over a disparity range predicted from the landmarks in view (else
 //     from the map, else from ground_z_hint_m).
 //  2. Each valid pixel becomes a world point p_w = R p_c + t, p_c = Z (u', v', 1), Z = f B / d.
-//     Stereo sigma: sigma_Z = Z^2 sigma_d / (f B) (sigma_d = disparity_sigma_px (2 - confidence)),
-//     projected on the vertical. Pixels are averaged per cell into one measurement per frame
-//     (neighbouring SGM disparities are correlated, so n counts at most max_independent_pixels);
-//     the pose covariance (SWF update vector [rho, phi], p_w = R Exp(phi) p_c + t + rho) adds
-//     J Sigma J^T, J = [e_z^T, -e_z^T R [p_c]x], at the cell's mean camera-frame point.
+//     Stereo sigma: sigma_Z = Z^2 sigma_d / (f B) (sigma_d = s disparity_sigma_px (2 -
+//     confidence)), projected on the vertical; s >= 1 is this frame's measured disparity noise over
+//     the model's, from the SWF landmarks in view (1.4826 x median |SGM - landmark disparity|, less
+//     the landmarks' own disparity variance): SGM's error grows where the model does not see it
+//     (gross mismatches at 7-20 px of disparity at high altitude). Pixels are averaged per cell
+//     into one measurement per frame (neighbouring SGM disparities are correlated, so n counts at
+//     most max_independent_pixels); the pose covariance (SWF update vector [rho, phi], p_w = R
+//     Exp(phi) p_c + t + rho) adds J Sigma J^T, J = [e_z^T, -e_z^T R [p_c]x], at the cell's mean
+//     camera-frame point.
 //  3. Frames and landmarks (sigma^2 = their covariance's zz) are fused per cell by inverse
 //     variance. Unknown cells stay unknown (NaN). The cell size is chosen from altitude
 //     (pixels_per_cell working pixels per cell, a power of 2 times min_cell_m) and only ever
@@ -58,11 +62,25 @@ struct HazardMapperOptions {
   float uniqueness = 0.05f;
   float min_confidence = 0.05f;
   double disparity_sigma_px = 0.3;  // at working resolution, confidence 1
-  int max_independent_pixels = 2;   // SGM errors are correlated within a cell (measured)
-  double ground_z_hint_m = 0.0;     // used for the disparity range with no landmark and no map
+  // SGM errors are correlated between neighbouring pixels (autocorrelation ~0.25 at 1 px, ~0.2
+  // at 2 px, < 0.07 at 4 px, measured against the renderer's exact disparity): a cell's n pixels
+  // count as max(1, n / pixels_per_independent) independent samples, at most
+  // max_independent_pixels.
+  double pixels_per_independent = 4.0;
+  int max_independent_pixels = 64;
+  // Fraction of a frame's cell error shared with the other frames over the same cell (the same
+  // texture gives the same SGM mismatches from similar viewpoints): fused variance =
+  // rho min_k var_k + (1 - rho) / sum_k (1 / var_k) (exact for equicorrelated frames).
+  double frame_error_correlation = 0.5;
+  // In-flight calibration of the disparity noise against the SWF landmarks in view: the robust
+  // spread of (SGM disparity - landmark disparity), less the landmarks' own disparity variance,
+  // scales the model sigma up (never down) when at least min_calibration_landmarks match.
+  bool calibrate_disparity_sigma = true;
+  int min_calibration_landmarks = 8;
+  double ground_z_hint_m = 0.0;  // used for the disparity range with no landmark and no map
   // Grid.
   int grid_cells = 256;  // cells per side (capacity and size)
-  double min_cell_m = 0.05;
+  double min_cell_m = 0.1;
   double max_cell_m = 0.8;
   double pixels_per_cell = 2.0;
   bool target_from_first_pose = true;  // grid centre / target = nadir of the first frame
@@ -121,6 +139,8 @@ struct HazardStats {
   int num_disparities = 0;
   std::uint32_t range_clamped = 0;       // updates whose predicted range exceeded max_disparities
   std::uint32_t landmarks_rejected = 0;  // non-finite, off-grid or over max_landmarks
+  int calibration_landmarks = 0;         // landmarks with a valid SGM disparity this update
+  double disparity_scale = 1.0;  // measured / model disparity sigma applied this update (>= 1)
 };
 
 class HazardMapper {
@@ -162,6 +182,7 @@ class HazardMapper {
   void Reduce(const frontend::GrayView& src, std::vector<std::uint8_t>* dst) const;
   void ChooseRange(const HazardFrame& frame, int* min_d, int* num_d);
   void MaybeRefine(double altitude_m);
+  void CalibrateDisparitySigma(const HazardFrame& frame);
   void FuseStereo(const HazardFrame& frame);
   void FuseLandmarks(const HazardFrame& frame);
   void Analyze(const HazardFrame& frame);
@@ -183,10 +204,16 @@ class HazardMapper {
   double corner_y_ = 0.0;
   Eigen::Vector2d target_{0.0, 0.0};
   double predicted_depth_m_ = 1.0;
+  double disparity_scale_ = 1.0;
+  std::vector<double> calib_abs_;    // |SGM - landmark disparity| per matched landmark
+  std::vector<double> calib_var_;    // the landmark's own disparity variance
+  std::vector<double> calib_model_;  // the model sigma at the landmark's pixel
   // Fused state per cell.
-  std::vector<double> info_;      // sum 1/sigma^2 (stereo + pose + landmarks)
-  std::vector<double> info_z_;    // sum z/sigma^2
-  std::vector<double> info_rel_;  // sum 1/sigma_stereo^2 (relative, pose-free)
+  std::vector<double> info_;         // sum 1/sigma^2 (stereo + pose + landmarks)
+  std::vector<double> info_z_;       // sum z/sigma^2
+  std::vector<double> info_rel_;     // sum 1/sigma_stereo^2 (relative, pose-free)
+  std::vector<double> min_var_;      // smallest single-frame variance fused (0 = none)
+  std::vector<double> min_var_rel_;  // ... of the stereo part alone
   std::vector<std::uint16_t> count_;
   // Per-frame scratch (also used for resampling).
   std::vector<double> f_w_;

@@ -59,6 +59,8 @@ class World {
   const sim::HazardMap& Truth() const { return truth_; }
   const sim::Renderer& Renderer() const { return renderer_; }
   const sim::Appearance& Appearance() const { return appearance_; }
+  // The pair rendered by the last Step() (with its exact depth).
+  const sim::StereoImages& Images() const { return images_; }
   // Renders a pair at world_T_camera and feeds the mapper (pose perturbed by its covariance,
   // noisy landmarks from the truth depth). rng_seed drives the perturbations.
   core::Status Step(const estimator::Pose<double>& world_T_camera, std::uint64_t frame,
