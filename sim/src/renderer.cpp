@@ -176,7 +176,11 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
     double depth = nan;
     if (cast(dir, tile, &t)) {
       depth = t;  // the camera-frame ray has z == 1: t is the camera-frame depth
-      const double footprint_m = t * std::sqrt(xn * xn + yn * yn + 1.0) * inv_fx;
+      // Single precision where the result is only a filter width, a noise sigma or a float: the
+      // divider is the renderer's bottleneck (sqrt and division are exact in IEEE, so
+      // deterministic either way).
+      const double footprint_m =
+          t * std::sqrt(static_cast<float>(xn * xn + yn * yn + 1.0)) * inv_fx;
       double radiance = 0.0;
       if (options_.samples_per_pixel == 1) {
         radiance = Shade(appearance, center + t * dir, footprint_m);
@@ -192,7 +196,8 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
       dn = options_.exposure_dn * radiance;
     }
     if (options_.add_noise) {
-      const double sigma = std::sqrt(read_var + std::max(0.0, dn) * inv_e_per_dn);
+      const double sigma =
+          std::sqrt(static_cast<float>(read_var + std::max(0.0, dn) * inv_e_per_dn));
       const std::uint64_t hash = Mix64(noise_key ^ k);
       dn += sigma * gaussian_table_[hash & (kGaussianTableSize - 1)];
     }
@@ -200,7 +205,7 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
     image[k] = static_cast<std::uint8_t>(std::clamp(dn, 0.0, 255.0) + 0.5);
     if (camera_index == 0) {
       out->depth_m[k] = static_cast<float>(depth);
-      out->disparity_px[k] = static_cast<float>(disparity_numerator / depth);
+      out->disparity_px[k] = static_cast<float>(disparity_numerator) / static_cast<float>(depth);
     }
   };
 

@@ -407,9 +407,11 @@ inline bool Terrain::IntersectCell(const GridRay& ray, std::int32_t i, std::int3
     const double disc = g1 * g1 - 4.0 * g2 * g0;
     if (disc < 0.0) return false;
     // Numerically stable pair of roots; g0 > 0 makes q != 0.
+    // One division: r1 = q / g2 = q^2 / (q g2), r2 = g0 / q = g0 g2 / (q g2).
     const double q = -0.5 * (g1 + std::copysign(std::sqrt(disc), g1));
-    const double r1 = q / g2;
-    const double r2 = g0 / q;
+    const double inv_qg2 = 1.0 / (q * g2);
+    const double r1 = q * q * inv_qg2;
+    const double r2 = g0 * g2 * inv_qg2;
     const double lo = std::min(r1, r2);
     const double hi = std::max(r1, r2);
     tau = lo >= 0.0 ? lo : hi;
@@ -516,6 +518,10 @@ bool Terrain::IntersectSpan(const GridRay& ray, double ta, double tb, double* t)
       return IntersectCell(ray, ia, ja, ta, tm, t) || IntersectCell(ray, ia, jb, tm, tb, t);
     }
   }
+  return WalkSpan(ray, ta, tb, t);
+}
+
+bool Terrain::WalkSpan(const GridRay& ray, double ta, double tb, double* t) const {
   const double inv_descent = -1.0 / ray.dz;
   const double fastest = std::max(std::abs(ray.dgx), std::abs(ray.dgy));
   constexpr double kInf = std::numeric_limits<double>::infinity();

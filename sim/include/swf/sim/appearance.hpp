@@ -64,18 +64,25 @@ class Appearance {
   core::Status Build(const Terrain& terrain, const AppearanceOptions& options);
 
   static constexpr int kDetailOctaves = 8;
-  static constexpr std::int64_t kLatticeSize = 512;  // power of two
+  static constexpr std::int32_t kLatticeSize = 512;  // power of two
+  static constexpr std::int32_t kLatticeStride = kLatticeSize + 1;
 
   AppearanceOptions options_;
   std::int32_t size_ = 0;
   double origin_m_ = 0.0;
   double cell_m_ = 1.0;
+  double inv_cell_m_ = 1.0;
   std::vector<float> albedo_;
   std::vector<float> shaded_;
   std::vector<std::uint8_t> lit_;
-  std::vector<float> lattice_;  // kLatticeSize^2 values in [-1, 1)
-  std::int64_t octave_offset_x_[kDetailOctaves] = {};
-  std::int64_t octave_offset_y_[kDetailOctaves] = {};
+  std::vector<float> lattice_;  // kLatticeSize^2 values in [-1, 1), row stride kLatticeStride
+  // Per octave o, stored as [o / 4][o % 4] (four-lane groups): lattice offsets and amplitude
+  // detail_strength 2^(-o/2).
+  using V4f [[gnu::vector_size(16)]] = float;
+  using V4i [[gnu::vector_size(16)]] = std::int32_t;
+  V4i octave_offset_x_[kDetailOctaves / 4] = {};
+  V4i octave_offset_y_[kDetailOctaves / 4] = {};
+  V4f octave_amplitude_[kDetailOctaves / 4] = {};
 };
 
 }  // namespace swf::sim

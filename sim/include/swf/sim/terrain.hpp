@@ -139,6 +139,9 @@ class Terrain final : public Surface {
   // Bilinear height in grid coordinates (gx, gy), clamped to the grid.
   double GridHeight(double gx, double gy) const;
   // First root of the ray against the bilinear patch of cell (i, j) for t in [t0, t1].
+  // IntersectSpan over more than two cells: the max pyramid walk (kept out of line so that the
+  // short cases stay small).
+  [[gnu::noinline]] bool WalkSpan(const GridRay& ray, double ta, double tb, double* t) const;
   [[gnu::always_inline]] bool IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j,
                                             double t0, double t1, double* t) const;
 
