@@ -106,14 +106,14 @@ FlowResult RunFlow(const std::string& name) {
 TEST(FrontendDataTest, MiddleburyFlowRubberWhale) {
   const FlowResult r = RunFlow("RubberWhale");
   EXPECT_GE(r.errors.size(), r.detected * 95 / 100);
-  EXPECT_LE(Median(r.errors), 0.1);
+  EXPECT_LE(Median(r.errors), 0.075);  // measured 0.054 px (OpenCV's LK on the same corners 0.059)
   EXPECT_GE(FractionBelow(r.errors, 1.0), 0.90);
 }
 
 TEST(FrontendDataTest, MiddleburyFlowDimetrodon) {
   const FlowResult r = RunFlow("Dimetrodon");
   EXPECT_GE(r.errors.size(), r.detected * 93 / 100);
-  EXPECT_LE(Median(r.errors), 0.1);
+  EXPECT_LE(Median(r.errors), 0.075);  // measured 0.057 px (OpenCV's LK on the same corners 0.059)
   EXPECT_GE(FractionBelow(r.errors, 1.0), 0.97);
 }
 
