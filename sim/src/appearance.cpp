@@ -338,21 +338,19 @@ double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
     const V4i a0 = (base_x + kx + octave_offset_x_[g]) & mask;
     const V4i b0 = (base_y + ky + octave_offset_y_[g]) & mask;
     const V4i i00 = b0 * kLatticeStride + a0;
-    // Per lane the pairs (v00, v10) and (v01, v11) are adjacent floats: 8-byte loads, then
-    // de-interleaved.
-    V4f top01;
-    V4f top23;
-    V4f bottom01;
-    V4f bottom23;
-    auto load_pairs = [&](int lane, V4f* top, V4f* bottom, int half) {
-      const float* p = lattice + i00[lane];
-      std::memcpy(reinterpret_cast<char*>(top) + 8 * half, p, 8);
-      std::memcpy(reinterpret_cast<char*>(bottom) + 8 * half, p + kLatticeStride, 8);
+    // Per lane the pairs (v00, v10) and (v01, v11) are adjacent floats: 8-byte loads into the
+    // halves of 16-byte registers (as doubles, bit-cast back), then de-interleaved.
+    auto pair = [&](int lane, std::int32_t offset) {
+      double q = 0.0;
+      std::memcpy(&q, lattice + i00[lane] + offset, sizeof(q));
+      return q;
     };
-    load_pairs(0, &top01, &bottom01, 0);
-    load_pairs(1, &top01, &bottom01, 1);
-    load_pairs(2, &top23, &bottom23, 0);
-    load_pairs(3, &top23, &bottom23, 1);
+    const auto top01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
+    const auto top23 = reinterpret_cast<V4f>(V2d{pair(2, 0), pair(3, 0)});
+    const auto bottom01 =
+        reinterpret_cast<V4f>(V2d{pair(0, kLatticeStride), pair(1, kLatticeStride)});
+    const auto bottom23 =
+        reinterpret_cast<V4f>(V2d{pair(2, kLatticeStride), pair(3, kLatticeStride)});
     const V4f v00 = __builtin_shufflevector(top01, top23, 0, 2, 4, 6);
     const V4f v10 = __builtin_shufflevector(top01, top23, 1, 3, 5, 7);
     const V4f v01 = __builtin_shufflevector(bottom01, bottom23, 0, 2, 4, 6);

@@ -80,6 +80,7 @@ class Appearance {
   // detail_strength 2^(-o/2).
   using V4f [[gnu::vector_size(16)]] = float;
   using V4i [[gnu::vector_size(16)]] = std::int32_t;
+  using V2d [[gnu::vector_size(16)]] = double;
   V4i octave_offset_x_[kDetailOctaves / 4] = {};
   V4i octave_offset_y_[kDetailOctaves / 4] = {};
   V4f octave_amplitude_[kDetailOctaves / 4] = {};
