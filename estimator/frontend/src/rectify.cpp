@@ -271,13 +271,13 @@ void StereoRectifier::RemapOne(const GrayView& raw, const Table& table,
     const std::uint8_t* src = raw.data;
     for (int u = 0; u < padded; u += 8) {
       const std::int32_t* off = offset + u;
-      const V8u t = {Load16(src + off[0]), Load16(src + off[1]), Load16(src + off[2]),
-                     Load16(src + off[3]), Load16(src + off[4]), Load16(src + off[5]),
-                     Load16(src + off[6]), Load16(src + off[7])};
+      V8u t;
+      V8u b;
       const std::uint8_t* below = src + stride;
-      const V8u b = {Load16(below + off[0]), Load16(below + off[1]), Load16(below + off[2]),
-                     Load16(below + off[3]), Load16(below + off[4]), Load16(below + off[5]),
-                     Load16(below + off[6]), Load16(below + off[7])};
+      for (int i = 0; i < 8; ++i) {  // unrolled: one 16-bit lane insert per load
+        t[i] = Load16(src + off[i]);
+        b[i] = Load16(below + off[i]);
+      }
       V8s ax;
       V8s ay;
       std::memcpy(&ax, wx + u, sizeof(ax));
