@@ -188,57 +188,79 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
                  : Shade(appearance, p, footprint_m);
   };
 
-  auto render_pixel = [&](std::int32_t u, std::int32_t v, const TileRange& tile) {
-    const size_t k = static_cast<size_t>(v) * w + u;
-    const double xn = (u - cx) * inv_fx;
-    const double yn = (v - cy) * inv_fy;
-    const Eigen::Vector3d dir = col_x * xn + col_y * yn + col_z;  // r * (xn, yn, 1)
-    double t = 0.0;
-    double dn = 0.0;
-    double depth = nan;
-    if (cast(dir, tile, &t)) {
-      depth = t;  // the camera-frame ray has z == 1: t is the camera-frame depth
-      // Single precision where the result is only a filter width, a noise sigma or a float: the
-      // divider is the renderer's bottleneck (sqrt and division are exact in IEEE, so
-      // deterministic either way).
-      const double footprint_m =
-          t * std::sqrt(static_cast<float>(xn * xn + yn * yn + 1.0)) * inv_fx;
-      double radiance = 0.0;
-      if (one_sample) {
-        radiance = shade(center + t * dir, footprint_m);
-      } else {
-        for (const auto& offset : kSubPixel) {
-          const Eigen::Vector3d sub = dir + offset[0] * step + offset[1] * step_v;
-          double ts = 0.0;
-          if (cast(sub, tile, &ts)) {
-            radiance += 0.25 * shade(center + ts * sub, 0.5 * footprint_m);
+  // A tile in three passes (rays, shading, noise and output), so that the long dependency chain
+  // of one pixel (ray root, texture, noise) overlaps with its neighbours' in the CPU.
+  double hit_t[kTile * kTile];
+  double tile_dn[kTile * kTile];
+  auto render_tile = [&](std::int32_t u0, std::int32_t v0, std::int32_t u1, std::int32_t v1) {
+    const TileRange tile = tile_range(u0, v0, u1, v1);
+    const std::int32_t tw = u1 - u0 + 1;
+    for (std::int32_t v = v0; v <= v1; ++v) {
+      const double yn = (v - cy) * inv_fy;
+      const Eigen::Vector3d row = col_y * yn + col_z;
+      for (std::int32_t u = u0; u <= u1; ++u) {
+        const Eigen::Vector3d dir = col_x * ((u - cx) * inv_fx) + row;  // r * (xn, yn, 1)
+        double t = 0.0;
+        // The camera-frame ray has z == 1: t is the camera-frame depth.
+        hit_t[(v - v0) * tw + (u - u0)] = cast(dir, tile, &t) ? t : nan;
+      }
+    }
+    for (std::int32_t v = v0; v <= v1; ++v) {
+      const double yn = (v - cy) * inv_fy;
+      const Eigen::Vector3d row = col_y * yn + col_z;
+      for (std::int32_t u = u0; u <= u1; ++u) {
+        const std::int32_t q = (v - v0) * tw + (u - u0);
+        const double t = hit_t[q];
+        tile_dn[q] = 0.0;
+        if (!(t == t)) continue;  // NaN: no hit
+        const double xn = (u - cx) * inv_fx;
+        const Eigen::Vector3d dir = col_x * xn + row;
+        // Single precision where the result is only a filter width, a noise sigma or a float:
+        // the divider is a bottleneck (sqrt and division are exact in IEEE, so deterministic
+        // either way).
+        const double footprint_m =
+            t * std::sqrt(static_cast<float>(xn * xn + yn * yn + 1.0)) * inv_fx;
+        double radiance = 0.0;
+        if (one_sample) {
+          radiance = shade(center + t * dir, footprint_m);
+        } else {
+          for (const auto& offset : kSubPixel) {
+            const Eigen::Vector3d sub = dir + offset[0] * step + offset[1] * step_v;
+            double ts = 0.0;
+            if (cast(sub, tile, &ts)) {
+              radiance += 0.25 * shade(center + ts * sub, 0.5 * footprint_m);
+            }
           }
         }
+        tile_dn[q] = exposure_dn * radiance;
       }
-      dn = exposure_dn * radiance;
     }
-    if (add_noise) {
-      const double sigma =
-          std::sqrt(static_cast<float>(read_var + std::max(0.0, dn) * inv_e_per_dn));
-      const std::uint64_t hash = Mix64(noise_key ^ k);
-      dn += sigma * gaussian[hash & (kGaussianTableSize - 1)];
-    }
-    // Round half up after clamping (the value is non-negative there).
-    pixels[k] = static_cast<std::uint8_t>(std::clamp(dn, 0.0, 255.0) + 0.5);
-    if (depth_out != nullptr) {
-      depth_out[k] = static_cast<float>(depth);
-      disparity_out[k] = disparity_numerator_f / static_cast<float>(depth);
+    for (std::int32_t v = v0; v <= v1; ++v) {
+      for (std::int32_t u = u0; u <= u1; ++u) {
+        const std::int32_t q = (v - v0) * tw + (u - u0);
+        const size_t k = static_cast<size_t>(v) * w + u;
+        double dn = tile_dn[q];
+        if (add_noise) {
+          const double sigma =
+              std::sqrt(static_cast<float>(read_var + std::max(0.0, dn) * inv_e_per_dn));
+          const std::uint64_t hash = Mix64(noise_key ^ k);
+          dn += sigma * gaussian[hash & (kGaussianTableSize - 1)];
+        }
+        // Round half up after clamping (the value is non-negative there).
+        pixels[k] = static_cast<std::uint8_t>(std::clamp(dn, 0.0, 255.0) + 0.5);
+        if (depth_out != nullptr) {
+          const double depth = hit_t[q];
+          depth_out[k] = static_cast<float>(depth);
+          disparity_out[k] = disparity_numerator_f / static_cast<float>(depth);
+        }
+      }
     }
   };
 
   for (std::int32_t v0 = 0; v0 < h; v0 += kTile) {
     const std::int32_t v1 = std::min(h, v0 + kTile) - 1;
     for (std::int32_t u0 = 0; u0 < w; u0 += kTile) {
-      const std::int32_t u1 = std::min(w, u0 + kTile) - 1;
-      const TileRange tile = tile_range(u0, v0, u1, v1);
-      for (std::int32_t v = v0; v <= v1; ++v) {
-        for (std::int32_t u = u0; u <= u1; ++u) render_pixel(u, v, tile);
-      }
+      render_tile(u0, v0, std::min(w, u0 + kTile) - 1, v1);
     }
   }
 }
