@@ -25,9 +25,10 @@ struct RunResult {
 
 template <typename Filter>
 inline RunResult RunScene(Filter* swf, const SyntheticScene& scene, SwfOptions options,
-                          bool track_mse = false) {
-  StereoModel<double> model;
+                          bool track_mse = false, double max_init_depth_m = 0.0) {
+  typename Filter::ModelType model;
   model.camera = scene.camera();
+  model.max_init_depth_m = max_init_depth_m;
   EXPECT_EQ(swf->Configure(model, options), core::Status::kOk);
   // Relative motion from an IMU-like source: truth perturbed with the noise Q describes.
   constexpr double kSigmaT = 0.1;
@@ -89,6 +90,8 @@ inline RunResult RunScene(Filter* swf, const SyntheticScene& scene, SwfOptions o
 
 template <int K, int P = 160>
 using StereoSwf = SlidingWindowFilter<StereoModel<double>, K, 160, 160, P>;
+template <int K, int P = 160>
+using InverseDepthSwf = SlidingWindowFilter<InverseDepthStereoModel<double>, K, 160, 160, P>;
 
 inline SwfOptions ModeOptions(SwfMode mode) {
   SwfOptions o;

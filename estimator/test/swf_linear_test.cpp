@@ -36,6 +36,22 @@ struct LinearModel {
     *l = a_landmark.inverse() * (z - a_pose * p);
     return true;
   }
+  // The filter's anchored landmark surface; a linear landmark needs no anchor.
+  struct LandmarkAnchor {};
+  bool InitLandmark(const PoseType& p, const Vec3<double>& z, LandmarkAnchor* /*anchor*/,
+                    Vec3<double>* l) const {
+    return InitLandmark(p, z, l);
+  }
+  bool Predict(const PoseType& p, const LandmarkAnchor& /*anchor*/, const Vec3<double>& l,
+               Vec3<double>* z, Mat36<double>* j_pose, Mat3<double>* j_landmark) const {
+    return Predict(p, l, z, j_pose, j_landmark);
+  }
+  static bool LandmarkPosition(const LandmarkAnchor& /*anchor*/, const Vec3<double>& l,
+                               Vec3<double>* position, Mat3<double>* jacobian) {
+    *position = l;
+    if (jacobian != nullptr) jacobian->setIdentity();
+    return true;
+  }
   PoseType Propagate(const PoseType& p, const MotionType& u) const { return f * p + u; }
   MotionType RelativeMotion(const PoseType& a, const PoseType& b) const { return b - f * a; }
   Vec6<double> ProcessResidual(const PoseType& prev, const PoseType& next, const MotionType& u,

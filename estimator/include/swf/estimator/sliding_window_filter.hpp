@@ -127,6 +127,7 @@ struct SwfSummary {
   double huber_threshold = 0.0;
   int poses_marginalized = 0;      // in the last Update
   int landmarks_marginalized = 0;  // in the last Update (retired landmarks)
+  int landmarks_unplaced = 0;      // of those, retired without a position (inverse depth <= 0)
   int dense_dimension = 0;         // size of the reduced system S
   int state_dimension = 0;         // 6 * poses + 3 * active landmarks
 };
@@ -144,9 +145,11 @@ class SlidingWindowFilter {
   static_assert(K >= 1 && N >= 1 && M >= 1 && P >= 1, "capacities must be positive");
 
  public:
+  using ModelType = Model;
   using S = typename Model::Scalar;
   using PoseType = typename Model::PoseType;
   using MotionType = typename Model::MotionType;
+  using LandmarkAnchor = typename Model::LandmarkAnchor;
 
   static constexpr int kMaxPoses = K + 1;  // one extra while a new pose awaits marginalization
   static constexpr int kMaxDense = 6 * K + 3 * P;
@@ -224,8 +227,10 @@ class SlidingWindowFilter {
       for (const Observation& o : pose.obs)
         if (o.landmark == slot) return core::Status::kInvalidArgument;  // duplicate in frame
     } else {
-      Vec3<S> position;
-      if (!model_.InitLandmark(pose.pose, z, &position)) return core::Status::kInvalidArgument;
+      Vec3<S> params;
+      LandmarkAnchor anchor{};
+      if (!model_.InitLandmark(pose.pose, z, &anchor, &params))
+        return core::Status::kInvalidArgument;
       if (free_slots_.empty()) {
         fault_bits_ |= kFaultLandmarkCapacity;
         return core::Status::kFull;
@@ -236,7 +241,8 @@ class SlidingWindowFilter {
       l = LandmarkSlot{};
       l.used = true;
       l.id = landmark_id;
-      l.position = position;
+      l.params = params;
+      l.anchor = anchor;
       ids_.Insert(landmark_id, slot);
       ++num_landmarks_;
     }
@@ -336,17 +342,24 @@ class SlidingWindowFilter {
   int NumLandmarks() const { return num_landmarks_; }
   int NumPriorLandmarks() const { return static_cast<int>(prior_landmarks_.size()); }
 
+  // World position of an active landmark; false for an unknown id or a point the model cannot
+  // place (an inverse-depth landmark at or beyond infinity).
   bool GetLandmark(std::int64_t id, Vec3<S>* position) const {
     const int slot = ids_.Find(id);
     if (slot < 0) return false;
-    *position = landmarks_[slot].position;
-    return true;
+    return Model::LandmarkPosition(landmarks_[slot].anchor, landmarks_[slot].params, position,
+                                   nullptr);
   }
-  // After ComputeCovariances().
+  // World-frame covariance (the parameters' covariance mapped through dl/dm), after
+  // ComputeCovariances().
   bool GetLandmarkCovariance(std::int64_t id, Mat3<S>* covariance) const {
     const int slot = ids_.Find(id);
     if (slot < 0) return false;
-    *covariance = landmarks_[slot].covariance;
+    Vec3<S> position;
+    Mat3<S> j;
+    const LandmarkSlot& l = landmarks_[slot];
+    if (!Model::LandmarkPosition(l.anchor, l.params, &position, &j)) return false;
+    *covariance = j * l.covariance * j.transpose();
     return true;
   }
   // Covariance of pose j's update vector, after ComputeCovariances().
@@ -358,12 +371,16 @@ class SlidingWindowFilter {
   }
   const Mat6<S>& NewestPoseCovariance() const { return newest_pose_cov_; }
 
-  // Calls f(id, position, observations in window) for every active landmark, in slot order.
+  // Calls f(id, world position, observations in window) for every active landmark the model
+  // can place, in slot order.
   template <typename F>
   void ForEachLandmark(F&& f) const {
-    for (int i = 0; i < N; ++i)
-      if (landmarks_[i].used)
-        f(landmarks_[i].id, landmarks_[i].position, landmarks_[i].obs_in_window);
+    Vec3<S> position;
+    for (int i = 0; i < N; ++i) {
+      const LandmarkSlot& l = landmarks_[i];
+      if (l.used && Model::LandmarkPosition(l.anchor, l.params, &position, nullptr))
+        f(l.id, position, l.obs_in_window);
+    }
   }
 
   const core::StaticVector<RetiredLandmark<S>, N>& Retired() const { return retired_; }
@@ -411,8 +428,9 @@ class SlidingWindowFilter {
   struct LandmarkSlot {
     bool used = false;
     std::int64_t id = 0;
-    Vec3<S> position = Vec3<S>::Zero();
-    int prior_index = -1;  // position in prior_landmarks_, or -1 for a free landmark
+    Vec3<S> params = Vec3<S>::Zero();  // the model's landmark parameters (stereo_model.hpp)
+    LandmarkAnchor anchor{};           // constant, fixed by the model at creation
+    int prior_index = -1;              // position in prior_landmarks_, or -1 for a free landmark
     int obs_in_window = 0;
     int total_obs = 0;
     // Per-iteration workspace.
@@ -553,7 +571,7 @@ class SlidingWindowFilter {
       if (!d.allFinite()) return false;
     }
     for (int i = 0; i < N; ++i)
-      if (landmarks_[i].used && !landmarks_[i].position.allFinite()) return false;
+      if (landmarks_[i].used && !landmarks_[i].params.allFinite()) return false;
     for (int r = 0; r < prior_dim_; ++r)
       if (!std::isfinite(prior_g_[r])) return false;
     return true;
@@ -573,8 +591,8 @@ class SlidingWindowFilter {
     Vec3<S> h;
     Mat36<S> jp;
     Mat3<S> jl;
-    o->valid = model_.Predict(pose, landmarks_[o->landmark].position, &h,
-                              with_jacobians ? &jp : nullptr, &jl);
+    const LandmarkSlot& lm = landmarks_[o->landmark];
+    o->valid = model_.Predict(pose, lm.anchor, lm.params, &h, with_jacobians ? &jp : nullptr, &jl);
     if (!o->valid) return;
     o->r = o->sqrt_info * (o->z - h);
     if (!o->r.allFinite()) {
@@ -583,13 +601,12 @@ class SlidingWindowFilter {
       return;
     }
     if (with_jacobians) {
-      const LandmarkSlot& l = landmarks_[o->landmark];
-      if (options_.first_estimate_jacobians && l.prior_index >= 0) {
+      if (options_.first_estimate_jacobians && lm.prior_index >= 0) {
         // First-estimate Jacobians: the prior fixed this landmark's linearization when it
         // entered; linearizing its later measurements elsewhere would give the prior and the
         // window different Jacobians for the same variable and create spurious information.
         Vec3<S> h_first;
-        (void)model_.Predict(pose, first_estimate_[l.prior_index], &h_first, &jp, &jl);
+        (void)model_.Predict(pose, lm.anchor, first_estimate_[lm.prior_index], &h_first, &jp, &jl);
       }
       o->jp = o->sqrt_info * jp;
       o->jl = o->sqrt_info * jl;
@@ -673,7 +690,7 @@ class SlidingWindowFilter {
     const Vec6<S> d = Model::Difference(prior_pose_lin_, Slot(0).pose, &prior_pose_jacobian_);
     for (int i = 0; i < 6; ++i) prior_delta_[i] = d[i];
     for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
-      const Vec3<S> dl = landmarks_[prior_landmarks_[q]].position - prior_landmark_lin_[q];
+      const Vec3<S> dl = landmarks_[prior_landmarks_[q]].params - prior_landmark_lin_[q];
       for (int k = 0; k < 3; ++k) prior_delta_[6 + 3 * q + k] = dl[k];
     }
   }
@@ -892,12 +909,12 @@ class SlidingWindowFilter {
   void Backup() {
     for (int j = 0; j < num_poses_; ++j) pose_backup_[j] = Slot(j).pose;
     for (int i = 0; i < N; ++i)
-      if (landmarks_[i].used) landmarks_[i].backup = landmarks_[i].position;
+      if (landmarks_[i].used) landmarks_[i].backup = landmarks_[i].params;
   }
   void Restore() {
     for (int j = 0; j < num_poses_; ++j) Slot(j).pose = pose_backup_[j];
     for (int i = 0; i < N; ++i)
-      if (landmarks_[i].used) landmarks_[i].position = landmarks_[i].backup;
+      if (landmarks_[i].used) landmarks_[i].params = landmarks_[i].backup;
   }
   void ApplyStep(S alpha) {
     for (int j = 0; j < num_poses_; ++j) {
@@ -907,7 +924,7 @@ class SlidingWindowFilter {
     }
     for (int i = 0; i < N; ++i) {
       LandmarkSlot& l = landmarks_[i];
-      if (l.used) l.position = l.backup + alpha * l.delta;
+      if (l.used) l.params = l.backup + alpha * l.delta;
     }
   }
 
@@ -932,8 +949,8 @@ class SlidingWindowFilter {
       }
       l.prior_index = static_cast<int>(prior_landmarks_.size());
       (void)prior_landmarks_.push_back(o.landmark);
-      prior_landmark_lin_[l.prior_index] = l.position;
-      first_estimate_[l.prior_index] = l.position;
+      prior_landmark_lin_[l.prior_index] = l.params;
+      first_estimate_[l.prior_index] = l.params;
       // A new prior variable enters with zero information about itself until the Schur below.
       GrowPrior();
     }
@@ -1004,7 +1021,7 @@ class SlidingWindowFilter {
         prior_[c * kMaxPriorDim + r] = local_[(c + 6) * kMaxLocalDim + r + 6];
     for (int r = 0; r < prior_dim_; ++r) prior_g_[r] = local_b_[r + 6];
     prior_pose_lin_ = p1.pose;
-    for (int q = 0; q < nq; ++q) prior_landmark_lin_[q] = landmarks_[prior_landmarks_[q]].position;
+    for (int q = 0; q < nq; ++q) prior_landmark_lin_[q] = landmarks_[prior_landmarks_[q]].params;
     // Drop p0.
     for (const Observation& o : p0.obs) --landmarks_[o.landmark].obs_in_window;
     p0.obs.clear();
@@ -1079,9 +1096,12 @@ class SlidingWindowFilter {
       }
       RetiredLandmark<S> r;
       r.id = l.id;
-      r.position = l.position;
       r.total_observations = l.total_obs;
-      (void)retired_.push_back(r);
+      if (Model::LandmarkPosition(l.anchor, l.params, &r.position, nullptr)) {
+        (void)retired_.push_back(r);
+      } else {
+        ++summary_.landmarks_unplaced;  // at or beyond infinity: no position to report
+      }
       ids_.Erase(l.id);
       l.used = false;
       (void)free_slots_.push_back(i);
