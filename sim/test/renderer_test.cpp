@@ -177,7 +177,7 @@ TEST(RendererTest, TrueLandmarkProjectsOntoItsPlantedFiducial) {
 
 TEST(RendererTest, TileStartHeightsNeverSkipAHit) {
   // GIVEN rock-field terrain seen low and oblique (30 deg off nadir: rocks occlude ground), where
-  // the renderer starts each 16 x 16 tile's rays below the tile's local maximum height.
+  // the renderer walks each 8 x 8 tile's rays only between the tile's local height bounds.
   TerrainOptions t = TerrainPresetOptions(TerrainPreset::kRockField, 4);
   t.size = 512;
   Scene scene;

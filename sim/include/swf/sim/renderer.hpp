@@ -3,15 +3,17 @@
 //
 // For each pixel centre (u, v) of camera c (0 left, 1 right at +baseline along camera x) the ray
 // world_R_camera * ((u - cx) / fx, (v - cy) / fy, 1) from the camera centre is intersected with the
-// bilinear height field (Terrain::Intersect: two-level max-height pyramid, closed-form roots per
-// cell).
+// bilinear height field (closed-form roots per cell, as Terrain::Intersect). Pixels go in 8x8
+// tiles: the tile's corner rays and the min/max pyramid bound the heights where any of its rays can
+// first hit (refined a few rounds), so each ray only solves the one or two cells of that stretch
+// (Terrain::IntersectSpan; longer stretches walk the pyramid).
 // The hit's radiance (Appearance::Radiance, bilinear, band-limited by the pixel footprint
 // range / fx) becomes DN = exposure_dn * radiance; with samples_per_pixel = 4 the radiance is
 // averaged over a rotated 2x2 grid of sub-pixel rays (geometric anti-aliasing). Photometric noise
 // in DN: sigma^2 = (read_noise_e / e_per_dn)^2 + DN / e_per_dn (read + shot noise), Gaussian
-// values from a fixed Box-Muller table indexed by a hash of (seed, frame, camera, pixel), then
-// rounding and clamping to 8 bits. Truth for the left image: depth = camera-frame z of the hit of
-// the pixel-centre ray, disparity = fx * baseline / depth (NaN where the ray misses).
+// values from a fixed 4096-entry Box-Muller table indexed by a hash of (seed, frame, camera,
+// pixel), then rounding and clamping to 8 bits. Truth for the left image: depth = camera-frame z of
+// the hit of the pixel-centre ray, disparity = fx * baseline / depth (NaN where the ray misses).
 #pragma once
 
 #include <Eigen/Core>

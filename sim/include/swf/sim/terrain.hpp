@@ -95,7 +95,7 @@ class Terrain final : public Surface {
 
   double HeightAt(double x_m, double y_m) const override;
   // Exact first hit of the ray with the bilinear surface: the ray descends a two-level max-height
-  // pyramid (8 x 8 cell blocks, 64 x 64 cell super blocks), skipping every block it passes above;
+  // pyramid (2 x 2 cell blocks, 64 x 64 cell super blocks), skipping every block it passes above;
   // in each remaining cell the height along the ray is a quadratic in t (bilinear patch), whose
   // smallest root in the cell is solved in closed form (no iteration, no tolerance).
   bool Intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
