@@ -35,6 +35,9 @@ struct Trace {
 // Capacities: windows up to 40 poses, 300 landmarks active, 200 per frame, 160 in the prior.
 using Filter = estimator::SlidingWindowFilter<estimator::StereoModel<double>, 40, 300, 200, 160>;
 using BigBatch = estimator::SlidingWindowFilter<estimator::StereoModel<double>, 160, 4000, 64, 1>;
+// The same capacities with anchored inverse-depth landmarks.
+using InverseDepthFilter =
+    estimator::SlidingWindowFilter<estimator::InverseDepthStereoModel<double>, 40, 300, 200, 160>;
 
 // Motion-input noise of the experiments: 10 cm and 2 mrad per frame (1 sigma).
 inline constexpr double kMotionSigmaM = 0.1;
@@ -43,18 +46,20 @@ inline constexpr double kMotionSigmaRad = 0.002;
 template <typename F>
 Trace RunFilter(const SyntheticScene& scene, estimator::SwfMode mode, int window,
                 std::uint64_t seed, const std::function<void(F*, std::size_t)>& after_update = {},
-                double q_t = kMotionSigmaM, double q_r = kMotionSigmaRad) {
+                double q_t = kMotionSigmaM, double q_r = kMotionSigmaRad,
+                bool first_estimate_jacobians = true) {
   using estimator::Mat3;
   using estimator::Mat6;
   using estimator::Vec3;
   auto swf = std::make_unique<F>();
-  estimator::StereoModel<double> model;
+  typename F::ModelType model;
   model.camera = scene.camera();
   estimator::SwfOptions options;
   options.mode = mode;
   options.window_size = window;
   options.first_pose_sigma_m = 1e-3;
   options.first_pose_sigma_rad = 1e-5;
+  options.first_estimate_jacobians = first_estimate_jacobians;
   if (swf->Configure(model, options) != core::Status::kOk) std::abort();
   Mat6<double> q_sqrt = Mat6<double>::Zero();
   q_sqrt.diagonal() << Vec3<double>::Constant(1 / q_t), Vec3<double>::Constant(1 / q_r);

