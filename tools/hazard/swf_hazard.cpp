@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "run_filter.hpp"  // tools/eval: the SWF over a measurement-level scene
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/sim/rng.hpp"
 #include "swf/sim/trajectory.hpp"
@@ -89,7 +90,8 @@ void Json(FILE* f, double v) {
   }
 }
 
-int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_seeds) {
+int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_seeds,
+         int only_preset) {
   FILE* json = std::fopen((out + "/hazard_eval.json").c_str(), "w");
   if (json == nullptr) {
     std::fprintf(stderr, "cannot write %s/hazard_eval.json\n", out.c_str());
@@ -145,6 +147,7 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
   std::vector<DescentResult> results;
   std::vector<Acc> descent_acc(3);
   for (int p = 0; p < 3; ++p) {
+    if (only_preset >= 0 && p != only_preset) continue;
     for (int s = 0; s < descents; ++s) {
       World world;
       const auto seed = static_cast<std::uint64_t>(1000 + s);
@@ -176,6 +179,11 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
       if (s == 0) {
         (void)swf::hazard_eval::WriteHazardMapPng(
             *mapper, out + "/hazard_map_descent_" + kPresetNames[p] + ".png");
+      }
+      if (m.site_valid && m.site_on_hazard) {  // every failure kept for inspection
+        (void)swf::hazard_eval::WriteHazardMapPng(
+            *mapper,
+            out + "/hazard_map_failed_" + kPresetNames[p] + "_" + std::to_string(s) + ".png");
       }
     }
     std::fprintf(stderr, "descents %s done\n", kPresetNames[p]);
@@ -401,8 +409,55 @@ SgmError MeasureSgm(const World& w, const swf::hazard::HazardMapper& m) {
 // The flight demo's geometry without the flight process: a vertical descent over one terrain
 // (preset, seed, size as in swf-fsw's sim source) from 100 to 10 m, one hazard update every
 // `step` metres, per-update measurements printed as a table (and OUTDIR/flight.dat).
+//
+// With `swf`: the pose error and covariance given to the mapper come from a SlidingWindowFilter
+// run on the measurement-level generator (estimator/test/synthetic_scene.hpp: 0.5 px stereo
+// features, 10 cm / 2 mrad motion inputs, window 5) along the same altitudes, one frame per
+// hazard update: error = truth.LocalDifference(estimate), covariance = its newest-pose marginal.
+struct SwfPoses {
+  std::vector<Eigen::Matrix<double, 6, 1>> error;
+  std::vector<Eigen::Matrix<double, 6, 6>> covariance;
+  std::vector<double> nees;
+};
+bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* out) {
+  swf::eval::SceneOptions so;
+  so.motion = swf::eval::SceneOptions::Motion::kDescent;
+  so.frames = frames;
+  so.start_altitude_m = 100.0;
+  so.step_m = step;
+  so.num_landmarks = 600;
+  so.landmark_radius_m = 20.0;
+  so.max_obs_per_frame = 150;
+  so.jitter_rad = 0.1 * M_PI / 180.0;
+  so.seed = seed;
+  const swf::eval::SyntheticScene scene(so);
+  out->error.assign(frames, Eigen::Matrix<double, 6, 1>::Zero());
+  out->covariance.assign(frames, Eigen::Matrix<double, 6, 6>::Zero());
+  out->nees.assign(frames, NAN);
+  bool ok = true;
+  auto hook = [&](swf::eval::Filter* f, std::size_t j) {
+    if (f->ComputeCovariances() != swf::core::Status::kOk) {
+      ok = false;
+      return;
+    }
+    const swf::estimator::Pose<double>& truth = scene.frames()[j].truth;
+    out->error[j] = truth.LocalDifference(f->NewestPose());
+    out->covariance[j] = f->NewestPoseCovariance();
+    out->nees[j] = out->error[j].dot(out->covariance[j].ldlt().solve(out->error[j]));
+  };
+  (void)swf::eval::RunFilter<swf::eval::Filter>(scene, swf::estimator::SwfMode::kSlidingWindow, 5,
+                                                seed * 31 + 7, hook);
+  return ok;
+}
+
 int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPreset preset,
-           std::uint64_t seed, double x0, double y0, double step) {
+           std::uint64_t seed, double x0, double y0, double step, bool swf) {
+  SwfPoses poses;
+  const int frames = static_cast<int>(std::floor(90.0 / step + 1e-9)) + 1;
+  if (swf && !RunSwfAlongDescent(frames, step, seed, &poses)) {
+    std::fprintf(stderr, "SWF covariance failed\n");
+    return 1;
+  }
   World world;
   if (world.Configure(preset, seed, eo) != swf::core::Status::kOk) return 1;
   auto mapper = std::make_unique<swf::hazard::HazardMapper>();
@@ -416,14 +471,26 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
   std::fputs(head, dat);
   std::fputs(head, stdout);
   int f = 0;
-  for (double alt = 100.0; alt > 10.0 - 1e-9; alt -= step) {
+  for (int fi = 0; fi < frames; ++fi) {
+    const double alt = 100.0 - step * fi;
     // The demo's trajectory: heading 0, nadir, absolute height 100 m at the start.
     swf::estimator::Pose<double> pose;
     pose.R = swf::sim::NadirRotation(0.0);
     pose.t = {x0, y0, alt};
     double ms = 0.0;
-    if (world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms) != swf::core::Status::kOk) {
+    if (world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms, swf ? &poses.error[f] : nullptr,
+                   swf ? &poses.covariance[f] : nullptr) != swf::core::Status::kOk) {
       return 1;
+    }
+    if (swf) {
+      std::printf(
+          "# swf frame %d: position error %.3f m (sigma %.3f), attitude error %.4f deg "
+          "(sigma %.4f), NEES %.2f\n",
+          f, poses.error[f].head<3>().norm(),
+          std::sqrt(poses.covariance[f].topLeftCorner<3, 3>().trace()),
+          poses.error[f].tail<3>().norm() * 180.0 / M_PI,
+          std::sqrt(poses.covariance[f].bottomRightCorner<3, 3>().trace()) * 180.0 / M_PI,
+          poses.nees[f]);
     }
     ++f;
     const double agl = alt - world.Terrain().HeightAt(x0, y0);
@@ -491,8 +558,12 @@ int main(int argc, char** argv) {
   eo.downsample = std::atoi(Arg(argc, argv, "--downsample", "1"));
   const std::string verb = argv[1];
   if (verb == "eval") {
+    swf::sim::TerrainPreset only = swf::sim::TerrainPreset::kCraterField;
+    const char* only_name = Arg(argc, argv, "--descent-preset", "");
+    const bool restrict = only_name[0] != '\0' && swf::sim::ParseTerrainPreset(only_name, &only);
     return Eval(argv[2], eo, std::atoi(Arg(argc, argv, "--descents", "17")),
-                std::atoi(Arg(argc, argv, "--sweep-seeds", "3")));
+                std::atoi(Arg(argc, argv, "--sweep-seeds", "3")),
+                restrict ? static_cast<int>(only) : -1);
   }
   if (verb == "map") {
     swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kRockField;
@@ -511,7 +582,8 @@ int main(int argc, char** argv) {
     eo.terrain_size = std::atoi(Arg(argc, argv, "--terrain-size", "2048"));
     return Flight(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10),
                   std::atof(Arg(argc, argv, "--x", "0")), std::atof(Arg(argc, argv, "--y", "0")),
-                  std::atof(Arg(argc, argv, "--step", "5")));
+                  std::atof(Arg(argc, argv, "--step", "5")),
+                  std::atoi(Arg(argc, argv, "--swf", "0")) != 0);
   }
   std::fprintf(stderr, "unknown verb %s\n", verb.c_str());
   return 1;

@@ -47,7 +47,9 @@ hazard::HazardMapperOptions World::MapperOptions() const {
 }
 
 core::Status World::Step(const estimator::Pose<double>& world_T_camera, std::uint64_t frame,
-                         std::uint64_t rng_seed, hazard::HazardMapper* mapper, double* update_ms) {
+                         std::uint64_t rng_seed, hazard::HazardMapper* mapper, double* update_ms,
+                         const Eigen::Matrix<double, 6, 1>* pose_error,
+                         const Eigen::Matrix<double, 6, 6>* pose_covariance) {
   if (core::Status s = renderer_.Render(terrain_, appearance_, world_T_camera, frame, &images_);
       s != core::Status::kOk) {
     return s;
@@ -62,8 +64,13 @@ core::Status World::Step(const estimator::Pose<double>& world_T_camera, std::uin
   Eigen::Matrix<double, 6, 1> delta;
   for (int k = 0; k < 6; ++k) delta[k] = sig[k] * rng.Gaussian();
   hazard::HazardFrame f;
-  f.world_T_camera = world_T_camera.Retract(delta);
-  f.pose_covariance = sig.cwiseProduct(sig).asDiagonal();
+  if (pose_error != nullptr && pose_covariance != nullptr) {
+    f.world_T_camera = world_T_camera.Retract(*pose_error);
+    f.pose_covariance = *pose_covariance;
+  } else {
+    f.world_T_camera = world_T_camera.Retract(delta);
+    f.pose_covariance = sig.cwiseProduct(sig).asDiagonal();
+  }
   // Landmarks: true surface points at random pixels, with stereo-like noise (0.3 px).
   const estimator::StereoCamera<double>& cam = renderer_.Camera();
   landmarks_.clear();

@@ -71,7 +71,7 @@ struct HazardMapperOptions {
   // Fraction of a frame's cell error shared with the other frames over the same cell (the same
   // texture gives the same SGM mismatches from similar viewpoints): fused variance =
   // rho min_k var_k + (1 - rho) / sum_k (1 / var_k) (exact for equicorrelated frames).
-  double frame_error_correlation = 0.5;
+  double frame_error_correlation = 0.25;
   // In-flight calibration of the disparity noise against the SWF landmarks in view: the robust
   // spread of (SGM disparity - landmark disparity), less the landmarks' own disparity variance,
   // scales the model sigma up (never down) when at least min_calibration_landmarks match.
@@ -80,7 +80,7 @@ struct HazardMapperOptions {
   double ground_z_hint_m = 0.0;  // used for the disparity range with no landmark and no map
   // Grid.
   int grid_cells = 256;  // cells per side (capacity and size)
-  double min_cell_m = 0.1;
+  double min_cell_m = 0.05;
   double max_cell_m = 0.8;
   double pixels_per_cell = 2.0;
   bool target_from_first_pose = true;  // grid centre / target = nadir of the first frame

@@ -63,8 +63,13 @@ class World {
   const sim::StereoImages& Images() const { return images_; }
   // Renders a pair at world_T_camera and feeds the mapper (pose perturbed by its covariance,
   // noisy landmarks from the truth depth). rng_seed drives the perturbations.
+  // With `pose_error` / `pose_covariance` (both or neither): the mapper gets
+  // world_T_camera.Retract(*pose_error) and *pose_covariance instead (e.g. a running SWF's error
+  // and covariance along the same descent).
   core::Status Step(const estimator::Pose<double>& world_T_camera, std::uint64_t frame,
-                    std::uint64_t rng_seed, hazard::HazardMapper* mapper, double* update_ms);
+                    std::uint64_t rng_seed, hazard::HazardMapper* mapper, double* update_ms,
+                    const Eigen::Matrix<double, 6, 1>* pose_error = nullptr,
+                    const Eigen::Matrix<double, 6, 6>* pose_covariance = nullptr);
   // Compares the map with truth.
   FrameMetrics Evaluate(const hazard::HazardMapper& mapper, double altitude_m) const;
   hazard::HazardMapperOptions MapperOptions() const;
