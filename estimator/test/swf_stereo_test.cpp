@@ -26,6 +26,37 @@ using testing::SyntheticScene;
 
 // ---- Jacobians against central differences ----------------------------------------------
 
+// Central differences of predict(pose, params, &z) against the analytic pose (3x6) and
+// parameter (3x3) Jacobians. one_sided_last: difference the last parameter forward only (rho at
+// zero, where the backward side is not defined).
+template <typename Predict>
+void ExpectJacobiansMatchNumeric(const Predict& predict, const Pose<double>& pose,
+                                 const Vec3<double>& params, const Mat36<double>& jp,
+                                 const Mat3<double>& jl, double h, bool one_sided_last = false) {
+  Vec3<double> z;
+  ASSERT_TRUE(predict(pose, params, &z));
+  for (int k = 0; k < 9; ++k) {
+    const bool pose_column = k < 6;
+    Vec6<double> dp = Vec6<double>::Zero();
+    Vec3<double> dl = Vec3<double>::Zero();
+    if (pose_column) {
+      dp[k] = h;
+    } else {
+      dl[k - 6] = h;
+    }
+    const Vec3<double> column = pose_column ? Vec3<double>(jp.col(k)) : Vec3<double>(jl.col(k - 6));
+    Vec3<double> zp;
+    Vec3<double> zm;
+    ASSERT_TRUE(predict(pose.Retract(dp), params + dl, &zp)) << k;
+    if (one_sided_last && k == 8) {
+      EXPECT_LT(((zp - z) / h - column).norm(), 1e-3 * (1 + column.norm())) << k;
+      continue;
+    }
+    ASSERT_TRUE(predict(pose.Retract(-dp), params - dl, &zm)) << k;
+    EXPECT_LT(((zp - zm) / (2 * h) - column).norm(), 1e-4 * (1 + column.norm())) << k;
+  }
+}
+
 TEST(StereoModel, MeasurementJacobiansMatchNumeric) {
   StereoModel<double> model;
   model.camera = testing::EdlRig();
@@ -35,25 +66,11 @@ TEST(StereoModel, MeasurementJacobiansMatchNumeric) {
   Mat36<double> jp;
   Mat3<double> jl;
   ASSERT_TRUE(model.Predict(pose, l, &z, &jp, &jl));
-  const double h = 1e-6;
-  for (int k = 0; k < 6; ++k) {
-    Vec6<double> d = Vec6<double>::Zero();
-    d[k] = h;
-    Vec3<double> zp;
-    Vec3<double> zm;
-    ASSERT_TRUE(model.Predict(pose.Retract(d), l, &zp, nullptr, nullptr));
-    ASSERT_TRUE(model.Predict(pose.Retract(-d), l, &zm, nullptr, nullptr));
-    EXPECT_LT(((zp - zm) / (2 * h) - jp.col(k)).norm(), 1e-4 * (1 + jp.col(k).norm())) << k;
-  }
-  for (int k = 0; k < 3; ++k) {
-    Vec3<double> d = Vec3<double>::Zero();
-    d[k] = h;
-    Vec3<double> zp;
-    Vec3<double> zm;
-    ASSERT_TRUE(model.Predict(pose, l + d, &zp, nullptr, nullptr));
-    ASSERT_TRUE(model.Predict(pose, l - d, &zm, nullptr, nullptr));
-    EXPECT_LT(((zp - zm) / (2 * h) - jl.col(k)).norm(), 1e-4 * (1 + jl.col(k).norm())) << k;
-  }
+  ExpectJacobiansMatchNumeric(
+      [&](const Pose<double>& p, const Vec3<double>& m, Vec3<double>* out) {
+        return model.Predict(p, m, out, nullptr, nullptr);
+      },
+      pose, l, jp, jl, 1e-6);
   // Behind the camera: no prediction.
   EXPECT_FALSE(model.Predict(pose, Vec3<double>(1, 2, 80), &z, &jp, &jl));
 }
@@ -71,29 +88,11 @@ TEST(InverseDepthStereoModel, JacobiansMatchNumeric) {
     Mat36<double> jp;
     Mat3<double> jl;
     ASSERT_TRUE(model.Predict(pose, anchor, m, &z, &jp, &jl));
-    const double h = 1e-7;
-    for (int k = 0; k < 6; ++k) {
-      Vec6<double> d = Vec6<double>::Zero();
-      d[k] = h;
-      Vec3<double> zp;
-      Vec3<double> zm;
-      ASSERT_TRUE(model.Predict(pose.Retract(d), anchor, m, &zp, nullptr, nullptr));
-      ASSERT_TRUE(model.Predict(pose.Retract(-d), anchor, m, &zm, nullptr, nullptr));
-      EXPECT_LT(((zp - zm) / (2 * h) - jp.col(k)).norm(), 1e-4 * (1 + jp.col(k).norm())) << k;
-    }
-    for (int k = 0; k < 3; ++k) {
-      Vec3<double> d = Vec3<double>::Zero();
-      d[k] = h;
-      Vec3<double> zp;
-      Vec3<double> zm;
-      ASSERT_TRUE(model.Predict(pose, anchor, m + d, &zp, nullptr, nullptr));
-      if (rho == 0.0 && k == 2) {  // no central difference across rho = 0: one-sided
-        EXPECT_LT(((zp - z) / h - jl.col(k)).norm(), 1e-3 * (1 + jl.col(k).norm())) << k;
-        continue;
-      }
-      ASSERT_TRUE(model.Predict(pose, anchor, m - d, &zm, nullptr, nullptr));
-      EXPECT_LT(((zp - zm) / (2 * h) - jl.col(k)).norm(), 1e-4 * (1 + jl.col(k).norm())) << k;
-    }
+    ExpectJacobiansMatchNumeric(
+        [&](const Pose<double>& p, const Vec3<double>& params, Vec3<double>* out) {
+          return model.Predict(p, anchor, params, out, nullptr, nullptr);
+        },
+        pose, m, jp, jl, 1e-7, rho == 0.0);
   }
   // The parameterization agrees with the world-point model, and so does its position Jacobian.
   const Vec3<double> m(0.04, -0.02, 1.0 / 65.0);
