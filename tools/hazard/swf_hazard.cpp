@@ -520,6 +520,42 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     std::fflush(stdout);
   }
   std::fclose(dat);
+  // Truth: how much of the final grid is a possible site (no truth hazard node within the
+  // footprint radius, at least a footprint radius inside the grid).
+  {
+    const swf::sim::Terrain& t = world.Terrain();
+    const swf::sim::HazardMap& h = world.Truth();
+    const double r = eo.footprint_radius_m;
+    const int rn = static_cast<int>(std::ceil(r / t.CellM()));
+    const double half = 0.5 * mapper->GridCells() * mapper->CellM();
+    const double cx = mapper->CornerX() + half;
+    const double cy = mapper->CornerY() + half;
+    int candidates = 0;
+    int clear = 0;
+    for (int j = 0; j < t.Size(); j += 2) {
+      for (int i = 0; i < t.Size(); i += 2) {
+        if (std::fabs(t.NodeX(i) - cx) > half - r || std::fabs(t.NodeY(j) - cy) > half - r) {
+          continue;
+        }
+        ++candidates;
+        bool hit = false;
+        for (int b = std::max(0, j - rn); b <= std::min(t.Size() - 1, j + rn) && !hit; ++b) {
+          for (int a = std::max(0, i - rn); a <= std::min(t.Size() - 1, i + rn); ++a) {
+            if (h.hazard[static_cast<std::size_t>(b) * t.Size() + a] != 0 &&
+                std::hypot(t.NodeX(a) - t.NodeX(i), t.NodeY(b) - t.NodeY(j)) <= r) {
+              hit = true;
+              break;
+            }
+          }
+        }
+        clear += !hit;
+      }
+    }
+    std::printf(
+        "truth: %d of %d candidate centres in the final grid are a footprint away from "
+        "every true hazard\n",
+        clear, candidates);
+  }
   // Truth rocks above the threshold inside the final grid, with the map's sigma at their centre.
   for (const swf::sim::Rock& rock : world.Terrain().Rocks()) {
     int ci = 0;
