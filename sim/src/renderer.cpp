@@ -183,6 +183,43 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
   const Eigen::Vector3d col_x = r.col(0);
   const Eigen::Vector3d col_y = r.col(1);
   const Eigen::Vector3d col_z = r.col(2);
+  // cast for the four rays of pixels u .. u + 3 of a row in a tile inside the terrain, in single
+  // precision (Terrain::IntersectSpan4; grid positions relative to the node under the camera);
+  // a ray that needs the pyramid walk is cast again by cast.
+  using V4f = Terrain::V4f;
+  using V4i = Terrain::V4i;
+  Terrain::GridRays4 rays4{};
+  rays4.base_i = static_cast<std::int32_t>(std::floor(gx0));
+  rays4.base_j = static_cast<std::int32_t>(std::floor(gy0));
+  rays4.gx0 = static_cast<float>(gx0 - rays4.base_i);
+  rays4.gy0 = static_cast<float>(gy0 - rays4.base_j);
+  rays4.oz = static_cast<float>(center.z());
+  const V4f lanes = {0.0f, 1.0f, 2.0f, 3.0f};
+  const auto inv_fx_f = static_cast<float>(inv_fx);
+  auto cast4 = [&](std::int32_t u, const Eigen::Vector3d& row, const TileRange& tile, double* t) {
+    const V4f xn = (static_cast<float>(u - cx) + lanes) * inv_fx_f;
+    const Eigen::Vector3d row_g = row * inv_cell;
+    const Eigen::Vector3d col_g = col_x * inv_cell;
+    rays4.dgx = static_cast<float>(col_g.x()) * xn + static_cast<float>(row_g.x());
+    rays4.dgy = static_cast<float>(col_g.y()) * xn + static_cast<float>(row_g.y());
+    rays4.dz = static_cast<float>(col_x.z()) * xn + static_cast<float>(row.z());
+    const V4f inv_descent = -1.0f / rays4.dz;
+    const V4f ta = static_cast<float>(center.z() - tile.hi - height_pad_m) * inv_descent;
+    rays4.ta = ta > 0.0f ? ta : V4f{0.0f, 0.0f, 0.0f, 0.0f};
+    rays4.tb = static_cast<float>(center.z() - tile.lo + height_pad_m) * inv_descent;
+    V4f hit;
+    V4i walk;
+    terrain.IntersectSpan4(rays4, &hit, &walk);
+    for (int k = 0; k < 4; ++k) {
+      if (walk[k] == 0) {
+        t[k] = hit[k];  // NaN stays NaN
+        continue;
+      }
+      const Eigen::Vector3d dir = col_x * ((u + k - cx) * inv_fx) + row;
+      double tk = 0.0;
+      t[k] = cast(dir, tile, &tk) ? tk : std::numeric_limits<double>::quiet_NaN();
+    }
+  };
   auto shade = [&](const Eigen::Vector3d& p, double footprint_m) {
     return plain ? appearance.Radiance(p.x(), p.y(), footprint_m)
                  : Shade(appearance, p, footprint_m);
@@ -198,7 +235,11 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
     for (std::int32_t v = v0; v <= v1; ++v) {
       const double yn = (v - cy) * inv_fy;
       const Eigen::Vector3d row = col_y * yn + col_z;
-      for (std::int32_t u = u0; u <= u1; ++u) {
+      std::int32_t u = u0;
+      if (tile.inside) {  // four rays at a time
+        for (; u + 3 <= u1; u += 4) cast4(u, row, tile, &hit_t[(v - v0) * tw + (u - u0)]);
+      }
+      for (; u <= u1; ++u) {
         const Eigen::Vector3d dir = col_x * ((u - cx) * inv_fx) + row;  // r * (xn, yn, 1)
         double t = 0.0;
         // The camera-frame ray has z == 1: t is the camera-frame depth.

@@ -8,6 +8,12 @@
 
 #include "swf/sim/rng.hpp"
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+#include <arm_neon.h>
+#endif
+
 namespace swf::sim {
 namespace {
 
@@ -519,6 +525,134 @@ bool Terrain::IntersectSpan(const GridRay& ray, double ta, double tb, double* t)
     }
   }
   return WalkSpan(ray, ta, tb, t);
+}
+
+namespace {
+
+using V4f = Terrain::V4f;
+
+V4f SqrtLanes(V4f x) {
+#if defined(__SSE2__)
+  return _mm_sqrt_ps(x);
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+  return vsqrtq_f32(x);
+#else
+  return V4f{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+V4f Load(const float* p) {
+  V4f v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
+
+}  // namespace
+
+inline Terrain::V4f Terrain::IntersectCell4(const GridRays4& rays, V4i i, V4i j, V4f t0,
+                                            V4f t1) const {
+  // The gap z - h along the ray as in IntersectCell, with heights relative to the cell's first
+  // node (node heights are floats: their differences are nearly exact).
+  alignas(16) float h00[4];
+  alignas(16) float h10[4];
+  alignas(16) float h01[4];
+  alignas(16) float h11[4];
+  for (int k = 0; k < 4; ++k) {
+    const float* p =
+        &heights_[static_cast<size_t>(rays.base_j + j[k]) * size_ + (rays.base_i + i[k])];
+    h00[k] = p[0];
+    h10[k] = p[1] - p[0];
+    h01[k] = p[size_] - p[0];
+    h11[k] = p[size_ + 1] - p[0];
+  }
+  const V4f base = Load(h00);
+  const V4f e10 = Load(h10);
+  const V4f e01 = Load(h01);
+  const V4f d11 = Load(h11);
+  const V4f e11 = d11 - e10 - e01;
+  const V4f fx = rays.gx0 + t0 * rays.dgx - __builtin_convertvector(i, V4f);
+  const V4f fy = rays.gy0 + t0 * rays.dgy - __builtin_convertvector(j, V4f);
+  const V4f s = t1 - t0;
+  const V4f zero = {0.0f, 0.0f, 0.0f, 0.0f};
+  // The ray is lowest at t1 (dz < 0); a bilinear patch is highest at a corner.
+  const V4f top_a = e10 > zero ? e10 : zero;
+  const V4f top_b = e01 > d11 ? e01 : d11;
+  const V4i above = (rays.oz + t1 * rays.dz - base) > (top_a > top_b ? top_a : top_b);
+  const V4f g0 = (rays.oz + t0 * rays.dz - base) - (e10 * fx + e01 * fy + e11 * fx * fy);
+  const V4i entered_below = g0 <= 0.0f;
+  const V4f g1 =
+      rays.dz - (e10 * rays.dgx + e01 * rays.dgy + e11 * (fx * rays.dgy + rays.dgx * fy));
+  const V4f g2 = -e11 * rays.dgx * rays.dgy;
+  // Positive at both ends: a root needs the vertex inside the span (a dip).
+  const V4f g_end = g0 + s * (g1 + s * g2);
+  const V4i dip = (g2 > 0.0f) & (g1 < 0.0f) & (-g1 < 2.0f * g2 * s);
+  const V4f disc = g1 * g1 - 4.0f * g2 * g0;
+  const V4i quadratic = ~((g_end > 0.0f) & ~dip) & (disc >= 0.0f);
+  // Numerically stable pair of roots (g0 > 0 makes q != 0); one division for both cases: q g2
+  // (quadratic) or g1 (linear, root -g0 / g1).
+  constexpr std::int32_t kSign = std::numeric_limits<std::int32_t>::min();
+  const V4i sign = {kSign, kSign, kSign, kSign};
+  const V4f root = SqrtLanes(disc > zero ? disc : zero);
+  const V4f q = -0.5f * (g1 + reinterpret_cast<V4f>(reinterpret_cast<V4i>(root) |
+                                                    (reinterpret_cast<V4i>(g1) & sign)));
+  const V4i linear = g2 == 0.0f;
+  const V4f inv = 1.0f / (linear != 0 ? g1 : q * g2);
+  const V4f r1 = q * q * inv;
+  const V4f r2 = g0 * g2 * inv;
+  const V4f lo = r2 < r1 ? r2 : r1;
+  const V4f hi = r1 < r2 ? r2 : r1;
+  const V4f minus_one = {-1.0f, -1.0f, -1.0f, -1.0f};
+  const V4f tau_quadratic = quadratic != 0 ? (lo >= 0.0f ? lo : hi) : minus_one;
+  const V4f tau_linear = g1 < 0.0f ? -g0 * inv : minus_one;
+  const V4f tau = linear != 0 ? tau_linear : tau_quadratic;
+  // Rounding may put a root at the exit a little past it: accepted, clamped to the exit.
+  const V4i in_span = (tau >= 0.0f) & (tau <= s + 1e-4f * s);
+  const V4i found = ~above & (entered_below | in_span);
+  const V4f nan = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN(),
+                   std::numeric_limits<float>::quiet_NaN(),
+                   std::numeric_limits<float>::quiet_NaN()};
+  const V4f offset = entered_below != 0 ? zero : (s < tau ? s : tau);
+  return found != 0 ? t0 + offset : nan;
+}
+
+void Terrain::IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk) const {
+  // As IntersectSpan: the cells the segment touches, read off its end points (floor of the
+  // relative positions, clamped so that the global cell stays inside the grid).
+  auto floor_i = [](V4f x) {
+    const V4i i = __builtin_convertvector(x, V4i);
+    return i + (__builtin_convertvector(i, V4f) > x);  // -1 where truncation rounded up
+  };
+  auto clamp_i = [&](V4i i, std::int32_t base) {
+    const std::int32_t lo = -base;
+    const std::int32_t hi = size_ - 2 - base;
+    i = i < lo ? V4i{lo, lo, lo, lo} : i;
+    return i > hi ? V4i{hi, hi, hi, hi} : i;
+  };
+  const V4i ia = clamp_i(floor_i(rays.gx0 + rays.ta * rays.dgx), rays.base_i);
+  const V4i ib = clamp_i(floor_i(rays.gx0 + rays.tb * rays.dgx), rays.base_i);
+  const V4i ja = clamp_i(floor_i(rays.gy0 + rays.ta * rays.dgy), rays.base_j);
+  const V4i jb = clamp_i(floor_i(rays.gy0 + rays.tb * rays.dgy), rays.base_j);
+  const V4i di = ib - ia;
+  const V4i dj = jb - ja;
+  const V4i one = (di == 0) & (dj == 0);
+  const V4i two_x = (dj == 0) & ((di == 1) | (di == -1));
+  const V4i two_y = (di == 0) & ((dj == 1) | (dj == -1));
+  const V4i two = two_x | two_y;
+  *walk = ~(one | two);
+  // Two neighbours: split where the ray crosses their border.
+  const V4i border_i = ia > ib ? ia : ib;
+  const V4i border_j = ja > jb ? ja : jb;
+  const V4f cross = two_x != 0 ? (__builtin_convertvector(border_i, V4f) - rays.gx0) / rays.dgx
+                               : (__builtin_convertvector(border_j, V4f) - rays.gy0) / rays.dgy;
+  const V4f clamped = cross < rays.ta ? rays.ta : (rays.tb < cross ? rays.tb : cross);
+  const V4f mid = two != 0 ? clamped : rays.tb;
+  V4f hit = IntersectCell4(rays, ia, ja, rays.ta, mid);
+  const V4i second = two & (hit != hit);  // NaN: no hit in the first cell
+  if (second[0] | second[1] | second[2] | second[3]) {
+    const V4f later = IntersectCell4(rays, ib, jb, mid, rays.tb);
+    hit = second != 0 ? later : hit;
+  }
+  *t = hit;
 }
 
 bool Terrain::WalkSpan(const GridRay& ray, double ta, double tb, double* t) const {

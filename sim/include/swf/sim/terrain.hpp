@@ -115,6 +115,20 @@ class Terrain final : public Surface {
   // lies inside the grid (IntersectBetween after its clipping; a renderer that clipped whole
   // tiles calls it directly).
   bool IntersectSpan(const GridRay& ray, double ta, double tb, double* t) const;
+  // Four rays from one origin (pixels of a tile row) at once, in single precision in the lanes of
+  // 4-lane vectors (GCC vector extensions: SSE2 / NEON): IntersectSpan for each where the segment
+  // [ta, tb] touches one cell or two neighbours, with the same closed-form root per cell; *walk
+  // marks the rays whose segment needs the pyramid walk (left to IntersectSpan). Grid positions
+  // are relative to the node (base_i, base_j) so that they stay small: a float then resolves
+  // ~1e-5 cell over +-200 cells. *t is the hit parameter, NaN where there is none.
+  using V4f [[gnu::vector_size(16)]] = float;
+  using V4i [[gnu::vector_size(16)]] = std::int32_t;
+  struct GridRays4 {
+    std::int32_t base_i, base_j;
+    float gx0, gy0, oz;  // origin: grid position relative to the base node, height
+    V4f dgx, dgy, dz, ta, tb;
+  };
+  void IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk) const;
   // Bounds of the surface height over the box [x0, x1] x [y0, y1] (metres, clamped to the
   // terrain): the minimum and maximum of the max/min-pyramid blocks the box overlaps.
   void HeightRangeInBox(double x0_m, double y0_m, double x1_m, double y1_m, double* lo_m,
@@ -144,6 +158,9 @@ class Terrain final : public Surface {
   [[gnu::noinline]] bool WalkSpan(const GridRay& ray, double ta, double tb, double* t) const;
   [[gnu::always_inline]] bool IntersectCell(const GridRay& ray, std::int32_t i, std::int32_t j,
                                             double t0, double t1, double* t) const;
+  // IntersectCell for four rays: cells (base + (i, j)) (already clamped to the grid), spans
+  // [t0, t1]; the hit parameter where ray k meets the patch, NaN elsewhere.
+  V4f IntersectCell4(const GridRays4& rays, V4i i, V4i j, V4f t0, V4f t1) const;
 
   static constexpr std::int32_t kBlock = 2;   // cells per side of a min/max-height block
   static constexpr std::int32_t kSuper = 32;  // blocks per side of a min/max-height super block
