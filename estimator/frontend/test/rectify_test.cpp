@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <vector>
 
 #include "swf/testing/allocation_counter.hpp"
 #include "synthetic.hpp"
@@ -211,6 +212,70 @@ TEST_P(RectifyOutputTest, OutputMatchesExactFloatRemap) {
 }
 
 INSTANTIATE_TEST_SUITE_P(FocalScales, RectifyOutputTest, ::testing::Values(1.0, 0.6));
+
+// GIVEN the EuRoC rig at several zooms and raw images with row padding WHEN every remap kernel this
+// CPU supports is forced THEN each output is bit-identical to the portable kernel's, without
+// allocating; a kernel the CPU lacks is rejected.
+TEST(StereoRectifierTest, EveryKernelMatchesPortableBitForBit) {
+  constexpr int kW = 752;
+  constexpr int kH = 480;
+  constexpr int kStride = 800;
+  const testing::Texture texture(11);
+  const testing::TestImage left_src = texture.RenderShifted<testing::TestImage>(kW, kH, 0.0, 0.0);
+  const testing::TestImage right_src = texture.RenderShifted<testing::TestImage>(kW, kH, 2.7, -0.6);
+  std::vector<std::uint8_t> padded_left(static_cast<std::size_t>(kStride) * kH, 0xA5);
+  std::vector<std::uint8_t> padded_right(static_cast<std::size_t>(kStride) * kH, 0x5A);
+  for (int v = 0; v < kH; ++v) {
+    std::copy_n(left_src.pixels.begin() + static_cast<std::ptrdiff_t>(v) * kW, kW,
+                padded_left.begin() + static_cast<std::ptrdiff_t>(v) * kStride);
+    std::copy_n(right_src.pixels.begin() + static_cast<std::ptrdiff_t>(v) * kW, kW,
+                padded_right.begin() + static_cast<std::ptrdiff_t>(v) * kStride);
+  }
+  const GrayView raw_left{padded_left.data(), kW, kH, kStride};
+  const GrayView raw_right{padded_right.data(), kW, kH, kStride};
+  auto reference = std::make_unique<StereoRectifier>();
+  auto rectifier = std::make_unique<StereoRectifier>();
+  int compared = 0;
+  for (const double zoom : {1.0, 0.6, 1.7}) {
+    RectifyOptions options;
+    options.focal_scale = zoom;
+    options.kernel = RemapKernel::kPortable;
+    ASSERT_EQ(reference->Configure(EurocCam(0), EurocCam(1), options), core::Status::kOk);
+    EXPECT_EQ(reference->Kernel(), RemapKernel::kPortable);
+    testing::TestImage want_left(kW, kH);
+    testing::TestImage want_right(kW, kH);
+    ASSERT_EQ(
+        reference->Rectify(raw_left, raw_right, want_left.MutableView(), want_right.MutableView()),
+        core::Status::kOk);
+    for (const RemapKernel kernel : {RemapKernel::kSsse3, RemapKernel::kAvx2, RemapKernel::kNeon}) {
+      options.kernel = kernel;
+      if (rectifier->Configure(EurocCam(0), EurocCam(1), options) != core::Status::kOk) continue;
+      std::printf("kernel %d zoom %.1f: %.3f of the segments by windows\n",
+                  static_cast<int>(kernel), zoom, rectifier->WindowFraction());
+      EXPECT_EQ(rectifier->Kernel(), kernel);
+      EXPECT_GT(rectifier->WindowFraction(), zoom < 1.0 ? 0.4 : 0.95);
+      testing::TestImage got_left(kW, kH);
+      testing::TestImage got_right(kW, kH);
+      {
+        swf::testing::AllocationScope scope;
+        ASSERT_EQ(rectifier->Rectify(raw_left, raw_right, got_left.MutableView(),
+                                     got_right.MutableView()),
+                  core::Status::kOk);
+        EXPECT_EQ(scope.Count(), 0u);
+      }
+      EXPECT_EQ(got_left.pixels, want_left.pixels) << static_cast<int>(kernel) << " zoom " << zoom;
+      EXPECT_EQ(got_right.pixels, want_right.pixels)
+          << static_cast<int>(kernel) << " zoom " << zoom;
+      ++compared;
+    }
+  }
+#if defined(__x86_64__) || defined(__aarch64__)
+  EXPECT_GE(compared, 3);  // at least one SIMD kernel per zoom (SSSE3 on x86-64, NEON on AArch64)
+#endif
+  RectifyOptions automatic;
+  ASSERT_EQ(rectifier->Configure(EurocCam(0), EurocCam(1), automatic), core::Status::kOk);
+  EXPECT_NE(rectifier->Kernel(), RemapKernel::kAuto);
+}
 
 // GIVEN an ideal rig (no distortion, parallel cameras) THEN rectification is the identity.
 TEST(StereoRectifierTest, IdealRigIsIdentityAndAllocationFree) {

@@ -50,11 +50,32 @@ struct CameraCalibration {
   estimator::Pose<double> body_T_camera;  // extrinsics (EuRoC T_BS)
 };
 
+// Gather/blend kernel of Rectify. Every kernel gives bit-identical output; kAuto picks the fastest
+// one this CPU supports once in Configure (x86-64: AVX2, else SSSE3, else portable; AArch64: NEON).
+// Naming another kernel forces it (tests and benchmarks); Configure rejects one the CPU lacks.
+enum class RemapKernel : std::uint8_t { kAuto, kPortable, kSsse3, kAvx2, kNeon };
+
 struct RectifyOptions {
   int width = 0;  // output size; 0 = the input size
   int height = 0;
   double focal_scale = 1.0;  // < 1 zooms out (keeps more of the raw field of view)
+  RemapKernel kernel = RemapKernel::kAuto;
 };
+
+namespace rectify_detail {
+constexpr int kSegment = 16;  // output pixels per table segment
+// Every pixel's source is inside (fast path), some are (per-pixel checks), none is (zeros).
+// kWindow: inside, and each 8-pixel half reads its taps from a 16 x 3 byte window (rows r .. r + 2,
+// columns c .. c + 15 of the raw image, c and r those of the half's first pixel), so that the
+// SIMD kernels fetch the taps with three 16-byte loads and byte shuffles instead of 16 loads.
+enum class SegmentKind : std::uint8_t { kInside, kWindow, kMixed, kOutside };
+struct Segment {
+  float x[3];  // raw u = x[0] + k (x[1] + k x[2]), k = 0 .. kSegment - 1 (1/128 px)
+  float y[3];
+  // kWindow only: top-left raw pixel (column, row) of the window of half 0 and half 1.
+  std::int16_t window[4];  // column 0, column 1, row 0, row 1
+};
+}  // namespace rectify_detail
 
 class StereoRectifier {
  public:
@@ -83,20 +104,20 @@ class StereoRectifier {
   double MaxTableErrorPx() const { return max_table_error_px_; }
   // True when the table maps every output pixel to itself (both cameras) and Rectify copies rows.
   bool IsIdentity() const { return identity_; }
+  // The kernel Configure selected (never kAuto once configured).
+  RemapKernel Kernel() const { return kernel_; }
+  // Fraction of the table's segments (both cameras) that the shuffle kernels fetch by windows.
+  double WindowFraction() const { return window_fraction_; }
 
  private:
   // Remap table of one camera (file comment). Segment s of output row v is entry
   // v * segments_per_row_ + s.
-  static constexpr int kSegment = 16;
+  static constexpr int kSegment = rectify_detail::kSegment;
   static constexpr int kMaxSegmentsPerRow = (kMaxImageWidth + kSegment - 1) / kSegment;
   static constexpr std::size_t kMaxSegments =
       static_cast<std::size_t>(kMaxSegmentsPerRow) * kMaxImageHeight;
-  // Every pixel's source is inside (fast path), some are (per-pixel checks), none is (zeros).
-  enum class SegmentKind : std::uint8_t { kInside, kMixed, kOutside };
-  struct Segment {
-    float x[3];  // raw u = x[0] + k (x[1] + k x[2]), k = 0 .. kSegment - 1
-    float y[3];
-  };
+  using SegmentKind = rectify_detail::SegmentKind;
+  using Segment = rectify_detail::Segment;
   struct Table {
     Segment segment[kMaxSegments];
     SegmentKind kind[kMaxSegments];
@@ -111,6 +132,8 @@ class StereoRectifier {
   int height_ = 0;
   int segments_per_row_ = 0;
   double max_table_error_px_ = 0.0;
+  double window_fraction_ = 0.0;
+  RemapKernel kernel_ = RemapKernel::kPortable;
   bool identity_ = false;
   bool configured_ = false;
   Table table_[2];
