@@ -229,6 +229,12 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
   // of one pixel (ray root, texture, noise) overlaps with its neighbours' in the CPU.
   double hit_t[kTile * kTile];
   double tile_dn[kTile * kTile];
+  // Plain ground, one sample per pixel: the hit points' texture four at a time
+  // (Appearance::Radiance4) after the shading pass has gathered them.
+  double hit_x[kTile * kTile];
+  double hit_y[kTile * kTile];
+  double footprint[kTile * kTile];
+  const bool four_points = one_sample && plain;
   auto render_tile = [&](std::int32_t u0, std::int32_t v0, std::int32_t u1, std::int32_t v1) {
     const TileRange tile = tile_range(u0, v0, u1, v1);
     const std::int32_t tw = u1 - u0 + 1;
@@ -262,6 +268,13 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
         const double footprint_m =
             t * std::sqrt(static_cast<float>(xn * xn + yn * yn + 1.0)) * inv_fx;
         double radiance = 0.0;
+        if (four_points) {  // the texture below, four points at a time
+          const Eigen::Vector3d p = center + t * dir;
+          hit_x[q] = p.x();
+          hit_y[q] = p.y();
+          footprint[q] = footprint_m;
+          continue;
+        }
         if (one_sample) {
           radiance = shade(center + t * dir, footprint_m);
         } else {
@@ -274,6 +287,27 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
           }
         }
         tile_dn[q] = exposure_dn * radiance;
+      }
+    }
+    if (four_points) {
+      const std::int32_t n = tw * (v1 - v0 + 1);
+      for (std::int32_t q = 0; q < n; q += 4) {
+        const std::int32_t m = std::min<std::int32_t>(4, n - q);
+        double x[4];
+        double y[4];
+        double f[4];
+        for (std::int32_t k = 0; k < 4; ++k) {
+          // Misses (and lanes past the end) sample a valid point; their result is dropped.
+          const bool use = k < m && hit_t[q + k] == hit_t[q + k];
+          x[k] = use ? hit_x[q + k] : center.x();
+          y[k] = use ? hit_y[q + k] : center.y();
+          f[k] = use ? footprint[q + k] : 1.0;
+        }
+        double radiance[4];
+        appearance.Radiance4(x, y, f, radiance);
+        for (std::int32_t k = 0; k < m; ++k) {
+          if (hit_t[q + k] == hit_t[q + k]) tile_dn[q + k] = exposure_dn * radiance[k];
+        }
       }
     }
     for (std::int32_t v = v0; v <= v1; ++v) {

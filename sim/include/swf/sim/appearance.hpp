@@ -55,6 +55,10 @@ class Appearance {
 
   // Radiance factor at a world point; footprint_m is the ground size of one pixel there.
   double Radiance(double x_m, double y_m, double footprint_m) const;
+  // Radiance at four points at once: the same texture, its octaves evaluated one point per lane
+  // of 4-lane vectors (an octave costs a few vector operations for all four).
+  void Radiance4(const double* x_m, const double* y_m, const double* footprint_m,
+                 double* radiance) const;
 
   // Per-node grids (row-major like Terrain::Heights()).
   const std::vector<float>& Albedo() const { return albedo_; }
