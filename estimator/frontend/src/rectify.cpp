@@ -218,6 +218,21 @@ __attribute__((target("avx2"))) void RemapAvx2(const RemapJob& job) {
   // lane): the column / row of half h in 128-bit lane h.
   const M256 column_of = _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 2, 3, 2,
                                           3, 2, 3, 2, 3, 2, 3, 2, 3, 2, 3, 2, 3);
+  // Constants kept in memory: GCC otherwise rebuilds each broadcast constant inside the loop
+  // (mov, vmovd, vpbroadcast) for lack of registers; the empty asm hides their values, so they stay
+  // memory operands.
+  alignas(32) M256 bytes_of[3] = {_mm256_set1_epi8(static_cast<char>(0x80)),
+                                  _mm256_set1_epi32(kWeightOne - 1), _mm256_set1_epi16(kWeightOne)};
+  alignas(32) V16s signed_of[2] = {V16s{} + 0xFF, V16s{} + kWeightOne / 2};
+  alignas(32) V16u unsigned_of[2] = {V16u{} + 0x8080, V16u{} + 256};
+  asm("" : : "r"(bytes_of), "r"(signed_of), "r"(unsigned_of) : "memory");
+  const M256& bias = bytes_of[0];
+  const M256& frac = bytes_of[1];
+  const M256& one = bytes_of[2];
+  const V16s& low_byte = signed_of[0];
+  const V16s& half = signed_of[1];
+  const V16u& select = unsigned_of[0];
+  const V16u& next = unsigned_of[1];
   const M256 row_of = _mm256_setr_epi8(4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 6, 7, 6, 7,
                                        6, 7, 6, 7, 6, 7, 6, 7, 6, 7, 6, 7);
   for (int v = 0; v < job.height; ++v) {
@@ -255,9 +270,10 @@ __attribute__((target("avx2"))) void RemapAvx2(const RemapJob& job) {
         const M256 origins = _mm256_set1_epi64x(origin);
         const auto cx0 = reinterpret_cast<V16u>(_mm256_shuffle_epi8(origins, column_of));
         const auto cy0 = reinterpret_cast<V16u>(_mm256_shuffle_epi8(origins, row_of));
-        V16u idx_a;
-        V16u idx_b;
-        WindowIndices(cx - cx0, cy - cy0, &idx_a, &idx_b);
+        // WindowIndices with the constants above.
+        const V16u dx = cx - cx0;
+        const V16u idx_a = ((dx << 8) + dx + next) | ((cy - cy0) * select);
+        const V16u idx_b = idx_a ^ select;
         const std::uint8_t* p0 =
             src + static_cast<std::ptrdiff_t>(seg.window[2]) * stride + seg.window[0];
         const std::uint8_t* p1 =
@@ -270,29 +286,31 @@ __attribute__((target("avx2"))) void RemapAvx2(const RemapJob& job) {
                                             reinterpret_cast<const M128*>(p0 + 2 * stride));
         const auto ia = reinterpret_cast<M256>(idx_a);
         const auto ib = reinterpret_cast<M256>(idx_b);
-        const auto t = reinterpret_cast<V16u>(
-            _mm256_or_si256(_mm256_shuffle_epi8(r0, ia), _mm256_shuffle_epi8(r1, ib)));
-        const auto b = reinterpret_cast<V16u>(
-            _mm256_or_si256(_mm256_shuffle_epi8(r1, ia), _mm256_shuffle_epi8(r2, ib)));
-        const auto ax = reinterpret_cast<V16s>(
-            _mm256_packs_epi32(reinterpret_cast<M256>(fx_lo & (kWeightOne - 1)),
-                               reinterpret_cast<M256>(fx_hi & (kWeightOne - 1))));
+        // Tap pairs with 128 subtracted (x ^ 0x80: signed bytes), so that the horizontal blend is
+        // one unsigned-by-signed byte multiply-add: upper' = p0' (128 - ax) + p1' ax = upper - 2^14
+        // in [-2^14, 2^14 - 128]; the vertical step of Blend8 is exact on these (|d| unchanged,
+        // floor division by arithmetic shifts), and the result comes out 128 lower.
+        const M256 t = _mm256_xor_si256(
+            _mm256_or_si256(_mm256_shuffle_epi8(r0, ia), _mm256_shuffle_epi8(r1, ib)), bias);
+        const M256 b = _mm256_xor_si256(
+            _mm256_or_si256(_mm256_shuffle_epi8(r1, ia), _mm256_shuffle_epi8(r2, ib)), bias);
+        const M256 ax = _mm256_packs_epi32(_mm256_and_si256(reinterpret_cast<M256>(fx_lo), frac),
+                                           _mm256_and_si256(reinterpret_cast<M256>(fx_hi), frac));
         const auto ay = reinterpret_cast<V16s>(
-            _mm256_packs_epi32(reinterpret_cast<M256>(fy_lo & (kWeightOne - 1)),
-                               reinterpret_cast<M256>(fy_hi & (kWeightOne - 1))));
-        // Blend8 on 16 lanes.
-        const V16s bx = kWeightOne - ax;
-        const V16s upper =
-            reinterpret_cast<V16s>(t & 0xFF) * bx + reinterpret_cast<V16s>(t >> 8) * ax;
-        const V16s lower =
-            reinterpret_cast<V16s>(b & 0xFF) * bx + reinterpret_cast<V16s>(b >> 8) * ax;
+            _mm256_packs_epi32(_mm256_and_si256(reinterpret_cast<M256>(fy_lo), frac),
+                               _mm256_and_si256(reinterpret_cast<M256>(fy_hi), frac)));
+        // Weight bytes (128 - ax, ax) per pixel.
+        const M256 wx = _mm256_or_si256(_mm256_sub_epi16(one, ax), _mm256_slli_epi16(ax, 8));
+        const auto upper = reinterpret_cast<V16s>(_mm256_maddubs_epi16(wx, t));
+        const auto lower = reinterpret_cast<V16s>(_mm256_maddubs_epi16(wx, b));
         const V16s d = lower - upper;
-        const V16s mid = upper + (((d >> 8) * ay) << 1) + (((d & 0xFF) * ay) >> kWeightBits);
-        const V16s result = (mid + (kWeightOne / 2)) >> kWeightBits;
-        // Results are 0 .. 255, so the saturating pack is exact; keep the low 8 bytes of each half.
-        const M256 bytes = _mm256_permute4x64_epi64(
-            _mm256_packus_epi16(reinterpret_cast<M256>(result), reinterpret_cast<M256>(result)),
-            0x08);
+        const V16s mid = upper + (((d >> 8) * ay) << 1) + (((d & low_byte) * ay) >> kWeightBits);
+        const V16s result = (mid + half) >> kWeightBits;  // -128 .. 127
+        const M256 bytes = _mm256_xor_si256(
+            _mm256_permute4x64_epi64(
+                _mm256_packs_epi16(reinterpret_cast<M256>(result), reinterpret_cast<M256>(result)),
+                0x08),
+            bias);
         _mm_storeu_si128(reinterpret_cast<M128*>(o + u0), _mm256_castsi256_si128(bytes));
       } else if (job.kind[row + s] == SegmentKind::kInside) {
         alignas(16) std::uint8_t bytes[kSegment];
@@ -555,6 +573,7 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
     const auto fast_x = static_cast<float>((cal.width - 1) * kWeightOne);
     const auto fast_y = static_cast<float>((cal.height - 1) * kWeightOne);
     for (int v = 0; v < h; ++v) {
+      table.row_inside[v] = true;
       for (int s = 0; s < segments_per_row_; ++s) {
         const std::size_t index = static_cast<std::size_t>(v) * segments_per_row_ + s;
         Segment& seg = table.segment[index];
@@ -572,6 +591,7 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
         if (!visible) {  // part of the segment is behind the camera: no source at all
           seg = Segment{};
           table.kind[index] = SegmentKind::kOutside;
+          table.row_inside[v] = false;
           identity_ = false;
           continue;
         }
@@ -611,6 +631,7 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
         table.kind[index] = all_fast     ? SegmentKind::kInside
                             : any_source ? SegmentKind::kMixed
                                          : SegmentKind::kOutside;
+        table.row_inside[v] = table.row_inside[v] && all_fast;
         if (all_fast && len == kSegment && WindowSegment(&seg, cal.width, cal.height)) {
           table.kind[index] = SegmentKind::kWindow;
           ++windows;
@@ -658,6 +679,7 @@ void StereoRectifier::RemapOne(const GrayView& raw, const Table& table,
   const int max_x = raw.width - 1;
   const int max_y = raw.height - 1;
   for (int v = 0; v < height_; ++v) {
+    if (table.row_inside[v]) continue;
     const std::size_t row = static_cast<std::size_t>(v) * segments_per_row_;
     const Segment* segs = table.segment + row;
     const SegmentKind* kinds = table.kind + row;

@@ -121,6 +121,7 @@ class StereoRectifier {
   struct Table {
     Segment segment[kMaxSegments];
     SegmentKind kind[kMaxSegments];
+    bool row_inside[kMaxImageHeight];  // every segment of the row is kInside or kWindow
   };
   void RemapOne(const GrayView& raw, const Table& table, const MutableGrayView& out) const;
 
