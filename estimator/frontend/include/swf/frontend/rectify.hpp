@@ -14,16 +14,18 @@
 // Table: each output row is cut into segments of kSegment pixels; per segment the raw source
 // coordinate is a quadratic in the pixel index k, c0 + k (c1 + k c2) (single precision, in
 // 1/128 px with the rounding offset folded into c0, through the exact map at the segment's first,
-// middle and last pixel), 24 bytes per 16 pixels instead of a per-pixel entry. Configure measures
-// the largest distance between this and the exact map over every output pixel whose source is
-// inside the raw image (MaxTableErrorPx; 0.00015 / 0.00025 px for the benchmark / EuRoC rigs). A
-// segment with a pixel behind a camera has no source at all. Per frame and row: the coordinates of
-// a whole row are evaluated with 4-lane float vectors and rounded to 1/128 px, the 2x2 source bytes
-// are gathered with two 16-bit loads per pixel, and the blend runs in 8 x 16-bit lanes (GCC vector
-// extensions: SSE2 on x86-64, NEON on AArch64). The blend is exact integer arithmetic: out =
-// round((top (128 - wy) + bottom wy) / 2^14), top/bottom = p0 (128 - wx) + p1 wx. A rig whose table
-// rounds every output pixel to itself (already rectified: the simulator) is copied row by row,
-// which is the output the table would give.
+// middle and last pixel), 32 bytes per 16 pixels (with the window origin below) instead of a
+// per-pixel entry. Configure measures the largest distance between this and the exact map over
+// every output pixel whose source is inside the raw image (MaxTableErrorPx; 0.00015 / 0.00025 px
+// for the benchmark / EuRoC rigs). A segment with a pixel behind a camera has no source at all.
+// Per frame: the coordinates are evaluated with float vectors (the same operations as the scalar
+// check) and rounded to 1/128 px, the 2x2 source bytes are fetched, and the blend runs in 16-bit
+// lanes. It is exact integer arithmetic: out = round((top (128 - wy) + bottom wy) / 2^14),
+// top/bottom = p0 (128 - wx) + p1 wx, so every kernel (RemapKernel) gives the same bytes. The
+// portable kernel (GCC vector extensions) fetches the taps with two 16-bit loads per pixel; the
+// SSSE3 / AVX2 / NEON kernels fetch those of a kWindow segment from three 16-byte rows with byte
+// shuffles. A rig whose table rounds every output pixel to itself (already rectified: the
+// simulator) is copied row by row, which is the output the table would give.
 #pragma once
 
 #include <cstdint>
