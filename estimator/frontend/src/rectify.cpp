@@ -161,22 +161,35 @@ __attribute__((target("ssse3"))) inline V8b WindowHalfSsse3(const Coords8& c, in
   const M128 r2 = _mm_loadu_si128(reinterpret_cast<const M128*>(p + 2 * stride));
   const auto ia = reinterpret_cast<M128>(idx_a);
   const auto ib = reinterpret_cast<M128>(idx_b);
-  const auto t =
-      reinterpret_cast<V8u>(_mm_or_si128(_mm_shuffle_epi8(r0, ia), _mm_shuffle_epi8(r1, ib)));
-  const auto b =
-      reinterpret_cast<V8u>(_mm_or_si128(_mm_shuffle_epi8(r1, ia), _mm_shuffle_epi8(r2, ib)));
-  const auto ax =
-      reinterpret_cast<V8s>(_mm_packs_epi32(reinterpret_cast<M128>(c.fx_lo & (kWeightOne - 1)),
-                                            reinterpret_cast<M128>(c.fx_hi & (kWeightOne - 1))));
+  // Blend8 with the horizontal step as one byte multiply-add on taps offset by -128 (exact; the
+  // AVX2 kernel's comment).
+  const M128 bias = _mm_set1_epi8(static_cast<char>(0x80));
+  const M128 t =
+      _mm_xor_si128(_mm_or_si128(_mm_shuffle_epi8(r0, ia), _mm_shuffle_epi8(r1, ib)), bias);
+  const M128 b =
+      _mm_xor_si128(_mm_or_si128(_mm_shuffle_epi8(r1, ia), _mm_shuffle_epi8(r2, ib)), bias);
+  const M128 ax = _mm_packs_epi32(reinterpret_cast<M128>(c.fx_lo & (kWeightOne - 1)),
+                                  reinterpret_cast<M128>(c.fx_hi & (kWeightOne - 1)));
   const auto ay =
       reinterpret_cast<V8s>(_mm_packs_epi32(reinterpret_cast<M128>(c.fy_lo & (kWeightOne - 1)),
                                             reinterpret_cast<M128>(c.fy_hi & (kWeightOne - 1))));
-  return Blend8(t, b, ax, ay);
+  const M128 wx =
+      _mm_or_si128(_mm_sub_epi16(_mm_set1_epi16(kWeightOne), ax), _mm_slli_epi16(ax, 8));
+  const auto upper = reinterpret_cast<V8s>(_mm_maddubs_epi16(wx, t));
+  const auto lower = reinterpret_cast<V8s>(_mm_maddubs_epi16(wx, b));
+  const V8s d = lower - upper;
+  const V8s mid = upper + (((d >> 8) * ay) << 1) + (((d & 0xFF) * ay) >> kWeightBits);
+  const V8s result = (mid + (kWeightOne / 2)) >> kWeightBits;  // -128 .. 127
+  const M128 bytes = _mm_xor_si128(
+      _mm_packs_epi16(reinterpret_cast<M128>(result), reinterpret_cast<M128>(result)), bias);
+  V8b out;
+  std::memcpy(&out, &bytes, sizeof(out));
+  return out;
 }
 
 // SSSE3 kernel: kWindow segments by shuffles, kInside by 16-bit gathers; the rest is left to the
 // per-pixel pass.
-__attribute__((target("ssse3"))) void RemapSsse3(const RemapJob& job) {
+__attribute__((target("ssse3"))) void RemapSsse3(RemapJob job) {  // a copy: o aliases anything
   const std::uint8_t* src = job.raw->data;
   const std::int32_t stride = job.raw->stride;
   for (int v = 0; v < job.height; ++v) {
@@ -208,7 +221,7 @@ using M256 = __m256i;
 
 // AVX2 kernel: a kWindow segment in one pass of 16 lanes (128-bit half h of each register holds
 // pixels 8h .. 8h + 7, as the in-lane byte shuffle and pack need).
-__attribute__((target("avx2"))) void RemapAvx2(const RemapJob& job) {
+__attribute__((target("avx2"))) void RemapAvx2(RemapJob job) {  // a copy: o aliases anything
   const std::uint8_t* src = job.raw->data;
   const std::int32_t stride = job.raw->stride;
   // Pixel index of each lane: the pack of (lo, hi) interleaves 128-bit halves.
@@ -324,7 +337,7 @@ __attribute__((target("avx2"))) void RemapAvx2(const RemapJob& job) {
 
 #if defined(__aarch64__)
 // NEON kernel: the SSSE3 kernel's window halves with TBL (indices >= 16 give 0).
-void RemapNeon(const RemapJob& job) {
+void RemapNeon(RemapJob job) {  // a copy: o aliases anything
   const std::uint8_t* src = job.raw->data;
   const std::int32_t stride = job.raw->stride;
   for (int v = 0; v < job.height; ++v) {
