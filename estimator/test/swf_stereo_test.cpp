@@ -201,12 +201,16 @@ TEST(SwfStereo, HuberWeightingResistsGrossOutliers) {
   EXPECT_LT(e_robust, 0.8 * e_plain);
 }
 
-// Outliers displaced in random directions also corrupt disparity. A landmark initialized from
-// such a measurement can start kilometres beyond the terrain; as a world point its later
-// measurements then barely constrain its depth (dh/dZ ~ 1/Z^2), Huber down-weights them and the
-// landmark stays there. Two defences, measured here: inverse depth (the measurement is nearly
-// linear in rho, so the inliers pull the landmark back) and refusing initial depths beyond what
-// the scene can hold (max_init_depth_m; the scene is at most ~101 m away).
+// A landmark initialized from a corrupted first stereo measurement. As a world point started
+// far beyond the terrain, its later measurements barely constrain its depth (dh/dZ ~ 1/Z^2),
+// Huber down-weights them and the landmark stays there. Two defences, measured here: inverse
+// depth (the measurement is nearly linear in rho, so the inliers pull the landmark back) and
+// refusing initial depths beyond what the scene can hold (max_init_depth_m; the scene is at most
+// ~101 m away). The corruption is constructed, not drawn: which landmark a random draw turns
+// into a far start depends on the last bits of the scene's noise, which differ between x86-64
+// and AArch64 libm (a draw that sent one landmark 1e5 m away on one went unnoticed on the other).
+//   far:  every 10th landmark's first sighting gets 0.05 px of disparity (~46 km away),
+//   near: every 10th (offset 5) gets half its disparity (twice as far, still inside the gate).
 TEST(SwfStereo, CorruptedFirstMeasurementsAreContained) {
   SceneOptions so;
   so.frames = 20;
@@ -214,47 +218,41 @@ TEST(SwfStereo, CorruptedFirstMeasurementsAreContained) {
   SyntheticScene clean(so);
   const SwfOptions robust = ModeOptions(SwfMode::kSlidingWindow);
   const double e_clean = RunScene(std::make_unique<StereoSwf<5>>().get(), clean, robust).rms_m;
-  double e_xyz = 0;
-  double e_inv = 0;
-  double e_xyz_gate = 0;
-  double e_inv_gate = 0;
-  for (std::uint64_t seed : {42u, 43u, 44u}) {
-    auto corrupted = clean;
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    std::normal_distribution<double> gauss(0.0, 1.0);
-    for (auto& f : corrupted.mutable_frames())
-      for (auto& o : f.obs)
-        if (unit(rng) < 0.1) {
-          const Vec3<double> d(gauss(rng), gauss(rng), gauss(rng));
-          o.z += 30.0 * d.normalized();
-        }
-    const double x = RunScene(std::make_unique<StereoSwf<5>>().get(), corrupted, robust).rms_m;
-    const double i =
-        RunScene(std::make_unique<InverseDepthSwf<5>>().get(), corrupted, robust).rms_m;
-    const double xg =
-        RunScene(std::make_unique<StereoSwf<5>>().get(), corrupted, robust, false, 300.0).rms_m;
-    const double ig =
-        RunScene(std::make_unique<InverseDepthSwf<5>>().get(), corrupted, robust, false, 300.0)
-            .rms_m;
-    std::printf(
-        "random-direction outliers, draw %d: world point %.4g, inverse depth %.4g, with the "
-        "300 m gate %.4g / %.4g m\n",
-        static_cast<int>(seed), x, i, xg, ig);
-    e_xyz += x / 3;
-    e_inv += i / 3;
-    e_xyz_gate += xg / 3;
-    e_inv_gate += ig / 3;
-  }
+  auto corrupted = clean;
+  std::vector<bool> seen(clean.landmarks().size(), false);
+  int far = 0;
+  int near = 0;
+  for (auto& f : corrupted.mutable_frames())
+    for (auto& o : f.obs) {
+      if (seen[o.id]) continue;
+      seen[o.id] = true;
+      const double disparity = o.z[0] - o.z[1];
+      if (o.id % 10 == 0) {
+        o.z[1] = o.z[0] - 0.05;
+        ++far;
+      } else if (o.id % 10 == 5) {
+        o.z[1] = o.z[0] - 0.5 * disparity;
+        ++near;
+      }
+    }
+  ASSERT_GT(far, 3);
+  ASSERT_GT(near, 3);
+  auto rms = [&](auto filter, double gate_m) {
+    return RunScene(filter.get(), corrupted, robust, false, gate_m).rms_m;
+  };
+  const double e_xyz = rms(std::make_unique<StereoSwf<5>>(), 0.0);
+  const double e_inv = rms(std::make_unique<InverseDepthSwf<5>>(), 0.0);
+  const double e_xyz_gate = rms(std::make_unique<StereoSwf<5>>(), 300.0);
+  const double e_inv_gate = rms(std::make_unique<InverseDepthSwf<5>>(), 300.0);
   std::printf(
-      "random-direction outliers (means): clean %.4f, world point %.4g, inverse depth %.4g, "
-      "gated %.4g / %.4g m\n",
-      e_clean, e_xyz, e_inv, e_xyz_gate, e_inv_gate);
-  // Measured: clean 0.486 m; world point 4.1e4 m, inverse depth 56 m; gated: world point 22 m
-  // (one landmark started at < 300 m but still wrong stays 66 m off in draw 42), inverse depth
-  // 0.67 m. Only the two together contain every draw.
-  EXPECT_LT(e_inv, 0.1 * e_xyz);
-  EXPECT_LT(e_inv_gate, 0.2 * e_xyz_gate);
+      "corrupted first sightings (%d far, %d near): clean %.4f m, world point %.4g m, inverse "
+      "depth %.4g m, with the 300 m gate %.4g / %.4g m\n",
+      far, near, e_clean, e_xyz, e_inv, e_xyz_gate, e_inv_gate);
+  // Measured (x86-64): clean 0.486 m; world point 2.5e6 m (the far starts drift further out),
+  // inverse depth 0.75 m; gated 0.61 / 0.62 m. The near corruption is recovered by both.
+  EXPECT_GT(e_xyz, 100.0);
+  EXPECT_LT(e_inv, 2.0 * e_clean);
+  EXPECT_LT(e_xyz_gate, 2.0 * e_clean);
   EXPECT_LT(e_inv_gate, 2.0 * e_clean);
 }
 
