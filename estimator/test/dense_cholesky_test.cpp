@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <random>
@@ -84,6 +85,44 @@ TEST(DenseCholesky, IsDeterministic) {
     ASSERT_EQ(chol->Factorize(), core::Status::kOk);
   }
   EXPECT_EQ(std::memcmp(x1.data(), x2.data(), sizeof(double) * 190), 0);
+}
+
+// Every kernel the CPU can run gives the same factor and solution bits as the portable one
+// (same per-element operation order, no fused multiply-add), across panel and chunk boundaries.
+TEST(DenseCholesky, EveryKernelMatchesPortableBitForBit) {
+  using Chol = DenseCholesky<double, 300>;
+  auto portable = std::make_unique<Chol>();
+  auto other = std::make_unique<Chol>();
+  ASSERT_TRUE(portable->SetKernel(Chol::Kernel::kPortable));
+  EXPECT_FALSE(portable->UsesAvx());
+  if (!other->SetKernel(Chol::Kernel::kAvx)) {
+    std::printf("no AVX on this CPU: only the portable kernel runs here\n");
+    ASSERT_TRUE(other->SetKernel(Chol::Kernel::kAuto));
+    EXPECT_FALSE(other->UsesAvx());
+  }
+  std::printf("compared kernel: %s\n", other->UsesAvx() ? "AVX" : "portable");
+  for (int n : {5, 8, 136, 137, 260, 300}) {
+    const Eigen::MatrixXd a = RandomSpd(n, 100 + static_cast<std::uint64_t>(n));
+    Eigen::VectorXd x1 = Eigen::VectorXd::LinSpaced(n, -1.0, 2.0);
+    Eigen::VectorXd x2 = x1;
+    for (Chol* c : {portable.get(), other.get()}) {
+      c->Reset(n);
+      for (int j = 0; j < n; ++j)
+        for (int i = j; i < n; ++i) c->At(i, j) = a(i, j);
+      ASSERT_EQ(c->Factorize(), core::Status::kOk);
+    }
+    int differing = 0;
+    for (int j = 0; j < n; ++j)
+      for (int i = j; i < n; ++i) {
+        const double u = portable->At(i, j);
+        const double v = other->At(i, j);
+        differing += std::memcmp(&u, &v, sizeof(double)) != 0 ? 1 : 0;
+      }
+    EXPECT_EQ(differing, 0) << n;
+    portable->SolveInPlace(x1.data());
+    other->SolveInPlace(x2.data());
+    EXPECT_EQ(std::memcmp(x1.data(), x2.data(), sizeof(double) * n), 0) << n;
+  }
 }
 
 // Blocks straddling the 8-row panels (6x6 pose blocks at 6 j, 3x3 landmark blocks) and the

@@ -6,6 +6,8 @@
 //   Cholesky/<impl>/<n>: the reduced system's dense factorization alone (fill + factor of an SPD
 //     n x n matrix): DenseCholesky (flight) and Eigen::LLT<MatrixXd> (reference, heap-allocating,
 //     benchmark only), with GFlop/s = (n^3 / 3) / CPU time. n = 510 is Fig13Update's dense_dim.
+//   Cholesky_Dense/<n>/<kernel>: 0 = picked at construction, 1 = portable, 2 = AVX.
+//   CholeskyKernelRatio/<n>: the picked kernel against the portable one in the same iteration.
 //   CholeskyRatio/<n>: both in the same iteration, interleaved; ratio = Eigen CPU / Dense CPU,
 //     so machine load cancels out.
 //   KittiVo/swf, KittiVo/ceres: the kitti-vo batch problem solved by swf-vo's solver and by Ceres
@@ -207,11 +209,18 @@ void FactorEigen(Eigen::LLT<Eigen::MatrixXd>* llt, const Eigen::MatrixXd& a) {
   if (llt->info() != Eigen::Success) std::abort();
 }
 
+// Kernel argument: 0 = the one Configure picks (AVX where the CPU has it), 1 = portable 2-wide,
+// 2 = AVX (skipped where the CPU has none).
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Cholesky_Dense(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const Eigen::MatrixXd a = RandomSpd(n);
   auto chol = std::make_unique<Dense540>();
+  const auto kernel = static_cast<Dense540::Kernel>(state.range(1));
+  if (!chol->SetKernel(kernel)) {
+    state.SkipWithError("kernel not supported by this CPU");
+    return;
+  }
   for (auto _ : state) {
     FactorDense(chol.get(), a);
     benchmark::ClobberMemory();
@@ -219,7 +228,43 @@ void BM_Cholesky_Dense(benchmark::State& state) {
   state.counters["GFlop/s"] =
       benchmark::Counter(FlopsOfCholesky(n) * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_Cholesky_Dense)->Arg(120)->Arg(510)->Unit(benchmark::kMillisecond)->Repetitions(5);
+BENCHMARK(BM_Cholesky_Dense)
+    ->ArgsProduct({{120, 510}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(5);
+
+// The picked kernel against the portable one, interleaved in the same iteration (the ratio
+// does not depend on the machine's load); ratio = portable CPU / picked CPU.
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_CholeskyKernelRatio(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Eigen::MatrixXd a = RandomSpd(n);
+  auto picked = std::make_unique<Dense540>();
+  auto portable = std::make_unique<Dense540>();
+  (void)portable->SetKernel(Dense540::Kernel::kPortable);
+  double picked_s = 0.0;
+  double portable_s = 0.0;
+  for (auto _ : state) {
+    const double t0 = ThreadCpuSeconds();
+    FactorDense(picked.get(), a);
+    const double t1 = ThreadCpuSeconds();
+    FactorDense(portable.get(), a);
+    const double t2 = ThreadCpuSeconds();
+    picked_s += t1 - t0;
+    portable_s += t2 - t1;
+    benchmark::ClobberMemory();
+  }
+  const auto iterations = static_cast<double>(state.iterations());
+  state.counters["picked_ms"] = 1e3 * picked_s / iterations;
+  state.counters["portable_ms"] = 1e3 * portable_s / iterations;
+  state.counters["picked_is_avx"] = picked->UsesAvx() ? 1 : 0;
+  state.counters["ratio_portable_over_picked"] = portable_s / picked_s;
+}
+BENCHMARK(BM_CholeskyKernelRatio)
+    ->Arg(120)
+    ->Arg(510)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(5);
 
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Cholesky_EigenLlt(benchmark::State& state) {
