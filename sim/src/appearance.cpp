@@ -418,7 +418,15 @@ void Appearance::Radiance4(const double* x_m, const double* y_m, const double* f
   const V4f cfy = __builtin_convertvector(hy - __builtin_convertvector(dj, V4d), V4f);
   V4d footprint;
   std::memcpy(&footprint, footprint_m, sizeof(footprint));
-  V4f lane_ratio = static_cast<float>(cell_m_) / __builtin_convertvector(footprint, V4f);
+  const V4f detail = Detail4(di, dj, cfx, cfy,
+                             static_cast<float>(cell_m_) / __builtin_convertvector(footprint, V4f));
+  V4f factor = 1.0f + detail;
+  factor = factor < 0.05f ? 0.05f : factor;
+  const V4d out = __builtin_convertvector(base * factor, V4d);
+  std::memcpy(radiance, &out, sizeof(out));
+}
+
+inline Appearance::V4f Appearance::Detail4(V4i di, V4i dj, V4f cfx, V4f cfy, V4f lane_ratio) const {
   const V4i mask = {kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1};
   const float* lattice = lattice_.data();
   V4f detail = {0.0f, 0.0f, 0.0f, 0.0f};
@@ -465,10 +473,60 @@ void Appearance::Radiance4(const double* x_m, const double* y_m, const double* f
     const V4f lower = v01 + rx * (v11 - v01);
     detail += w * octave_amplitude_[o / 4][o % 4] * (upper + ry * (lower - upper));
   }
+  return detail;
+}
+
+Appearance::V4f Appearance::Radiance4Grid(std::int32_t base_i, std::int32_t base_j, V4f gx, V4f gy,
+                                          V4f footprint_m) const {
+  // As Radiance4 with the grid split done in float: floor of a relative position and its fraction
+  // (exact: the integer part of a float is subtracted without rounding).
+  auto floor_i = [](V4f x) {
+    const V4i i = __builtin_convertvector(x, V4i);
+    return i + (__builtin_convertvector(i, V4f) > x);  // -1 where truncation rounded up
+  };
+  const std::int32_t last = size_ - 2;
+  auto clamp_i = [&](V4i i) {
+    i = i < 0 ? V4i{0, 0, 0, 0} : i;
+    return i > last ? V4i{last, last, last, last} : i;
+  };
+  const V4i ki = floor_i(gx);
+  const V4i kj = floor_i(gy);
+  const V4f fx = gx - __builtin_convertvector(ki, V4f);
+  const V4f fy = gy - __builtin_convertvector(kj, V4f);
+  const V4i i = clamp_i(ki + base_i);
+  const V4i j = clamp_i(kj + base_j);
+  // Per lane the node pairs (s00, s10) and (s01, s11) are adjacent floats: 8-byte loads into the
+  // halves of 16-byte registers, then de-interleaved (as in Detail4).
+  const float* const shaded = shaded_.data();
+  const std::int32_t stride = size_;
+  auto pair = [&](int lane, std::int32_t offset) {
+    double q = 0.0;
+    std::memcpy(&q, shaded + static_cast<size_t>(j[lane]) * stride + i[lane] + offset, sizeof(q));
+    return q;
+  };
+  const auto low01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
+  const auto low23 = reinterpret_cast<V4f>(V2d{pair(2, 0), pair(3, 0)});
+  const auto high01 = reinterpret_cast<V4f>(V2d{pair(0, stride), pair(1, stride)});
+  const auto high23 = reinterpret_cast<V4f>(V2d{pair(2, stride), pair(3, stride)});
+  const V4f a00 = __builtin_shufflevector(low01, low23, 0, 2, 4, 6);
+  const V4f a10 = __builtin_shufflevector(low01, low23, 1, 3, 5, 7);
+  const V4f a01 = __builtin_shufflevector(high01, high23, 0, 2, 4, 6);
+  const V4f a11 = __builtin_shufflevector(high01, high23, 1, 3, 5, 7);
+  const V4f top = a00 + fx * (a10 - a00);
+  const V4f bottom = a01 + fx * (a11 - a01);
+  const V4f base = top + fy * (bottom - top);
+  // The detail lattice sits half a cell off the nodes.
+  const V4f hx = gx + 0.5f;
+  const V4f hy = gy + 0.5f;
+  const V4i dx = floor_i(hx);
+  const V4i dy = floor_i(hy);
+  const V4f cfx = hx - __builtin_convertvector(dx, V4f);
+  const V4f cfy = hy - __builtin_convertvector(dy, V4f);
+  const V4f detail =
+      Detail4(dx + base_i, dy + base_j, cfx, cfy, static_cast<float>(cell_m_) / footprint_m);
   V4f factor = 1.0f + detail;
   factor = factor < 0.05f ? 0.05f : factor;
-  const V4d out = __builtin_convertvector(base * factor, V4d);
-  std::memcpy(radiance, &out, sizeof(out));
+  return base * factor;
 }
 
 }  // namespace swf::sim

@@ -2,12 +2,38 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "swf/sim/rng.hpp"
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+#include <arm_neon.h>
+#endif
+
 namespace swf::sim {
 namespace {
+
+using V4f = Terrain::V4f;
+using V4i = Terrain::V4i;
+
+V4f SqrtLanes(V4f x) {
+#if defined(__SSE2__)
+  return _mm_sqrt_ps(x);
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+  return vsqrtq_f32(x);
+#else
+  return V4f{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+V4f LoadLanes(const float* p) {
+  V4f v;
+  std::memcpy(&v, p, sizeof(v));
+  return v;
+}
 
 // 4096 values (16 KB) stay in the L1 cache; a 64 K table (256 KB) missed it on every pixel.
 constexpr std::size_t kGaussianTableSize = 1u << 12;
@@ -186,8 +212,6 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
   // cast for the four rays of pixels u .. u + 3 of a row in a tile inside the terrain, in single
   // precision (Terrain::IntersectSpan4; grid positions relative to the node under the camera);
   // a ray that needs the pyramid walk is cast again by cast.
-  using V4f = Terrain::V4f;
-  using V4i = Terrain::V4i;
   Terrain::GridRays4 rays4{};
   rays4.base_i = static_cast<std::int32_t>(std::floor(gx0));
   rays4.base_j = static_cast<std::int32_t>(std::floor(gy0));
@@ -235,8 +259,8 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
   double hit_y[kTile * kTile];
   double footprint[kTile * kTile];
   const bool four_points = one_sample && plain;
-  auto render_tile = [&](std::int32_t u0, std::int32_t v0, std::int32_t u1, std::int32_t v1) {
-    const TileRange tile = tile_range(u0, v0, u1, v1);
+  auto render_tile = [&](std::int32_t u0, std::int32_t v0, std::int32_t u1, std::int32_t v1,
+                         const TileRange& tile) {
     const std::int32_t tw = u1 - u0 + 1;
     for (std::int32_t v = v0; v <= v1; ++v) {
       const double yn = (v - cy) * inv_fy;
@@ -332,10 +356,148 @@ void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance
     }
   };
 
+  // Plain ground, one sample per pixel, a tile inside the terrain whose rows split into groups of
+  // four pixels (all tiles of a 1024x768 image): rays, texture, noise and output in 4-lane
+  // single-precision vectors, one pixel per lane, with hit points in grid units relative to the
+  // node under the camera (Appearance::Radiance4Grid on the terrain's grid).
+  const bool vector_tiles = four_points && appearance.OriginM() == terrain.NodeX(0) &&
+                            appearance.CellM() == terrain.CellM();
+  const auto exposure_f = static_cast<float>(exposure_dn);
+  const auto read_var_f = static_cast<float>(read_var);
+  const auto inv_e_per_dn_f = static_cast<float>(inv_e_per_dn);
+  const float* const gaussian_table = gaussian;
+  float tile_t[kTile * kTile];
+  // Rays of the tile that cross into a neighbour cell and miss the first one: their second cells
+  // are solved four at a time after the tile's rays (instead of one mostly empty vector per group
+  // that has any).
+  std::int32_t pending_q[kTile * kTile];
+  V4f pending_ray[kTile * kTile];  // dgx, dgy, dz, tb
+  float pending_t0[kTile * kTile];
+  std::int32_t pending_i[kTile * kTile];
+  std::int32_t pending_j[kTile * kTile];
+  auto render_tile_vector = [&](std::int32_t u0, std::int32_t v0, std::int32_t u1, std::int32_t v1,
+                                const TileRange& tile) {
+    const std::int32_t tw = u1 - u0 + 1;
+    const float ta_num = static_cast<float>(center.z() - tile.hi - height_pad_m);
+    const float tb_num = static_cast<float>(center.z() - tile.lo + height_pad_m);
+    const Eigen::Vector3d col_g = col_x * inv_cell;
+    const auto col_gx = static_cast<float>(col_g.x());
+    const auto col_gy = static_cast<float>(col_g.y());
+    const auto col_gz = static_cast<float>(col_x.z());
+    const V4f zero = {0.0f, 0.0f, 0.0f, 0.0f};
+    std::int32_t pending = 0;
+    for (std::int32_t v = v0; v <= v1; ++v) {
+      const double yn = (v - cy) * inv_fy;
+      const Eigen::Vector3d row = col_y * yn + col_z;
+      const Eigen::Vector3d row_g = row * inv_cell;
+      for (std::int32_t u = u0; u <= u1; u += 4) {
+        const std::int32_t q = (v - v0) * tw + (u - u0);
+        // As cast4.
+        const V4f xn = (static_cast<float>(u - cx) + lanes) * inv_fx_f;
+        rays4.dgx = col_gx * xn + static_cast<float>(row_g.x());
+        rays4.dgy = col_gy * xn + static_cast<float>(row_g.y());
+        rays4.dz = col_gz * xn + static_cast<float>(row.z());
+        const V4f inv_descent = -1.0f / rays4.dz;
+        const V4f ta = ta_num * inv_descent;
+        rays4.ta = ta > 0.0f ? ta : zero;
+        rays4.tb = tb_num * inv_descent;
+        V4f hit;
+        V4i walk;
+        Terrain::SecondCells4 second;
+        terrain.IntersectSpan4(rays4, &hit, &walk, &second);
+        std::memcpy(&tile_t[q], &hit, sizeof(hit));
+        const V4i special = walk | second.pending;
+        if (!(special[0] | special[1] | special[2] | special[3])) continue;
+        for (int k = 0; k < 4; ++k) {
+          if (walk[k] != 0) {
+            const Eigen::Vector3d dir = col_x * ((u + k - cx) * inv_fx) + row;
+            double tk = 0.0;
+            tile_t[q + k] = cast(dir, tile, &tk) ? static_cast<float>(tk)
+                                                 : std::numeric_limits<float>::quiet_NaN();
+          } else if (second.pending[k] != 0) {
+            pending_q[pending] = q + k;
+            pending_ray[pending] = V4f{rays4.dgx[k], rays4.dgy[k], rays4.dz[k], rays4.tb[k]};
+            pending_t0[pending] = second.t0[k];
+            pending_i[pending] = second.i[k];
+            pending_j[pending] = second.j[k];
+            ++pending;
+          }
+        }
+      }
+    }
+    for (std::int32_t p = 0; p < pending; p += 4) {
+      Terrain::GridRays4 packed = rays4;  // origin and base node
+      Terrain::SecondCells4 cells{};
+      for (int k = 0; k < 4; ++k) {
+        const std::int32_t e = std::min(p + k, pending - 1);  // spare lanes repeat the last ray
+        packed.dgx[k] = pending_ray[e][0];
+        packed.dgy[k] = pending_ray[e][1];
+        packed.dz[k] = pending_ray[e][2];
+        packed.tb[k] = pending_ray[e][3];
+        cells.i[k] = pending_i[e];
+        cells.j[k] = pending_j[e];
+        cells.t0[k] = pending_t0[e];
+      }
+      const V4f later = terrain.IntersectSecondCells4(packed, cells);
+      for (std::int32_t k = 0; k < 4 && p + k < pending; ++k) tile_t[pending_q[p + k]] = later[k];
+    }
+    // Texture, noise and output, four pixels at a time.
+    const V4f gx0_f = {rays4.gx0, rays4.gx0, rays4.gx0, rays4.gx0};
+    const V4f gy0_f = {rays4.gy0, rays4.gy0, rays4.gy0, rays4.gy0};
+    for (std::int32_t v = v0; v <= v1; ++v) {
+      const double yn = (v - cy) * inv_fy;
+      const Eigen::Vector3d row = col_y * yn + col_z;
+      const Eigen::Vector3d row_g = row * inv_cell;
+      const auto yn_f = static_cast<float>(yn);
+      const float stretch_y = yn_f * yn_f + 1.0f;
+      for (std::int32_t u = u0; u <= u1; u += 4) {
+        const std::int32_t q = (v - v0) * tw + (u - u0);
+        const size_t k0 = static_cast<size_t>(v) * w + u;
+        const V4f t = LoadLanes(&tile_t[q]);
+        const V4i hit = t == t;  // NaN: no hit
+        const V4f xn = (static_cast<float>(u - cx) + lanes) * inv_fx_f;
+        const V4f dgx = col_gx * xn + static_cast<float>(row_g.x());
+        const V4f dgy = col_gy * xn + static_cast<float>(row_g.y());
+        // Ground size of a pixel: range t |(xn, yn, 1)| over fx. Misses sample the node under
+        // the camera (a valid point); their result is dropped.
+        const V4f footprint = t * SqrtLanes(xn * xn + stretch_y) * inv_fx_f;
+        const V4f gx = hit != 0 ? gx0_f + t * dgx : zero;
+        const V4f gy = hit != 0 ? gy0_f + t * dgy : zero;
+        const V4f f = hit != 0 ? footprint : V4f{1.0f, 1.0f, 1.0f, 1.0f};
+        const V4f radiance = appearance.Radiance4Grid(rays4.base_i, rays4.base_j, gx, gy, f);
+        V4f dn = hit != 0 ? exposure_f * radiance : zero;
+        if (add_noise) {
+          const V4f sigma = SqrtLanes(read_var_f + (dn > zero ? dn : zero) * inv_e_per_dn_f);
+          V4f g;
+          for (int k = 0; k < 4; ++k) {
+            g[k] = gaussian_table[Mix64(noise_key ^ (k0 + k)) & (kGaussianTableSize - 1)];
+          }
+          dn += sigma * g;
+        }
+        // Round half up after clamping (the value is non-negative there).
+        dn = dn < zero ? zero : dn;
+        dn = dn > 255.0f ? V4f{255.0f, 255.0f, 255.0f, 255.0f} : dn;
+        const V4i level = __builtin_convertvector(dn + 0.5f, V4i);
+        for (int k = 0; k < 4; ++k) pixels[k0 + k] = static_cast<std::uint8_t>(level[k]);
+        if (depth_out != nullptr) {
+          const V4f disparity = disparity_numerator_f / t;
+          std::memcpy(&depth_out[k0], &t, sizeof(t));
+          std::memcpy(&disparity_out[k0], &disparity, sizeof(disparity));
+        }
+      }
+    }
+  };
+
   for (std::int32_t v0 = 0; v0 < h; v0 += kTile) {
     const std::int32_t v1 = std::min(h, v0 + kTile) - 1;
     for (std::int32_t u0 = 0; u0 < w; u0 += kTile) {
-      render_tile(u0, v0, std::min(w, u0 + kTile) - 1, v1);
+      const std::int32_t u1 = std::min(w, u0 + kTile) - 1;
+      const TileRange tile = tile_range(u0, v0, u1, v1);
+      if (vector_tiles && tile.inside && (u1 - u0 + 1) % 4 == 0) {
+        render_tile_vector(u0, v0, u1, v1, tile);
+      } else {
+        render_tile(u0, v0, u1, v1, tile);
+      }
     }
   }
 }

@@ -541,34 +541,34 @@ V4f SqrtLanes(V4f x) {
 #endif
 }
 
-V4f Load(const float* p) {
-  V4f v;
-  std::memcpy(&v, p, sizeof(v));
-  return v;
-}
-
 }  // namespace
 
 inline Terrain::V4f Terrain::IntersectCell4(const GridRays4& rays, V4i i, V4i j, V4f t0,
                                             V4f t1) const {
   // The gap z - h along the ray as in IntersectCell, with heights relative to the cell's first
   // node (node heights are floats: their differences are nearly exact).
-  alignas(16) float h00[4];
-  alignas(16) float h10[4];
-  alignas(16) float h01[4];
-  alignas(16) float h11[4];
-  for (int k = 0; k < 4; ++k) {
-    const float* p =
-        &heights_[static_cast<size_t>(rays.base_j + j[k]) * size_ + (rays.base_i + i[k])];
-    h00[k] = p[0];
-    h10[k] = p[1] - p[0];
-    h01[k] = p[size_] - p[0];
-    h11[k] = p[size_ + 1] - p[0];
-  }
-  const V4f base = Load(h00);
-  const V4f e10 = Load(h10);
-  const V4f e01 = Load(h01);
-  const V4f d11 = Load(h11);
+  // Per lane the node pairs (h00, h10) and (h01, h11) are adjacent floats: 8-byte loads into the
+  // halves of 16-byte registers (as doubles, bit-cast back), de-interleaved, then the differences
+  // for all four lanes at once (the same float subtractions as one lane at a time).
+  using V2d [[gnu::vector_size(16)]] = double;
+  const float* const heights = heights_.data();
+  const std::int32_t stride = size_;
+  auto pair = [&](int lane, std::int32_t offset) {
+    double q = 0.0;
+    std::memcpy(&q,
+                heights + static_cast<size_t>(rays.base_j + j[lane]) * stride +
+                    (rays.base_i + i[lane]) + offset,
+                sizeof(q));
+    return q;
+  };
+  const auto low01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
+  const auto low23 = reinterpret_cast<V4f>(V2d{pair(2, 0), pair(3, 0)});
+  const auto high01 = reinterpret_cast<V4f>(V2d{pair(0, stride), pair(1, stride)});
+  const auto high23 = reinterpret_cast<V4f>(V2d{pair(2, stride), pair(3, stride)});
+  const V4f base = __builtin_shufflevector(low01, low23, 0, 2, 4, 6);
+  const V4f e10 = __builtin_shufflevector(low01, low23, 1, 3, 5, 7) - base;
+  const V4f e01 = __builtin_shufflevector(high01, high23, 0, 2, 4, 6) - base;
+  const V4f d11 = __builtin_shufflevector(high01, high23, 1, 3, 5, 7) - base;
   const V4f e11 = d11 - e10 - e01;
   const V4f fx = rays.gx0 + t0 * rays.dgx - __builtin_convertvector(i, V4f);
   const V4f fy = rays.gy0 + t0 * rays.dgy - __builtin_convertvector(j, V4f);
@@ -615,7 +615,7 @@ inline Terrain::V4f Terrain::IntersectCell4(const GridRays4& rays, V4i i, V4i j,
   return found != 0 ? t0 + offset : nan;
 }
 
-void Terrain::IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk) const {
+void Terrain::IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk, SecondCells4* second) const {
   // As IntersectSpan: the cells the segment touches, read off its end points (floor of the
   // relative positions, clamped so that the global cell stays inside the grid).
   auto floor_i = [](V4f x) {
@@ -646,13 +646,27 @@ void Terrain::IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk) const {
                                : (__builtin_convertvector(border_j, V4f) - rays.gy0) / rays.dgy;
   const V4f clamped = cross < rays.ta ? rays.ta : (rays.tb < cross ? rays.tb : cross);
   const V4f mid = two != 0 ? clamped : rays.tb;
-  V4f hit = IntersectCell4(rays, ia, ja, rays.ta, mid);
-  const V4i second = two & (hit != hit);  // NaN: no hit in the first cell
-  if (second[0] | second[1] | second[2] | second[3]) {
-    const V4f later = IntersectCell4(rays, ib, jb, mid, rays.tb);
-    hit = second != 0 ? later : hit;
-  }
+  const V4f hit = IntersectCell4(rays, ia, ja, rays.ta, mid);
   *t = hit;
+  second->pending = two & (hit != hit);  // NaN: no hit in the first cell
+  second->i = ib;
+  second->j = jb;
+  second->t0 = mid;
+}
+
+void Terrain::IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk) const {
+  SecondCells4 second{};
+  IntersectSpan4(rays, t, walk, &second);
+  const V4i pending = second.pending;
+  if (pending[0] | pending[1] | pending[2] | pending[3]) {
+    const V4f later = IntersectSecondCells4(rays, second);
+    *t = pending != 0 ? later : *t;
+  }
+}
+
+Terrain::V4f Terrain::IntersectSecondCells4(const GridRays4& rays,
+                                            const SecondCells4& second) const {
+  return IntersectCell4(rays, second.i, second.j, second.t0, rays.tb);
 }
 
 bool Terrain::WalkSpan(const GridRay& ray, double ta, double tb, double* t) const {

@@ -60,6 +60,17 @@ class Appearance {
   void Radiance4(const double* x_m, const double* y_m, const double* footprint_m,
                  double* radiance) const;
 
+  // Radiance4 for four points given in grid units relative to the node (base_i, base_j)
+  // (x = OriginM() + (base_i + gx) CellM(), likewise y), all in single precision: relative
+  // positions stay small, so a float resolves ~1e-5 cell over +-250 cells. The points must lie
+  // inside the grid (no clamping of the position, only of the indices, for memory safety).
+  using V4f [[gnu::vector_size(16)]] = float;
+  using V4i [[gnu::vector_size(16)]] = std::int32_t;
+  V4f Radiance4Grid(std::int32_t base_i, std::int32_t base_j, V4f gx, V4f gy,
+                    V4f footprint_m) const;
+
+  double OriginM() const { return origin_m_; }
+  double CellM() const { return cell_m_; }
   // Per-node grids (row-major like Terrain::Heights()).
   const std::vector<float>& Albedo() const { return albedo_; }
   const std::vector<float>& Shaded() const { return shaded_; }
@@ -68,6 +79,9 @@ class Appearance {
 
  private:
   core::Status Build(const Terrain& terrain, const AppearanceOptions& options);
+  // detail(x, y) for four points: lattice cell (di, dj) and in-cell fraction (cfx, cfy) of the
+  // first octave, pixels per first-octave wavelength lane_ratio.
+  V4f Detail4(V4i di, V4i dj, V4f cfx, V4f cfy, V4f lane_ratio) const;
 
   static constexpr int kDetailOctaves = 8;
   static constexpr std::int32_t kLatticeSize = 512;  // power of two
@@ -84,8 +98,6 @@ class Appearance {
   std::vector<float> lattice_;  // kLatticeSize^2 values in [-1, 1), row stride kLatticeStride
   // Per octave o, stored as [o / 4][o % 4] (four-lane groups): lattice offsets and amplitude
   // detail_strength 2^(-o/2).
-  using V4f [[gnu::vector_size(16)]] = float;
-  using V4i [[gnu::vector_size(16)]] = std::int32_t;
   using V2d [[gnu::vector_size(16)]] = double;
   V4i octave_offset_x_[kDetailOctaves / 4] = {};
   V4i octave_offset_y_[kDetailOctaves / 4] = {};

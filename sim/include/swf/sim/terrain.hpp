@@ -129,6 +129,18 @@ class Terrain final : public Surface {
     V4f dgx, dgy, dz, ta, tb;
   };
   void IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk) const;
+  // IntersectSpan4 in two steps, so that a caller can gather the second cells of many rays into
+  // full vectors (most groups of four have only one or two rays that cross into a neighbour and
+  // miss the first cell): the first step solves the first cell of every ray and marks in
+  // second->pending the rays left to solve in the neighbour second->(i, j) from second->t0 to tb;
+  // IntersectSecondCells4 solves those (for lanes packed from any GridRays4 of the same origin).
+  struct SecondCells4 {
+    V4i pending;
+    V4i i, j;  // relative to the base node, like GridRays4
+    V4f t0;
+  };
+  void IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk, SecondCells4* second) const;
+  V4f IntersectSecondCells4(const GridRays4& rays, const SecondCells4& second) const;
   // Bounds of the surface height over the box [x0, x1] x [y0, y1] (metres, clamped to the
   // terrain): the minimum and maximum of the max/min-pyramid blocks the box overlaps.
   void HeightRangeInBox(double x0_m, double y0_m, double x1_m, double y1_m, double* lo_m,
