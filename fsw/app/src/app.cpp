@@ -124,7 +124,8 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
 void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
                   const HealthRecord& health, const EvaluationResult* eval,
                   const HazardEvaluation* hazard, std::int64_t hazard_maps, bool locked, bool fifo,
-                  const char* result) {
+                  const char* result, const sim::Trajectory* trajectory,
+                  const sim::OrbitalTarget* target) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) {
     std::fprintf(stderr, "swf-fsw: cannot write %s\n", path.c_str());
@@ -138,6 +139,22 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
   if (c.source == SourceKind::kSim) {
     std::fprintf(f, "  \"image_width_px\": %d,\n  \"image_height_px\": %d,\n", c.sim.width_px,
                  c.sim.height_px);
+    std::fprintf(f, "  \"terrain\": \"%s\",\n  \"seed\": %llu,\n", c.sim.terrain.c_str(),
+                 static_cast<unsigned long long>(c.sim.seed));
+  }
+  // Where the simulated descent went: the nadir of the first frame, and for `sim.target:
+  // orbital` the pre-selection's clearance from orbit-visible hazards.
+  if (trajectory != nullptr && trajectory->NumFrames() > 0) {
+    const Eigen::Vector3d& p = trajectory->WorldTCamera(0).t;
+    std::fprintf(f, "  \"descent_target\": {\"mode\": \"%s\", \"x_m\": %.3f, \"y_m\": %.3f",
+                 c.sim.target.c_str(), p.x(), p.y());
+    if (target != nullptr && c.sim.target == "orbital") {
+      std::fprintf(f,
+                   ", \"search_radius_m\": %.1f, \"orbital_clearance_m\": %.3f, "
+                   "\"distance_from_nominal_m\": %.3f",
+                   c.sim.target_search_m, target->clearance_m, target->distance_m);
+    }
+    std::fprintf(f, "},\n");
   }
   if (eval != nullptr) {
     std::fprintf(f,
@@ -280,7 +297,9 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   } fake_cameras;
 #endif
   std::int64_t total_frames = 0;
-  if (config.initial == "truth") {
+  if (config.initial == "truth" &&
+      (config.source != SourceKind::kSim || config.sim.target != "orbital")) {
+    // (The simulator's orbital target needs the terrain: taken from the world once built.)
     sim::Trajectory trajectory;
     sim::RigOptions rig;
     if (!SimTrajectory(config, &trajectory, &rig, &error)) {
@@ -288,7 +307,7 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
       return 2;
     }
     po.initial_world_T_camera = trajectory.WorldTCamera(0);
-  } else {
+  } else if (config.initial != "truth") {
     po.initial_world_T_camera.R = sim::NadirRotation(0.0);
     po.initial_world_T_camera.t = Eigen::Vector3d(
         config.initial_position_m[0], config.initial_position_m[1], config.initial_position_m[2]);
@@ -318,6 +337,15 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                             &error)) {
         std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
         return 1;
+      }
+      if (config.initial == "truth")
+        po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
+      if (config.sim.target == "orbital") {
+        const sim::OrbitalTarget& t = world->Target();
+        std::fprintf(stderr,
+                     "%s: orbital target (%.1f, %.1f) m, %.1f m from the nominal, orbital "
+                     "clearance %.1f m\n",
+                     tool, t.target_m.x(), t.target_m.y(), t.distance_m, t.clearance_m);
       }
       po.camera = world->Camera();
       po.width_px = world->Width();
@@ -651,7 +679,8 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   if (!config.summary_path.empty()) {
     WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr,
                  evaluate && hazard_counter.maps > 0 ? &hazard_eval : nullptr, hazard_counter.maps,
-                 locked, fifo, result);
+                 locked, fifo, result, world ? &world->Trajectory() : nullptr,
+                 world ? &world->Target() : nullptr);
   }
   return exit_code;
 }

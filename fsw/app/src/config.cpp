@@ -190,6 +190,19 @@ const std::map<std::string, Setter>& Fields() {
       c->sim.imu_sigma_rad = d;
       return true;
     };
+    f["sim.target"] = OneOf([](FswConfig* c) { return &c->sim.target; }, {"nominal", "orbital"});
+    f["sim.target_search_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      double d = 0.0;
+      if (!ParseDouble(v, &d, why)) return false;
+      // 60 m keeps the search square (plus the 10 m clearance cap) and the 100 m view inside the
+      // 204.8 m terrain.
+      if (d < 0.0 || d > 60.0) {
+        *why = v + " is outside [0, 60]";
+        return false;
+      }
+      c->sim.target_search_m = d;
+      return true;
+    };
     f["camera.left"] = Text([](FswConfig* c) { return &c->camera.left; });
     f["camera.right"] = Text([](FswConfig* c) { return &c->camera.right; });
     f["camera.left_calibration"] = Text([](FswConfig* c) { return &c->camera.left_calibration; });
@@ -364,6 +377,9 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   if (c.mode == "ekf" && c.window != 1) return fail("window", "must be 1 in mode ekf");
   if (c.source == SourceKind::kSim && c.sim.width_px % 2 != 0) {
     return fail("sim.width_px", "must be even (principal point on a pixel boundary)");
+  }
+  if (c.sim.target == "orbital" && c.sim.scenario != "descent") {
+    return fail("sim.target", "'orbital' selects a descent target: needs sim.scenario descent");
   }
   if (c.max_disparity_px >= c.sim.width_px && c.source == SourceKind::kSim) {
     return fail("max_disparity_px", "must be smaller than sim.width_px");

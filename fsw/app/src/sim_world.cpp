@@ -20,8 +20,26 @@ std::string SharedDir(const FswConfig& config) {
 
 }  // namespace
 
+bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* error) {
+  sim::TerrainPreset preset;
+  if (!sim::ParseTerrainPreset(config.sim.terrain.c_str(), &preset)) {
+    *error = "sim.terrain: unknown preset";
+    return false;
+  }
+  const double scale = config.sim.scenario == "lab" ? 0.1 : 1.0;
+  sim::TerrainOptions to =
+      sim::ScaleTerrain(sim::TerrainPresetOptions(preset, config.sim.seed), scale);
+  // A smaller grid keeps the same cell size (the terrain shrinks, the texture stays).
+  to.size = config.sim.terrain_size;
+  if (terrain->Configure(to) != Status::kOk) {
+    *error = "sim.terrain_size: the terrain was refused";
+    return false;
+  }
+  return true;
+}
+
 bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
-                   std::string* error) {
+                   std::string* error, const sim::Terrain* terrain, sim::OrbitalTarget* chosen) {
   *rig = config.sim.scenario == "lab" ? sim::LabRig() : sim::EdlRig();
   rig->width_px = config.sim.width_px;
   rig->height_px = config.sim.height_px;
@@ -40,6 +58,27 @@ bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::Ri
   }
   t.seed = config.sim.seed;
   if (config.sim.frames > 0 && config.sim.frames < t.num_frames) t.num_frames = config.sim.frames;
+  if (config.sim.target == "orbital") {
+    // The same vertical descent, over the target orbit picked around the nominal one (the
+    // origin); the mapper's target is the nadir of the first frame, i.e. this point.
+    sim::Terrain built;
+    if (terrain == nullptr) {
+      if (!SimTerrain(config, &built, error)) return false;
+      terrain = &built;
+    }
+    sim::OrbitalSelectionOptions so;
+    so.search_radius_m = config.sim.target_search_m;
+    sim::OrbitalTarget target;
+    if (sim::SelectOrbitalTarget(*terrain, so, &target) != Status::kOk) {
+      *error =
+          "sim.target_search_m: the orbital search square (radius + 10 m clearance cap) does not "
+          "fit in the terrain (sim.terrain_size)";
+      return false;
+    }
+    t.start_world_m.x() += target.target_m.x();
+    t.start_world_m.y() += target.target_m.y();
+    if (chosen != nullptr) *chosen = target;
+  }
   if (trajectory->Configure(t) != Status::kOk) {
     *error = "sim.scenario: the trajectory was refused (rate_hz or frames)";
     return false;
@@ -48,22 +87,10 @@ bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::Ri
 }
 
 bool SimWorld::Build(const FswConfig& config, std::string* error) {
-  if (!SimTrajectory(config, &trajectory_, &rig_, error)) return false;
+  if (!SimTerrain(config, &terrain_, error)) return false;
+  if (!SimTrajectory(config, &trajectory_, &rig_, error, &terrain_, &target_)) return false;
   num_frames_ = trajectory_.NumFrames();
-  sim::TerrainPreset preset;
-  if (!sim::ParseTerrainPreset(config.sim.terrain.c_str(), &preset)) {
-    *error = "sim.terrain: unknown preset";
-    return false;
-  }
   const double scale = config.sim.scenario == "lab" ? 0.1 : 1.0;
-  sim::TerrainOptions to =
-      sim::ScaleTerrain(sim::TerrainPresetOptions(preset, config.sim.seed), scale);
-  // A smaller grid keeps the same cell size (the terrain shrinks, the texture stays).
-  to.size = config.sim.terrain_size;
-  if (terrain_.Configure(to) != Status::kOk) {
-    *error = "sim.terrain_size: the terrain was refused";
-    return false;
-  }
   sim::AppearanceOptions look = sim::DefaultImagery(SharedDir(config));
   look.image_pixel_m *= scale;
   look.seed = config.sim.seed;

@@ -45,6 +45,8 @@ TEST(ConfigTest, NamesTheFieldAndLineOfEveryProblem) {
   Refused("initial.position_m: 1 2\n", "initial.position_m:");
   Refused("sim.width_px: 5000\n", "sim.width_px: 5000 is outside");
   Refused("measurement_sigma_px: nan\n", "measurement_sigma_px:");
+  Refused("sim.target: best\n", "sim.target: 'best' is not one of nominal orbital");
+  Refused("sim.target_search_m: 70\n", "t.cfg:1: sim.target_search_m: 70 is outside [0, 60]");
 }
 
 TEST(ConfigTest, RefusesInconsistentCombinations) {
@@ -59,6 +61,7 @@ TEST(ConfigTest, RefusesInconsistentCombinations) {
       "initial: 'truth' needs the simulator");
   Refused("inject.ms: 5\n", "inject.stage: required");
   Refused("sim.width_px: 255\n", "sim.width_px: must be even");
+  Refused("sim.scenario: hover\nsim.target: orbital\n", "sim.target: 'orbital' selects a descent");
 }
 
 TEST(ConfigTest, OverridesAreCheckedLikeTheFile) {

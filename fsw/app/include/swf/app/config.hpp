@@ -27,6 +27,12 @@ struct SimConfig {
   std::uint64_t seed = 1;
   std::string shared_dir;  // ../shared (or $SWF_SHARED_DIR) when empty
   std::int32_t render_threads = 2;
+  // Descent target (scenario descent): "nominal" flies straight down over the origin; "orbital"
+  // flies straight down over the point sim::SelectOrbitalTarget picks within target_search_m of
+  // the origin from the terrain degraded to orbital resolution (the mission's pre-selection of
+  // the landing target from orbital data, before descent).
+  std::string target = "nominal";
+  double target_search_m = 40.0;
   // The lander's IMU / navigation filter as the process-model input: true relative motion plus
   // white noise of these 1-sigma per frame (translation per axis, rotation per axis).
   bool imu = true;

@@ -13,15 +13,22 @@
 #include "swf/app/flight_loop.hpp"
 #include "swf/drivers/stereo_source.hpp"
 #include "swf/sim/appearance.hpp"
+#include "swf/sim/orbital.hpp"
 #include "swf/sim/renderer.hpp"
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
 
 namespace swf::app {
 
-// The trajectory (and rig) of a sim configuration; cheap (no terrain). For `initial: truth`.
+// The terrain of a sim configuration (seconds for 2048^2 nodes).
+bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* error);
+
+// The trajectory (and rig) of a sim configuration. Cheap (no terrain) unless `sim.target:
+// orbital`: the descent target then comes from `terrain` (built here when null), and `chosen`
+// (optional) receives the selection.
 bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
-                   std::string* error);
+                   std::string* error, const sim::Terrain* terrain = nullptr,
+                   sim::OrbitalTarget* chosen = nullptr);
 
 class SimWorld : public MotionProvider {
  public:
@@ -29,6 +36,8 @@ class SimWorld : public MotionProvider {
   bool Build(const FswConfig& config, std::string* error);
   const sim::Terrain& Terrain() const { return terrain_; }
   const sim::Trajectory& Trajectory() const { return trajectory_; }
+  // The orbital pre-selection (`sim.target: orbital`; default-constructed otherwise).
+  const sim::OrbitalTarget& Target() const { return target_; }
   const estimator::StereoCamera<double>& Camera() const { return renderer_.Camera(); }
   std::int32_t Width() const { return rig_.width_px; }
   std::int32_t Height() const { return rig_.height_px; }
@@ -49,6 +58,7 @@ class SimWorld : public MotionProvider {
   sim::Appearance appearance_;
   sim::Renderer renderer_;
   sim::Trajectory trajectory_;
+  sim::OrbitalTarget target_;
   std::int32_t num_frames_ = 0;
   std::vector<MotionInput> motion_;
   bool imu_ = false;
