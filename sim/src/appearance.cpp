@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -484,24 +485,32 @@ Appearance::V4f Appearance::Radiance4Grid(std::int32_t base_i, std::int32_t base
     const V4i i = __builtin_convertvector(x, V4i);
     return i + (__builtin_convertvector(i, V4f) > x);  // -1 where truncation rounded up
   };
-  const std::int32_t last = size_ - 2;
-  auto clamp_i = [&](V4i i) {
-    i = i < 0 ? V4i{0, 0, 0, 0} : i;
-    return i > last ? V4i{last, last, last, last} : i;
-  };
-  const V4i ki = floor_i(gx);
-  const V4i kj = floor_i(gy);
+  // Clamped to the grid as Radiance does (position to [0, size - 1], cell index to size - 2), in
+  // float before the floor (float max / min are single instructions, 32-bit integer ones are not
+  // on SSE2); the bounds are integers, so the floor of the clamped value is the clamped floor.
+  const auto lo_x = static_cast<float>(-base_i);
+  const auto lo_y = static_cast<float>(-base_j);
+  const auto hi_x = static_cast<float>(size_ - 1 - base_i);
+  const auto hi_y = static_cast<float>(size_ - 1 - base_j);
+  gx = gx > lo_x ? gx : V4f{lo_x, lo_x, lo_x, lo_x};  // a NaN lane gets the lower bound
+  gy = gy > lo_y ? gy : V4f{lo_y, lo_y, lo_y, lo_y};
+  gx = gx < hi_x ? gx : V4f{hi_x, hi_x, hi_x, hi_x};
+  gy = gy < hi_y ? gy : V4f{hi_y, hi_y, hi_y, hi_y};
+  const float last_x = hi_x - 1.0f;
+  const float last_y = hi_y - 1.0f;
+  const V4i ki = floor_i(gx < last_x ? gx : V4f{last_x, last_x, last_x, last_x});
+  const V4i kj = floor_i(gy < last_y ? gy : V4f{last_y, last_y, last_y, last_y});
   const V4f fx = gx - __builtin_convertvector(ki, V4f);
   const V4f fy = gy - __builtin_convertvector(kj, V4f);
-  const V4i i = clamp_i(ki + base_i);
-  const V4i j = clamp_i(kj + base_j);
   // Per lane the node pairs (s00, s10) and (s01, s11) are adjacent floats: 8-byte loads into the
   // halves of 16-byte registers, then de-interleaved (as in Detail4).
-  const float* const shaded = shaded_.data();
   const std::int32_t stride = size_;
+  const float* const base_node =
+      shaded_.data() + static_cast<std::ptrdiff_t>(base_j) * stride + base_i;
+  const V4i node = kj * stride + ki;  // offsets from the base node (at most 2^28 nodes)
   auto pair = [&](int lane, std::int32_t offset) {
     double q = 0.0;
-    std::memcpy(&q, shaded + static_cast<size_t>(j[lane]) * stride + i[lane] + offset, sizeof(q));
+    std::memcpy(&q, base_node + node[lane] + offset, sizeof(q));
     return q;
   };
   const auto low01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -553,12 +554,13 @@ inline Terrain::V4f Terrain::IntersectCell4(const GridRays4& rays, V4i i, V4i j,
   using V2d [[gnu::vector_size(16)]] = double;
   const float* const heights = heights_.data();
   const std::int32_t stride = size_;
+  // Offsets from the base node in one vector multiply-add (the grid has at most 2^28 nodes).
+  const float* const base_node =
+      heights + static_cast<std::ptrdiff_t>(rays.base_j) * stride + rays.base_i;
+  const V4i node = j * stride + i;
   auto pair = [&](int lane, std::int32_t offset) {
     double q = 0.0;
-    std::memcpy(&q,
-                heights + static_cast<size_t>(rays.base_j + j[lane]) * stride +
-                    (rays.base_i + i[lane]) + offset,
-                sizeof(q));
+    std::memcpy(&q, base_node + node[lane] + offset, sizeof(q));
     return q;
   };
   const auto low01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
@@ -622,16 +624,21 @@ void Terrain::IntersectSpan4(const GridRays4& rays, V4f* t, V4i* walk, SecondCel
     const V4i i = __builtin_convertvector(x, V4i);
     return i + (__builtin_convertvector(i, V4f) > x);  // -1 where truncation rounded up
   };
-  auto clamp_i = [&](V4i i, std::int32_t base) {
-    const std::int32_t lo = -base;
-    const std::int32_t hi = size_ - 2 - base;
-    i = i < lo ? V4i{lo, lo, lo, lo} : i;
-    return i > hi ? V4i{hi, hi, hi, hi} : i;
+  // Clamped in float before the floor (float max / min are one instruction each on SSE2 and
+  // NEON, 32-bit integer ones are not on SSE2): floor is monotonic and the bounds are integers,
+  // so this is the clamped floor. A NaN position gets the lower bound (max and min return their
+  // second operand when unordered), never an index outside the grid.
+  auto clamped_floor = [&](V4f x, std::int32_t base) {
+    const auto lo = static_cast<float>(-base);
+    const auto hi = static_cast<float>(size_ - 2 - base);
+    x = x > lo ? x : V4f{lo, lo, lo, lo};
+    x = x < hi ? x : V4f{hi, hi, hi, hi};
+    return floor_i(x);
   };
-  const V4i ia = clamp_i(floor_i(rays.gx0 + rays.ta * rays.dgx), rays.base_i);
-  const V4i ib = clamp_i(floor_i(rays.gx0 + rays.tb * rays.dgx), rays.base_i);
-  const V4i ja = clamp_i(floor_i(rays.gy0 + rays.ta * rays.dgy), rays.base_j);
-  const V4i jb = clamp_i(floor_i(rays.gy0 + rays.tb * rays.dgy), rays.base_j);
+  const V4i ia = clamped_floor(rays.gx0 + rays.ta * rays.dgx, rays.base_i);
+  const V4i ib = clamped_floor(rays.gx0 + rays.tb * rays.dgx, rays.base_i);
+  const V4i ja = clamped_floor(rays.gy0 + rays.ta * rays.dgy, rays.base_j);
+  const V4i jb = clamped_floor(rays.gy0 + rays.tb * rays.dgy, rays.base_j);
   const V4i di = ib - ia;
   const V4i dj = jb - ja;
   const V4i one = (di == 0) & (dj == 0);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <numbers>
 
@@ -123,6 +124,8 @@ TEST(TerrainTest, FourRaysAtOnceAgreeWithOneRayAtATime) {
     int misses = 0;
     int disagree = 0;
     int walks = 0;
+    int seconds = 0;
+    int split_differs = 0;
     double worst = 0.0;
     for (int n = 0; n < 4000; ++n) {
       const Eigen::Vector3d origin(rng.Uniform(-0.5, 0.5) * half, rng.Uniform(-0.5, 0.5) * half,
@@ -157,6 +160,30 @@ TEST(TerrainTest, FourRaysAtOnceAgreeWithOneRayAtATime) {
       Terrain::V4f four{};
       Terrain::V4i walk{};
       t.IntersectSpan4(rays, &four, &walk);
+      // AND in two steps with the second cells solved in other lanes (reversed, as a renderer
+      // packs them from several groups): the same bits.
+      Terrain::V4f first{};
+      Terrain::V4i walk_two{};
+      Terrain::SecondCells4 second{};
+      t.IntersectSpan4(rays, &first, &walk_two, &second);
+      Terrain::GridRays4 packed = rays;
+      Terrain::SecondCells4 cells = second;
+      for (int k = 0; k < 4; ++k) {
+        packed.dgx[3 - k] = rays.dgx[k];
+        packed.dgy[3 - k] = rays.dgy[k];
+        packed.dz[3 - k] = rays.dz[k];
+        packed.tb[3 - k] = rays.tb[k];
+        cells.i[3 - k] = second.i[k];
+        cells.j[3 - k] = second.j[k];
+        cells.t0[3 - k] = second.t0[k];
+      }
+      const Terrain::V4f later = t.IntersectSecondCells4(packed, cells);
+      for (int k = 0; k < 4; ++k) {
+        if (walk[k] != 0) continue;
+        const float two_step = second.pending[k] != 0 ? later[3 - k] : first[k];
+        seconds += second.pending[k] != 0 ? 1 : 0;
+        if (std::memcmp(&two_step, &four[k], sizeof(float)) != 0) ++split_differs;
+      }
       for (int k = 0; k < 4; ++k) {
         const Terrain::GridRay ray{gx0, gy0, rays.dgx[k], rays.dgy[k], rays.oz, rays.dz[k]};
         double single = 0.0;
@@ -175,13 +202,16 @@ TEST(TerrainTest, FourRaysAtOnceAgreeWithOneRayAtATime) {
     }
     // THEN they find the same hits (single precision may decide a graze differently: at most
     // 1 in 2000) at the same parameter to 2e-5 (a float's resolution at ~20 m is 2e-6); the
-    // segments over more than two cells are marked for the walk.
+    // segments over more than two cells are marked for the walk; solving the second cells apart
+    // changes no bit.
     EXPECT_GT(hits, 2000) << "flat " << flat;
     EXPECT_GT(misses, 2000) << "flat " << flat;
     EXPECT_LE(disagree, (hits + misses) / 2000) << "flat " << flat;
     EXPECT_LT(worst, 2e-5) << "flat " << flat;
     EXPECT_GT(walks, 500) << "flat " << flat;
     EXPECT_LT(walks, (hits + misses) / 2) << "flat " << flat;
+    EXPECT_GT(seconds, 100) << "flat " << flat;
+    EXPECT_EQ(split_differs, 0) << "flat " << flat;
     std::printf("flat %d: %d hits, %d misses, %d walks, %d disagree, worst %.3g\n", flat, hits,
                 misses, walks, disagree, worst);
   }
