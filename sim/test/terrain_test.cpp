@@ -182,7 +182,8 @@ TEST(TerrainTest, FourRaysAtOnceAgreeWithOneRayAtATime) {
         if (walk[k] != 0) continue;
         const float two_step = second.pending[k] != 0 ? later[3 - k] : first[k];
         seconds += second.pending[k] != 0 ? 1 : 0;
-        if (std::memcmp(&two_step, &four[k], sizeof(float)) != 0) ++split_differs;
+        const float one_step = four[k];
+        if (std::memcmp(&two_step, &one_step, sizeof(float)) != 0) ++split_differs;
       }
       for (int k = 0; k < 4; ++k) {
         const Terrain::GridRay ray{gx0, gy0, rays.dgx[k], rays.dgy[k], rays.oz, rays.dz[k]};
