@@ -372,12 +372,7 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
       po.width_px = log->Width();
       po.height_px = log->Height();
       if (log->Rectified()) {
-        sim::Trajectory trajectory;
-        sim::RigOptions rig;
-        if (!SimTrajectory(config, &trajectory, &rig, &error)) {
-          std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
-          return 2;
-        }
+        sim::RigOptions rig = SimRig(config);
         rig.width_px = log->Width();
         rig.height_px = log->Height();
         po.camera = sim::MakeStereoCamera(rig);

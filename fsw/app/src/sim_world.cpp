@@ -38,13 +38,18 @@ bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* err
   return true;
 }
 
+sim::RigOptions SimRig(const FswConfig& config) {
+  sim::RigOptions rig = config.sim.scenario == "lab" ? sim::LabRig() : sim::EdlRig();
+  rig.width_px = config.sim.width_px;
+  rig.height_px = config.sim.height_px;
+  rig.horizontal_fov_deg = config.sim.hfov_deg;
+  rig.baseline_m = config.sim.baseline_m;
+  return rig;
+}
+
 bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
                    std::string* error, const sim::Terrain* terrain, sim::OrbitalTarget* chosen) {
-  *rig = config.sim.scenario == "lab" ? sim::LabRig() : sim::EdlRig();
-  rig->width_px = config.sim.width_px;
-  rig->height_px = config.sim.height_px;
-  rig->horizontal_fov_deg = config.sim.hfov_deg;
-  rig->baseline_m = config.sim.baseline_m;
+  *rig = SimRig(config);
   sim::TrajectoryOptions t;
   if (config.sim.scenario == "descent") {
     t = sim::DescentTrajectory(config.rate_hz);

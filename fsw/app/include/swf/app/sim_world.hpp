@@ -23,6 +23,9 @@ namespace swf::app {
 // The terrain of a sim configuration (seconds for 2048^2 nodes).
 bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* error);
 
+// The camera rig of a sim configuration.
+sim::RigOptions SimRig(const FswConfig& config);
+
 // The trajectory (and rig) of a sim configuration. Cheap (no terrain) unless `sim.target:
 // orbital`: the descent target then comes from `terrain` (built here when null), and `chosen`
 // (optional) receives the selection.
