@@ -14,6 +14,9 @@
 // values from a fixed 4096-entry Box-Muller table indexed by a hash of (seed, frame, camera,
 // pixel), then rounding and clamping to 8 bits. Truth for the left image: depth = camera-frame z of
 // the hit of the pixel-centre ray, disparity = fx * baseline / depth (NaN where the ray misses).
+// Plain ground at one sample per pixel is computed in single precision, four pixels per 4-lane
+// vector (texture position, footprint and noise arithmetic in float: the 8-bit values may differ
+// from the double formulas above by 1 DN in rare pixels; the truth is the same).
 #pragma once
 
 #include <Eigen/Core>
