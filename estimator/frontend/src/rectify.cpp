@@ -26,6 +26,15 @@ constexpr int kSegment = rectify_detail::kSegment;
 constexpr int kWeightBits = 7;
 constexpr int kWeightOne = 1 << kWeightBits;
 constexpr float kWeightOneF = static_cast<float>(kWeightOne);
+// kWindow coordinates (WindowHalf): 1/1024 px from the window origin, so that the integer part
+// (0 .. 14) and the 1/128-px weight come out of one 16-bit lane by shifts.
+constexpr int kFineBits = 10;
+constexpr int kFineOne = 1 << kFineBits;
+constexpr int kFineToWeight = kFineBits - kWeightBits;
+constexpr int kHalf = kSegment / 2;  // pixels per WindowHalf
+
+using rectify_detail::Quadratic;
+using rectify_detail::WindowHalf;
 
 // GCC vector extensions (SSE2 / NEON).
 using V4f [[gnu::vector_size(16)]] = float;
@@ -50,6 +59,16 @@ inline std::uint16_t Load16(const std::uint8_t* p) {
 // (the library is built with -ffp-contract=off, and no kernel enables FMA).
 inline float EvalSegment(const float* c, float k) { return c[0] + k * (c[1] + k * c[2]); }
 
+// WindowHalf coordinate of pixel j (1/1024 px from the window origin, rounding offset included).
+// The SIMD kernels evaluate it in 16-bit lanes: (j 2^12 c1 + 2^14) >> 15 is pmulhrsw / sqrdmulh
+// of c1 by j 2^12, likewise c2 by j^2 2^9; Configure keeps every sum inside 0 .. 2^15 so that
+// wrapping 16-bit adds give the same value.
+constexpr int kLinearScale = 1 << 12;    // j 2^12 <= 28672
+constexpr int kQuadraticScale = 1 << 9;  // j^2 2^9 <= 25088
+inline int EvalHalf(const std::int16_t* c, int j) {
+  return c[0] + ((j * c[1] + 4) >> 3) + ((j * j * c[2] + 32) >> 6);
+}
+
 // Source coordinates (1/128 px, rounded) of pixels q .. q + 7 of a segment.
 struct Coords8 {
   V4i fx_lo;
@@ -58,7 +77,7 @@ struct Coords8 {
   V4i fy_hi;
 };
 
-[[gnu::always_inline]] inline Coords8 SegmentCoords(const Segment& seg, int q) {
+[[gnu::always_inline]] inline Coords8 SegmentCoords(const Quadratic& seg, int q) {
   const V4f lane = {0.0f, 1.0f, 2.0f, 3.0f};
   const V4f x0 = {seg.x[0], seg.x[0], seg.x[0], seg.x[0]};
   const V4f x1 = {seg.x[1], seg.x[1], seg.x[1], seg.x[1]};
@@ -76,22 +95,32 @@ struct Coords8 {
 }
 
 // Bilinear blend of 8 pixels: t / b hold the top / bottom tap pairs (low byte: left tap), ax / ay
-// the weights in 1/128. 16-bit lanes, exact (file comment).
+// the weights in 1/128. 16-bit lanes, exact integers: upper = p0 (128 - ax) + p1 ax (lower
+// likewise), mid = upper + floor((d ay + 64) / 128) with d = lower - upper, out = (mid + 64) >> 7.
+// These are two rounding multiply-highs in the SIMD kernels (pmulhrsw / sqrdmulh by ay 2^8, then
+// by 2^8); here d ay is split into its high (signed) and low (unsigned) byte to stay in 16 bits.
 [[gnu::always_inline]] inline V8b Blend8(V8u t, V8u b, V8s ax, V8s ay) {
   const V8s bx = kWeightOne - ax;
   const V8s upper = reinterpret_cast<V8s>(t & 0xFF) * bx + reinterpret_cast<V8s>(t >> 8) * ax;
   const V8s lower = reinterpret_cast<V8s>(b & 0xFF) * bx + reinterpret_cast<V8s>(b >> 8) * ax;
-  // upper + (lower - upper) ay / 128 with 16-bit products: split the difference into its
-  // high (signed) and low (unsigned) byte.
   const V8s d = lower - upper;
-  const V8s mid = upper + (((d >> 8) * ay) << 1) + (((d & 0xFF) * ay) >> kWeightBits);
+  const V8s mid =
+      upper + (((d >> 8) * ay) << 1) + ((((d & 0xFF) * ay) + (kWeightOne / 2)) >> kWeightBits);
   const V8s result = (mid + (kWeightOne / 2)) >> kWeightBits;
   return __builtin_convertvector(result, V8b);
 }
 
+// Scalar Blend8 (the per-pixel border pass).
+inline std::uint8_t Blend1(const std::uint8_t* s0, const std::uint8_t* s1, int ax, int ay) {
+  const int upper = s0[0] * (kWeightOne - ax) + s0[1] * ax;
+  const int lower = s1[0] * (kWeightOne - ax) + s1[1] * ax;
+  const int mid = upper + (((lower - upper) * ay + kWeightOne / 2) >> kWeightBits);
+  return static_cast<std::uint8_t>((mid + kWeightOne / 2) >> kWeightBits);
+}
+
 // One segment whose taps are all inside, gathered with a 16-bit load per tap pair (kInside in the
 // SIMD kernels). Writes kSegment bytes.
-[[gnu::always_inline]] inline void GatherSegment(const Segment& seg, const std::uint8_t* src,
+[[gnu::always_inline]] inline void GatherSegment(const Quadratic& seg, const std::uint8_t* src,
                                                  std::int32_t stride, std::uint8_t* dst) {
   const V4i stride4 = {stride, stride, stride, stride};
   for (int q = 0; q < kSegment; q += 8) {
@@ -113,11 +142,299 @@ struct Coords8 {
   }
 }
 
-// Shuffle-index arithmetic of a window half (kWindow): dx = column - base (0 .. 14) and dy = row -
-// top row (0 or 1) per 16-bit lane. Returns the byte indices into row r (idx_a) and row r + 1
-// (idx_b): lane bytes dx, dx + 1, with the top bit set (lookup gives 0) where the other row holds
-// the taps. The top taps are shuffle(row r, idx_a) | shuffle(row r + 1, idx_b), the bottom taps
-// shuffle(row r + 1, idx_a) | shuffle(row r + 2, idx_b).
+// EvalHalf of pixels 0 .. 7 in 16-bit lanes without a multiply-high (portable kernel), for the
+// coefficients at lanes kFirst .. kFirst + 2 of a WindowHalf loaded as a vector: with
+// c1 = 8 h + l (l = c1 & 7), (j c1 + 4) >> 3 = j h + ((j l + 4) >> 3), and c2 likewise by 64, so
+// that every product fits 16 bits; unsigned lanes wrap as the SIMD kernels' adds do.
+template <int kFirst>
+[[gnu::always_inline]] inline V8u EvalHalf8(V8s coef) {
+  const V8u j = {0, 1, 2, 3, 4, 5, 6, 7};
+  const V8u j2 = j * j;
+  const auto c0 = reinterpret_cast<V8u>(__builtin_shufflevector(
+      coef, coef, kFirst, kFirst, kFirst, kFirst, kFirst, kFirst, kFirst, kFirst));
+  const V8s c1 = __builtin_shufflevector(coef, coef, kFirst + 1, kFirst + 1, kFirst + 1, kFirst + 1,
+                                         kFirst + 1, kFirst + 1, kFirst + 1, kFirst + 1);
+  const V8s c2 = __builtin_shufflevector(coef, coef, kFirst + 2, kFirst + 2, kFirst + 2, kFirst + 2,
+                                         kFirst + 2, kFirst + 2, kFirst + 2, kFirst + 2);
+  return c0 + j * reinterpret_cast<V8u>(c1 >> 3) + ((j * reinterpret_cast<V8u>(c1 & 7) + 4) >> 3) +
+         j2 * reinterpret_cast<V8u>(c2 >> 6) + ((j2 * reinterpret_cast<V8u>(c2 & 63) + 32) >> 6);
+}
+
+// Lanes 0 .. 3 / 4 .. 7 of unsigned 16-bit lanes as 32-bit lanes (interleaved with zeros).
+inline V4i WidenLo(V8u v) {
+  const V8u zero = {};
+  return reinterpret_cast<V4i>(__builtin_shufflevector(v, zero, 0, 8, 1, 9, 2, 10, 3, 11));
+}
+inline V4i WidenHi(V8u v) {
+  const V8u zero = {};
+  return reinterpret_cast<V4i>(__builtin_shufflevector(v, zero, 4, 12, 5, 13, 6, 14, 7, 15));
+}
+
+// Everything a kernel needs for one image.
+struct RemapJob {
+  const Segment* segment;
+  const SegmentKind* kind;
+  const bool* row_window;  // every segment of the row is kWindow
+  int segments_per_row;
+  int width;
+  int height;
+  const GrayView* raw;
+  const MutableGrayView* out;
+};
+
+// Constant vectors of the SIMD window kernels: 16 lanes of 16 bits (x86 SSSE3 uses the low 8; every
+// constant repeats per 128 bits), byte values named as such.
+struct alignas(32) WindowConstants {
+  std::int16_t word[6][16];    // byte shuffles that broadcast word w of each 128-bit lane
+  std::int16_t linear[16];     // j 2^12
+  std::int16_t quadratic[16];  // j^2 2^9
+  std::int16_t high_byte[16];  // byte shuffle: the high byte of every lane into both its bytes
+  std::int16_t next[16];       // 0x0100: the right tap is the next byte
+  std::int16_t below[16];      // 2^10 - 1: Y above it is the window's second row
+  std::int16_t bias[16];       // bytes 0x80 (also the shuffle bits that give 0)
+  std::int16_t frac[16];       // 127
+  std::int16_t spread[16];     // 255: ax 255 + 128 = (128 - ax) | ax << 8
+  std::int16_t one[16];        // 128
+  std::int16_t ay_bits[16];    // 0x7F00: ay << 8 straight from Y << 5
+  std::int16_t unit[16];       // 2^8: a rounding multiply-high by it is (x + 64) >> 7
+};
+
+constexpr WindowConstants MakeWindowConstants() {
+  WindowConstants k{};
+  for (int i = 0; i < 16; ++i) {
+    const int j = i % kHalf;
+    for (int w = 0; w < 6; ++w) k.word[w][i] = static_cast<std::int16_t>((2 * w + 1) << 8 | 2 * w);
+    k.linear[i] = static_cast<std::int16_t>(j * kLinearScale);
+    k.quadratic[i] = static_cast<std::int16_t>(j * j * kQuadraticScale);
+    k.high_byte[i] = static_cast<std::int16_t>(((2 * j + 1) << 8) | (2 * j + 1));
+    k.next[i] = 0x0100;
+    k.below[i] = kFineOne - 1;
+    k.bias[i] = static_cast<std::int16_t>(-0x7F80);  // 0x8080
+    k.frac[i] = kWeightOne - 1;
+    k.spread[i] = 0xFF;
+    k.one[i] = kWeightOne;
+    k.ay_bits[i] = (kWeightOne - 1) << 8;
+    k.unit[i] = 1 << 8;
+  }
+  return k;
+}
+
+#if defined(__x86_64__)
+using M128 = __m128i;
+using M256 = __m256i;
+
+template <class M>
+inline const M& Vec(const std::int16_t (&lanes)[16]) {
+  return *reinterpret_cast<const M*>(lanes);
+}
+
+// One WindowHalf (8 pixels) with SSSE3: the 16-bit coordinates by pmulhrsw (EvalHalf), the taps by
+// pshufb from the window's three rows (index bytes with the top bit set give 0, which picks the
+// row), the horizontal blend by one pmaddubsw on taps offset by -128 and the vertical one by
+// pmulhrsw (Blend8; exact, see RemapAvx2). Returns the 8 output bytes in the low half.
+__attribute__((target("ssse3"))) inline M128 WindowHalfSsse3(const WindowHalf& half,
+                                                             const std::uint8_t* src,
+                                                             std::int32_t stride,
+                                                             const WindowConstants& k) {
+  const M128 coef = _mm_load_si128(reinterpret_cast<const M128*>(&half));
+  const M128 x = _mm_add_epi16(
+      _mm_add_epi16(
+          _mm_shuffle_epi8(coef, Vec<M128>(k.word[0])),
+          _mm_mulhrs_epi16(_mm_shuffle_epi8(coef, Vec<M128>(k.word[1])), Vec<M128>(k.linear))),
+      _mm_mulhrs_epi16(_mm_shuffle_epi8(coef, Vec<M128>(k.word[2])), Vec<M128>(k.quadratic)));
+  const M128 y = _mm_add_epi16(
+      _mm_add_epi16(
+          _mm_shuffle_epi8(coef, Vec<M128>(k.word[3])),
+          _mm_mulhrs_epi16(_mm_shuffle_epi8(coef, Vec<M128>(k.word[4])), Vec<M128>(k.linear))),
+      _mm_mulhrs_epi16(_mm_shuffle_epi8(coef, Vec<M128>(k.word[5])), Vec<M128>(k.quadratic)));
+  // Tap byte indices (dx, dx + 1) per lane: dx is the high byte of X >> 2.
+  const M128 idx =
+      _mm_add_epi16(_mm_shuffle_epi8(_mm_srli_epi16(x, kFineBits - 8), Vec<M128>(k.high_byte)),
+                    Vec<M128>(k.next));
+  const M128 bias = Vec<M128>(k.bias);
+  const M128 ia = _mm_or_si128(idx, _mm_and_si128(_mm_cmpgt_epi16(y, Vec<M128>(k.below)), bias));
+  const M128 ib = _mm_xor_si128(ia, bias);
+  const std::uint8_t* p = src + static_cast<std::ptrdiff_t>(half.row) * stride + half.column;
+  const M128 r0 = _mm_loadu_si128(reinterpret_cast<const M128*>(p));
+  const M128 r1 = _mm_loadu_si128(reinterpret_cast<const M128*>(p + stride));
+  const M128 r2 = _mm_loadu_si128(reinterpret_cast<const M128*>(p + 2 * stride));
+  const M128 t =
+      _mm_xor_si128(_mm_or_si128(_mm_shuffle_epi8(r0, ia), _mm_shuffle_epi8(r1, ib)), bias);
+  const M128 b =
+      _mm_xor_si128(_mm_or_si128(_mm_shuffle_epi8(r1, ia), _mm_shuffle_epi8(r2, ib)), bias);
+  const M128 ax = _mm_and_si128(_mm_srli_epi16(x, kFineToWeight), Vec<M128>(k.frac));
+  const M128 wx = _mm_add_epi16(_mm_mullo_epi16(ax, Vec<M128>(k.spread)), Vec<M128>(k.one));
+  const M128 ay8 = _mm_and_si128(_mm_slli_epi16(y, 8 - kFineToWeight), Vec<M128>(k.ay_bits));
+  const M128 upper = _mm_maddubs_epi16(wx, t);
+  const M128 lower = _mm_maddubs_epi16(wx, b);
+  const M128 mid = _mm_add_epi16(upper, _mm_mulhrs_epi16(_mm_sub_epi16(lower, upper), ay8));
+  const M128 result = _mm_mulhrs_epi16(mid, Vec<M128>(k.unit));  // -128 .. 127
+  return _mm_xor_si128(_mm_packs_epi16(result, result), bias);
+}
+
+// SSSE3 kernel: kWindow segments by shuffles, kInside by 16-bit gathers; the rest is left to the
+// per-pixel pass.
+__attribute__((target("ssse3"))) void RemapSsse3(RemapJob job) {  // a copy: o aliases anything
+  const std::uint8_t* src = job.raw->data;
+  const std::int32_t stride = job.raw->stride;
+  WindowConstants k = MakeWindowConstants();
+  asm("" : : "r"(&k) : "memory");  // constants stay memory operands (RemapAvx2)
+  for (int v = 0; v < job.height; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
+    std::uint8_t* o = job.out->Row(v);
+    for (int s = 0; s < job.segments_per_row; ++s) {
+      const Segment& seg = job.segment[row + s];
+      const int u0 = s * kSegment;
+      if (job.kind[row + s] == SegmentKind::kWindow) {
+        for (int h = 0; h < 2; ++h) {
+          _mm_storel_epi64(reinterpret_cast<M128*>(o + u0 + h * kHalf),
+                           WindowHalfSsse3(seg.half[h], src, stride, k));
+        }
+      } else if (job.kind[row + s] == SegmentKind::kInside) {
+        alignas(16) std::uint8_t bytes[kSegment];
+        GatherSegment(seg.quad, src, stride, bytes);
+        std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
+      }
+    }
+  }
+}
+
+// vpblendvb: a where the mask byte's top bit is clear, b where it is set. In asm because GCC
+// rewrites the intrinsic as a select on (mask < 0) and, for a mask from a 16-bit compare,
+// recomputes that with a byte compare.
+__attribute__((target("avx2"))) inline M256 BlendBytes(M256 a, M256 b, M256 mask) {
+  M256 out;
+  asm("vpblendvb %3, %2, %1, %0" : "=x"(out) : "x"(a), "x"(b), "x"(mask));
+  return out;
+}
+
+// One kWindow segment with AVX2, 16 lanes; 128-bit half h of every register is the segment's
+// WindowHalf h, as the in-lane byte shuffles need. Returns the output in 16-bit lanes, 128 lower.
+// kMadd: the windows' offsets row * stride + column by one pmaddwd of the loaded entry (stride
+// < 2^15, `madd` holds 1 and the stride at words 6 and 7 of each 128 bits) instead of scalar code.
+template <bool kMadd>
+__attribute__((target("avx2"))) [[gnu::always_inline]] inline M256 WindowSegmentAvx2(
+    const Segment& seg, const std::uint8_t* src, const std::uint8_t* src1, const std::uint8_t* src2,
+    std::int32_t stride, const M256& madd, const WindowConstants& k) {
+  const M256 coef = _mm256_load_si256(reinterpret_cast<const M256*>(&seg));
+  // EvalHalf in 16-bit lanes.
+  const M256 x = _mm256_add_epi16(
+      _mm256_add_epi16(_mm256_shuffle_epi8(coef, Vec<M256>(k.word[0])),
+                       _mm256_mulhrs_epi16(_mm256_shuffle_epi8(coef, Vec<M256>(k.word[1])),
+                                           Vec<M256>(k.linear))),
+      _mm256_mulhrs_epi16(_mm256_shuffle_epi8(coef, Vec<M256>(k.word[2])), Vec<M256>(k.quadratic)));
+  const M256 y = _mm256_add_epi16(
+      _mm256_add_epi16(_mm256_shuffle_epi8(coef, Vec<M256>(k.word[3])),
+                       _mm256_mulhrs_epi16(_mm256_shuffle_epi8(coef, Vec<M256>(k.word[4])),
+                                           Vec<M256>(k.linear))),
+      _mm256_mulhrs_epi16(_mm256_shuffle_epi8(coef, Vec<M256>(k.word[5])), Vec<M256>(k.quadratic)));
+  // Tap byte indices (dx, dx + 1) per lane (dx: the high byte of X >> 2); where Y is in the
+  // window's second row the taps come from rows 1 and 2 (a byte blend) instead of 0 and 1.
+  const M256 idx = _mm256_add_epi16(
+      _mm256_shuffle_epi8(_mm256_srli_epi16(x, kFineBits - 8), Vec<M256>(k.high_byte)),
+      Vec<M256>(k.next));
+  const M256 second = _mm256_cmpgt_epi16(y, Vec<M256>(k.below));
+  // Window offsets from the image; the rows below are read through `src + stride` and
+  // `src + 2 stride` as bases (no per-segment address arithmetic).
+  std::size_t o0;
+  std::size_t o1;
+  if constexpr (kMadd) {
+    const M256 offsets = _mm256_madd_epi16(coef, madd);
+    o0 = static_cast<std::uint32_t>(_mm256_extract_epi32(offsets, 3));
+    o1 = static_cast<std::uint32_t>(_mm256_extract_epi32(offsets, 7));
+  } else {
+    o0 = static_cast<std::size_t>(seg.half[0].row) * stride + seg.half[0].column;
+    o1 = static_cast<std::size_t>(seg.half[1].row) * stride + seg.half[1].column;
+  }
+  const M256 r0 = _mm256_loadu2_m128i(reinterpret_cast<const M128*>(src + o1),
+                                      reinterpret_cast<const M128*>(src + o0));
+  const M256 r1 = _mm256_loadu2_m128i(reinterpret_cast<const M128*>(src1 + o1),
+                                      reinterpret_cast<const M128*>(src1 + o0));
+  const M256 r2 = _mm256_loadu2_m128i(reinterpret_cast<const M128*>(src2 + o1),
+                                      reinterpret_cast<const M128*>(src2 + o0));
+  const M256 s1 = _mm256_shuffle_epi8(r1, idx);
+  // Tap pairs with 128 subtracted (x ^ 0x80: signed bytes), so that the horizontal blend is one
+  // unsigned-by-signed byte multiply-add: upper' = p0' (128 - ax) + p1' ax = upper - 2^14 in
+  // [-2^14, 2^14 - 128]. The vertical step is Blend8's: pmulhrsw(d, ay 2^8) is
+  // floor((d ay + 64) / 128) (d = lower - upper is unchanged), and pmulhrsw(mid', 2^8) =
+  // (mid' + 64) >> 7 is the result 128 lower, as 2^14 / 2^7 = 128.
+  const M256& bias = Vec<M256>(k.bias);
+  const M256 t = _mm256_xor_si256(BlendBytes(_mm256_shuffle_epi8(r0, idx), s1, second), bias);
+  const M256 b = _mm256_xor_si256(BlendBytes(s1, _mm256_shuffle_epi8(r2, idx), second), bias);
+  const M256 ax = _mm256_and_si256(_mm256_srli_epi16(x, kFineToWeight), Vec<M256>(k.frac));
+  // Weight bytes (128 - ax, ax) per pixel: ax 255 + 128.
+  const M256 wx = _mm256_add_epi16(_mm256_mullo_epi16(ax, Vec<M256>(k.spread)), Vec<M256>(k.one));
+  const M256 ay8 = _mm256_and_si256(_mm256_slli_epi16(y, 8 - kFineToWeight), Vec<M256>(k.ay_bits));
+  const M256 upper = _mm256_maddubs_epi16(wx, t);
+  const M256 lower = _mm256_maddubs_epi16(wx, b);
+  const M256 mid =
+      _mm256_add_epi16(upper, _mm256_mulhrs_epi16(_mm256_sub_epi16(lower, upper), ay8));
+  return _mm256_mulhrs_epi16(mid, Vec<M256>(k.unit));  // -128 .. 127
+}
+
+template <bool kMadd>
+__attribute__((target("avx2"))) void RemapAvx2Rows(const RemapJob& job, const M256& madd,
+                                                   const WindowConstants& k) {
+  const std::uint8_t* src = job.raw->data;
+  const std::int32_t stride = job.raw->stride;
+  const std::uint8_t* src1 = src + stride;
+  const std::uint8_t* src2 = src1 + stride;
+  const M256& bias = Vec<M256>(k.bias);
+  for (int v = 0; v < job.height; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
+    const Segment* seg = job.segment + row;
+    std::uint8_t* o = job.out->Row(v);
+    int s = 0;
+    if (job.row_window[v]) {
+      // Every segment of the row is kWindow (and full): two per pass, one pack and 32-byte store.
+      for (; s + 2 <= job.segments_per_row; s += 2) {
+        const M256 a = WindowSegmentAvx2<kMadd>(seg[s], src, src1, src2, stride, madd, k);
+        const M256 c = WindowSegmentAvx2<kMadd>(seg[s + 1], src, src1, src2, stride, madd, k);
+        const M256 bytes =
+            _mm256_xor_si256(_mm256_permute4x64_epi64(_mm256_packs_epi16(a, c), 0xD8), bias);
+        _mm256_storeu_si256(reinterpret_cast<M256*>(o + s * kSegment), bytes);
+      }
+    }
+    for (; s < job.segments_per_row; ++s) {
+      const int u0 = s * kSegment;
+      if (job.kind[row + s] == SegmentKind::kWindow) {
+        const M256 a = WindowSegmentAvx2<kMadd>(seg[s], src, src1, src2, stride, madd, k);
+        const M256 bytes =
+            _mm256_xor_si256(_mm256_permute4x64_epi64(_mm256_packs_epi16(a, a), 0x08), bias);
+        _mm_storeu_si128(reinterpret_cast<M128*>(o + u0), _mm256_castsi256_si128(bytes));
+      } else if (job.kind[row + s] == SegmentKind::kInside) {
+        alignas(16) std::uint8_t bytes[kSegment];
+        GatherSegment(seg[s].quad, src, stride, bytes);
+        std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
+      }
+    }
+  }
+}
+
+// AVX2 kernel: kWindow segments by WindowSegmentAvx2, kInside by 16-bit gathers; the rest is left
+// to the per-pixel pass.
+__attribute__((target("avx2"))) void RemapAvx2(RemapJob job) {  // a copy: o aliases anything
+  // Constants kept in memory: GCC otherwise rebuilds broadcast constants inside the loop (mov,
+  // vmovd, vpbroadcast) for lack of registers; the empty asm hides their values, so they stay
+  // memory operands.
+  WindowConstants k = MakeWindowConstants();
+  asm("" : : "r"(&k) : "memory");
+  const std::int32_t stride = job.raw->stride;
+  if (stride < (1 << 15)) {
+    const M256 madd = _mm256_setr_epi16(0, 0, 0, 0, 0, 0, 1, static_cast<std::int16_t>(stride), 0,
+                                        0, 0, 0, 0, 0, 1, static_cast<std::int16_t>(stride));
+    RemapAvx2Rows<true>(job, madd, k);
+  } else {
+    RemapAvx2Rows<false>(job, _mm256_setzero_si256(), k);
+  }
+}
+#endif  // __x86_64__
+
+// Shuffle-index arithmetic of a window half (NEON): dx = column - window column (0 .. 14) and dy =
+// row - window row (0 or 1) per 16-bit lane. Returns the byte indices into row r (idx_a) and row
+// r + 1 (idx_b): lane bytes dx, dx + 1, with the top bit set (lookup gives 0) where the other row
+// holds the taps. The top taps are lookup(row r, idx_a) | lookup(row r + 1, idx_b), the bottom
+// taps lookup(row r + 1, idx_a) | lookup(row r + 2, idx_b).
 template <class V>
 [[gnu::always_inline]] inline void WindowIndices(V dx, V dy, V* idx_a, V* idx_b) {
   const V idx = dx * 257 + 256;
@@ -126,220 +443,15 @@ template <class V>
   *idx_b = idx | (m ^ 0x8080);
 }
 
-// Everything a kernel needs for one image.
-struct RemapJob {
-  const Segment* segment;
-  const SegmentKind* kind;
-  int segments_per_row;
-  int width;
-  int height;
-  const GrayView* raw;
-  const MutableGrayView* out;
-};
-
-#if defined(__x86_64__)
-using M128 = __m128i;
-
-// One 8-pixel half of a kWindow segment with SSSE3 byte shuffles.
-__attribute__((target("ssse3"))) inline V8b WindowHalfSsse3(const Coords8& c, int base, int row,
-                                                            const std::uint8_t* src,
-                                                            std::int32_t stride) {
-  // Lanes fit 16 bits (raw sides < 2^15): the saturating pack is exact.
-  const auto cx =
-      reinterpret_cast<V8u>(_mm_packs_epi32(reinterpret_cast<M128>(c.fx_lo >> kWeightBits),
-                                            reinterpret_cast<M128>(c.fx_hi >> kWeightBits)));
-  const auto cy =
-      reinterpret_cast<V8u>(_mm_packs_epi32(reinterpret_cast<M128>(c.fy_lo >> kWeightBits),
-                                            reinterpret_cast<M128>(c.fy_hi >> kWeightBits)));
-  V8u idx_a;
-  V8u idx_b;
-  WindowIndices(cx - static_cast<std::uint16_t>(base), cy - static_cast<std::uint16_t>(row), &idx_a,
-                &idx_b);
-  const std::uint8_t* p = src + static_cast<std::ptrdiff_t>(row) * stride + base;
-  const M128 r0 = _mm_loadu_si128(reinterpret_cast<const M128*>(p));
-  const M128 r1 = _mm_loadu_si128(reinterpret_cast<const M128*>(p + stride));
-  const M128 r2 = _mm_loadu_si128(reinterpret_cast<const M128*>(p + 2 * stride));
-  const auto ia = reinterpret_cast<M128>(idx_a);
-  const auto ib = reinterpret_cast<M128>(idx_b);
-  // Blend8 with the horizontal step as one byte multiply-add on taps offset by -128 (exact; the
-  // AVX2 kernel's comment).
-  const M128 bias = _mm_set1_epi8(static_cast<char>(0x80));
-  const M128 t =
-      _mm_xor_si128(_mm_or_si128(_mm_shuffle_epi8(r0, ia), _mm_shuffle_epi8(r1, ib)), bias);
-  const M128 b =
-      _mm_xor_si128(_mm_or_si128(_mm_shuffle_epi8(r1, ia), _mm_shuffle_epi8(r2, ib)), bias);
-  const M128 ax = _mm_packs_epi32(reinterpret_cast<M128>(c.fx_lo & (kWeightOne - 1)),
-                                  reinterpret_cast<M128>(c.fx_hi & (kWeightOne - 1)));
-  const auto ay =
-      reinterpret_cast<V8s>(_mm_packs_epi32(reinterpret_cast<M128>(c.fy_lo & (kWeightOne - 1)),
-                                            reinterpret_cast<M128>(c.fy_hi & (kWeightOne - 1))));
-  const M128 wx =
-      _mm_or_si128(_mm_sub_epi16(_mm_set1_epi16(kWeightOne), ax), _mm_slli_epi16(ax, 8));
-  const auto upper = reinterpret_cast<V8s>(_mm_maddubs_epi16(wx, t));
-  const auto lower = reinterpret_cast<V8s>(_mm_maddubs_epi16(wx, b));
-  const V8s d = lower - upper;
-  const V8s mid = upper + (((d >> 8) * ay) << 1) + (((d & 0xFF) * ay) >> kWeightBits);
-  const V8s result = (mid + (kWeightOne / 2)) >> kWeightBits;  // -128 .. 127
-  const M128 bytes = _mm_xor_si128(
-      _mm_packs_epi16(reinterpret_cast<M128>(result), reinterpret_cast<M128>(result)), bias);
-  V8b out;
-  std::memcpy(&out, &bytes, sizeof(out));
-  return out;
-}
-
-// SSSE3 kernel: kWindow segments by shuffles, kInside by 16-bit gathers; the rest is left to the
-// per-pixel pass.
-__attribute__((target("ssse3"))) void RemapSsse3(RemapJob job) {  // a copy: o aliases anything
-  const std::uint8_t* src = job.raw->data;
-  const std::int32_t stride = job.raw->stride;
-  for (int v = 0; v < job.height; ++v) {
-    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
-    std::uint8_t* o = job.out->Row(v);
-    for (int s = 0; s < job.segments_per_row; ++s) {
-      const Segment& seg = job.segment[row + s];
-      const int u0 = s * kSegment;
-      if (job.kind[row + s] == SegmentKind::kWindow) {
-        for (int q = 0; q < kSegment; q += 8) {
-          const V8b bytes = WindowHalfSsse3(SegmentCoords(seg, q), seg.window[q / 8],
-                                            seg.window[2 + q / 8], src, stride);
-          std::memcpy(o + u0 + q, &bytes, sizeof(bytes));
-        }
-      } else if (job.kind[row + s] == SegmentKind::kInside) {
-        alignas(16) std::uint8_t bytes[kSegment];
-        GatherSegment(seg, src, stride, bytes);
-        std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
-      }
-    }
-  }
-}
-
-using V8f [[gnu::vector_size(32)]] = float;
-using V8i [[gnu::vector_size(32)]] = std::int32_t;
-using V16s [[gnu::vector_size(32)]] = std::int16_t;
-using V16u [[gnu::vector_size(32)]] = std::uint16_t;
-using M256 = __m256i;
-
-// AVX2 kernel: a kWindow segment in one pass of 16 lanes (128-bit half h of each register holds
-// pixels 8h .. 8h + 7, as the in-lane byte shuffle and pack need).
-__attribute__((target("avx2"))) void RemapAvx2(RemapJob job) {  // a copy: o aliases anything
-  const std::uint8_t* src = job.raw->data;
-  const std::int32_t stride = job.raw->stride;
-  // Pixel index of each lane: the pack of (lo, hi) interleaves 128-bit halves.
-  const V8f k_lo = {0.0f, 1.0f, 2.0f, 3.0f, 8.0f, 9.0f, 10.0f, 11.0f};
-  const V8f k_hi = {4.0f, 5.0f, 6.0f, 7.0f, 12.0f, 13.0f, 14.0f, 15.0f};
-  // Byte selectors of the segment's window origin (Segment::window, broadcast to every 64-bit
-  // lane): the column / row of half h in 128-bit lane h.
-  const M256 column_of = _mm256_setr_epi8(0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 2, 3, 2,
-                                          3, 2, 3, 2, 3, 2, 3, 2, 3, 2, 3, 2, 3);
-  // Constants kept in memory: GCC otherwise rebuilds each broadcast constant inside the loop
-  // (mov, vmovd, vpbroadcast) for lack of registers; the empty asm hides their values, so they stay
-  // memory operands.
-  alignas(32) M256 bytes_of[3] = {_mm256_set1_epi8(static_cast<char>(0x80)),
-                                  _mm256_set1_epi32(kWeightOne - 1), _mm256_set1_epi16(kWeightOne)};
-  alignas(32) V16s signed_of[2] = {V16s{} + 0xFF, V16s{} + kWeightOne / 2};
-  alignas(32) V16u unsigned_of[2] = {V16u{} + 0x8080, V16u{} + 256};
-  asm("" : : "r"(bytes_of), "r"(signed_of), "r"(unsigned_of) : "memory");
-  const M256& bias = bytes_of[0];
-  const M256& frac = bytes_of[1];
-  const M256& one = bytes_of[2];
-  const V16s& low_byte = signed_of[0];
-  const V16s& half = signed_of[1];
-  const V16u& select = unsigned_of[0];
-  const V16u& next = unsigned_of[1];
-  const M256 row_of = _mm256_setr_epi8(4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 4, 5, 6, 7, 6, 7,
-                                       6, 7, 6, 7, 6, 7, 6, 7, 6, 7, 6, 7);
-  for (int v = 0; v < job.height; ++v) {
-    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
-    std::uint8_t* o = job.out->Row(v);
-    for (int s = 0; s < job.segments_per_row; ++s) {
-      const Segment& seg = job.segment[row + s];
-      const int u0 = s * kSegment;
-      if (job.kind[row + s] == SegmentKind::kWindow) {
-        const V8f x0 = {seg.x[0], seg.x[0], seg.x[0], seg.x[0],
-                        seg.x[0], seg.x[0], seg.x[0], seg.x[0]};
-        const V8f x1 = {seg.x[1], seg.x[1], seg.x[1], seg.x[1],
-                        seg.x[1], seg.x[1], seg.x[1], seg.x[1]};
-        const V8f x2 = {seg.x[2], seg.x[2], seg.x[2], seg.x[2],
-                        seg.x[2], seg.x[2], seg.x[2], seg.x[2]};
-        const V8f y0 = {seg.y[0], seg.y[0], seg.y[0], seg.y[0],
-                        seg.y[0], seg.y[0], seg.y[0], seg.y[0]};
-        const V8f y1 = {seg.y[1], seg.y[1], seg.y[1], seg.y[1],
-                        seg.y[1], seg.y[1], seg.y[1], seg.y[1]};
-        const V8f y2 = {seg.y[2], seg.y[2], seg.y[2], seg.y[2],
-                        seg.y[2], seg.y[2], seg.y[2], seg.y[2]};
-        // The same operations as EvalSegment; truncation rounds.
-        const V8i fx_lo = __builtin_convertvector(x0 + k_lo * (x1 + k_lo * x2), V8i);
-        const V8i fx_hi = __builtin_convertvector(x0 + k_hi * (x1 + k_hi * x2), V8i);
-        const V8i fy_lo = __builtin_convertvector(y0 + k_lo * (y1 + k_lo * y2), V8i);
-        const V8i fy_hi = __builtin_convertvector(y0 + k_hi * (y1 + k_hi * y2), V8i);
-        const auto cx = reinterpret_cast<V16u>(
-            _mm256_packs_epi32(reinterpret_cast<M256>(fx_lo >> kWeightBits),
-                               reinterpret_cast<M256>(fx_hi >> kWeightBits)));
-        const auto cy = reinterpret_cast<V16u>(
-            _mm256_packs_epi32(reinterpret_cast<M256>(fy_lo >> kWeightBits),
-                               reinterpret_cast<M256>(fy_hi >> kWeightBits)));
-        std::int64_t origin;
-        std::memcpy(&origin, seg.window, sizeof(origin));
-        const M256 origins = _mm256_set1_epi64x(origin);
-        const auto cx0 = reinterpret_cast<V16u>(_mm256_shuffle_epi8(origins, column_of));
-        const auto cy0 = reinterpret_cast<V16u>(_mm256_shuffle_epi8(origins, row_of));
-        // WindowIndices with the constants above.
-        const V16u dx = cx - cx0;
-        const V16u idx_a = ((dx << 8) + dx + next) | ((cy - cy0) * select);
-        const V16u idx_b = idx_a ^ select;
-        const std::uint8_t* p0 =
-            src + static_cast<std::ptrdiff_t>(seg.window[2]) * stride + seg.window[0];
-        const std::uint8_t* p1 =
-            src + static_cast<std::ptrdiff_t>(seg.window[3]) * stride + seg.window[1];
-        const M256 r0 = _mm256_loadu2_m128i(reinterpret_cast<const M128*>(p1),
-                                            reinterpret_cast<const M128*>(p0));
-        const M256 r1 = _mm256_loadu2_m128i(reinterpret_cast<const M128*>(p1 + stride),
-                                            reinterpret_cast<const M128*>(p0 + stride));
-        const M256 r2 = _mm256_loadu2_m128i(reinterpret_cast<const M128*>(p1 + 2 * stride),
-                                            reinterpret_cast<const M128*>(p0 + 2 * stride));
-        const auto ia = reinterpret_cast<M256>(idx_a);
-        const auto ib = reinterpret_cast<M256>(idx_b);
-        // Tap pairs with 128 subtracted (x ^ 0x80: signed bytes), so that the horizontal blend is
-        // one unsigned-by-signed byte multiply-add: upper' = p0' (128 - ax) + p1' ax = upper - 2^14
-        // in [-2^14, 2^14 - 128]; the vertical step of Blend8 is exact on these (|d| unchanged,
-        // floor division by arithmetic shifts), and the result comes out 128 lower.
-        const M256 t = _mm256_xor_si256(
-            _mm256_or_si256(_mm256_shuffle_epi8(r0, ia), _mm256_shuffle_epi8(r1, ib)), bias);
-        const M256 b = _mm256_xor_si256(
-            _mm256_or_si256(_mm256_shuffle_epi8(r1, ia), _mm256_shuffle_epi8(r2, ib)), bias);
-        const M256 ax = _mm256_packs_epi32(_mm256_and_si256(reinterpret_cast<M256>(fx_lo), frac),
-                                           _mm256_and_si256(reinterpret_cast<M256>(fx_hi), frac));
-        const auto ay = reinterpret_cast<V16s>(
-            _mm256_packs_epi32(_mm256_and_si256(reinterpret_cast<M256>(fy_lo), frac),
-                               _mm256_and_si256(reinterpret_cast<M256>(fy_hi), frac)));
-        // Weight bytes (128 - ax, ax) per pixel.
-        const M256 wx = _mm256_or_si256(_mm256_sub_epi16(one, ax), _mm256_slli_epi16(ax, 8));
-        const auto upper = reinterpret_cast<V16s>(_mm256_maddubs_epi16(wx, t));
-        const auto lower = reinterpret_cast<V16s>(_mm256_maddubs_epi16(wx, b));
-        const V16s d = lower - upper;
-        const V16s mid = upper + (((d >> 8) * ay) << 1) + (((d & low_byte) * ay) >> kWeightBits);
-        const V16s result = (mid + half) >> kWeightBits;  // -128 .. 127
-        const M256 bytes = _mm256_xor_si256(
-            _mm256_permute4x64_epi64(
-                _mm256_packs_epi16(reinterpret_cast<M256>(result), reinterpret_cast<M256>(result)),
-                0x08),
-            bias);
-        _mm_storeu_si128(reinterpret_cast<M128*>(o + u0), _mm256_castsi256_si128(bytes));
-      } else if (job.kind[row + s] == SegmentKind::kInside) {
-        alignas(16) std::uint8_t bytes[kSegment];
-        GatherSegment(seg, src, stride, bytes);
-        std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
-      }
-    }
-  }
-}
-#endif  // __x86_64__
-
 #if defined(__aarch64__)
-// NEON kernel: the SSSE3 kernel's window halves with TBL (indices >= 16 give 0).
+// NEON kernel: each WindowHalf with sqrdmulh (= pmulhrsw) coordinates and TBL taps (indices >= 16
+// give 0), blended by Blend8.
 void RemapNeon(RemapJob job) {  // a copy: o aliases anything
   const std::uint8_t* src = job.raw->data;
   const std::int32_t stride = job.raw->stride;
+  constexpr WindowConstants kConstants = MakeWindowConstants();
+  const int16x8_t linear = vld1q_s16(kConstants.linear);
+  const int16x8_t quadratic = vld1q_s16(kConstants.quadratic);
   for (int v = 0; v < job.height; ++v) {
     const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
     std::uint8_t* o = job.out->Row(v);
@@ -347,19 +459,24 @@ void RemapNeon(RemapJob job) {  // a copy: o aliases anything
       const Segment& seg = job.segment[row + s];
       const int u0 = s * kSegment;
       if (job.kind[row + s] == SegmentKind::kWindow) {
-        for (int q = 0; q < kSegment; q += 8) {
-          const Coords8 c = SegmentCoords(seg, q);
-          const int base = seg.window[q / 8];
-          const int top = seg.window[2 + q / 8];
-          const auto cx =
-              reinterpret_cast<V8u>(Narrow(c.fx_lo >> kWeightBits, c.fx_hi >> kWeightBits));
-          const auto cy =
-              reinterpret_cast<V8u>(Narrow(c.fy_lo >> kWeightBits, c.fy_hi >> kWeightBits));
+        for (int h = 0; h < 2; ++h) {
+          const WindowHalf& half = seg.half[h];
+          int16x8_t coef;
+          std::memcpy(&coef, &half, sizeof(coef));
+          const int16x8_t x =
+              vaddq_s16(vaddq_s16(vdupq_laneq_s16(coef, 0), vqrdmulhq_laneq_s16(linear, coef, 1)),
+                        vqrdmulhq_laneq_s16(quadratic, coef, 2));
+          const int16x8_t y =
+              vaddq_s16(vaddq_s16(vdupq_laneq_s16(coef, 3), vqrdmulhq_laneq_s16(linear, coef, 4)),
+                        vqrdmulhq_laneq_s16(quadratic, coef, 5));
+          const auto xs = reinterpret_cast<V8s>(x);
+          const auto ys = reinterpret_cast<V8s>(y);
           V8u idx_a;
           V8u idx_b;
-          WindowIndices(cx - static_cast<std::uint16_t>(base), cy - static_cast<std::uint16_t>(top),
-                        &idx_a, &idx_b);
-          const std::uint8_t* p = src + static_cast<std::ptrdiff_t>(top) * stride + base;
+          WindowIndices(reinterpret_cast<V8u>(xs >> kFineBits),
+                        reinterpret_cast<V8u>(ys >> kFineBits), &idx_a, &idx_b);
+          const std::uint8_t* p =
+              src + static_cast<std::ptrdiff_t>(half.row) * stride + half.column;
           const uint8x16_t r0 = vld1q_u8(p);
           const uint8x16_t r1 = vld1q_u8(p + stride);
           const uint8x16_t r2 = vld1q_u8(p + 2 * stride);
@@ -367,14 +484,14 @@ void RemapNeon(RemapJob job) {  // a copy: o aliases anything
           const auto ib = vreinterpretq_u8_u16(reinterpret_cast<uint16x8_t>(idx_b));
           const auto t = reinterpret_cast<V8u>(vorrq_u8(vqtbl1q_u8(r0, ia), vqtbl1q_u8(r1, ib)));
           const auto b = reinterpret_cast<V8u>(vorrq_u8(vqtbl1q_u8(r1, ia), vqtbl1q_u8(r2, ib)));
-          const V8s ax = Narrow(c.fx_lo, c.fx_hi) & (kWeightOne - 1);
-          const V8s ay = Narrow(c.fy_lo, c.fy_hi) & (kWeightOne - 1);
+          const V8s ax = (xs >> kFineToWeight) & (kWeightOne - 1);
+          const V8s ay = (ys >> kFineToWeight) & (kWeightOne - 1);
           const V8b bytes = Blend8(t, b, ax, ay);
-          std::memcpy(o + u0 + q, &bytes, sizeof(bytes));
+          std::memcpy(o + u0 + h * kHalf, &bytes, sizeof(bytes));
         }
       } else if (job.kind[row + s] == SegmentKind::kInside) {
         alignas(16) std::uint8_t bytes[kSegment];
-        GatherSegment(seg, src, stride, bytes);
+        GatherSegment(seg.quad, src, stride, bytes);
         std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
       }
     }
@@ -400,7 +517,30 @@ void RemapPortable(const RemapJob& job) {
     for (int s = 0; s < job.segments_per_row; ++s) {
       const int u0 = s * kSegment;
       const SegmentKind kind = job.kind[row + s];
-      if (kind != SegmentKind::kInside && kind != SegmentKind::kWindow) {
+      if (kind == SegmentKind::kWindow) {
+        for (int h = 0; h < 2; ++h) {
+          const WindowHalf& half = job.segment[row + s].half[h];
+          V8s coef;
+          std::memcpy(&coef, &half, sizeof(coef));
+          const V8u x = EvalHalf8<0>(coef);
+          const V8u y = EvalHalf8<3>(coef);
+          // Top-left tap: the window origin + dx + (dy ? stride : 0).
+          const V8u dx = x >> kFineBits;
+          const std::int32_t origin = half.row * stride + half.column;
+          const V8u dy = y >> kFineBits;
+          const V4i off_lo = origin + WidenLo(dx) + (-WidenLo(dy) & stride4);
+          const V4i off_hi = origin + WidenHi(dx) + (-WidenHi(dy) & stride4);
+          const auto ax = reinterpret_cast<V8s>((x >> kFineToWeight) & (kWeightOne - 1));
+          const auto ay = reinterpret_cast<V8s>((y >> kFineToWeight) & (kWeightOne - 1));
+          const int q = u0 + h * kHalf;
+          std::memcpy(offset + q, &off_lo, sizeof(off_lo));
+          std::memcpy(offset + q + 4, &off_hi, sizeof(off_hi));
+          std::memcpy(wx + q, &ax, sizeof(ax));
+          std::memcpy(wy + q, &ay, sizeof(ay));
+        }
+        continue;
+      }
+      if (kind != SegmentKind::kInside) {
         for (int k = 0; k < kSegment; ++k) {
           offset[u0 + k] = 0;  // a harmless tap; the pixels are redone by the per-pixel pass
           wx[u0 + k] = 0;
@@ -409,7 +549,7 @@ void RemapPortable(const RemapJob& job) {
         continue;
       }
       for (int q = 0; q < kSegment; q += 8) {
-        const Coords8 c = SegmentCoords(job.segment[row + s], q);
+        const Coords8 c = SegmentCoords(job.segment[row + s].quad, q);
         const V4i off_lo = (c.fy_lo >> kWeightBits) * stride4 + (c.fx_lo >> kWeightBits);
         const V4i off_hi = (c.fy_hi >> kWeightBits) * stride4 + (c.fx_hi >> kWeightBits);
         const V8s ax = Narrow(c.fx_lo, c.fx_hi) & (kWeightOne - 1);
@@ -470,30 +610,53 @@ bool ValidCalibration(const CameraCalibration& c) {
          std::isfinite(c.p2) && std::isfinite(c.k3);
 }
 
-// True when each 8-pixel half of an all-inside segment finds its taps in a 16 x 3 window inside
-// the raw image (SegmentKind::kWindow); the window's top-left pixel, the smaller column and row of
-// the top-left taps of the half's first and last pixel, is stored in seg->window.
-bool WindowSegment(Segment* seg, int raw_width, int raw_height) {
-  auto column = [&](int k) {
-    return static_cast<int>(EvalSegment(seg->x, static_cast<float>(k))) >> kWeightBits;
-  };
-  auto row = [&](int k) {
-    return static_cast<int>(EvalSegment(seg->y, static_cast<float>(k))) >> kWeightBits;
-  };
-  for (int h = 0; h < 2; ++h) {
-    const int first = h * 8;
-    const int base = std::min(column(first), column(first + 7));
-    const int top = std::min(row(first), row(first + 7));
-    if (base + 15 > raw_width - 1 || top + 2 > raw_height - 1) return false;
-    for (int k = first; k < first + 8; ++k) {
-      const int dx = column(k) - base;
-      const int dy = row(k) - top;
-      if (dx < 0 || dx > 14 || dy < 0 || dy > 1) return false;
-    }
-    seg->window[h] = static_cast<std::int16_t>(base);  // raw sides < 2^15
-    seg->window[2 + h] = static_cast<std::int16_t>(top);
+// One coordinate of a WindowHalf: the quadratic through the exact raw coordinate f0, fm, f7 at
+// j = 0, 3.5, 7, in 1/1024 px from `origin` with the 1/256-px rounding offset folded in (so that
+// X >> 3 rounds to 1/128 px). False when a coefficient does not fit its 16-bit lane.
+bool FitHalf(double f0, double fm, double f7, int origin, std::int16_t* c) {
+  const double c2 = ((f7 - f0) / 7.0 - (fm - f0) / 3.5) / 3.5;
+  const double c1 = (fm - f0) / 3.5 - c2 * 3.5;
+  const double coef[3] = {(f0 - origin) * kFineOne + (1 << (kFineToWeight - 1)),
+                          c1 * kFineOne * (1 << 3), c2 * kFineOne * (1 << 6)};
+  for (int i = 0; i < 3; ++i) {
+    const double r = std::round(coef[i]);
+    if (!(std::fabs(r) <= 32767.0)) return false;
+    c[i] = static_cast<std::int16_t>(r);
   }
   return true;
+}
+
+// Makes `half` the WindowHalf of pixels whose exact raw coordinates are (ex[j], ey[j]), j = 0 .. 7
+// (mx, my at j = 3.5): the window's column / row is the smallest tap column / row (or one less),
+// and every pixel's X must stay in 0 .. 15 px (taps dx, dx + 1 <= 15), Y in 0 .. 2 px, the window
+// inside the raw image. False when no origin works.
+bool FitWindowHalf(const double* ex, const double* ey, double mx, double my, int raw_width,
+                   int raw_height, WindowHalf* half) {
+  const int column = static_cast<int>(std::floor(std::min(ex[0], ex[kHalf - 1])));
+  const int row = static_cast<int>(std::floor(std::min(ey[0], ey[kHalf - 1])));
+  for (int dc = 0; dc < 2; ++dc) {
+    for (int dr = 0; dr < 2; ++dr) {
+      const int c = column - dc;
+      const int r = row - dr;
+      if (c < 0 || r < 0 || c + 15 > raw_width - 1 || r + 2 > raw_height - 1) continue;
+      if (!FitHalf(ex[0], mx, ex[kHalf - 1], c, half->x) ||
+          !FitHalf(ey[0], my, ey[kHalf - 1], r, half->y)) {
+        return false;
+      }
+      bool ok = true;
+      for (int j = 0; j < kHalf; ++j) {
+        const int x = EvalHalf(half->x, j);
+        const int y = EvalHalf(half->y, j);
+        ok = ok && x >= 0 && x < 15 * kFineOne && y >= 0 && y < 2 * kFineOne;
+      }
+      if (ok) {
+        half->column = static_cast<std::int16_t>(c);  // raw sides < 2^15
+        half->row = static_cast<std::int16_t>(r);
+        return true;
+      }
+    }
+  }
+  return false;
 }
 
 }  // namespace
@@ -587,6 +750,7 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
     const auto fast_y = static_cast<float>((cal.height - 1) * kWeightOne);
     for (int v = 0; v < h; ++v) {
       table.row_inside[v] = true;
+      table.row_window[v] = true;
       for (int s = 0; s < segments_per_row_; ++s) {
         const std::size_t index = static_cast<std::size_t>(v) * segments_per_row_ + s;
         Segment& seg = table.segment[index];
@@ -605,6 +769,7 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
           seg = Segment{};
           table.kind[index] = SegmentKind::kOutside;
           table.row_inside[v] = false;
+          table.row_window[v] = false;
           identity_ = false;
           continue;
         }
@@ -623,13 +788,18 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
           coef[1] = static_cast<float>(c1 * kWeightOne);
           coef[2] = static_cast<float>(c2 * kWeightOne);
         };
-        fit(ex[0], mx, ex[len - 1], seg.x);
-        fit(ey[0], my, ey[len - 1], seg.y);
+        Quadratic quad;
+        fit(ex[0], mx, ex[len - 1], quad.x);
+        fit(ey[0], my, ey[len - 1], quad.y);
         bool all_fast = true;
         bool any_source = false;
+        double error = 0.0;  // of what Rectify samples, over the pixels with an exact source
+        auto inside = [&](int k) {
+          return ex[k] >= 0.0 && ey[k] >= 0.0 && ex[k] <= cal.width - 1 && ey[k] <= cal.height - 1;
+        };
         for (int k = 0; k < len; ++k) {
-          const float fx = EvalSegment(seg.x, static_cast<float>(k));
-          const float fy = EvalSegment(seg.y, static_cast<float>(k));
+          const float fx = EvalSegment(quad.x, static_cast<float>(k));
+          const float fy = EvalSegment(quad.y, static_cast<float>(k));
           const double tx = (fx - 0.5) / kWeightOne;
           const double ty = (fy - 0.5) / kWeightOne;
           const bool source = fx >= 0.0f && fy >= 0.0f && fx < fast_x + 1.0f && fy < fast_y + 1.0f;
@@ -637,18 +807,39 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
           any_source = any_source || source;
           identity_ = identity_ && source && static_cast<int>(fx) == (u0 + k) * kWeightOne &&
                       static_cast<int>(fy) == v * kWeightOne;
-          if (ex[k] >= 0.0 && ey[k] >= 0.0 && ex[k] <= cal.width - 1 && ey[k] <= cal.height - 1) {
-            max_table_error_px_ = std::max(max_table_error_px_, std::hypot(tx - ex[k], ty - ey[k]));
-          }
+          if (inside(k)) error = std::max(error, std::hypot(tx - ex[k], ty - ey[k]));
         }
+        seg.quad = quad;
         table.kind[index] = all_fast     ? SegmentKind::kInside
                             : any_source ? SegmentKind::kMixed
                                          : SegmentKind::kOutside;
         table.row_inside[v] = table.row_inside[v] && all_fast;
-        if (all_fast && len == kSegment && WindowSegment(&seg, cal.width, cal.height)) {
+        // Window halves: their own quadratics through the exact map (j = 0, 3.5, 7).
+        WindowHalf halves[2];
+        bool window = all_fast && len == kSegment;
+        for (int hh = 0; hh < 2 && window; ++hh) {
+          const int k0 = hh * kHalf;
+          double hx = 0.0;
+          double hy = 0.0;
+          window = RawPixel(c, u0 + k0 + 3.5, v, &hx, &hy) &&
+                   FitWindowHalf(ex + k0, ey + k0, hx, hy, cal.width, cal.height, &halves[hh]);
+        }
+        if (window) {
+          error = 0.0;
+          for (int k = 0; k < kSegment; ++k) {
+            const WindowHalf& half = halves[k / kHalf];
+            const double tx = half.column + (EvalHalf(half.x, k % kHalf) - 4.0) / kFineOne;
+            const double ty = half.row + (EvalHalf(half.y, k % kHalf) - 4.0) / kFineOne;
+            if (inside(k)) error = std::max(error, std::hypot(tx - ex[k], ty - ey[k]));
+          }
+          seg.half[0] = halves[0];
+          seg.half[1] = halves[1];
           table.kind[index] = SegmentKind::kWindow;
           ++windows;
+        } else {
+          table.row_window[v] = false;
         }
+        max_table_error_px_ = std::max(max_table_error_px_, error);
       }
     }
   }
@@ -665,9 +856,17 @@ bool StereoRectifier::TablePixel(int camera, int u, int v, float* raw_u, float* 
   const std::size_t index = static_cast<std::size_t>(v) * segments_per_row_ + u / kSegment;
   if (table_[camera].kind[index] == SegmentKind::kOutside) return false;
   const Segment& seg = table_[camera].segment[index];
+  if (table_[camera].kind[index] == SegmentKind::kWindow) {  // inside by construction
+    const WindowHalf& half = seg.half[(u % kSegment) / kHalf];
+    const int j = u % kHalf;
+    constexpr float kRounding = 1 << (kFineToWeight - 1);
+    *raw_u = half.column + (static_cast<float>(EvalHalf(half.x, j)) - kRounding) / kFineOne;
+    *raw_v = half.row + (static_cast<float>(EvalHalf(half.y, j)) - kRounding) / kFineOne;
+    return true;
+  }
   const auto k = static_cast<float>(u % kSegment);
-  const float fx = EvalSegment(seg.x, k);
-  const float fy = EvalSegment(seg.y, k);
+  const float fx = EvalSegment(seg.quad.x, k);
+  const float fy = EvalSegment(seg.quad.y, k);
   *raw_u = (fx - 0.5f) / kWeightOneF;
   *raw_v = (fy - 0.5f) / kWeightOneF;
   return fx >= 0.0f && fy >= 0.0f &&
@@ -677,7 +876,8 @@ bool StereoRectifier::TablePixel(int camera, int u, int v, float* raw_u, float* 
 
 void StereoRectifier::RemapOne(const GrayView& raw, const Table& table,
                                const MutableGrayView& out) const {
-  const RemapJob job{table.segment, table.kind, segments_per_row_, width_, height_, &raw, &out};
+  const RemapJob job{
+      table.segment, table.kind, table.row_window, segments_per_row_, width_, height_, &raw, &out};
   switch (kernel_) {
 #if defined(__x86_64__)
     case RemapKernel::kAvx2: RemapAvx2(job); break;
@@ -707,8 +907,8 @@ void StereoRectifier::RemapOne(const GrayView& raw, const Table& table,
         continue;
       }
       for (int k = 0; k < len; ++k) {
-        const float fx = EvalSegment(segs[s].x, static_cast<float>(k));
-        const float fy = EvalSegment(segs[s].y, static_cast<float>(k));
+        const float fx = EvalSegment(segs[s].quad.x, static_cast<float>(k));
+        const float fy = EvalSegment(segs[s].quad.y, static_cast<float>(k));
         if (!(fx >= 0.0f && fy >= 0.0f && fx < static_cast<float>(max_x * kWeightOne) + 1.0f &&
               fy < static_cast<float>(max_y * kWeightOne) + 1.0f)) {
           o[u0 + k] = 0;
@@ -722,12 +922,7 @@ void StereoRectifier::RemapOne(const GrayView& raw, const Table& table,
         const int ax = ix - cx * kWeightOne;
         const int ay = iy - cy * kWeightOne;
         const std::uint8_t* s0 = raw.Row(cy) + cx;
-        const std::uint8_t* s1 = s0 + stride;
-        const int upper = s0[0] * (kWeightOne - ax) + s0[1] * ax;
-        const int lower = s1[0] * (kWeightOne - ax) + s1[1] * ax;
-        o[u0 + k] = static_cast<std::uint8_t>(
-            (upper * (kWeightOne - ay) + lower * ay + kWeightOne * kWeightOne / 2) >>
-            (2 * kWeightBits));
+        o[u0 + k] = Blend1(s0, s0 + stride, ax, ay);
       }
     }
   }

@@ -11,21 +11,26 @@
 // distortion (x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2), y likewise)
 // -> raw pixel.
 //
-// Table: each output row is cut into segments of kSegment pixels; per segment the raw source
-// coordinate is a quadratic in the pixel index k, c0 + k (c1 + k c2) (single precision, in
-// 1/128 px with the rounding offset folded into c0, through the exact map at the segment's first,
-// middle and last pixel), 32 bytes per 16 pixels (with the window origin below) instead of a
-// per-pixel entry. Configure measures the largest distance between this and the exact map over
-// every output pixel whose source is inside the raw image (MaxTableErrorPx; 0.00015 / 0.00025 px
-// for the benchmark / EuRoC rigs). A segment with a pixel behind a camera has no source at all.
-// Per frame: the coordinates are evaluated with float vectors (the same operations as the scalar
-// check) and rounded to 1/128 px, the 2x2 source bytes are fetched, and the blend runs in 16-bit
-// lanes. It is exact integer arithmetic: out = round((top (128 - wy) + bottom wy) / 2^14),
-// top/bottom = p0 (128 - wx) + p1 wx, so every kernel (RemapKernel) gives the same bytes. The
-// portable kernel (GCC vector extensions) fetches the taps with two 16-bit loads per pixel; the
-// SSSE3 / AVX2 / NEON kernels fetch those of a kWindow segment from three 16-byte rows with byte
-// shuffles. A rig whose table rounds every output pixel to itself (already rectified: the
-// simulator) is copied row by row, which is the output the table would give.
+// Table: each output row is cut into segments of kSegment pixels, 32 bytes per segment instead of
+// a per-pixel entry. A segment whose 8-pixel halves each take all their taps from a 16 x 3-byte raw
+// window (kWindow; every segment of the benchmark and EuRoC rigs) stores per half the window origin
+// and, relative to it, each source coordinate as a quadratic in the pixel index with 16-bit
+// coefficients (WindowHalf, 1/1024 px), through the exact map at the half's first, middle and last
+// pixel. The other segments store one single-precision quadratic per coordinate over the 16 pixels
+// (Quadratic, 1/128 px). Both fold in the offset that makes truncation round to 1/128 px.
+// Configure measures the largest distance between what Rectify samples (before that rounding) and
+// the exact map over every output pixel whose source is inside the raw image (MaxTableErrorPx;
+// 0.0026 / 0.0024 px for the benchmark / EuRoC rigs, mostly the 16-bit coefficients' rounding). A
+// segment with a pixel behind a camera has no source at all.
+// Per frame: the coordinates are evaluated (16-bit rounding multiply-highs for kWindow, float
+// vectors for the rest, in every kernel the same operations as the scalar check) and rounded to
+// 1/128 px, the 2x2 source bytes are fetched, and the blend runs in 16-bit lanes. It is exact
+// integer arithmetic: top/bottom = p0 (128 - wx) + p1 wx, mid = top + round((bottom - top) wy /
+// 128), out = round(mid / 128) (halves rounded up), so every kernel (RemapKernel) gives the same
+// bytes. The portable kernel (GCC vector extensions) fetches the taps with two 16-bit loads per
+// pixel; the SSSE3 / AVX2 / NEON kernels fetch those of a kWindow segment from three 16-byte rows
+// with byte shuffles. A rig whose table rounds every output pixel to itself (already rectified:
+// the simulator) is copied row by row, which is the output the table would give.
 #pragma once
 
 #include <cstdint>
@@ -68,14 +73,31 @@ namespace rectify_detail {
 constexpr int kSegment = 16;  // output pixels per table segment
 // Every pixel's source is inside (fast path), some are (per-pixel checks), none is (zeros).
 // kWindow: inside, and each 8-pixel half reads its taps from a 16 x 3 byte window (rows r .. r + 2,
-// columns c .. c + 15 of the raw image, c and r those of the half's first pixel), so that the
-// SIMD kernels fetch the taps with three 16-byte loads and byte shuffles instead of 16 loads.
+// columns c .. c + 15 of the raw image), so that the SIMD kernels fetch the taps with three 16-byte
+// loads and byte shuffles instead of 16 loads.
 enum class SegmentKind : std::uint8_t { kInside, kWindow, kMixed, kOutside };
-struct Segment {
-  float x[3];  // raw u = x[0] + k (x[1] + k x[2]), k = 0 .. kSegment - 1 (1/128 px)
+// kInside / kMixed: raw u = x[0] + k (x[1] + k x[2]), k = 0 .. kSegment - 1 (1/128 px, floats).
+struct Quadratic {
+  float x[3];
   float y[3];
-  // kWindow only: top-left raw pixel (column, row) of the window of half 0 and half 1.
-  std::int16_t window[4];  // column 0, column 1, row 0, row 1
+};
+// kWindow: one 8-pixel half in 16-bit fixed point, relative to its window so that a 16-bit lane
+// holds it: X(j) = x[0] + ((j x[1] + 4) >> 3) + ((j^2 x[2] + 32) >> 6) (1/1024 px from column,
+// j = 0 .. 7; the shifts are what a rounding multiply-high, pmulhrsw / sqrdmulh, by j 2^12 and
+// j^2 2^9 gives), Y likewise from row; Configure keeps X in [0, 15) px and Y in [0, 2) px. 16
+// bytes: a 128-bit SIMD lane holds a half's entry.
+struct WindowHalf {
+  std::int16_t x[3];
+  std::int16_t y[3];
+  std::int16_t column;  // top-left raw pixel of the window
+  std::int16_t row;
+};
+// 32 bytes; which member is live follows the segment's kind.
+struct alignas(32) Segment {
+  union {
+    Quadratic quad;
+    WindowHalf half[2];
+  };
 };
 }  // namespace rectify_detail
 
@@ -121,9 +143,10 @@ class StereoRectifier {
   using SegmentKind = rectify_detail::SegmentKind;
   using Segment = rectify_detail::Segment;
   struct Table {
-    Segment segment[kMaxSegments];
+    Segment segment[kMaxSegments];  // 32-byte aligned: the AVX2 kernel loads a whole entry
     SegmentKind kind[kMaxSegments];
     bool row_inside[kMaxImageHeight];  // every segment of the row is kInside or kWindow
+    bool row_window[kMaxImageHeight];  // every segment of the row is kWindow
   };
   void RemapOne(const GrayView& raw, const Table& table, const MutableGrayView& out) const;
 
