@@ -313,7 +313,7 @@ __attribute__((target("avx2"))) inline M256 BlendBytes(M256 a, M256 b, M256 mask
 // kMadd: the windows' offsets row * stride + column by one pmaddwd of the loaded entry (stride
 // < 2^15, `madd` holds 1 and the stride at words 6 and 7 of each 128 bits) instead of scalar code.
 template <bool kMadd>
-__attribute__((target("avx2"))) [[gnu::always_inline]] inline M256 WindowSegmentAvx2(
+__attribute__((target("avx2"), always_inline)) inline M256 WindowSegmentAvx2(
     const Segment& seg, const std::uint8_t* src, const std::uint8_t* src1, const std::uint8_t* src2,
     std::int32_t stride, const M256& madd, const WindowConstants& k) {
   const M256 coef = _mm256_load_si256(reinterpret_cast<const M256*>(&seg));
