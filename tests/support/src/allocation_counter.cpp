@@ -1,11 +1,25 @@
 // glibc lets an executable interpose malloc and friends; the real allocator stays reachable
 // through the __libc_* entry points. operator new is replaced as the standard allows.
+//
+// Under AddressSanitizer (the debug preset) nothing is interposed: ASan must own the allocator
+// to track every block, and an executable that replaces malloc with glibc's hides blocks from
+// it and crashed test programs during ASan's own start-up. ASan instead calls a hook on every
+// allocation it serves (malloc, calloc, realloc, operator new), which counts the same events.
 #include "swf/testing/allocation_counter.hpp"
 
 #include <atomic>
 #include <cstdlib>
 #include <new>
 
+#if defined(__SANITIZE_ADDRESS__)
+#define SWF_COUNT_THROUGH_ASAN_HOOKS 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define SWF_COUNT_THROUGH_ASAN_HOOKS 1
+#endif
+#endif
+
+#ifndef SWF_COUNT_THROUGH_ASAN_HOOKS
 extern "C" {
 void* __libc_malloc(std::size_t size);
 void* __libc_calloc(std::size_t n, std::size_t size);
@@ -13,6 +27,7 @@ void* __libc_realloc(void* p, std::size_t size);
 void* __libc_memalign(std::size_t alignment, std::size_t size);
 void __libc_free(void* p);
 }
+#endif
 
 namespace {
 std::atomic<bool> g_counting{false};
@@ -35,6 +50,20 @@ std::uint64_t StopCountingAllocations() {
 }
 }  // namespace swf::testing
 
+#ifdef SWF_COUNT_THROUGH_ASAN_HOOKS
+// Exported by the sanitizer runtime (sanitizer/allocator_interface.h, not shipped by GCC 12).
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*,
+                                                                             std::size_t),
+                                                         void (*free_hook)(const volatile void*));
+
+namespace {
+void OnAsanMalloc(const volatile void* /*p*/, std::size_t /*size*/) { Note(); }
+void OnAsanFree(const volatile void* /*p*/) {}
+// Installed before main, so it also sees allocations of static constructors that run later.
+[[maybe_unused]] const int g_hooks_installed =
+    __sanitizer_install_malloc_and_free_hooks(OnAsanMalloc, OnAsanFree);
+}  // namespace
+#else
 extern "C" {
 void* malloc(std::size_t size) {
   Note();
@@ -80,3 +109,4 @@ void operator delete(void* p, std::align_val_t) noexcept { __libc_free(p); }
 void operator delete[](void* p, std::align_val_t) noexcept { __libc_free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
 void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
+#endif  // SWF_COUNT_THROUGH_ASAN_HOOKS
