@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 
+#include "lanes.hpp"
 #include "swf/sim/image_io.hpp"
 #include "swf/sim/rng.hpp"
 
@@ -339,25 +340,9 @@ double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
     const V4i a0 = (base_x + kx + octave_offset_x_[g]) & mask;
     const V4i b0 = (base_y + ky + octave_offset_y_[g]) & mask;
     const V4i i00 = b0 * kLatticeStride + a0;
-    // Per lane the pairs (v00, v10) and (v01, v11) are adjacent floats: 8-byte loads into the
-    // halves of 16-byte registers (as doubles, bit-cast back), then de-interleaved.
-    auto pair = [&](int lane, std::int32_t offset) {
-      double q = 0.0;
-      std::memcpy(&q, lattice + i00[lane] + offset, sizeof(q));
-      return q;
-    };
-    const auto top01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
-    const auto top23 = reinterpret_cast<V4f>(V2d{pair(2, 0), pair(3, 0)});
-    const auto bottom01 =
-        reinterpret_cast<V4f>(V2d{pair(0, kLatticeStride), pair(1, kLatticeStride)});
-    const auto bottom23 =
-        reinterpret_cast<V4f>(V2d{pair(2, kLatticeStride), pair(3, kLatticeStride)});
-    const V4f v00 = __builtin_shufflevector(top01, top23, 0, 2, 4, 6);
-    const V4f v10 = __builtin_shufflevector(top01, top23, 1, 3, 5, 7);
-    const V4f v01 = __builtin_shufflevector(bottom01, bottom23, 0, 2, 4, 6);
-    const V4f v11 = __builtin_shufflevector(bottom01, bottom23, 1, 3, 5, 7);
-    const V4f upper = v00 + rx * (v10 - v00);
-    const V4f lower = v01 + rx * (v11 - v01);
+    const lanes::CellCorners4 v = lanes::GatherCellCorners4(lattice, i00, kLatticeStride);
+    const V4f upper = v.v00 + rx * (v.v10 - v.v00);
+    const V4f lower = v.v01 + rx * (v.v11 - v.v01);
     detail += w * octave_amplitude_[g] * (upper + ry * (lower - upper));
   }
   const float sum = (detail[0] + detail[1]) + (detail[2] + detail[3]);
@@ -453,25 +438,9 @@ inline Appearance::V4f Appearance::Detail4(V4i di, V4i dj, V4f cfx, V4f cfy, V4f
     const V4i a0 = ((di << o) + kx + octave_offset_x_[o / 4][o % 4]) & mask;
     const V4i b0 = ((dj << o) + ky + octave_offset_y_[o / 4][o % 4]) & mask;
     const V4i i00 = b0 * kLatticeStride + a0;
-    // Per lane the pairs (v00, v10) and (v01, v11) are adjacent floats: 8-byte loads into the
-    // halves of 16-byte registers (as doubles, bit-cast back), then de-interleaved.
-    auto pair = [&](int lane, std::int32_t offset) {
-      double q = 0.0;
-      std::memcpy(&q, lattice + i00[lane] + offset, sizeof(q));
-      return q;
-    };
-    const auto top01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
-    const auto top23 = reinterpret_cast<V4f>(V2d{pair(2, 0), pair(3, 0)});
-    const auto bottom01 =
-        reinterpret_cast<V4f>(V2d{pair(0, kLatticeStride), pair(1, kLatticeStride)});
-    const auto bottom23 =
-        reinterpret_cast<V4f>(V2d{pair(2, kLatticeStride), pair(3, kLatticeStride)});
-    const V4f v00 = __builtin_shufflevector(top01, top23, 0, 2, 4, 6);
-    const V4f v10 = __builtin_shufflevector(top01, top23, 1, 3, 5, 7);
-    const V4f v01 = __builtin_shufflevector(bottom01, bottom23, 0, 2, 4, 6);
-    const V4f v11 = __builtin_shufflevector(bottom01, bottom23, 1, 3, 5, 7);
-    const V4f upper = v00 + rx * (v10 - v00);
-    const V4f lower = v01 + rx * (v11 - v01);
+    const lanes::CellCorners4 v = lanes::GatherCellCorners4(lattice, i00, kLatticeStride);
+    const V4f upper = v.v00 + rx * (v.v10 - v.v00);
+    const V4f lower = v.v01 + rx * (v.v11 - v.v01);
     detail += w * octave_amplitude_[o / 4][o % 4] * (upper + ry * (lower - upper));
   }
   return detail;
@@ -502,27 +471,13 @@ Appearance::V4f Appearance::Radiance4Grid(std::int32_t base_i, std::int32_t base
   const V4i kj = floor_i(gy < last_y ? gy : V4f{last_y, last_y, last_y, last_y});
   const V4f fx = gx - __builtin_convertvector(ki, V4f);
   const V4f fy = gy - __builtin_convertvector(kj, V4f);
-  // Per lane the node pairs (s00, s10) and (s01, s11) are adjacent floats: 8-byte loads into the
-  // halves of 16-byte registers, then de-interleaved (as in Detail4).
   const std::int32_t stride = size_;
   const float* const base_node =
       shaded_.data() + static_cast<std::ptrdiff_t>(base_j) * stride + base_i;
   const V4i node = kj * stride + ki;  // offsets from the base node (at most 2^28 nodes)
-  auto pair = [&](int lane, std::int32_t offset) {
-    double q = 0.0;
-    std::memcpy(&q, base_node + node[lane] + offset, sizeof(q));
-    return q;
-  };
-  const auto low01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
-  const auto low23 = reinterpret_cast<V4f>(V2d{pair(2, 0), pair(3, 0)});
-  const auto high01 = reinterpret_cast<V4f>(V2d{pair(0, stride), pair(1, stride)});
-  const auto high23 = reinterpret_cast<V4f>(V2d{pair(2, stride), pair(3, stride)});
-  const V4f a00 = __builtin_shufflevector(low01, low23, 0, 2, 4, 6);
-  const V4f a10 = __builtin_shufflevector(low01, low23, 1, 3, 5, 7);
-  const V4f a01 = __builtin_shufflevector(high01, high23, 0, 2, 4, 6);
-  const V4f a11 = __builtin_shufflevector(high01, high23, 1, 3, 5, 7);
-  const V4f top = a00 + fx * (a10 - a00);
-  const V4f bottom = a01 + fx * (a11 - a01);
+  const lanes::CellCorners4 a = lanes::GatherCellCorners4(base_node, node, stride);
+  const V4f top = a.v00 + fx * (a.v10 - a.v00);
+  const V4f bottom = a.v01 + fx * (a.v11 - a.v01);
   const V4f base = top + fy * (bottom - top);
   // The detail lattice sits half a cell off the nodes.
   const V4f hx = gx + 0.5f;

@@ -5,13 +5,8 @@
 #include <cstring>
 #include <limits>
 
+#include "lanes.hpp"
 #include "swf/sim/rng.hpp"
-
-#if defined(__SSE2__)
-#include <xmmintrin.h>
-#elif defined(__ARM_NEON) && defined(__aarch64__)
-#include <arm_neon.h>
-#endif
 
 namespace swf::sim {
 namespace {
@@ -19,15 +14,7 @@ namespace {
 using V4f = Terrain::V4f;
 using V4i = Terrain::V4i;
 
-V4f SqrtLanes(V4f x) {
-#if defined(__SSE2__)
-  return _mm_sqrt_ps(x);
-#elif defined(__ARM_NEON) && defined(__aarch64__)
-  return vsqrtq_f32(x);
-#else
-  return V4f{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
-#endif
-}
+using lanes::SqrtLanes;
 
 V4f LoadLanes(const float* p) {
   V4f v;

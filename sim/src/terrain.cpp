@@ -7,13 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include "lanes.hpp"
 #include "swf/sim/rng.hpp"
-
-#if defined(__SSE2__)
-#include <xmmintrin.h>
-#elif defined(__ARM_NEON) && defined(__aarch64__)
-#include <arm_neon.h>
-#endif
 
 namespace swf::sim {
 namespace {
@@ -531,16 +526,7 @@ bool Terrain::IntersectSpan(const GridRay& ray, double ta, double tb, double* t)
 namespace {
 
 using V4f = Terrain::V4f;
-
-V4f SqrtLanes(V4f x) {
-#if defined(__SSE2__)
-  return _mm_sqrt_ps(x);
-#elif defined(__ARM_NEON) && defined(__aarch64__)
-  return vsqrtq_f32(x);
-#else
-  return V4f{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
-#endif
-}
+using lanes::SqrtLanes;
 
 }  // namespace
 
@@ -548,29 +534,19 @@ inline Terrain::V4f Terrain::IntersectCell4(const GridRays4& rays, V4i i, V4i j,
                                             V4f t1) const {
   // The gap z - h along the ray as in IntersectCell, with heights relative to the cell's first
   // node (node heights are floats: their differences are nearly exact).
-  // Per lane the node pairs (h00, h10) and (h01, h11) are adjacent floats: 8-byte loads into the
-  // halves of 16-byte registers (as doubles, bit-cast back), de-interleaved, then the differences
-  // for all four lanes at once (the same float subtractions as one lane at a time).
-  using V2d [[gnu::vector_size(16)]] = double;
+  // The four node heights of each lane's cell, then the differences for all four lanes at once
+  // (the same float subtractions as one lane at a time).
   const float* const heights = heights_.data();
   const std::int32_t stride = size_;
   // Offsets from the base node in one vector multiply-add (the grid has at most 2^28 nodes).
   const float* const base_node =
       heights + static_cast<std::ptrdiff_t>(rays.base_j) * stride + rays.base_i;
   const V4i node = j * stride + i;
-  auto pair = [&](int lane, std::int32_t offset) {
-    double q = 0.0;
-    std::memcpy(&q, base_node + node[lane] + offset, sizeof(q));
-    return q;
-  };
-  const auto low01 = reinterpret_cast<V4f>(V2d{pair(0, 0), pair(1, 0)});
-  const auto low23 = reinterpret_cast<V4f>(V2d{pair(2, 0), pair(3, 0)});
-  const auto high01 = reinterpret_cast<V4f>(V2d{pair(0, stride), pair(1, stride)});
-  const auto high23 = reinterpret_cast<V4f>(V2d{pair(2, stride), pair(3, stride)});
-  const V4f base = __builtin_shufflevector(low01, low23, 0, 2, 4, 6);
-  const V4f e10 = __builtin_shufflevector(low01, low23, 1, 3, 5, 7) - base;
-  const V4f e01 = __builtin_shufflevector(high01, high23, 0, 2, 4, 6) - base;
-  const V4f d11 = __builtin_shufflevector(high01, high23, 1, 3, 5, 7) - base;
+  const lanes::CellCorners4 h = lanes::GatherCellCorners4(base_node, node, stride);
+  const V4f base = h.v00;
+  const V4f e10 = h.v10 - base;
+  const V4f e01 = h.v01 - base;
+  const V4f d11 = h.v11 - base;
   const V4f e11 = d11 - e10 - e01;
   const V4f fx = rays.gx0 + t0 * rays.dgx - __builtin_convertvector(i, V4f);
   const V4f fy = rays.gy0 + t0 * rays.dgy - __builtin_convertvector(j, V4f);

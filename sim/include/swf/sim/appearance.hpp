@@ -98,7 +98,6 @@ class Appearance {
   std::vector<float> lattice_;  // kLatticeSize^2 values in [-1, 1), row stride kLatticeStride
   // Per octave o, stored as [o / 4][o % 4] (four-lane groups): lattice offsets and amplitude
   // detail_strength 2^(-o/2).
-  using V2d [[gnu::vector_size(16)]] = double;
   V4i octave_offset_x_[kDetailOctaves / 4] = {};
   V4i octave_offset_y_[kDetailOctaves / 4] = {};
   V4f octave_amplitude_[kDetailOctaves / 4] = {};
