@@ -1,42 +1,21 @@
-// glibc lets an executable interpose malloc and friends; the real allocator stays reachable
-// through the __libc_* entry points. operator new is replaced as the standard allows.
-//
-// Under AddressSanitizer (the debug preset) nothing is interposed: ASan must own the allocator
-// to track every block, and an executable that replaces malloc with glibc's hides blocks from
-// it and crashed test programs during ASan's own start-up. ASan instead calls a hook on every
-// allocation it serves (malloc, calloc, realloc, operator new), which counts the same events.
+// The unit tests' counting policy for fsw/core's allocation interposer: every thread counts
+// while a scope is open.
 #include "swf/testing/allocation_counter.hpp"
 
 #include <atomic>
-#include <cstdlib>
-#include <new>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define SWF_COUNT_THROUGH_ASAN_HOOKS 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SWF_COUNT_THROUGH_ASAN_HOOKS 1
-#endif
-#endif
-
-#ifndef SWF_COUNT_THROUGH_ASAN_HOOKS
-extern "C" {
-void* __libc_malloc(std::size_t size);
-void* __libc_calloc(std::size_t n, std::size_t size);
-void* __libc_realloc(void* p, std::size_t size);
-void* __libc_memalign(std::size_t alignment, std::size_t size);
-void __libc_free(void* p);
-}
-#endif
+#include "swf/core/allocation_interposer.hpp"
 
 namespace {
 std::atomic<bool> g_counting{false};
 std::atomic<std::uint64_t> g_count{0};
+}  // namespace
 
-inline void Note() {
+namespace swf::core {
+void NoteAllocation() {
   if (g_counting.load(std::memory_order_relaxed)) g_count.fetch_add(1, std::memory_order_relaxed);
 }
-}  // namespace
+}  // namespace swf::core
 
 namespace swf::testing {
 std::uint64_t AllocationsSinceStart() { return g_count.load(); }
@@ -49,64 +28,3 @@ std::uint64_t StopCountingAllocations() {
   return g_count.load();
 }
 }  // namespace swf::testing
-
-#ifdef SWF_COUNT_THROUGH_ASAN_HOOKS
-// Exported by the sanitizer runtime (sanitizer/allocator_interface.h, not shipped by GCC 12).
-extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*,
-                                                                             std::size_t),
-                                                         void (*free_hook)(const volatile void*));
-
-namespace {
-void OnAsanMalloc(const volatile void* /*p*/, std::size_t /*size*/) { Note(); }
-void OnAsanFree(const volatile void* /*p*/) {}
-// Installed before main, so it also sees allocations of static constructors that run later.
-[[maybe_unused]] const int g_hooks_installed =
-    __sanitizer_install_malloc_and_free_hooks(OnAsanMalloc, OnAsanFree);
-}  // namespace
-#else
-extern "C" {
-void* malloc(std::size_t size) {
-  Note();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t n, std::size_t size) {
-  Note();
-  return __libc_calloc(n, size);
-}
-void* realloc(void* p, std::size_t size) {
-  Note();
-  return __libc_realloc(p, size);
-}
-void free(void* p) { __libc_free(p); }
-}
-
-void* operator new(std::size_t size) {
-  Note();
-  void* p = __libc_malloc(size == 0 ? 1 : size);
-  if (p == nullptr) std::abort();
-  return p;
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-  Note();
-  return __libc_malloc(size == 0 ? 1 : size);
-}
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
-  return operator new(size, tag);
-}
-void* operator new(std::size_t size, std::align_val_t align) {
-  Note();
-  void* p = __libc_memalign(static_cast<std::size_t>(align), size == 0 ? 1 : size);
-  if (p == nullptr) std::abort();
-  return p;
-}
-void* operator new[](std::size_t size, std::align_val_t align) { return operator new(size, align); }
-void operator delete(void* p) noexcept { __libc_free(p); }
-void operator delete[](void* p) noexcept { __libc_free(p); }
-void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
-void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { __libc_free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { __libc_free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
-#endif  // SWF_COUNT_THROUGH_ASAN_HOOKS

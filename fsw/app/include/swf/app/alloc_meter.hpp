@@ -1,7 +1,8 @@
 // Heap allocations on the real-time threads after start, as the flight binary itself reports
-// them (health_t.allocations_after_start). The counting hook (alloc_hook.cpp, an object library
-// linked only into the executables) interposes operator new and malloc and counts calls made by
-// threads that called BeginRealtimeAllocationCounting(). Without the hook the count is -1
+// them (health_t.allocations_after_start). The counting hook (alloc_hook.cpp, the real-time
+// policy of fsw/core's allocation interposer, both linked as objects into the executables only)
+// counts the calls of malloc and operator new made by threads that called
+// BeginRealtimeAllocationCounting(). Without the hook the count is -1
 // ("not measured"); tests use tests/support's counter instead.
 #pragma once
 

@@ -1,6 +1,7 @@
 // Counts heap allocations so tests can prove "no allocation after start" (STYLE.md, memory).
 // Linking swf::test_support replaces the global operator new family and malloc/calloc/realloc
-// of the test executable; every call is counted while a counting scope is open on any thread.
+// of the test executable (fsw/core's allocation interposer, with this counter as its policy);
+// every call is counted while a counting scope is open on any thread.
 #pragma once
 
 #include <cstdint>
