@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <cstring>
 #include <map>
 #include <string>
 
@@ -116,6 +117,31 @@ TEST(KittiVoCeres, SlidingWindowStaysNearTheBatchCost) {
               window.final_cost, window.initial_cost);
   EXPECT_GE(window.final_cost, batch.final_cost * (1 - 1e-9));
   EXPECT_LT(window.final_cost, 0.5 * window.initial_cost);
+}
+
+// A solver reused across solves (Configure resets its filter) gives the bits of a fresh one,
+// also after a windowed solve has left a prior and retired landmarks behind.
+TEST(KittiVoCeres, AReusedSolverGivesTheBitsOfAFreshOne) {
+  KittiVoProblem problem;
+  std::string error;
+  ASSERT_TRUE(LoadKittiVo(DataDir() + "VO_calibration.txt", DataDir() + "VO_camera_poses_large.txt",
+                          DataDir() + "VO_stereo_factors_large.txt", &problem, &error));
+  const KittiVoResult fresh = SolveKittiVo(problem, 0);
+  KittiVoSolver solver;
+  const KittiVoResult windowed = solver.Solve(problem, 5);
+  const KittiVoResult reused = solver.Solve(problem, 0);
+  ASSERT_TRUE(fresh.ok && windowed.ok && reused.ok);
+  EXPECT_EQ(std::memcmp(&fresh.final_cost, &reused.final_cost, sizeof(double)), 0);
+  EXPECT_EQ(fresh.iterations, reused.iterations);
+  ASSERT_EQ(fresh.poses.size(), reused.poses.size());
+  int differing = 0;
+  for (std::size_t j = 0; j < fresh.poses.size(); ++j)
+    differing +=
+        std::memcmp(fresh.poses[j].t.data(), reused.poses[j].t.data(), 3 * sizeof(double)) ||
+                std::memcmp(fresh.poses[j].R.data(), reused.poses[j].R.data(), 9 * sizeof(double))
+            ? 1
+            : 0;
+  EXPECT_EQ(differing, 0);
 }
 
 TEST(KittiVoCeres, LoaderNamesTheBadLine) {

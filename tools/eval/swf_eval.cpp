@@ -904,12 +904,13 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
       return 1;
     }
-    const auto batch = swf::tools::SolveKittiVo(problem, 0);
+    swf::tools::KittiVoSolver solver;  // one ~40 MB filter for every window
+    const auto batch = solver.Solve(problem, 0);
     Series cost{"final cost", {}};
     Series dpos{"max position difference to batch (m)", {}};
     std::string list;
     for (int k : {2, 3, 5, 10, 20}) {
-      const auto r = swf::tools::SolveKittiVo(problem, k);
+      const auto r = solver.Solve(problem, k);
       double worst = 0;
       for (std::size_t j = 0; j < r.poses.size(); ++j)
         worst = std::max(worst, (r.poses[j].t - batch.poses[j].t).norm());

@@ -125,7 +125,18 @@ double KittiVoCost(const KittiVoProblem& problem, const std::vector<Pose<double>
   return cost;
 }
 
+struct KittiVoSolver::Workspace {
+  Filter filter;
+};
+
+KittiVoSolver::KittiVoSolver() : workspace_(std::make_unique<Workspace>()) {}
+KittiVoSolver::~KittiVoSolver() = default;
+
 KittiVoResult SolveKittiVo(const KittiVoProblem& problem, int window) {
+  return KittiVoSolver().Solve(problem, window);
+}
+
+KittiVoResult KittiVoSolver::Solve(const KittiVoProblem& problem, int window) {
   KittiVoResult result;
   const int n = static_cast<int>(problem.poses.size());
   const bool batch = window <= 0;
@@ -138,7 +149,7 @@ KittiVoResult SolveKittiVo(const KittiVoProblem& problem, int window) {
     result.error = "--window must be at most " + std::to_string(kMaxPoses);
     return result;
   }
-  auto filter = std::make_unique<Filter>();  // large: built once, on the heap
+  Filter* const filter = &workspace_->filter;
   estimator::StereoModel<double> model;
   model.camera = problem.camera;
   estimator::SwfOptions options;
