@@ -325,10 +325,10 @@ const swf::tools::KittiVoProblem& Kitti() {
   return kProblem;
 }
 
-// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 // Arg 0: the solver (its ~40 MB fixed-capacity filter) is built once, as the flight process
 // builds its filter at start-up, and each iteration feeds the problem and solves, like Ceres's
 // build + solve. Arg 1: the solver is built inside every iteration (a one-shot swf-vo run).
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_KittiVo_Swf(benchmark::State& state) {
   const bool build_each_time = state.range(0) != 0;
   auto solver = std::make_unique<swf::tools::KittiVoSolver>();
