@@ -157,12 +157,18 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
     std::fprintf(f, "},\n");
   }
   if (eval != nullptr) {
+    // Landmark errors come from the published landmark maps; with none evaluated they are null,
+    // not a perfect 0.
+    if (eval->landmarks_evaluated > 0) {
+      std::fprintf(f, "  \"landmark_rms_error_m\": %.6f,\n  \"landmark_median_error_m\": %.6f,\n",
+                   eval->landmark_rms_error_m, eval->landmark_median_error_m);
+    } else {
+      std::fprintf(f, "  \"landmark_rms_error_m\": null,\n  \"landmark_median_error_m\": null,\n");
+    }
     std::fprintf(f,
-                 "  \"landmark_rms_error_m\": %.6f,\n  \"landmark_median_error_m\": %.6f,\n"
                  "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %.6f,\n"
                  "  \"final_pose_error_m\": %.6f,\n  \"nav_outputs\": %lld,\n"
                  "  \"landmark_maps\": %lld,\n",
-                 eval->landmark_rms_error_m, eval->landmark_median_error_m,
                  static_cast<long long>(eval->landmarks_evaluated), eval->pose_rms_error_m,
                  eval->final_pose_error_m, static_cast<long long>(eval->navs),
                  static_cast<long long>(eval->maps));
@@ -657,8 +663,12 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                static_cast<long long>(h.allocations_after_start), h.stages[kStageCycle].p50_ms,
                h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms);
   if (evaluate) {
-    std::fprintf(stderr, ", landmark RMS error %.3f m, pose RMS error %.3f m",
-                 eval.landmark_rms_error_m, eval.pose_rms_error_m);
+    if (eval.landmarks_evaluated > 0) {
+      std::fprintf(stderr, ", landmark RMS error %.3f m", eval.landmark_rms_error_m);
+    } else {
+      std::fprintf(stderr, ", no landmark map to evaluate");
+    }
+    std::fprintf(stderr, ", pose RMS error %.3f m", eval.pose_rms_error_m);
   }
   std::fprintf(stderr, ", %lld hazard maps (%lld skipped, %lld failed), hazard p50 %.1f ms",
                static_cast<long long>(hazard_counter.maps),
