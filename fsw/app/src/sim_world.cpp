@@ -141,18 +141,23 @@ bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std
   std::atomic<int> next{0};
   std::atomic<int> done{0};
   std::atomic<bool> failed{false};
+  // Renders frame k into the stores; false (and `failed`) when the renderer refuses it.
+  auto render_frame = [&](int k, sim::StereoImages* images) {
+    if (renderer_.Render(terrain_, appearance_, trajectory_.WorldTCamera(k),
+                         static_cast<std::uint64_t>(k), images) != Status::kOk ||
+        images->left.size() != n) {
+      failed = true;
+      return false;
+    }
+    left_[k] = images->left;
+    right_[k] = images->right;
+    ++done;
+    return true;
+  };
   auto worker = [&] {
     sim::StereoImages images;
     for (int k = next++; k < num_frames_; k = next++) {
-      if (renderer_.Render(terrain_, appearance_, trajectory_.WorldTCamera(k),
-                           static_cast<std::uint64_t>(k), &images) != Status::kOk ||
-          images.left.size() != n) {
-        failed = true;
-        return;
-      }
-      left_[k] = images.left;
-      right_[k] = images.right;
-      ++done;
+      if (!render_frame(k, &images)) return;
     }
   };
   std::vector<std::thread> pool;
@@ -161,15 +166,7 @@ bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std
   {
     sim::StereoImages images;
     for (int k = next++; k < num_frames_; k = next++) {
-      if (renderer_.Render(terrain_, appearance_, trajectory_.WorldTCamera(k),
-                           static_cast<std::uint64_t>(k), &images) != Status::kOk ||
-          images.left.size() != n) {
-        failed = true;
-        break;
-      }
-      left_[k] = images.left;
-      right_[k] = images.right;
-      ++done;
+      if (!render_frame(k, &images)) break;
       if (progress != nullptr) progress(done.load(), num_frames_);
     }
   }
