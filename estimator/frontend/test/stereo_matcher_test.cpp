@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -78,6 +79,65 @@ TEST(StereoMatcherTest, RejectsUnrelatedImages) {
   StereoMatchList matches;
   ASSERT_EQ(matcher.MatchAll(left.View(), right.View(), corners, &matches), core::Status::kOk);
   EXPECT_LE(matches.size(), corners.size() / 4);
+}
+
+// GIVEN a right image that holds, besides the true match at disparity 10.5 (between integers),
+// an exact copy of a strip of the left image at disparity 58 (a look-alike, as rocks of one
+// size and light on a row are), both with sensor noise, WHEN matching the left features in that
+// strip THEN without the ambiguity check the copy's lower integer SAD wins and passes the
+// left-right check and the ZNCC gate, and with it the features are rejected as ambiguous, none at a
+// wrong disparity.
+TEST(StereoMatcherTest, RejectsALookAlikeThatBeatsTheTrueMatch) {
+  const testing::Texture texture(7);
+  TestImage left = texture.RenderShifted<TestImage>(400, 240, 0.0, 0.0);
+  TestImage right = texture.RenderShifted<TestImage>(400, 240, -10.5, 0.0);
+  constexpr int kCopyFrom = 100;  // right columns [100, 140) = left columns [158, 198)
+  constexpr int kCopyTo = 140;
+  constexpr int kLookAlike = 58;
+  for (int y = 0; y < right.height; ++y) {
+    for (int x = kCopyFrom; x < kCopyTo; ++x) {
+      right.pixels[static_cast<std::size_t>(y) * right.width + x] =
+          left.pixels[static_cast<std::size_t>(y) * left.width + x + kLookAlike];
+    }
+  }
+  // Independent sensor noise in each image (uniform +-3 DN, a fixed hash): no real camera sees a
+  // pixel-exact copy.
+  std::uint32_t h = 12345u;
+  for (TestImage* img : {&left, &right}) {
+    for (std::uint8_t& p : img->pixels) {
+      h = h * 1664525u + 1013904223u;
+      const int v = p + static_cast<int>((h >> 24) % 7u) - 3;
+      p = static_cast<std::uint8_t>(v < 0 ? 0 : (v > 255 ? 255 : v));
+    }
+  }
+  // Left features whose look-alike patch lies inside the copy and whose true match outside it.
+  CornerList strip;
+  for (const Corner& c : Detect(left)) {
+    const int x = static_cast<int>(c.x);
+    if (x >= kCopyFrom + kLookAlike + 5 && x + 5 < kCopyTo + kLookAlike && x - 11 - 5 >= kCopyTo) {
+      (void)strip.push_back(c);
+    }
+  }
+  ASSERT_GE(strip.size(), 5u);
+  auto match = [&](float sad_ratio, std::size_t* wrong) {
+    StereoMatcherOptions o;
+    o.ambiguity_sad_ratio = sad_ratio;
+    StereoMatcher matcher;
+    EXPECT_EQ(matcher.Configure(o), core::Status::kOk);
+    StereoMatchList matches;
+    EXPECT_EQ(matcher.MatchAll(left.View(), right.View(), strip, &matches), core::Status::kOk);
+    *wrong = 0;
+    for (const StereoMatch& m : matches) *wrong += std::fabs(m.disparity - 10.5f) > 1.0f;
+    return matches.size();
+  };
+  std::size_t wrong_off = 0;
+  std::size_t wrong_on = 0;
+  const std::size_t off = match(-1.0f, &wrong_off);
+  const std::size_t on = match(StereoMatcherOptions{}.ambiguity_sad_ratio, &wrong_on);
+  std::printf("look-alike strip, %zu features: check off %zu matched (%zu wrong), on %zu (%zu)\n",
+              strip.size(), off, wrong_off, on, wrong_on);
+  EXPECT_GE(wrong_off, strip.size() / 2);  // the failure the check exists for
+  EXPECT_EQ(wrong_on, 0u);
 }
 
 TEST(StereoMatcherTest, RefineDisparityConvergesFromOffGuess) {

@@ -32,6 +32,14 @@ struct StereoMatcherOptions {
   float lk_epsilon_px = 0.002f;
   float max_lk_shift_px = 1.5f;  // refinement may not move further from the SAD optimum
   float min_zncc = 0.8f;         // quality gate after refinement
+  // Repeated texture (a rock field's look-alike rocks on one row) can give a wrong integer
+  // disparity a lower SAD than the true one when the true disparity falls between integers.
+  // A second SAD minimum within (1 + ambiguity_sad_ratio) x the best cost is refined and
+  // left-right checked too; when it is a distinct match (more than a pixel away) whose refined
+  // ZNCC is not below the best's by more than ambiguity_zncc_margin, the feature is rejected as
+  // ambiguous. ambiguity_sad_ratio < 0: off.
+  float ambiguity_sad_ratio = 1.0f;
+  float ambiguity_zncc_margin = 0.01f;
   // Solve for an additive offset between the cameras (independent exposures). Off: constant
   // brightness (see TrackerOptions::brightness_offset).
   bool brightness_offset = true;
@@ -65,10 +73,22 @@ class StereoMatcher {
                         StereoMatchList* matches) const;
 
  private:
+  // One integer SAD minimum: its disparity, cost and the costs at disparity -1 / +1 (-1 when
+  // outside the searched range).
+  struct SadMinimum {
+    int disparity = -1;
+    int cost = 0;
+    int cost_before = -1;
+    int cost_after = -1;
+  };
   // Best integer disparity of the patch at (x, y) of `from` searched in `to` at x - sign * d.
-  // Returns -1 when no disparity fits; *cost_before / *cost_after are the neighbours' SADs.
-  int SearchRow(const GrayView& from, const GrayView& to, int x, int y, int sign, int* best_cost,
-                int* cost_before, int* cost_after) const;
+  // False when no disparity fits. *runner_up (when not null) receives the lowest other local
+  // minimum more than one disparity from the best (disparity -1 when there is none).
+  bool SearchRow(const GrayView& from, const GrayView& to, int x, int y, int sign, SadMinimum* best,
+                 SadMinimum* runner_up) const;
+  // Left-right check, parabola start and LK refinement of one SAD minimum; false when rejected.
+  bool Verify(const GrayView& left, const GrayView& right, int x, int y, const SadMinimum& m,
+              float* disparity, float* quality) const;
 
   StereoMatcherOptions options_{};
   bool configured_ = false;
