@@ -159,6 +159,14 @@ TEST(StereoMatcherTest, RejectsBadOptions) {
   o = StereoMatcherOptions{};
   o.patch_radius = 0;
   EXPECT_EQ(matcher.Configure(o), core::Status::kInvalidArgument);
+  o = StereoMatcherOptions{};
+  o.ambiguity_zncc_margin = -0.1f;
+  EXPECT_EQ(matcher.Configure(o), core::Status::kInvalidArgument);
+  o = StereoMatcherOptions{};
+  o.ambiguity_sad_ratio = std::nanf("");
+  EXPECT_EQ(matcher.Configure(o), core::Status::kInvalidArgument);
+  o.ambiguity_sad_ratio = -1.0f;  // off
+  EXPECT_EQ(matcher.Configure(o), core::Status::kOk);
 }
 
 }  // namespace
