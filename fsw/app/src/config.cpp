@@ -1,8 +1,13 @@
 #include "swf/app/config.hpp"
 
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -19,6 +24,37 @@ std::string Trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
+// At most this many bytes of anything read are quoted back in an error: a 10 MB value must not
+// become 10 MB on stderr, and bytes outside printable ASCII are shown as \xNN so that an error
+// never writes terminal control sequences or invalid text.
+constexpr std::size_t kMaxExcerpt = 48;
+
+std::string Excerpt(const std::string& s) {
+  std::string out;
+  const std::size_t n = std::min(s.size(), kMaxExcerpt);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto ch = static_cast<unsigned char>(s[i]);
+    if (ch >= 0x20 && ch < 0x7f) {
+      out += static_cast<char>(ch);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", ch);
+      out += hex;
+    }
+  }
+  if (s.size() > kMaxExcerpt) out += std::string("... (") + std::to_string(s.size()) + " bytes)";
+  return out;
+}
+
+// The value in quotes, excerpted. (Built by appending: GCC 12 reports a false -Wrestrict for "'" +
+// std::string when this is inlined.)
+std::string Quoted(const std::string& v) {
+  std::string out(1, '\'');
+  out += Excerpt(v);
+  out += '\'';
+  return out;
+}
+
 // Each field: a setter that parses the text value or writes why not.
 using Setter = std::function<bool(const std::string& value, FswConfig* c, std::string* why)>;
 
@@ -27,7 +63,7 @@ bool ParseDouble(const std::string& v, double* out, std::string* why) {
   errno = 0;
   const double d = std::strtod(v.c_str(), &end);
   if (v.empty() || end == v.c_str() || *end != '\0' || errno != 0 || !std::isfinite(d)) {
-    *why = "'" + v + "' is not a finite number";
+    *why = Quoted(v) + " is not a finite number";
     return false;
   }
   *out = d;
@@ -39,7 +75,7 @@ bool ParseInt(const std::string& v, std::int64_t* out, std::string* why) {
   errno = 0;
   const long long i = std::strtoll(v.c_str(), &end, 10);
   if (v.empty() || end == v.c_str() || *end != '\0' || errno != 0) {
-    *why = "'" + v + "' is not an integer";
+    *why = Quoted(v) + " is not an integer";
     return false;
   }
   *out = i;
@@ -52,7 +88,7 @@ Setter Double(double FswConfig::*field, double lo, double hi) {
     if (!ParseDouble(v, &d, why)) return false;
     if (d < lo || d > hi) {
       std::ostringstream o;
-      o << v << " is outside [" << lo << ", " << hi << "]";
+      o << Excerpt(v) << " is outside [" << lo << ", " << hi << "]";
       *why = o.str();
       return false;
     }
@@ -67,7 +103,7 @@ Setter Int(Get get, std::int64_t lo, std::int64_t hi) {
     std::int64_t i = 0;
     if (!ParseInt(v, &i, why)) return false;
     if (i < lo || i > hi) {
-      *why = v + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+      *why = Excerpt(v) + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
       return false;
     }
     *get(c) = static_cast<T>(i);
@@ -83,7 +119,7 @@ Setter Bool(Get get) {
     } else if (v == "false" || v == "no" || v == "0") {
       *get(c) = false;
     } else {
-      *why = "'" + v + "' is not true/false";
+      *why = Quoted(v) + " is not true/false";
       return false;
     }
     return true;
@@ -108,7 +144,7 @@ Setter OneOf(Get get, std::initializer_list<const char*> allowed) {
         return true;
       }
     }
-    *why = "'" + v + "' is not one of";
+    *why = Quoted(v) + " is not one of";
     for (const std::string& o : options) *why += " " + o;
     return false;
   };
@@ -127,7 +163,7 @@ const std::map<std::string, Setter>& Fields() {
       else if (v == "log")
         c->source = SourceKind::kLog;
       else {
-        *why = "'" + v + "' is not one of sim v4l2 aravis log";
+        *why = Quoted(v) + " is not one of sim v4l2 aravis log";
         return false;
       }
       return true;
@@ -145,7 +181,7 @@ const std::map<std::string, Setter>& Fields() {
       double d = 0;
       if (!ParseDouble(v, &d, why)) return false;
       if (!(d > 1.0 && d < 170.0)) {
-        *why = v + " is outside (1, 170)";
+        *why = Excerpt(v) + " is outside (1, 170)";
         return false;
       }
       c->sim.hfov_deg = d;
@@ -155,7 +191,7 @@ const std::map<std::string, Setter>& Fields() {
       double d = 0;
       if (!ParseDouble(v, &d, why)) return false;
       if (!(d > 0.0 && d <= 100.0)) {
-        *why = v + " is outside (0, 100]";
+        *why = Excerpt(v) + " is outside (0, 100]";
         return false;
       }
       c->sim.baseline_m = d;
@@ -174,7 +210,7 @@ const std::map<std::string, Setter>& Fields() {
       double d = 0;
       if (!ParseDouble(v, &d, why)) return false;
       if (d < 0.0 || d > 10.0) {
-        *why = v + " is outside [0, 10]";
+        *why = Excerpt(v) + " is outside [0, 10]";
         return false;
       }
       c->sim.imu_sigma_m = d;
@@ -184,7 +220,7 @@ const std::map<std::string, Setter>& Fields() {
       double d = 0;
       if (!ParseDouble(v, &d, why)) return false;
       if (d < 0.0 || d > 0.5) {
-        *why = v + " is outside [0, 0.5]";
+        *why = Excerpt(v) + " is outside [0, 0.5]";
         return false;
       }
       c->sim.imu_sigma_rad = d;
@@ -197,7 +233,7 @@ const std::map<std::string, Setter>& Fields() {
       // 60 m keeps the search square (plus the 10 m clearance cap) and the 100 m view inside the
       // 204.8 m terrain.
       if (d < 0.0 || d > 60.0) {
-        *why = v + " is outside [0, 60]";
+        *why = Excerpt(v) + " is outside [0, 60]";
         return false;
       }
       c->sim.target_search_m = d;
@@ -216,7 +252,7 @@ const std::map<std::string, Setter>& Fields() {
       double d = 0;
       if (!ParseDouble(v, &d, why)) return false;
       if (!(d >= 0.0 && d <= 1000.0)) {
-        *why = v + " is outside [0, 1000]";
+        *why = Excerpt(v) + " is outside [0, 1000]";
         return false;
       }
       c->camera.pair_tolerance_ms = d;
@@ -241,7 +277,7 @@ const std::map<std::string, Setter>& Fields() {
       else if (v == "lockstep")
         c->pacing = Pacing::kLockstep;
       else {
-        *why = "'" + v + "' is not one of realtime lockstep";
+        *why = Quoted(v) + " is not one of realtime lockstep";
         return false;
       }
       return true;
@@ -254,7 +290,7 @@ const std::map<std::string, Setter>& Fields() {
         c->hazard_downsample = v[0] - '0';
         return true;
       }
-      *why = "'" + v + "' is not one of 1 2 4";
+      *why = Quoted(v) + " is not one of 1 2 4";
       return false;
     };
     f["health_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->health_every; }, 1, 100000);
@@ -277,7 +313,7 @@ const std::map<std::string, Setter>& Fields() {
       std::string rest;
       if (!(in >> p[0] >> p[1] >> p[2]) || (in >> rest) || !std::isfinite(p[0]) ||
           !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-        *why = "'" + v + "' is not three finite numbers (x y z)";
+        *why = Quoted(v) + " is not three finite numbers (x y z)";
         return false;
       }
       for (int i = 0; i < 3; ++i) c->initial_position_m[i] = p[i];
@@ -285,7 +321,7 @@ const std::map<std::string, Setter>& Fields() {
     };
     f["inject.stage"] = [](const std::string& v, FswConfig* c, std::string* why) {
       if (StageIndex(v) < 0 || StageIndex(v) >= kStageCycle) {
-        *why = "'" + v + "' is not a stage (acquire rectify track estimate output map)";
+        *why = Quoted(v) + " is not a stage (acquire rectify track estimate output map)";
         return false;
       }
       c->inject_stage = v;
@@ -301,24 +337,52 @@ const std::map<std::string, Setter>& Fields() {
   return kFields;
 }
 
-bool ApplyLine(const std::string& raw, const std::string& where, FswConfig* config,
-               std::string* error) {
+// A configuration is text: NUL (which would silently cut a value short: `window: 5\0junk` read as
+// 5) and the other control bytes are refused; tab and carriage return (CRLF files) are blanks.
+bool CheckBytes(const std::string& line, const std::string& where, std::string* error) {
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const auto ch = static_cast<unsigned char>(line[i]);
+    if ((ch < 0x20 && ch != '\t' && ch != '\r') || ch == 0x7f) {
+      char what[64];
+      std::snprintf(what, sizeof what, "%s (0x%02x) at column %zu",
+                    ch == 0 ? "a NUL byte" : "a control byte", ch, i + 1);
+      *error = where + ": " + what + ": a configuration is text";
+      return false;
+    }
+  }
+  return true;
+}
+
+// Splits one line into key and value. A blank or comment-only line gives an empty key.
+bool SplitLine(const std::string& raw, const std::string& where, std::string* key,
+               std::string* value, std::string* error) {
   std::string line = raw;
   const auto hash = line.find('#');
   if (hash != std::string::npos) line = line.substr(0, hash);
   line = Trim(line);
+  key->clear();
+  value->clear();
   if (line.empty()) return true;
   const auto colon = line.find(':');
   if (colon == std::string::npos) {
-    *error = where + ": expected 'key: value', got '" + line + "'";
+    *error = where + ": expected 'key: value', got '" + Excerpt(line) + "'";
     return false;
   }
-  const std::string key = Trim(line.substr(0, colon));
-  const std::string value = Trim(line.substr(colon + 1));
+  *key = Trim(line.substr(0, colon));
+  *value = Trim(line.substr(colon + 1));
+  if (key->empty()) {
+    *error = where + ": expected 'key: value', got '" + Excerpt(line) + "' (no key)";
+    return false;
+  }
+  return true;
+}
+
+bool SetField(const std::string& key, const std::string& value, const std::string& where,
+              FswConfig* config, std::string* error) {
   const auto& fields = Fields();
   const auto it = fields.find(key);
   if (it == fields.end()) {
-    *error = where + ": " + key + ": unknown field";
+    *error = where + ": " + Excerpt(key) + ": unknown field";
     return false;
   }
   std::string why;
@@ -327,6 +391,83 @@ bool ApplyLine(const std::string& raw, const std::string& where, FswConfig* conf
     return false;
   }
   return true;
+}
+
+// The file's lines into `c` (which starts from the defaults), recording where each key was set. A
+// key set twice is refused: the last one would win silently (`source: aravis` ... `source: sim`
+// flies the simulator).
+bool ApplyFileText(const std::string& text, const std::string& file, FswConfig* c,
+                   std::string* error) {
+  c->origins.file = file;
+  std::size_t begin = 0;
+  int number = 0;
+  int settings = 0;
+  while (begin < text.size()) {
+    std::size_t end = text.find('\n', begin);
+    if (end == std::string::npos) end = text.size();
+    const std::string raw = text.substr(begin, end - begin);
+    begin = end + 1;
+    const std::string where = file + ":" + std::to_string(++number);
+    std::string key;
+    std::string value;
+    if (!CheckBytes(raw, where, error) || !SplitLine(raw, where, &key, &value, error)) {
+      return false;
+    }
+    if (key.empty()) continue;
+    const auto first = c->origins.keys.find(key);
+    if (first != c->origins.keys.end()) {
+      *error =
+          where + ": " + key + ": set again (first on " + first->second + "); a key is set once";
+      return false;
+    }
+    if (!SetField(key, value, where, c, error)) return false;
+    c->origins.keys[key] = where;
+    ++settings;
+  }
+  // An empty or comments-only file would fly every default (a simulated descent publishing on the
+  // bus): what a file does not say is not guessed.
+  if (settings == 0) {
+    *error = file + ": no settings (the file is empty or only comments)";
+    return false;
+  }
+  if (c->origins.keys.count("source") == 0) {
+    *error = file +
+             ": source: required (sim, v4l2, aravis or log): the file "
+             "names what it flies";
+    return false;
+  }
+  return true;
+}
+
+// One command-line override. A key the file sets may be overridden (that is what --set is for); the
+// same key twice on the command line is refused like a key twice in the file.
+bool ApplyOverride(const std::string& key_value, FswConfig* c, std::string* error) {
+  const std::string where = "--set";
+  std::string key;
+  std::string value;
+  if (!CheckBytes(key_value, where, error) || !SplitLine(key_value, where, &key, &value, error)) {
+    return false;
+  }
+  if (key.empty()) {
+    *error = where + ": expected 'key: value', got '" + Excerpt(key_value) + "'";
+    return false;
+  }
+  const auto before = c->origins.keys.find(key);
+  if (before != c->origins.keys.end() && before->second == where) {
+    *error = where + ": " + key + ": given twice on the command line";
+    return false;
+  }
+  if (!SetField(key, value, where, c, error)) return false;
+  c->origins.keys[key] = where;
+  return true;
+}
+
+// Where the error about `field` points: the line (or --set) that set it; the file when the field
+// kept its default.
+std::string Where(const FswConfig& c, const std::string& field, const std::string& origin) {
+  const auto it = c.origins.keys.find(field);
+  if (it != c.origins.keys.end()) return it->second;
+  return c.origins.file.empty() ? origin : c.origins.file;
 }
 
 }  // namespace
@@ -350,7 +491,7 @@ int StageIndex(const std::string& name) {
 
 bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* error) {
   auto fail = [&](const std::string& field, const std::string& why) {
-    *error = origin + ": " + field + ": " + why;
+    *error = Where(c, field, origin) + ": " + field + ": " + why;
     return false;
   };
   if (c.source == SourceKind::kLog && c.log_path.empty()) {
@@ -395,35 +536,78 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   return true;
 }
 
+namespace {
+
+// Reads a configuration file: a regular file of at most kMaxConfigBytes (a directory opens and
+// reads as empty on Linux, a device or FIFO may never end).
+bool ReadConfigFile(const std::string& path, std::string* text, std::string* error) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    *error = Excerpt(path) + ": cannot open the configuration file: " + std::strerror(errno);
+    return false;
+  }
+  if (S_ISDIR(st.st_mode)) {
+    *error = Excerpt(path) + ": is a directory, not a configuration file";
+    return false;
+  }
+  if (!S_ISREG(st.st_mode)) {
+    *error = Excerpt(path) + ": is not a regular file";
+    return false;
+  }
+  if (static_cast<std::uint64_t>(st.st_size) > kMaxConfigBytes) {
+    *error = Excerpt(path) + ": " + std::to_string(st.st_size) + " bytes, larger than the " +
+             std::to_string(kMaxConfigBytes) + " a configuration may have";
+    return false;
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = Excerpt(path) + ": cannot open the configuration file";
+    return false;
+  }
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  *text = buffer.str();
+  if (text->size() > kMaxConfigBytes) {  // grew after stat
+    *error = Excerpt(path) + ": larger than " + std::to_string(kMaxConfigBytes) + " bytes";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,
                  std::string* error) {
   FswConfig c;
-  std::istringstream in(text);
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (!ApplyLine(line, origin + ":" + std::to_string(number), &c, error)) return false;
-  }
+  if (!ApplyFileText(text, origin, &c, error)) return false;
   if (!ValidateConfig(c, origin, error)) return false;
   *config = c;
   return true;
 }
 
 bool LoadConfig(const std::string& path, FswConfig* config, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = path + ": cannot open the configuration file";
-    return false;
+  std::string text;
+  if (!ReadConfigFile(path, &text, error)) return false;
+  return ParseConfig(text, path, config, error);
+}
+
+bool LoadConfig(const std::string& path, const std::vector<std::string>& overrides,
+                FswConfig* config, std::string* error) {
+  std::string text;
+  if (!ReadConfigFile(path, &text, error)) return false;
+  FswConfig c;
+  if (!ApplyFileText(text, path, &c, error)) return false;
+  for (const std::string& o : overrides) {
+    if (!ApplyOverride(o, &c, error)) return false;
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  return ParseConfig(text.str(), path, config, error);
+  if (!ValidateConfig(c, path, error)) return false;
+  *config = c;
+  return true;
 }
 
 bool OverrideConfig(const std::string& key_value, FswConfig* config, std::string* error) {
   FswConfig c = *config;
-  if (!ApplyLine(key_value, "--set", &c, error)) return false;
+  if (!ApplyOverride(key_value, &c, error)) return false;
   if (!ValidateConfig(c, "--set", error)) return false;
   *config = c;
   return true;

@@ -1,12 +1,17 @@
-// The flight process's configuration file: one `key: value` per line, `#` starts a comment,
-// dotted keys group settings (`sim.width_px: 512`). Every key is known and typed; the whole file
-// is validated before anything starts, and the first problem is reported with the line and the
-// field's name ("config.cfg:12: window: 40 is outside [1, 10]"). Unknown keys are errors, so a
-// typo never silently falls back to a default. fsw/app/README.md lists every key.
+// The flight process's configuration file: one `key: value` per line, `#` starts a comment, dotted
+// keys group settings (`sim.width_px: 512`). Every key is known and typed; the whole file is
+// validated before anything starts, and the first problem is reported with the line and the field's
+// name ("config.cfg:12: window: 40 is outside [1, 10]"). Unknown keys are errors, so a typo never
+// silently falls back to a default; so are a key given twice, a file without settings or without
+// `source`, NUL and other control bytes. Errors quote at most a bounded, printable excerpt of what
+// was read. fsw/app/README.md lists every key.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "swf/app/flight_loop.hpp"
 #include "swf/app/pipeline.hpp"
@@ -53,9 +58,17 @@ struct CameraConfig {
   double pair_tolerance_ms = 2.0;
 };
 
+// Where the settings came from, so that every error names the line to change: the file, and for
+// each key given, "<file>:<line>" or "--set" (a command-line override). Keys left at their default
+// are absent (their errors name the file alone).
+struct ConfigOrigins {
+  std::string file;
+  std::map<std::string, std::string> keys;
+};
+
 struct FswConfig {
-  SourceKind source = SourceKind::kSim;
-  std::string log_path;  // source: log
+  SourceKind source = SourceKind::kSim;  // required in every file
+  std::string log_path;                  // source: log
   SimConfig sim;
   CameraConfig camera;
 
@@ -103,16 +116,34 @@ struct FswConfig {
   std::int64_t inject_frame = -1;
   std::int64_t inject_frames = 1;
   double inject_ms = 0.0;
+
+  ConfigOrigins origins;
 };
 
-// Parses and validates. False with `error` = "<origin>:<line>: <field>: <problem>" (or
-// "<origin>: <field>: <problem>" for cross-field checks).
+// Parses and validates. False with `error` = "<origin>:<line>: <field>: <problem>"; a problem
+// between fields names the line of the field to change ("<origin>: <field>: ..." when that field
+// was left at its default). `config` is untouched on refusal.
 bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,
                  std::string* error);
+// Reads `path` (a regular file of at most kMaxConfigBytes; a directory, a device or a larger file
+// is refused) and parses it.
 bool LoadConfig(const std::string& path, FswConfig* config, std::string* error);
-// Applies one `key: value` override (command line) with the same checks, then re-validates.
+// The flown configuration: the file, then each `key: value` override in order (a key the file sets
+// may be overridden; the same key twice among the overrides is refused), validated once as a whole,
+// so that the order of the overrides does not matter and an override may repair a combination the
+// file alone fails. Errors in an override read "--set: <field>: <problem>".
+bool LoadConfig(const std::string& path, const std::vector<std::string>& overrides,
+                FswConfig* config, std::string* error);
+// Applies one `key: value` override (command line) with the same checks, then re-validates the
+// whole configuration (so a pair of overrides that only holds together must come in the order that
+// keeps every step valid; LoadConfig with overrides has no such order).
 bool OverrideConfig(const std::string& key_value, FswConfig* config, std::string* error);
+// Cross-field consistency. `origin` names the configuration when `config.origins.file` is empty.
+// Pure: reads no file.
 bool ValidateConfig(const FswConfig& config, const std::string& origin, std::string* error);
+
+// The largest configuration file read (a configuration is a few hundred lines).
+inline constexpr std::size_t kMaxConfigBytes = 1u << 20;
 
 const char* SourceName(SourceKind kind);
 int StageIndex(const std::string& name);  // -1 when unknown
