@@ -1,6 +1,7 @@
 #include "swf/app/config.hpp"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -538,6 +539,50 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
 
 namespace {
 
+// stat(2) and access(2) on `path`: "" when this process may write it (an existing non-directory
+// file, or a new file in an existing directory), otherwise why not.
+std::string WhyNotWritableFile(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) return "is a directory";
+    if (::access(path.c_str(), W_OK) != 0)
+      return std::string("cannot be written: ") + std::strerror(errno);
+    return "";
+  }
+  // ENOTDIR: a component of the directory is a file (said below about the directory).
+  if (errno != ENOENT && errno != ENOTDIR) {
+    return std::string("cannot be examined: ") + std::strerror(errno);
+  }
+  const auto slash = path.find_last_of('/');
+  const std::string dir =
+      slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
+  if (::stat(dir.c_str(), &st) != 0) {
+    const int e = errno;  // before anything else can change it
+    return std::string("its directory ") + Quoted(dir) + " " +
+           (e == ENOENT ? std::string("does not exist")
+                        : std::string("cannot be examined: ") + std::strerror(e));
+  }
+  if (!S_ISDIR(st.st_mode)) return Quoted(dir) + " is not a directory";
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+    const int e = errno;
+    return std::string("its directory ") + Quoted(dir) + " cannot be written: " + std::strerror(e);
+  }
+  return "";
+}
+
+std::string WhyNotWritableDirectory(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    return errno == ENOENT ? std::string("does not exist")
+                           : std::string("cannot be examined: ") + std::strerror(errno);
+  }
+  if (!S_ISDIR(st.st_mode)) return "is not a directory";
+  if (::access(path.c_str(), W_OK | X_OK) != 0) {
+    return std::string("cannot be written: ") + std::strerror(errno);
+  }
+  return "";
+}
+
 // Reads a configuration file: a regular file of at most kMaxConfigBytes (a directory opens and
 // reads as empty on Linux, a device or FIFO may never end).
 bool ReadConfigFile(const std::string& path, std::string* text, std::string* error) {
@@ -575,6 +620,30 @@ bool ReadConfigFile(const std::string& path, std::string* text, std::string* err
 }
 
 }  // namespace
+
+bool CheckOutputPaths(const FswConfig& c, std::string* error) {
+  const std::string origin = c.origins.file.empty() ? "configuration" : c.origins.file;
+  auto fail = [&](const char* field, const std::string& path, const std::string& why) {
+    *error = Where(c, field, origin) + ": " + field + ": " + Quoted(path) + " " + why;
+    return false;
+  };
+  if (!c.summary_path.empty()) {
+    const std::string why = WhyNotWritableFile(c.summary_path);
+    if (!why.empty()) return fail("summary.path", c.summary_path, why);
+  }
+  if (!c.record_path.empty()) {
+    const std::string why = WhyNotWritableFile(c.record_path);
+    if (!why.empty()) return fail("record.path", c.record_path, why);
+    if (c.record_path == c.summary_path) {
+      return fail("record.path", c.record_path, "is also summary.path");
+    }
+  }
+  if (!c.plot_dir.empty()) {
+    const std::string why = WhyNotWritableDirectory(c.plot_dir);
+    if (!why.empty()) return fail("summary.plot_dir", c.plot_dir, why);
+  }
+  return true;
+}
 
 bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,
                  std::string* error) {

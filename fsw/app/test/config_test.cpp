@@ -1,8 +1,10 @@
 // The configuration is refused before start with a message naming the field: bad files (empty, a
-// directory, duplicate keys, NUL bytes, no `source`).
+// directory, duplicate keys, NUL bytes, no `source`) and output paths that cannot be written.
 #include "swf/app/config.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -56,6 +58,11 @@ class ScratchDir {
  private:
   std::string path_;
 };
+
+bool Exists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
 
 TEST(ConfigTest, ParsesEveryKindOfField) {
   FswConfig c;
@@ -237,6 +244,67 @@ TEST(ConfigTest, CommittedConfigurationsLoad) {
     FswConfig c;
     std::string error;
     EXPECT_TRUE(LoadConfig(AppDir() + "/config/" + name, &c, &error)) << name << ": " << error;
+  }
+}
+
+// ---- output paths ------------------------------------------------------------------------------
+
+TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
+  ScratchDir dir;
+  const std::string d = dir.Path();
+  const std::string a_file = dir.Write("file", "x");
+  FswConfig c;
+  std::string error;
+  ASSERT_TRUE(ParseConfig("source: sim\nsummary.path: " + d + "/s.json\nrecord.path: " + d +
+                              "/r.lcmlog\nsummary.plot_dir: " + d + "\n",
+                          "t.cfg", &c, &error))
+      << error;
+  EXPECT_TRUE(CheckOutputPaths(c, &error)) << error;
+  // Nothing is created by the check.
+  EXPECT_FALSE(Exists(d + "/s.json"));
+  EXPECT_FALSE(Exists(d + "/r.lcmlog"));
+  // An existing file may be rewritten.
+  c.summary_path = a_file;
+  EXPECT_TRUE(CheckOutputPaths(c, &error)) << error;
+
+  auto refused = [&](FswConfig bad, const std::string& expect) {
+    std::string why;
+    EXPECT_FALSE(CheckOutputPaths(bad, &why)) << expect;
+    EXPECT_NE(why.find(expect), std::string::npos) << "error was: " << why;
+  };
+  FswConfig bad = c;
+  bad.summary_path = d + "/missing/s.json";
+  refused(bad, "t.cfg:2: summary.path: '" + d + "/missing/s.json' its directory '" + d +
+                   "/missing' does not exist");
+  bad = c;
+  bad.summary_path = d;
+  refused(bad, "t.cfg:2: summary.path: '" + d + "' is a directory");
+  bad = c;
+  bad.record_path = a_file + "/r.lcmlog";
+  refused(bad,
+          "t.cfg:3: record.path: '" + a_file + "/r.lcmlog' '" + a_file + "' is not a directory");
+  bad = c;
+  bad.record_path = bad.summary_path;
+  refused(bad, "record.path: '" + a_file + "' is also summary.path");
+  bad = c;
+  bad.plot_dir = d + "/plots";
+  refused(bad, "t.cfg:4: summary.plot_dir: '" + d + "/plots' does not exist");
+  bad = c;
+  bad.plot_dir = a_file;
+  refused(bad, "summary.plot_dir: '" + a_file + "' is not a directory");
+  // A path given by --set is named as such.
+  FswConfig over = c;
+  ASSERT_TRUE(OverrideConfig("summary.path: /nonexistent/s.json", &over, &error)) << error;
+  refused(over,
+          "--set: summary.path: '/nonexistent/s.json' its directory "
+          "'/nonexistent'");
+  // Permissions (meaningless for root, who may write anywhere on a writable file system).
+  if (::geteuid() != 0) {
+    const std::string ro = d + "/ro";
+    ASSERT_EQ(::mkdir(ro.c_str(), 0555), 0);
+    bad = c;
+    bad.summary_path = ro + "/s.json";
+    refused(bad, "summary.path: '" + ro + "/s.json' its directory '" + ro + "' cannot be written");
   }
 }
 

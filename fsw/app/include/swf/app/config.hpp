@@ -145,6 +145,13 @@ bool ValidateConfig(const FswConfig& config, const std::string& origin, std::str
 // The largest configuration file read (a configuration is a few hundred lines).
 inline constexpr std::size_t kMaxConfigBytes = 1u << 20;
 
+// Before the run: every output can be written, so that a run is never lost to a path found bad only
+// at its end. summary.path and record.path: an existing regular file this process may write, or a
+// new file in an existing directory it may write (not a directory, not the same file as the other);
+// summary.plot_dir: an existing directory it may write. Uses stat(2)/access(2) only: creates,
+// truncates and deletes nothing. False with "<where>: <field>: <problem>".
+bool CheckOutputPaths(const FswConfig& config, std::string* error);
+
 const char* SourceName(SourceKind kind);
 int StageIndex(const std::string& name);  // -1 when unknown
 
