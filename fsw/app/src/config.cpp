@@ -11,8 +11,13 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <sstream>
+
+#include "swf/app/sim_world.hpp"
+#include "swf/sim/rig.hpp"
+#include "swf/sim/trajectory.hpp"
 
 namespace swf::app {
 
@@ -98,13 +103,15 @@ Setter Double(double FswConfig::*field, double lo, double hi) {
   };
 }
 
+// `limit_note` says where a compiled limit comes from.
 template <typename T, typename Get>
-Setter Int(Get get, std::int64_t lo, std::int64_t hi) {
+Setter Int(Get get, std::int64_t lo, std::int64_t hi, const char* limit_note = "") {
   return [=](const std::string& v, FswConfig* c, std::string* why) {
     std::int64_t i = 0;
     if (!ParseInt(v, &i, why)) return false;
     if (i < lo || i > hi) {
-      *why = Excerpt(v) + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+      *why = Excerpt(v) + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]" +
+             limit_note;
       return false;
     }
     *get(c) = static_cast<T>(i);
@@ -260,7 +267,8 @@ const std::map<std::string, Setter>& Fields() {
       return true;
     };
     f["mode"] = OneOf([](FswConfig* c) { return &c->mode; }, {"swf", "ekf", "vo", "vsdf"});
-    f["window"] = Int<std::int32_t>([](FswConfig* c) { return &c->window; }, 1, kMaxWindow);
+    f["window"] = Int<std::int32_t>([](FswConfig* c) { return &c->window; }, 1, kMaxWindow,
+                                    " (kMaxWindow, the filter's compiled window capacity)");
     f["max_iterations"] =
         Int<std::int32_t>([](FswConfig* c) { return &c->max_iterations; }, 1, 100);
     f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
@@ -268,7 +276,8 @@ const std::map<std::string, Setter>& Fields() {
     f["process_sigma_m"] = Double(&FswConfig::process_sigma_m, 1e-6, 1e3);
     f["process_sigma_rad"] = Double(&FswConfig::process_sigma_rad, 1e-8, 3.0);
     f["max_tracks"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_tracks; }, 8,
-                                        static_cast<std::int64_t>(frontend::kMaxTracks));
+                                        static_cast<std::int64_t>(frontend::kMaxTracks),
+                                        " (frontend::kMaxTracks, the compiled track capacity)");
     f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
                                               frontend::kMaxDisparity);
     f["rate_hz"] = Double(&FswConfig::rate_hz, 0.1, 1000.0);
@@ -333,6 +342,16 @@ const std::map<std::string, Setter>& Fields() {
     f["inject.frames"] =
         Int<std::int64_t>([](FswConfig* c) { return &c->inject_frames; }, 1, std::int64_t{1} << 40);
     f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
+    f["envelope.min_range_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      double d = 0.0;
+      if (!ParseDouble(v, &d, why)) return false;
+      if (!(d > 0.0 && d <= 1e6)) {
+        *why = Excerpt(v) + " is outside (0, 1e6]";
+        return false;
+      }
+      c->envelope_min_range_m = d;
+      return true;
+    };
     return f;
   }();
   return kFields;
@@ -432,9 +451,7 @@ bool ApplyFileText(const std::string& text, const std::string& file, FswConfig* 
     return false;
   }
   if (c->origins.keys.count("source") == 0) {
-    *error = file +
-             ": source: required (sim, v4l2, aravis or log): the file "
-             "names what it flies";
+    *error = file + ": source: required (sim, v4l2, aravis or log): the file names what it flies";
     return false;
   }
   return true;
@@ -469,6 +486,95 @@ std::string Where(const FswConfig& c, const std::string& field, const std::strin
   const auto it = c.origins.keys.find(field);
   if (it != c.origins.keys.end()) return it->second;
   return c.origins.file.empty() ? origin : c.origins.file;
+}
+
+std::string Fixed(double v, int decimals) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", decimals, v);
+  return text;
+}
+
+// The closest range the simulator flies: the lowest camera height of its trajectory above the datum
+// z = 0. The rig looks straight down (0.1 deg jitter), so that is the depth of level ground in
+// every pixel. Terrain relief is not included (building the terrain takes seconds): relief (0.5 m
+// rms) and rocks (up to 1.25 m) bring ground closer, so the check is necessary, not sufficient, and
+// max_disparity_px wants margin above it.
+bool SimClosestRange(const FswConfig& c, double* range_m, std::string* error) {
+  FswConfig nominal = c;
+  // `sim.target: orbital` only moves the descent sideways (SimTrajectory adds the target's x and y
+  // to the start) and needs the terrain to say where: its altitudes are the nominal ones.
+  nominal.sim.target = "nominal";
+  sim::Trajectory trajectory;
+  sim::RigOptions rig;
+  if (!SimTrajectory(nominal, &trajectory, &rig, error)) return false;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (std::int32_t k = 0; k < trajectory.NumFrames(); ++k) {
+    lowest = std::min(lowest, trajectory.WorldTCamera(k).t.z());
+  }
+  *range_m = lowest;
+  return true;
+}
+
+// The settings the simulated rig comes from (an override changing one shows up here).
+std::string SimRigFrom(const FswConfig& c) {
+  std::ostringstream o;
+  o << "sim.width_px " << c.sim.width_px << ", sim.hfov_deg " << c.sim.hfov_deg
+    << ", sim.baseline_m " << c.sim.baseline_m;
+  return o.str();
+}
+
+// The front end finds a feature's match only within its search, min(max_disparity_px, width / 2)
+// (app.cpp FrontendFor), and its sub-pixel fit needs the cost one disparity beyond the minimum: the
+// disparity of the closest ground, f b / range, must stay at least 1 px inside. Beyond it every
+// close feature is matched to a wrong disparity or not at all, and the estimate diverges while
+// reporting ok (demo at 1024 px with max_disparity_px 160: 231 px at 10 m, landmark RMS 6570 m).
+bool DisparityFits(const FswConfig& c, double fx_px, double baseline_m, int width_px,
+                   double range_m, const std::string& range_from, const std::string& rig_from,
+                   const std::string& origin, std::string* error) {
+  const std::string field = "max_disparity_px";
+  const std::string at = Where(c, field, origin);
+  if (!(range_m > 0.0)) {
+    *error = at + ": " + field + ": the closest range flown (" + Fixed(range_m, 2) + " m, " +
+             range_from + ") is not above the ground";
+    return false;
+  }
+  const double need_px = fx_px * baseline_m / range_m;
+  const std::string need = std::string("the disparity at the closest range flown, ") +
+                           Fixed(need_px, 1) + " px at " + Fixed(range_m, 1) + " m (" + range_from +
+                           "; f " + Fixed(fx_px, 1) + " px x baseline " + Fixed(baseline_m, 3) +
+                           " m from " + rig_from + ")";
+  if (need_px + 1.0 > c.max_disparity_px) {
+    *error = at + ": " + field + ": " + std::to_string(c.max_disparity_px) +
+             (c.origins.keys.count(field) ? "" : " (the default)") + " is below " + need +
+             " + 1 px for the sub-pixel fit";
+    return false;
+  }
+  const int half_width = width_px / 2;
+  if (need_px + 1.0 > half_width) {
+    *error = at + ": " + field + ": the front end searches at most half the image width (" +
+             std::to_string(half_width) + " px), below " + need +
+             "; a shorter baseline, a wider field of view or a higher closest range";
+    return false;
+  }
+  return true;
+}
+
+// Capacities compiled into the flight estimator (pipeline.hpp). The window holds window + 1 poses
+// until the oldest is marginalized, and each can bring max_tracks landmarks the others do not see:
+// beyond kMaxLandmarks new landmarks would be refused in flight (kFaultLandmarkCapacity).
+bool CapacitiesHold(const FswConfig& c, const std::string& origin, std::string* error) {
+  const std::int64_t poses = static_cast<std::int64_t>(c.window) + 1;
+  const std::int64_t worst = poses * c.max_tracks;
+  if (worst > kMaxLandmarks) {
+    *error = Where(c, "max_tracks", origin) + ": max_tracks: " + std::to_string(c.max_tracks) +
+             " with window " + std::to_string(c.window) + " can keep (" + std::to_string(c.window) +
+             " + 1) x " + std::to_string(c.max_tracks) + " = " + std::to_string(worst) +
+             " landmarks active, above the compiled capacity kMaxLandmarks = " +
+             std::to_string(kMaxLandmarks) + " (at most " + std::to_string(kMaxLandmarks / poses) +
+             " tracks at window " + std::to_string(c.window) + ")";
+    return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -526,6 +632,11 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   if (c.max_disparity_px >= c.sim.width_px && c.source == SourceKind::kSim) {
     return fail("max_disparity_px", "must be smaller than sim.width_px");
   }
+  if (c.source == SourceKind::kSim && c.envelope_min_range_m > 0.0) {
+    return fail(
+        "envelope.min_range_m",
+        "only for camera and log sources (the simulator's closest range is its trajectory)");
+  }
   if (c.initial == "truth" && c.source != SourceKind::kSim && c.source != SourceKind::kLog) {
     return fail("initial", "'truth' needs the simulator (source sim, or a log of a sim run)");
   }
@@ -534,7 +645,54 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   }
   if (c.publish && c.lcm_url.empty()) return fail("lcm.url", "empty while lcm.publish is true");
   if (c.channel_prefix.size() > 32) return fail("lcm.channel_prefix", "longer than 32 characters");
+  if (!CapacitiesHold(c, origin, error)) return false;
+  if (c.source == SourceKind::kSim) {
+    // The simulator's rig and trajectory from the configuration, as sim_world.cpp builds them.
+    double range_m = 0.0;
+    std::string why;
+    if (!SimClosestRange(c, &range_m, &why)) {
+      *error = Where(c, "sim.scenario", origin) + ": " + why;
+      return false;
+    }
+    const estimator::StereoCamera<double> camera = sim::MakeStereoCamera(SimRig(c));
+    if (!DisparityFits(
+            c, camera.fx, camera.baseline_m, c.sim.width_px, range_m,
+            std::string("the lowest altitude of the sim.") + c.sim.scenario + " trajectory",
+            SimRigFrom(c), origin, error)) {
+      return false;
+    }
+  }
   return true;
+}
+
+bool CheckEnvelopeDisparity(const FswConfig& c, double fx_px, double baseline_m, int width_px,
+                            std::string* error) {
+  const std::string origin = c.origins.file.empty() ? "configuration" : c.origins.file;
+  double range_m = 0.0;
+  std::string range_from;
+  if (c.source == SourceKind::kSim) {
+    std::string why;
+    if (!SimClosestRange(c, &range_m, &why)) {
+      *error = Where(c, "sim.scenario", origin) + ": " + why;
+      return false;
+    }
+    range_from = std::string("the lowest altitude of the sim.") + c.sim.scenario + " trajectory";
+  } else if (c.envelope_min_range_m > 0.0) {
+    range_m = c.envelope_min_range_m;
+    range_from = "envelope.min_range_m";
+  } else if (c.source == SourceKind::kLog) {
+    return true;  // a replay re-runs recorded frames; the flight was checked when it flew
+  } else {
+    *error = Where(c, "envelope.min_range_m", origin) +
+             ": envelope.min_range_m: required for a camera source: the closest range (m) the "
+             "flight reaches, to check max_disparity_px against f x baseline = " +
+             Fixed(fx_px * baseline_m, 1) + " px m";
+    return false;
+  }
+  const std::string rig_from =
+      c.source == SourceKind::kSim ? SimRigFrom(c) : std::string("the rectified rig");
+  return DisparityFits(c, fx_px, baseline_m, width_px, range_m, range_from, rig_from, origin,
+                       error);
 }
 
 namespace {

@@ -1,5 +1,6 @@
 // The configuration is refused before start with a message naming the field: bad files (empty, a
-// directory, duplicate keys, NUL bytes, no `source`) and output paths that cannot be written.
+// directory, duplicate keys, NUL bytes, no `source`), settings the flown envelope cannot work with,
+// capacities that cannot hold, and output paths that cannot be written.
 #include "swf/app/config.hpp"
 
 #include <gtest/gtest.h>
@@ -11,6 +12,10 @@
 #include <fstream>
 #include <string>
 #include <vector>
+
+#include "swf/app/pipeline.hpp"
+#include "swf/app/sim_world.hpp"
+#include "swf/sim/rig.hpp"
 
 namespace swf::app {
 namespace {
@@ -64,6 +69,18 @@ bool Exists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0;
 }
 
+// The demo's descent (demo.cfg) at the paper's 1024 x 768: f = 512 / tan(12.5 deg) = 2309.5 px, 1 m
+// baseline, lowest altitude 10 m -> 230.9 px.
+const std::string kDemo1024 =
+    "source: sim\n"             // 1
+    "sim.scenario: descent\n"   // 2
+    "sim.width_px: 1024\n"      // 3
+    "sim.height_px: 768\n"      // 4
+    "sim.hfov_deg: 25\n"        // 5
+    "sim.baseline_m: 1.0\n"     // 6
+    "rate_hz: 10\n"             // 7
+    "max_disparity_px: 160\n";  // 8
+
 TEST(ConfigTest, ParsesEveryKindOfField) {
   FswConfig c;
   std::string error;
@@ -99,6 +116,11 @@ TEST(ConfigTest, NamesTheFieldAndLineOfEveryProblem) {
   Refused("source: sim\nsim.target: best\n", "sim.target: 'best' is not one of nominal orbital");
   Refused("source: sim\nsim.target_search_m: 70\n",
           "t.cfg:2: sim.target_search_m: 70 is outside [0, 60]");
+  const std::string over = std::to_string(frontend::kMaxTracks + 1);
+  Refused("source: sim\nmax_tracks: " + over + "\n",
+          "t.cfg:2: max_tracks: " + over + " is outside [8, " +
+              std::to_string(frontend::kMaxTracks) + "] (frontend::kMaxTracks");
+  Refused("source: aravis\nenvelope.min_range_m: -1\n", "t.cfg:2: envelope.min_range_m: -1");
 }
 
 TEST(ConfigTest, RefusesInconsistentCombinationsAtTheLineOfTheField) {
@@ -117,6 +139,8 @@ TEST(ConfigTest, RefusesInconsistentCombinationsAtTheLineOfTheField) {
   Refused("source: sim\nsim.width_px: 255\n", "t.cfg:2: sim.width_px: must be even");
   Refused("source: sim\nsim.scenario: hover\nsim.target: orbital\n",
           "t.cfg:3: sim.target: 'orbital' selects a descent");
+  Refused("source: sim\nenvelope.min_range_m: 5\n",
+          "t.cfg:2: envelope.min_range_m: only for camera and log sources");
 }
 
 // ---- A: files that must not fly --------------------------------------------------------------
@@ -239,12 +263,20 @@ TEST(ConfigTest, LoadWithOverridesValidatesTheWholeOnceInAnyOrder) {
   EXPECT_NE(error.find("dup.cfg:2: source: set again"), std::string::npos) << error;
 }
 
-TEST(ConfigTest, CommittedConfigurationsLoad) {
-  for (const char* name : {"demo.cfg", "test.cfg", "fake_gv.cfg"}) {
+TEST(ConfigTest, CommittedConfigurationsLoadAndFitTheirEnvelope) {
+  for (const char* name : {"demo.cfg", "test.cfg"}) {
     FswConfig c;
     std::string error;
     EXPECT_TRUE(LoadConfig(AppDir() + "/config/" + name, &c, &error)) << name << ": " << error;
+    const estimator::StereoCamera<double> camera = sim::MakeStereoCamera(SimRig(c));
+    EXPECT_TRUE(CheckEnvelopeDisparity(c, camera.fx, camera.baseline_m, c.sim.width_px, &error))
+        << name << ": " << error;
   }
+  FswConfig c;
+  std::string error;
+  EXPECT_TRUE(LoadConfig(AppDir() + "/config/fake_gv.cfg", &c, &error)) << error;
+  // fake_gv_{left,right}.yaml: ideal pinholes, f 300 px, 0.2 m apart, 320 px wide.
+  EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;
 }
 
 // ---- output paths ------------------------------------------------------------------------------
@@ -295,9 +327,7 @@ TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
   // A path given by --set is named as such.
   FswConfig over = c;
   ASSERT_TRUE(OverrideConfig("summary.path: /nonexistent/s.json", &over, &error)) << error;
-  refused(over,
-          "--set: summary.path: '/nonexistent/s.json' its directory "
-          "'/nonexistent'");
+  refused(over, "--set: summary.path: '/nonexistent/s.json' its directory '/nonexistent'");
   // Permissions (meaningless for root, who may write anywhere on a writable file system).
   if (::geteuid() != 0) {
     const std::string ro = d + "/ro";
@@ -306,6 +336,166 @@ TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
     bad.summary_path = ro + "/s.json";
     refused(bad, "summary.path: '" + ro + "/s.json' its directory '" + ro + "' cannot be written");
   }
+}
+
+// ---- B: the flown envelope and the compiled capacities ----------------------------------------
+
+TEST(ConfigTest, RefusesADisparitySearchBelowTheLowestAltitude) {
+  // The case: 1024 x 768 with the demo's 160 px search, 230.9 px needed at 10 m.
+  Refused(kDemo1024,
+          "t.cfg:8: max_disparity_px: 160 is below the disparity at the closest range flown, "
+          "230.9 px at 10.0 m (the lowest altitude of the sim.descent trajectory; f 2309.5 px x "
+          "baseline 1.000 m from sim.width_px 1024, sim.hfov_deg 25, sim.baseline_m 1) + 1 px for "
+          "the sub-pixel fit");
+  std::string repaired = kDemo1024;
+  repaired.replace(repaired.find("max_disparity_px: 160"), 21, "max_disparity_px: 240");
+  Accepted(repaired);
+  // At the demo's 512 px: 115.5 px; the demo's 160 holds, 116 does not (sub-pixel fit: +1 px).
+  const std::string demo512 =
+      "source: sim\nsim.width_px: 512\nsim.height_px: 384\nrate_hz: 10\nmax_disparity_px: ";
+  Accepted(demo512 + "160\n");
+  Accepted(demo512 + "117\n");
+  Refused(demo512 + "116\n",
+          "t.cfg:5: max_disparity_px: 116 is below the disparity at the "
+          "closest range flown, 115.5 px at 10.0 m");
+  // The default search (128) is named as the default.
+  Refused("source: sim\nsim.width_px: 1024\nsim.height_px: 768\n",
+          "t.cfg: max_disparity_px: 128 (the default) is below");
+  // A shorter descent ends higher: 30 frames at 10 Hz stop at 71 m (32.5 px).
+  Accepted(kDemo1024 + "sim.frames: 30\n");
+  // The baseline and the field of view enter f x b.
+  Refused(
+      "source: sim\nsim.width_px: 512\nsim.height_px: 384\nsim.baseline_m: 1.5\n"
+      "max_disparity_px: 160\n",
+      "173.2 px at 10.0 m");
+  Accepted(
+      "source: sim\nsim.width_px: 1024\nsim.height_px: 768\nsim.hfov_deg: 45\n"
+      "max_disparity_px: 160\n");  // f = 1236.1 px: 123.6 px
+  // The orbital target moves the descent sideways only: the same check, without the terrain.
+  Refused(
+      "source: sim\nsim.target: orbital\nsim.width_px: 1024\nsim.height_px: 768\n"
+      "max_disparity_px: 200\n",
+      "230.9 px at 10.0 m");
+  // Hover at 50 m: 46.2 px at 1024 px.
+  Accepted(
+      "source: sim\nsim.scenario: hover\nsim.width_px: 1024\nsim.height_px: 768\n"
+      "max_disparity_px: 48\n");
+  Refused(
+      "source: sim\nsim.scenario: hover\nsim.width_px: 1024\nsim.height_px: 768\n"
+      "max_disparity_px: 47\n",
+      "46.2 px at 50.0 m (the lowest altitude of the sim.hover trajectory");
+  // The lab scenario flies to 1 m; with the configured 1 m baseline no search can hold it.
+  Refused("source: sim\nsim.scenario: lab\nmax_disparity_px: 250\n",
+          "max_disparity_px: 250 is below the disparity at the closest range flown, 1154.7 px at "
+          "1.0 m");
+  // A search above half the image width is cut to it by the front end.
+  Refused(
+      "source: sim\nsim.width_px: 128\nsim.height_px: 96\nsim.hfov_deg: 10\n"
+      "max_disparity_px: 100\n",
+      "t.cfg:5: max_disparity_px: the front end searches at most half the image width (64 "
+      "px), below the disparity at the closest range flown, 73.2 px at 10.0 m");
+  // The file alone flies 1024 px with a 160 px search; an override repairs it, in any order.
+  ScratchDir dir;
+  const std::string file = dir.Write("demo.cfg", kDemo1024);
+  FswConfig loaded;
+  std::string why;
+  EXPECT_FALSE(LoadConfig(file, &loaded, &why));
+  EXPECT_NE(why.find("demo.cfg:8: max_disparity_px: 160 is below"), std::string::npos) << why;
+  EXPECT_TRUE(LoadConfig(file, {"max_disparity_px: 240"}, &loaded, &why)) << why;
+  const std::string small = dir.Write(
+      "small.cfg", "source: sim\nsim.width_px: 512\nsim.height_px: 384\nmax_disparity_px: 160\n");
+  EXPECT_TRUE(LoadConfig(
+      small, {"sim.width_px: 1024", "sim.height_px: 768", "max_disparity_px: 240"}, &loaded, &why))
+      << why;
+  EXPECT_FALSE(LoadConfig(small, {"sim.width_px: 1024", "max_disparity_px: 200"}, &loaded, &why));
+  EXPECT_NE(why.find("--set: max_disparity_px: 200 is below the disparity"), std::string::npos)
+      << why;
+  // Overrides: named as --set.
+  FswConfig c;
+  std::string error;
+  ASSERT_TRUE(ParseConfig(demo512 + "160\n", "t.cfg", &c, &error)) << error;
+  EXPECT_FALSE(OverrideConfig("max_disparity_px: 100", &c, &error));
+  EXPECT_NE(error.find("--set: max_disparity_px: 100 is below the disparity"), std::string::npos)
+      << error;
+}
+
+TEST(ConfigTest, CameraSourcesNeedTheirClosestRangeToCheckTheSearch) {
+  const std::string cameras =
+      "source: aravis\ncamera.fake: true\ncamera.left_calibration: l.yaml\n"
+      "camera.right_calibration: r.yaml\ninitial: position\nmax_disparity_px: 64\n";
+  FswConfig c;
+  std::string error;
+  // The fake rig: f 300 px, baseline 0.2 m, 320 px wide.
+  ASSERT_TRUE(ParseConfig(cameras, "cam.cfg", &c, &error)) << error;
+  EXPECT_FALSE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error));
+  EXPECT_NE(error.find("cam.cfg: envelope.min_range_m: required for a camera source"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find("f x baseline = 60.0 px m"), std::string::npos) << error;
+
+  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 10\n", "cam.cfg", &c, &error)) << error;
+  EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;  // 6 px
+  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 0.5\n", "cam.cfg", &c, &error)) << error;
+  EXPECT_FALSE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error));  // 120 px
+  EXPECT_NE(error.find("cam.cfg:6: max_disparity_px: 64 is below the disparity at the closest "
+                       "range flown, 120.0 px at 0.5 m (envelope.min_range_m; f 300.0 px x "
+                       "baseline 0.200 m from the rectified rig)"),
+            std::string::npos)
+      << error;
+  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 2\n", "cam.cfg", &c, &error)) << error;
+  EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;  // 30 px
+  EXPECT_FALSE(CheckEnvelopeDisparity(c, 300.0, 0.2, 50, &error));
+  EXPECT_NE(error.find("at most half the image width (25 px), below the disparity at the closest "
+                       "range flown, 30.0 px at 2.0 m"),
+            std::string::npos)
+      << error;
+
+  // A replay without the key re-runs what was checked when it flew; with it, it is checked.
+  FswConfig log = c;
+  log.source = SourceKind::kLog;
+  log.envelope_min_range_m = 0.0;
+  EXPECT_TRUE(CheckEnvelopeDisparity(log, 300.0, 0.2, 320, &error)) << error;
+  log.envelope_min_range_m = 0.5;  // 120 px
+  EXPECT_FALSE(CheckEnvelopeDisparity(log, 300.0, 0.2, 320, &error));
+
+  // The simulator's range is its trajectory's: the actual rig gives the same answer.
+  ASSERT_TRUE(
+      ParseConfig("source: sim\nsim.width_px: 512\nsim.height_px: 384\n"
+                  "max_disparity_px: 160\n",
+                  "sim.cfg", &c, &error))
+      << error;
+  EXPECT_TRUE(CheckEnvelopeDisparity(c, 1154.7, 1.0, 512, &error)) << error;
+  EXPECT_FALSE(CheckEnvelopeDisparity(c, 2309.5, 1.0, 1024, &error));
+  EXPECT_NE(error.find("sim.cfg:4: max_disparity_px: 160 is below"), std::string::npos) << error;
+}
+
+TEST(ConfigTest, RefusesWindowsAndTracksTheCompiledCapacitiesCannotHold) {
+  const std::string k = std::to_string(kMaxWindow);
+  const std::string above = std::to_string(kMaxWindow + 1);
+  Refused("source: sim\nwindow: " + above + "\n",
+          "window: " + above + " is outside [1, " + k + "] (kMaxWindow");
+  // window + 1 poses x max_tracks landmarks must fit in kMaxLandmarks (1024: at window 10, 93
+  // tracks; the demo's 150 tracks need window <= 5).
+  const int fit = kMaxLandmarks / (kMaxWindow + 1);
+  const std::string at_k = "source: sim\nwindow: " + k + "\nmax_tracks: ";
+  Accepted(at_k + std::to_string(fit) + "\n");
+  Refused(at_k + std::to_string(fit + 1) + "\n",
+          "t.cfg:3: max_tracks: " + std::to_string(fit + 1) + " with window " + k + " can keep (" +
+              k + " + 1) x " + std::to_string(fit + 1) + " = " +
+              std::to_string((kMaxWindow + 1) * (fit + 1)) +
+              " landmarks active, above the compiled capacity kMaxLandmarks = " +
+              std::to_string(kMaxLandmarks) + " (at most " + std::to_string(fit) +
+              " tracks at window " + k + ")");
+  // The defaults (window 5, 150 tracks) hold; at window 5 the limit is kMaxLandmarks / 6.
+  Accepted("source: sim\n");
+  const int fit5 = kMaxLandmarks / 6;
+  Accepted("source: sim\nmax_tracks: " + std::to_string(fit5) + "\n");
+  Refused("source: sim\nmax_tracks: " + std::to_string(fit5 + 1) + "\n",
+          "t.cfg:2: max_tracks: " + std::to_string(fit5 + 1) + " with window 5");
+  // The EKF's window of one holds every track count the front end allows.
+  static_assert(2 * frontend::kMaxTracks <= static_cast<std::size_t>(kMaxLandmarks));
+  Accepted("source: sim\nmode: ekf\nwindow: 1\nmax_tracks: " +
+           std::to_string(frontend::kMaxTracks) + "\n");
 }
 
 }  // namespace

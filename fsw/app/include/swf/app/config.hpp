@@ -106,6 +106,12 @@ struct FswConfig {
   std::string summary_path;  // JSON summary (sim: errors against truth) ("" = none)
   std::string plot_dir;      // gnuplot data files for the demo pictures ("" = none)
 
+  // Camera and log sources: the closest range (metres along the optical axis; for a nadir rig the
+  // lowest altitude above the ground) the flight reaches. With the rectified rig's f x baseline it
+  // gives the largest disparity the front end must search (CheckEnvelopeDisparity). 0 = not given.
+  // The simulator's comes from its trajectory.
+  double envelope_min_range_m = 0.0;
+
   // Initial pose: "truth" (the simulator's first pose; sim and replays of sim logs) or
   // "position": x y z metres, camera pointing straight down (the navigation hand-over).
   std::string initial = "truth";
@@ -138,12 +144,22 @@ bool LoadConfig(const std::string& path, const std::vector<std::string>& overrid
 // whole configuration (so a pair of overrides that only holds together must come in the order that
 // keeps every step valid; LoadConfig with overrides has no such order).
 bool OverrideConfig(const std::string& key_value, FswConfig* config, std::string* error);
-// Cross-field consistency. `origin` names the configuration when `config.origins.file` is empty.
-// Pure: reads no file.
+// Cross-field consistency, including the flown envelope of the simulator (the disparity at the
+// lowest altitude against max_disparity_px) and the compiled capacities. `origin` names the
+// configuration when `config.origins.file` is empty. Pure: reads no file.
 bool ValidateConfig(const FswConfig& config, const std::string& origin, std::string* error);
 
 // The largest configuration file read (a configuration is a few hundred lines).
 inline constexpr std::size_t kMaxConfigBytes = 1u << 20;
+
+// Before the run: the front end's disparity search covers the closest range flown, for the rig the
+// pipeline actually uses (`camera`: the rectified rig, f in px; `width_px`: its image width). The
+// search is min(max_disparity_px, width_px / 2) (app.cpp FrontendFor). The closest range is the
+// simulator's lowest altitude (source sim) or envelope.min_range_m (camera sources: required;
+// source log: checked when given, otherwise the recorded flight was checked when it flew). False
+// with "<where>: <field>: <problem>".
+bool CheckEnvelopeDisparity(const FswConfig& config, double fx_px, double baseline_m, int width_px,
+                            std::string* error);
 
 // Before the run: every output can be written, so that a run is never lost to a path found bad only
 // at its end. summary.path and record.path: an existing regular file this process may write, or a
