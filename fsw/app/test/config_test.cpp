@@ -283,7 +283,7 @@ TEST(ConfigTest, CommittedConfigurationsLoadAndFitTheirEnvelope) {
 
 TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
   ScratchDir dir;
-  const std::string d = dir.Path();
+  const std::string& d = dir.Path();
   const std::string a_file = dir.Write("file", "x");
   FswConfig c;
   std::string error;
