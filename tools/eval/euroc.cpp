@@ -1,38 +1,55 @@
 #include "euroc.hpp"
 
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <map>
 #include <memory>
 #include <sstream>
 
-#include "swf/estimator/stereo_model.hpp"
-#include "swf/frontend/frontend.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "swf/image_io/image_io.hpp"
 
 namespace swf::eval {
 namespace {
 
-using estimator::Mat3;
-using estimator::Mat6;
-
-// Window up to 20 poses, 1024 active landmarks, a front end's worth of measurements per frame,
-// 512 landmarks in the prior.
-using EurocFilter = estimator::SlidingWindowFilter<estimator::StereoModel<double>, 20, 1024,
-                                                   static_cast<int>(frontend::kMaxTracks), 512>;
-
-struct Frame {
+struct ListedImage {
   std::int64_t stamp_ns = 0;
   std::string name;
+  int line = 0;
 };
 
-bool ReadCsv(const std::string& path, std::vector<Frame>* frames, std::string* error) {
+// One data.csv line "timestamp_ns,filename" (already trimmed, not a comment).
+bool ParseCsvLine(const std::string& line, const std::string& where, ListedImage* f,
+                  std::string* error) {
+  const std::size_t comma = line.find(',');
+  char* end = nullptr;
+  f->stamp_ns = std::strtoll(line.c_str(), &end, 10);
+  if (comma == std::string::npos || end != line.c_str() + comma || f->stamp_ns <= 0) {
+    *error = where + ": expected: timestamp_ns,filename";
+    return false;
+  }
+  f->name = line.substr(comma + 1);
+  while (!f->name.empty() && f->name.front() == ' ') f->name.erase(f->name.begin());
+  std::string why;
+  if (!CheckImageName(f->name, &why)) {
+    *error = where + ": " + why;
+    return false;
+  }
+  // ASL names the image after its timestamp: a name that says otherwise is a shifted list.
+  const std::size_t dot = f->name.find('.');
+  const std::string stem = f->name.substr(0, dot);
+  if (!stem.empty() && std::all_of(stem.begin(), stem.end(), ::isdigit) &&
+      stem != std::to_string(f->stamp_ns)) {
+    *error = where + ": the image " + f->name + " is listed at timestamp " +
+             std::to_string(f->stamp_ns) + " ns (the list is shifted against its files)";
+    return false;
+  }
+  return true;
+}
+
+bool ReadCsv(const std::string& path, std::vector<ListedImage>* frames, std::string* error) {
   std::ifstream csv(path);
   if (!csv) {
     *error = path + ": cannot open";
@@ -44,16 +61,15 @@ bool ReadCsv(const std::string& path, std::vector<Frame>* frames, std::string* e
     ++number;
     while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
     if (line.empty() || line[0] == '#') continue;
-    const std::size_t comma = line.find(',');
-    Frame f;
-    char* end = nullptr;
-    f.stamp_ns = std::strtoll(line.c_str(), &end, 10);
-    if (comma == std::string::npos || end != line.c_str() + comma || f.stamp_ns <= 0) {
-      *error = path + ":" + std::to_string(number) + ": expected: timestamp_ns,filename";
+    ListedImage f;
+    f.line = number;
+    const std::string where = path + ":" + std::to_string(number);
+    if (!ParseCsvLine(line, where, &f, error)) return false;
+    if (!frames->empty() && f.stamp_ns <= frames->back().stamp_ns) {
+      *error = where + ": timestamp " + std::to_string(f.stamp_ns) +
+               " ns does not increase (previous line " + std::to_string(frames->back().line) + ")";
       return false;
     }
-    f.name = line.substr(comma + 1);
-    while (!f.name.empty() && f.name.front() == ' ') f.name.erase(f.name.begin());
     frames->push_back(f);
   }
   if (frames->empty()) {
@@ -63,153 +79,199 @@ bool ReadCsv(const std::string& path, std::vector<Frame>* frames, std::string* e
   return true;
 }
 
-frontend::HarrisOptions DetectorFor(int width, int height) {
-  frontend::HarrisOptions o;
-  o.bucket_cols = std::max(1, std::min(64, width / 40));
-  o.bucket_rows = std::max(1, std::min(64, height / 40));
-  return o;
+// A stereo pair is exposed together: line k of cam1's list must carry line k of cam0's
+// timestamp.
+bool CheckPairs(const std::string& left_csv, const std::vector<ListedImage>& left,
+                const std::string& right_csv, const std::vector<ListedImage>& right,
+                std::string* error) {
+  const std::size_t n = std::min(left.size(), right.size());
+  for (std::size_t k = 0; k < n; ++k) {
+    if (left[k].stamp_ns != right[k].stamp_ns) {
+      *error = right_csv + ":" + std::to_string(right[k].line) + ": timestamp " +
+               std::to_string(right[k].stamp_ns) + " ns differs from " + left_csv + ":" +
+               std::to_string(left[k].line) + " (" + std::to_string(left[k].stamp_ns) +
+               " ns): the left and right image lists do not pair up (shifted by a frame?)";
+      return false;
+    }
+  }
+  if (left.size() != right.size()) {
+    const bool more_left = left.size() > right.size();
+    const ListedImage& extra = more_left ? left[n] : right[n];
+    *error = (more_left ? left_csv : right_csv) + ":" + std::to_string(extra.line) +
+             ": no matching image in " + (more_left ? right_csv : left_csv) + " (" +
+             std::to_string(left.size()) + " left, " + std::to_string(right.size()) +
+             " right images)";
+    return false;
+  }
+  return true;
 }
 
-struct Inputs {
-  frontend::CameraCalibration cal[2];
-  std::vector<Frame> left;
-  std::vector<std::string> right_names;
-  std::vector<TumPose> truth;  // per frame
-};
-
-bool RunOne(const std::string& mav0, const Inputs& in, const EurocOptions& options, EurocRun* run,
-            std::string* error) {
-  auto rectifier = std::make_unique<frontend::StereoRectifier>();
-  if (rectifier->Configure(in.cal[0], in.cal[1], frontend::RectifyOptions{}) != core::Status::kOk) {
-    *error = mav0 + ": the rectifier rejected cam0/cam1 sensor.yaml";
-    return false;
+bool LoadCameras(const std::string& mav0, StereoSequence* s, std::string* error) {
+  for (int c = 0; c < 2; ++c) {
+    const std::string yaml = mav0 + "/cam" + std::to_string(c) + "/sensor.yaml";
+    if (!image_io::LoadCalibration(yaml, &s->calibration[c], error)) return false;
+    if (!CheckCalibration(s->calibration[c], yaml, error)) return false;
   }
-  frontend::FrontendOptions fo;
-  fo.camera = rectifier->Camera();
-  fo.harris = DetectorFor(rectifier->Width(), rectifier->Height());
-  fo.max_tracks = options.max_tracks;
-  auto front = std::make_unique<frontend::Frontend>();
-  if (front->Configure(fo) != core::Status::kOk) {
-    *error = "front end configuration rejected";
-    return false;
-  }
-  auto swf = std::make_unique<EurocFilter>();
-  estimator::StereoModel<double> model;
-  model.camera = rectifier->Camera();
-  estimator::SwfOptions so;
-  so.mode = run->mode;
-  so.window_size = options.window;
-  if (swf->Configure(model, so) != core::Status::kOk) {
-    *error = "estimator configuration rejected";
-    return false;
-  }
-  Mat6<double> q_sqrt = Mat6<double>::Zero();
-  q_sqrt.diagonal() << Vec3D::Constant(1 / options.motion_sigma_m),
-      Vec3D::Constant(1 / options.motion_sigma_rad);
-  const Mat3<double> r_sqrt = Mat3<double>::Identity() / options.sigma_px;
-  const PoseD camera_T_body = rectifier->RectifiedInBody().Inverse();
-  auto out = std::make_unique<frontend::FrameOutput>();
-  std::vector<frontend::LandmarkEstimate> estimates;
-  estimates.reserve(4096);
-  image_io::GrayImage raw[2];
-  image_io::GrayImage rect[2];
-  rect[0].Resize(rectifier->Width(), rectifier->Height());
-  rect[1].Resize(rectifier->Width(), rectifier->Height());
-  PoseD previous;
-  PoseD last;
-  double measurements = 0.0;
-  const auto start = std::chrono::steady_clock::now();
-  for (std::size_t j = 0; j < in.left.size(); ++j) {
-    const std::string paths[2] = {mav0 + "/cam0/data/" + in.left[j].name,
-                                  mav0 + "/cam1/data/" + in.right_names[j]};
-    for (int c = 0; c < 2; ++c) {
-      if (!image_io::LoadGray(paths[c], &raw[c], error)) return false;
-    }
-    if (rectifier->Rectify(raw[0].View(), raw[1].View(), rect[0].MutableView(),
-                           rect[1].MutableView()) != core::Status::kOk) {
-      *error = paths[0] + ": cannot rectify (size differs from sensor.yaml?)";
-      return false;
-    }
-    frontend::FramePrediction prediction;
-    if (options.predict && j >= 1) {
-      // Constant velocity, as AddPoseConstantVelocity will predict it.
-      prediction.has_pose = true;
-      prediction.world_T_camera = j >= 2 ? last * (previous.Inverse() * last) : last;
-      estimates.clear();
-      swf->ForEachLandmark([&](std::int64_t id, const Vec3D& p, int) {
-        estimates.push_back({static_cast<std::uint32_t>(id), p});
-      });
-      prediction.landmarks = estimates.data();
-      prediction.num_landmarks = estimates.size();
-    }
-    if (front->ProcessFrame(frontend::StereoFrame{rect[0].View(), rect[1].View()}, prediction,
-                            out.get()) != core::Status::kOk) {
-      *error = paths[0] + ": front end failed";
-      return false;
-    }
-    if (j == 0 || swf->NumPoses() == 0) {
-      (void)swf->AddPose(j == 0 ? PoseD{} : last);
-    } else {
-      (void)swf->AddPoseConstantVelocity(q_sqrt);
-    }
-    for (const frontend::StereoMeasurement& m : out->measurements) {
-      measurements += swf->AddObservation(m.landmark_id, Vec3D(m.u_left, m.u_right, m.v), r_sqrt) ==
-                      core::Status::kOk;
-    }
-    for (const frontend::NewLandmark& n : out->new_landmarks) {
-      measurements += swf->AddObservation(n.landmark_id, Vec3D(n.u_left, n.u_right, n.v), r_sqrt) ==
-                      core::Status::kOk;
-    }
-    const core::Status status = swf->Update();
-    if (status != core::Status::kOk && status != core::Status::kNotConverged) {
-      ++run->update_failures;
-    }
-    previous = last;
-    if (swf->NumPoses() > 0) last = swf->NewestPose();
-    run->estimate.push_back({in.truth[j].stamp_s, last * camera_T_body});
-  }
-  run->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  run->mean_measurements = measurements / static_cast<double>(in.left.size());
-  // Align the whole estimated trajectory to the ground truth, then score it.
-  std::vector<Vec3D> gt;
-  std::vector<Vec3D> est;
-  for (std::size_t j = 0; j < in.truth.size(); ++j) {
-    gt.push_back(in.truth[j].pose.t);
-    est.push_back(run->estimate[j].pose.t);
-  }
-  const PoseD align = AlignRigid(gt, est);
-  double sum = 0.0;
-  for (std::size_t j = 0; j < gt.size(); ++j) {
-    const double e = (gt[j] - align.Apply(est[j])).norm();
-    run->error_m.push_back(e);
-    sum += e * e;
-    run->ate_max_m = std::max(run->ate_max_m, e);
-  }
-  run->ate_rmse_m = std::sqrt(sum / static_cast<double>(gt.size()));
-  run->final_error_m = run->error_m.back();
   return true;
+}
+
+// Configures a rectifier like the pipeline's to learn the rectified camera and where it sits in
+// the body frame, and refuses a rig whose rectified image mostly has no source pixel.
+bool RectifiedRig(const std::string& mav0, StereoSequence* s, PoseD* body_T_camera,
+                  std::string* error) {
+  auto rectifier = std::make_unique<frontend::StereoRectifier>();
+  frontend::RectifyOptions ro;
+  ro.width = s->width;
+  ro.height = s->height;
+  if (rectifier->Configure(s->calibration[0], s->calibration[1], ro) != core::Status::kOk) {
+    *error = mav0 + "/cam0|cam1/sensor.yaml: the rectifier rejected this stereo calibration";
+    return false;
+  }
+  int inside = 0;
+  int total = 0;
+  for (int cam = 0; cam < 2; ++cam) {
+    for (int v = 0; v < s->height; v += 8) {
+      for (int u = 0; u < s->width; u += 8) {
+        float ru = 0.0f;
+        float rv = 0.0f;
+        inside += rectifier->TablePixel(cam, u, v, &ru, &rv);
+        ++total;
+      }
+    }
+  }
+  if (inside < total / 2) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf),
+                  ": only %.0f%% of the rectified image has a source pixel in the raw images",
+                  100.0 * inside / std::max(total, 1));
+    *error = mav0 + "/cam0|cam1/sensor.yaml" + buf;
+    return false;
+  }
+  s->camera = rectifier->Camera();
+  *body_T_camera = rectifier->RectifiedInBody();
+  return true;
+}
+
+double MedianInterval(const std::vector<ListedImage>& frames) {
+  std::vector<double> d;
+  for (std::size_t k = 1; k < frames.size(); ++k) {
+    d.push_back(static_cast<double>(frames[k].stamp_ns - frames[k - 1].stamp_ns));
+  }
+  return d.empty() ? 5e7 : Median(d);
+}
+
+// The recorded frames that have ground truth within 5 ms (the ground truth may start later or
+// end earlier than the images).
+void Associate(const std::string& mav0, const std::vector<ListedImage>& left,
+               const std::vector<ListedImage>& right, const std::vector<TumPose>& gt,
+               const PoseD& body_T_camera, EurocResult* r) {
+  for (std::size_t k = 0; k < left.size(); ++k) {
+    const double t = static_cast<double>(left[k].stamp_ns) * 1e-9;
+    const auto nearest =
+        std::min_element(gt.begin(), gt.end(), [t](const TumPose& a, const TumPose& b) {
+          return std::fabs(a.stamp_s - t) < std::fabs(b.stamp_s - t);
+        });
+    if (std::fabs(nearest->stamp_s - t) > 0.005) {
+      ++r->skipped_frames;
+      continue;
+    }
+    SequenceFrame f;
+    f.left_path = mav0 + "/cam0/data/" + left[k].name;
+    f.right_path = mav0 + "/cam1/data/" + right[k].name;
+    f.stamp_ns = left[k].stamp_ns;
+    f.truth = nearest->pose * body_T_camera;
+    f.source = static_cast<int>(r->sequence.frames.size());
+    f.record = "cam0/data.csv:" + std::to_string(left[k].line);
+    r->sequence.frames.push_back(f);
+  }
+}
+
+void Loop(double seconds, double interval_ns, StereoSequence* s) {
+  const std::vector<SequenceFrame> recorded = s->frames;
+  const int total = static_cast<int>(std::lround(seconds * 1e9 / interval_ns));
+  s->frames.clear();
+  const std::int64_t t0 = recorded.front().stamp_ns;
+  const std::vector<int> order = PingPong(static_cast<int>(recorded.size()), total);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    SequenceFrame f = recorded[static_cast<std::size_t>(order[k])];
+    f.stamp_ns = t0 + static_cast<std::int64_t>(std::llround(static_cast<double>(k) * interval_ns));
+    s->frames.push_back(f);
+  }
+}
+
+void PathStats(EurocResult* r) {
+  const std::vector<SequenceFrame>& f = r->sequence.frames;
+  for (std::size_t j = 0; j < f.size(); ++j) {
+    if (j > 0) r->gt_path_length_m += (f[j].truth.t - f[j - 1].truth.t).norm();
+    r->gt_extent_m = std::max(r->gt_extent_m, (f[j].truth.t - f[0].truth.t).norm());
+  }
 }
 
 }  // namespace
 
-PoseD AlignRigid(const std::vector<Vec3D>& a, const std::vector<Vec3D>& b) {
-  PoseD out;
-  const std::size_t n = std::min(a.size(), b.size());
-  if (n == 0) return out;
-  Vec3D mean_a = Vec3D::Zero();
-  Vec3D mean_b = Vec3D::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    mean_a += a[i] / static_cast<double>(n);
-    mean_b += b[i] / static_cast<double>(n);
+bool CheckImageName(const std::string& name, std::string* error) {
+  if (name.empty()) {
+    *error = "empty image file name";
+    return false;
   }
-  Mat3<double> cross = Mat3<double>::Zero();  // sum (a - mean_a)(b - mean_b)^T
-  for (std::size_t i = 0; i < n; ++i) cross += (a[i] - mean_a) * (b[i] - mean_b).transpose();
-  const Eigen::JacobiSVD<Mat3<double>> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Mat3<double> sign = Mat3<double>::Identity();
-  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) sign(2, 2) = -1.0;
-  out.R = svd.matrixU() * sign * svd.matrixV().transpose();
-  out.t = mean_a - out.R * mean_b;
-  return out;
+  if (name.front() == '/') {
+    *error = "image name '" + name + "' is an absolute path (refused: names are inside data/)";
+    return false;
+  }
+  std::stringstream parts(name);
+  std::string part;
+  while (std::getline(parts, part, '/')) {
+    if (part == "..") {
+      *error = "image name '" + name + "' contains '..' (refused: names are inside data/)";
+      return false;
+    }
+  }
+  return true;
+}
+
+bool CheckCalibration(const frontend::CameraCalibration& c, const std::string& path,
+                      std::string* error) {
+  char buf[256];
+  if (!(c.fx > 0.0 && c.fy > 0.0) || c.width <= 0 || c.height <= 0) {
+    std::snprintf(buf, sizeof(buf),
+                  ": focal lengths (%g, %g) and resolution (%d x %d) must be "
+                  "positive",
+                  c.fx, c.fy, c.width, c.height);
+    *error = path + buf;
+    return false;
+  }
+  if (!(c.cx >= 0.0 && c.cx < c.width && c.cy >= 0.0 && c.cy < c.height)) {
+    std::snprintf(buf, sizeof(buf), ": principal point (%g, %g) lies outside the %d x %d image",
+                  c.cx, c.cy, c.width, c.height);
+    *error = path + buf;
+    return false;
+  }
+  // The distorted radius r (1 + k1 r^2 + k2 r^4 + k3 r^6) must keep growing from the centre
+  // until it reaches the farthest image corner, or some pixels have two (or no) undistorted
+  // directions and rectification cannot be inverted there.
+  const double du = std::max(c.cx, c.width - c.cx) / c.fx;
+  const double dv = std::max(c.cy, c.height - c.cy) / c.fy;
+  const double corner = std::hypot(du, dv);
+  const auto distorted = [&c](double r) {
+    const double r2 = r * r;
+    return r * (1.0 + r2 * (c.k1 + r2 * (c.k2 + r2 * c.k3)));
+  };
+  double previous = 0.0;
+  for (double r = 1e-3; r <= 10.0; r += 1e-3) {
+    const double d = distorted(r);
+    if (!(d > previous)) {
+      std::snprintf(buf, sizeof(buf),
+                    ": the radial distortion (k1 %g, k2 %g, k3 %g) folds back at a distorted "
+                    "radius of %.3g, inside the image (corner at %.3g): not a usable calibration",
+                    c.k1, c.k2, c.k3, previous, corner);
+      *error = path + buf;
+      return false;
+    }
+    if (d >= corner) return true;
+    previous = d;
+  }
+  *error = path + ": the radial distortion never reaches the image corner";
+  return false;
 }
 
 bool ReadTum(const std::string& path, std::vector<TumPose>* poses, std::string* error) {
@@ -262,62 +324,57 @@ bool WriteTum(const std::string& path, const std::vector<TumPose>& poses) {
   return std::fclose(f) == 0;
 }
 
-bool RunEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
-              std::string* error) {
+bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
+               std::string* error) {
   const std::string mav0 = dir + "/mav0";
-  Inputs in;
-  for (int c = 0; c < 2; ++c) {
-    const std::string yaml = mav0 + "/cam" + std::to_string(c) + "/sensor.yaml";
-    if (!image_io::LoadCalibration(yaml, &in.cal[c], error)) return false;
-  }
-  std::vector<Frame> left;
-  std::vector<Frame> right;
-  if (!ReadCsv(mav0 + "/cam0/data.csv", &left, error)) return false;
-  if (!ReadCsv(mav0 + "/cam1/data.csv", &right, error)) return false;
+  StereoSequence& s = result->sequence;
+  s.name = "EuRoC";
+  s.dir = dir;
+  s.rectify = true;
+  if (!LoadCameras(mav0, &s, error)) return false;
+  s.width = s.calibration[0].width;
+  s.height = s.calibration[0].height;
+  PoseD body_T_camera;
+  if (!RectifiedRig(mav0, &s, &body_T_camera, error)) return false;
+  std::vector<ListedImage> left;
+  std::vector<ListedImage> right;
+  const std::string left_csv = mav0 + "/cam0/data.csv";
+  const std::string right_csv = mav0 + "/cam1/data.csv";
+  if (!ReadCsv(left_csv, &left, error) || !ReadCsv(right_csv, &right, error)) return false;
+  if (!CheckPairs(left_csv, left, right_csv, right, error)) return false;
   std::vector<TumPose> gt;
   if (!ReadTum(dir + "/groundtruth_tum.txt", &gt, error)) return false;
-  std::map<std::int64_t, std::string> right_by_stamp;
-  for (const Frame& f : right) right_by_stamp[f.stamp_ns] = f.name;
-  // Frames with a right image and a ground-truth pose within 5 ms.
-  for (const Frame& f : left) {
-    const auto r = right_by_stamp.find(f.stamp_ns);
-    if (r == right_by_stamp.end()) continue;
-    const double t = static_cast<double>(f.stamp_ns) * 1e-9;
-    const auto nearest =
-        std::min_element(gt.begin(), gt.end(), [t](const TumPose& a, const TumPose& b) {
-          return std::fabs(a.stamp_s - t) < std::fabs(b.stamp_s - t);
-        });
-    if (std::fabs(nearest->stamp_s - t) > 0.005) continue;
-    in.left.push_back(f);
-    in.right_names.push_back(r->second);
-    in.truth.push_back({t, nearest->pose});
-  }
-  if (in.left.size() < 3) {
-    *error = dir + ": fewer than 3 frames with both images and ground truth";
+  Associate(mav0, left, right, gt, body_T_camera, result);
+  result->recorded_frames = static_cast<int>(s.frames.size());
+  if (result->recorded_frames < 3) {
+    *error = dir + "/groundtruth_tum.txt: fewer than 3 of the " + std::to_string(left.size()) +
+             " listed frames have a ground-truth pose within 5 ms";
     return false;
   }
-  result->frames = static_cast<int>(in.left.size());
-  result->ground_truth = in.truth;
-  for (std::size_t j = 0; j < in.truth.size(); ++j) {
-    if (j > 0) result->gt_path_length_m += (in.truth[j].pose.t - in.truth[j - 1].pose.t).norm();
-    result->gt_extent_m =
-        std::max(result->gt_extent_m, (in.truth[j].pose.t - in.truth[0].pose.t).norm());
-  }
+  const double interval_ns = MedianInterval(left);
+  result->frame_interval_s = interval_ns * 1e-9;
+  PathStats(result);
+  if (options.loop_seconds > 0.0) Loop(options.loop_seconds, interval_ns, &s);
+  return true;
+}
+
+bool RunEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
+              std::string* error) {
+  if (!LoadEuroc(dir, options, result, error)) return false;
   const std::string k = std::to_string(options.window);
   result->runs.clear();
   for (const auto mode :
        {estimator::SwfMode::kSlidingWindow, estimator::SwfMode::kVisualOdometry}) {
-    EurocRun run;
-    run.mode = mode;
-    run.name = (mode == estimator::SwfMode::kSlidingWindow ? "SWF(" : "VO(") + k + ")";
-    if (!RunOne(mav0, in, options, &run, error)) return false;
-    result->runs.push_back(run);
-  }
-  {
-    auto rectifier = std::make_unique<frontend::StereoRectifier>();
-    (void)rectifier->Configure(in.cal[0], in.cal[1], frontend::RectifyOptions{});
-    result->focal_px = rectifier->Camera().fx;
-    result->baseline_m = rectifier->Camera().baseline_m;
+    RunOptions o;
+    o.name = (mode == estimator::SwfMode::kSlidingWindow ? "SWF(" : "VO(") + k + ")";
+    o.mode = mode;
+    o.window = options.window;
+    o.max_tracks = options.max_tracks;
+    o.sigma_px = options.sigma_px;
+    o.process_sigma_m = options.motion_sigma_m;
+    o.process_sigma_rad = options.motion_sigma_rad;
+    o.divergence_m = options.divergence_m;
+    result->runs.push_back(RunSequence(result->sequence, o));
   }
   return true;
 }

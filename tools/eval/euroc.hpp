@@ -1,25 +1,20 @@
-// swf-eval euroc: the whole pipeline (rectification, front end, Sliding Window Filter) on a
+// swf-eval euroc: the flight pipeline (rectification, front end, Sliding Window Filter) on a
 // folder in EuRoC's ASL layout (DIR/mav0/cam0, DIR/mav0/cam1, each with data.csv, sensor.yaml
 // and data/) with the ground truth as DIR/groundtruth_tum.txt (timestamp tx ty tz qx qy qz qw,
-// world_T_body). The online estimate (newest pose after every frame's update) is compared with
-// the ground truth after a rigid SE(3) alignment (Horn/Umeyama without scale).
+// world_T_body). Inputs are checked before anything runs: the two image lists must pair line by
+// line with equal timestamps (a list shifted by one frame is refused, naming the line), image
+// names must stay inside data/, and each calibration must be one that can be rectified over the
+// whole image. Optionally the recorded frames are looped (ping-pong) into a longer sequence with
+// monotonic timestamps, a stress case for a camera at rest.
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include "swf/estimator/geometry.hpp"
-#include "swf/estimator/sliding_window_filter.hpp"
+#include "sequence.hpp"
+#include "trajectory.hpp"
 
 namespace swf::eval {
-
-using PoseD = estimator::Pose<double>;
-using Vec3D = estimator::Vec3<double>;
-
-// The rigid transform a_T_b minimising sum |a_i - (R b_i + t)|^2 (Horn / Umeyama, no scale).
-// Needs at least 3 non-collinear points for a unique rotation; degenerate inputs still return a
-// proper rotation (the SVD sign fix keeps det R = +1).
-PoseD AlignRigid(const std::vector<Vec3D>& a, const std::vector<Vec3D>& b);
 
 struct TumPose {
   double stamp_s = 0.0;
@@ -29,40 +24,43 @@ struct TumPose {
 bool ReadTum(const std::string& path, std::vector<TumPose>* poses, std::string* error);
 bool WriteTum(const std::string& path, const std::vector<TumPose>& poses);
 
+// False with *error naming `path` when the calibration cannot describe a real camera over its
+// image: focal lengths not positive, principal point outside the image, or a radial distortion
+// that folds back (stops growing with the radius) before the image corners.
+bool CheckCalibration(const frontend::CameraCalibration& c, const std::string& path,
+                      std::string* error);
+
+// False with *error when `name` (an image file name from a list) is absolute or has a ".."
+// component: the lists may only name files inside their data folder.
+bool CheckImageName(const std::string& name, std::string* error);
+
 struct EurocOptions {
   int window = 5;                // poses in the window, for SWF and VO alike
-  std::size_t max_tracks = 150;  // front end tracks (the prior's landmarks make S dense: keep
-                                 // 3 * max_tracks + 6 * window moderate)
+  std::size_t max_tracks = 150;  // front end tracks
   double sigma_px = 0.5;         // measurement noise used by the estimator
   double motion_sigma_m = 0.05;  // constant-velocity process noise per frame
   double motion_sigma_rad = 0.02;
-  bool predict = true;  // pass the estimator's predicted pose and landmarks to the front end
-};
-
-struct EurocRun {
-  std::string name;  // "SWF(5)", "VO(5)"
-  estimator::SwfMode mode = estimator::SwfMode::kSlidingWindow;
-  std::vector<TumPose> estimate;  // world_T_body, world = first rectified camera
-  std::vector<double> error_m;    // per frame, after alignment
-  double ate_rmse_m = 0.0;
-  double ate_max_m = 0.0;
-  double final_error_m = 0.0;
-  int update_failures = 0;
-  double mean_measurements = 0.0;  // per frame, into the estimator
-  double seconds = 0.0;            // wall time of the whole run
+  // > 0: loop the recorded frames forwards and backwards into this many seconds.
+  double loop_seconds = 0.0;
+  double divergence_m = 1.0;  // anchored position error that calls a run diverged
 };
 
 struct EurocResult {
-  int frames = 0;
-  double gt_path_length_m = 0.0;
-  double gt_extent_m = 0.0;  // largest distance from the first ground-truth position
-  double focal_px = 0.0;
-  double baseline_m = 0.0;
-  std::vector<TumPose> ground_truth;  // associated with the frames
-  std::vector<EurocRun> runs;
+  StereoSequence sequence;  // the frames run (looped when asked)
+  int recorded_frames = 0;  // frames with both images and ground truth
+  int skipped_frames = 0;   // listed frames without ground truth within 5 ms
+  double frame_interval_s = 0.0;
+  double gt_path_length_m = 0.0;  // of the recorded frames
+  double gt_extent_m = 0.0;       // largest distance from the first ground-truth position
+  std::vector<RunRecord> runs;    // SWF(window), VO(window)
 };
 
-// Runs SWF and VO (same window) on DIR. False with *error for missing or malformed input.
+// Reads DIR into a sequence (truth: the rectified left camera, world = the ground truth's).
+bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
+               std::string* error);
+
+// LoadEuroc, then SWF and VO (same window). False with *error only for unusable input; a run
+// that fails (diverged, no measurements) is in its RunRecord's verdict.
 bool RunEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
               std::string* error);
 

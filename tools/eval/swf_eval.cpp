@@ -1,6 +1,7 @@
 // swf-eval: reruns the paper's experiments (section 4.2) on measurement-level synthetic scenes
 // and on kitti-vo, and writes one JSON file per experiment plus gnuplot data under OUT/.
 //   swf-eval paper OUT [--runs N] [--shared DIR]
+// The real-data commands (euroc, kitti) are in commands.cpp.
 // tools/run eval renders the plots and rebuilds docs/results.md from these files.
 #include <algorithm>
 #include <chrono>
@@ -13,7 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "euroc.hpp"
+#include "commands.hpp"
+#include "experiment_file.hpp"
 #include "experiments.hpp"
 #include "kitti_vo.hpp"
 #include "run_filter.hpp"
@@ -39,7 +41,9 @@ using swf::eval::InverseDepthFilter;
 using swf::eval::kMotionSigmaM;
 using swf::eval::kMotionSigmaRad;
 using swf::eval::RunFilter;
+using swf::eval::Series;
 using swf::eval::Trace;
+using swf::eval::WriteExperiment;
 
 // Cramer-Rao bound of the landmark MSE after m frames: trace of the landmark marginal
 // covariances of the batch problem evaluated at the true state (noise-free measurements keep the
@@ -85,11 +89,6 @@ std::vector<double> CramerRao(SceneOptions so) {
   return bound;
 }
 
-struct Series {
-  std::string name;
-  std::vector<double> y;
-};
-
 // Averages a per-frame quantity over Monte Carlo runs (scene seed and motion-noise seed vary).
 Series MonteCarlo(const std::string& name, SceneOptions so, int runs,
                   const std::function<Trace(const SyntheticScene&, std::uint64_t)>& run,
@@ -104,44 +103,6 @@ Series MonteCarlo(const std::string& name, SceneOptions so, int runs,
     if (final_rms != nullptr) final_rms->push_back(t.final_rms_m);
   }
   return s;
-}
-
-// x: the abscissa of every row (default 1, 2, 3, ...).
-bool WriteExperiment(const std::string& out, const std::string& name, const std::string& x_label,
-                     const std::vector<Series>& series, const std::string& extra_json,
-                     const std::vector<double>& x = {}) {
-  std::ofstream dat(out + "/" + name + ".dat");
-  std::ofstream json(out + "/" + name + ".json");
-  if (!dat || !json) return false;
-  dat << "# " << x_label;
-  for (const Series& s : series) dat << " \"" << s.name << "\"";
-  dat << "\n";
-  const std::size_t n = series.empty() ? 0 : series[0].y.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    if (k < x.size()) {
-      dat << x[k];
-    } else {
-      dat << k + 1;
-    }
-    for (const Series& s : series) dat << " " << (k < s.y.size() ? s.y[k] : NAN);
-    dat << "\n";
-  }
-  json << "{\n  \"experiment\": \"" << name << "\",\n  \"x\": \"" << x_label << "\",\n";
-  if (!extra_json.empty()) json << extra_json << ",\n";
-  if (!x.empty()) {
-    json << "  \"x_values\": [";
-    for (std::size_t k = 0; k < x.size(); ++k) json << (k ? ", " : "") << x[k];
-    json << "],\n";
-  }
-  json << "  \"series\": {\n";
-  for (std::size_t i = 0; i < series.size(); ++i) {
-    json << "    \"" << series[i].name << "\": [";
-    for (std::size_t k = 0; k < series[i].y.size(); ++k) json << (k ? ", " : "") << series[i].y[k];
-    json << "]" << (i + 1 < series.size() ? "," : "") << "\n";
-  }
-  json << "  }\n}\n";
-  std::printf("swf-eval: wrote %s/%s.json\n", out.c_str(), name.c_str());
-  return static_cast<bool>(json);
 }
 
 double Mean(const std::vector<double>& v) {
@@ -165,9 +126,8 @@ int Usage() {
   std::fprintf(
       stderr,
       "usage: swf-eval paper OUT [--runs N] [--nees-runs N] [--shared DIR] [--only LIST]\n"
-      "       swf-eval euroc DIR [--out OUT] [--window K] [--max-tracks N] [--predict 0|1]\n"
-      "                      [--motion-sigma M,RAD]\n"
-      "  LIST: comma-separated subset of fig12,fig13,fig14,fig15,fig16,fig17,nees,kitti\n");
+      "  LIST: comma-separated subset of fig12,fig13,fig14,fig15,fig16,fig17,nees,kitti\n%s",
+      swf::eval::SequenceUsage());
   return 2;
 }
 
@@ -467,153 +427,11 @@ bool AddFig16(const std::string& out, int runs, std::string* md) {
   return true;
 }
 
-int RunEurocCommand(int argc, char** argv) {
-  const std::string dir = argv[2];
-  std::string out = "out/eval";
-  swf::eval::EurocOptions options;
-  for (int i = 3; i < argc; i += 2) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) return Usage();
-    if (a == "--out") {
-      out = argv[i + 1];
-    } else if (a == "--window") {
-      options.window = std::atoi(argv[i + 1]);
-    } else if (a == "--max-tracks") {
-      options.max_tracks = static_cast<std::size_t>(std::atoi(argv[i + 1]));
-    } else if (a == "--motion-sigma") {
-      // "M,RAD": the constant-velocity process noise per frame.
-      if (std::sscanf(argv[i + 1], "%lf,%lf", &options.motion_sigma_m, &options.motion_sigma_rad) !=
-              2 ||
-          !(options.motion_sigma_m > 0.0) || !(options.motion_sigma_rad > 0.0)) {
-        return Usage();
-      }
-    } else if (a == "--predict") {
-      options.predict = std::atoi(argv[i + 1]) != 0;
-    } else {
-      return Usage();
-    }
-  }
-  if (options.window < 2 || options.window > 20 || options.max_tracks < 10 ||
-      options.max_tracks > swf::frontend::kMaxTracks) {
-    return Usage();
-  }
-  swf::eval::EurocResult result;
-  std::string error;
-  if (!swf::eval::RunEuroc(dir, options, &result, &error)) {
-    std::fprintf(stderr, "swf-eval euroc: %s\n", error.c_str());
-    return 1;
-  }
-  std::vector<Series> errors;
-  std::string methods;
-  std::string ate;
-  char buf[1024];
-  for (const auto& run : result.runs) {
-    const std::string key = run.mode == SwfMode::kSlidingWindow ? "swf" : "vo";
-    const std::string tum = "euroc_" + key + "_tum.txt";
-    if (!swf::eval::WriteTum(out + "/" + tum, run.estimate)) {
-      std::fprintf(stderr, "swf-eval euroc: cannot write %s/%s\n", out.c_str(), tum.c_str());
-      return 1;
-    }
-    errors.push_back({run.name + " position error (m)", run.error_m});
-    std::snprintf(buf, sizeof(buf),
-                  ",\n  \"%s\": {\"name\": \"%s\", \"ate_rmse_m\": %.6g, \"ate_max_m\": %.6g, "
-                  "\"final_error_m\": %.6g, \"update_failures\": %d, "
-                  "\"measurements_per_frame\": %.4g, \"seconds\": %.3g, \"trajectory\": \"%s\"}",
-                  key.c_str(), run.name.c_str(), run.ate_rmse_m, run.ate_max_m, run.final_error_m,
-                  run.update_failures, run.mean_measurements, run.seconds, tum.c_str());
-    methods += buf;
-    std::snprintf(buf, sizeof(buf), "%s\"%s\": %.6g", ate.empty() ? "" : ", ", key.c_str(),
-                  run.ate_rmse_m);
-    ate += buf;
-  }
-  {
-    std::ofstream json(out + "/euroc.json");
-    std::snprintf(buf, sizeof(buf),
-                  "{\n  \"experiment\": \"euroc\",\n  \"dataset\": \"%s\",\n  \"frames\": %d, "
-                  "\"window\": %d, \"max_tracks\": %zu,\n  \"rectified_focal_px\": %.6g, "
-                  "\"baseline_m\": %.6g,\n  \"gt_path_length_m\": %.6g, \"gt_extent_m\": %.6g,\n"
-                  "  \"alignment\": \"SE(3), Horn/Umeyama without scale, all frames\",\n"
-                  "  \"ate_rmse_m\": {%s}",
-                  dir.c_str(), result.frames, options.window, options.max_tracks, result.focal_px,
-                  result.baseline_m, result.gt_path_length_m, result.gt_extent_m, ate.c_str());
-    json << buf << methods << "\n}\n";
-    if (!json) {
-      std::fprintf(stderr, "swf-eval euroc: cannot write %s/euroc.json\n", out.c_str());
-      return 1;
-    }
-    std::printf("swf-eval: wrote %s/euroc.json\n", out.c_str());
-  }
-  if (!WriteExperiment(out, "euroc_error", "frame", errors, "  \"dataset\": \"" + dir + "\"")) {
-    return 1;
-  }
-  const auto& s = result.runs[0];
-  const auto& v = result.runs[1];
-  std::string md;
-  auto add = [&md](const std::string& line) { md += line + "\n"; };
-  add("## Real data: EuRoC (`swf-eval euroc DIR`)");
-  add("");
-  add("![euroc](eval/euroc_error.png)");
-  add("");
-  std::snprintf(
-      buf, sizeof(buf),
-      "The whole pipeline on `%s` (%d stereo frames): rectification from `sensor.yaml` (f = "
-      "%.1f px, baseline %.4f m), the flight front end (at most %zu tracks, the estimator's "
-      "predicted pose and landmarks passed back for warped tracking), and the filter with a "
-      "constant-velocity process model (no IMU), window %d. The online estimate (newest pose "
-      "after each frame) is written in TUM format (`out/eval/euroc_swf_tum.txt`, "
-      "`euroc_vo_tum.txt`) and compared with `groundtruth_tum.txt` after an SE(3) alignment "
-      "(Horn/Umeyama, no scale).",
-      dir.c_str(), result.frames, result.focal_px, result.baseline_m, options.max_tracks,
-      options.window);
-  add(buf);
-  add("");
-  add("| method | ATE RMSE (m) | max (m) | last frame (m) | measurements/frame | run time (s) |");
-  add("|---|---|---|---|---|---|");
-  for (const auto& run : result.runs) {
-    std::snprintf(buf, sizeof(buf), "| %s | %.4f | %.4f | %.4f | %.0f | %.1f |", run.name.c_str(),
-                  run.ate_rmse_m, run.ate_max_m, run.final_error_m, run.mean_measurements,
-                  run.seconds);
-    add(buf);
-  }
-  add("");
-  std::snprintf(
-      buf, sizeof(buf),
-      "The ground-truth path over these frames is %.3f m long and never more than %.3f m from "
-      "its start: the sample is the nearly stationary start of V1_01, so the ATE measures "
-      "stationary drift and jitter, not tracking over distance. SWF ATE %.2f mm against VO "
-      "%.2f mm (%s). The paper has no EuRoC experiment.",
-      result.gt_path_length_m, result.gt_extent_m, 1e3 * s.ate_rmse_m, 1e3 * v.ate_rmse_m,
-      s.ate_rmse_m < 0.8 * v.ate_rmse_m
-          ? "SWF clearly lower, consistent with the paper's point that the SWF does not suffer "
-            "from VO's stationary drift"
-          : "within 20% of each other: this short static sample does not separate them");
-  add(buf);
-  add("");
-  std::snprintf(
-      buf, sizeof(buf),
-      "Median per-frame position error after alignment: SWF %.2f mm, VO %.2f mm; at "
-      "the last frame %.1f mm and %.1f mm (%.1fx and %.1fx the median). %s",
-      1e3 * Median(s.error_m), 1e3 * Median(v.error_m), 1e3 * s.final_error_m,
-      1e3 * v.final_error_m, s.final_error_m / std::max(Median(s.error_m), 1e-12),
-      v.final_error_m / std::max(Median(v.error_m), 1e-12),
-      s.final_error_m > 3.0 * Median(s.error_m)
-          ? "The error grows toward the end of the sample while the ground truth stays put "
-            "(the raw images there are static too: flow below 0.1 px between frames, measured "
-            "with swf-track), in both modes: drift of the estimate, not motion."
-          : "");
-  add(buf);
-  add("");
-  std::ofstream md_file(out + "/euroc.md");
-  md_file << md;
-  if (!md_file) return 1;
-  std::printf("swf-eval: wrote %s/euroc.md\n", out.c_str());
-  return 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc >= 3 && std::string(argv[1]) == "euroc") return RunEurocCommand(argc, argv);
+  if (argc >= 3 && std::string(argv[1]) == "euroc") return swf::eval::RunEurocCommand(argc, argv);
+  if (argc >= 3 && std::string(argv[1]) == "kitti") return swf::eval::RunKittiCommand(argc, argv);
   if (argc < 3 || std::string(argv[1]) != "paper") return Usage();
   const std::string out = argv[2];
   int runs = 5;
@@ -636,6 +454,11 @@ int main(int argc, char** argv) {
     }
   }
   if (runs < 1 || nees_runs < 2) return Usage();
+  std::string dir_error;
+  if (!swf::eval::MakeDirectories(out, &dir_error)) {
+    std::fprintf(stderr, "swf-eval paper: %s\n", dir_error.c_str());
+    return 1;
+  }
   auto want = [&only](const char* name) {
     return only.empty() || only.find("," + std::string(name) + ",") != std::string::npos;
   };
@@ -675,7 +498,7 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof(buf),
                   "  \"runs\": %d, \"mse_m2_at_40\": %.6g, \"crlb_m2_at_40\": %.6g", runs,
                   swf5.y.back(), crlb.y.back());
-    WriteExperiment(out, "fig12_static", "frame", {swf5, one_over_m, crlb}, buf);
+    if (!WriteExperiment(out, "fig12_static", "frame", {swf5, one_over_m, crlb}, buf)) return 1;
     add("## Fig. 12: static cameras, 30 landmarks");
     add("");
     add("![fig12](eval/fig12_static.png)");
@@ -721,7 +544,7 @@ int main(int argc, char** argv) {
         100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)), Std(rms_vo) / std::max(Std(rms_s10), 1e-12),
         Mean(rms_vo2), 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
         Std(rms_vo2) / std::max(Std(rms_s10), 1e-12));
-    WriteExperiment(out, "fig13_descent", "frame", s, buf);
+    if (!WriteExperiment(out, "fig13_descent", "frame", s, buf)) return 1;
     add("## Fig. 13: descent, 150 landmarks tracked throughout (100 m to 41.5 m)");
     add("");
     add("![fig13](eval/fig13_descent.png)");
@@ -775,9 +598,11 @@ int main(int argc, char** argv) {
     const Trace s10 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 10, 1);
     const Trace s20 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 20, 1);
     std::snprintf(buf, sizeof(buf), "  \"note\": \"wall-clock ms of Update() on the 2-core VM\"");
-    WriteExperiment(
-        out, "fig14a_runtime", "frame",
-        {{"batch", batch.update_ms}, {"SWF(10)", s10.update_ms}, {"SWF(20)", s20.update_ms}}, buf);
+    if (!WriteExperiment(
+            out, "fig14a_runtime", "frame",
+            {{"batch", batch.update_ms}, {"SWF(10)", s10.update_ms}, {"SWF(20)", s20.update_ms}},
+            buf))
+      return 1;
     so.step_m = 4.4;  // ~5-frame tracks
     so.landmark_density_per_m2 = 0.08;
     so.frames = 100;
@@ -787,10 +612,11 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof(buf),
                   "  \"mean_state_dim_swf2\": %.4g, \"final_state_dim_batch\": %.4g",
                   Mean(with.state_dim), without.state_dim.back());
-    WriteExperiment(out, "fig14b_state_size", "frame",
-                    {{"SWF(2) with marginalization", with.state_dim},
-                     {"without marginalization", without.state_dim}},
-                    buf);
+    if (!WriteExperiment(out, "fig14b_state_size", "frame",
+                         {{"SWF(2) with marginalization", with.state_dim},
+                          {"without marginalization", without.state_dim}},
+                         buf))
+      return 1;
     add("## Fig. 14: run time and state size");
     add("");
     add("![fig14a](eval/fig14a_runtime.png) ![fig14b](eval/fig14b_state_size.png)");
@@ -835,7 +661,7 @@ int main(int argc, char** argv) {
     s.push_back(MonteCarlo("SWF(2) relinearized, inverse depth", so, runs,
                            plain(SwfMode::kSlidingWindow, 2, true)));
     std::snprintf(buf, sizeof(buf), "  \"runs\": %d", runs);
-    WriteExperiment(out, "fig15_sideways", "frame", s, buf);
+    if (!WriteExperiment(out, "fig15_sideways", "frame", s, buf)) return 1;
     add("## Fig. 15: sideways motion, ~85% overlap");
     add("");
     add("![fig15](eval/fig15_sideways.png)");
@@ -867,7 +693,7 @@ int main(int argc, char** argv) {
     s.push_back(MonteCarlo("VSDF(3)", so, runs, swf(SwfMode::kVsdf, 3)));
     s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40)));
     std::snprintf(buf, sizeof(buf), "  \"runs\": %d", runs);
-    WriteExperiment(out, "fig17_vsdf", "frame", s, buf);
+    if (!WriteExperiment(out, "fig17_vsdf", "frame", s, buf)) return 1;
     add("## Fig. 17: VSDF against SWF, 3 active frames");
     add("");
     add("![fig17](eval/fig17_vsdf.png)");
@@ -924,8 +750,9 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof(buf),
                   "  \"initial_cost\": %.10g, \"batch_final_cost\": %.10g,\n  \"windows\": [",
                   batch.initial_cost, batch.final_cost);
-    WriteExperiment(out, "kitti_windows", "window index (2,3,5,10,20)", {cost, dpos},
-                    std::string(buf) + list + "]");
+    if (!WriteExperiment(out, "kitti_windows", "window index (2,3,5,10,20)", {cost, dpos},
+                         std::string(buf) + list + "]"))
+      return 1;
     add("## Real data: kitti-vo, batch against sliding windows");
     add("");
     std::snprintf(

@@ -1,0 +1,523 @@
+#include "commands.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "euroc.hpp"
+#include "experiment_file.hpp"
+#include "json.hpp"
+#include "kitti.hpp"
+#include "report.hpp"
+#include "swf/frontend/config.hpp"
+
+namespace swf::eval {
+namespace {
+
+// What one command hands to the common writer.
+struct Evaluation {
+  std::string prefix;  // file names: OUT/<prefix>.json, .md, _error.dat, _swf_tum.txt, ...
+  std::string title;   // markdown heading
+  const StereoSequence* sequence = nullptr;
+  const std::vector<RunRecord>* runs = nullptr;
+  JsonObject header;        // dataset fields, first in the JSON
+  std::string description;  // markdown before the table
+  std::string notes;        // markdown after the comparison, computed by the command
+};
+
+std::string Key(const RunRecord& r) {
+  return r.options.mode == estimator::SwfMode::kSlidingWindow ? "swf" : "vo";
+}
+
+// Every frame of a run, to see where and how a run went wrong.
+bool WriteFrameTable(const std::string& path, const RunRecord& r, const StereoSequence& s,
+                     std::string* error) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) {
+    *error = path + ": cannot write";
+    return false;
+  }
+  std::fprintf(f,
+               "# frame\trecorded\tt_s\terror_no_fit_m\tsigma_m\ttracked\twindow_meas\t"
+               "iterations\tfault_bits\tstatus\test_x\test_y\test_z\ttrue_x\ttrue_y\ttrue_z\n");
+  for (std::size_t j = 0; j < r.frames.size(); ++j) {
+    const FrameRecord& fr = r.frames[j];
+    const Vec3D truth = (s.frames[0].truth.Inverse() * s.frames[j].truth).t;
+    const Vec3D est = (r.frames[0].estimate.Inverse() * fr.estimate).t;
+    std::fprintf(
+        f, "%zu\t%d\t%.3f\t%.6g\t%.6g\t%d\t%d\t%d\t0x%x\t%d\t%.6g\t%.6g\t%.6g\t%.6g\t%.6g\t%.6g\n",
+        j, s.frames[j].source,
+        1e-9 * static_cast<double>(s.frames[j].stamp_ns - s.frames[0].stamp_ns),
+        fr.anchored_error_m, fr.position_sigma_m, fr.tracked, fr.window_measurements, fr.iterations,
+        fr.fault_bits, fr.status, est.x(), est.y(), est.z(), truth.x(), truth.y(), truth.z());
+  }
+  if (std::fclose(f) != 0) {
+    *error = path + ": cannot write";
+    return false;
+  }
+  return true;
+}
+
+bool WriteTrajectories(const std::string& out, const Evaluation& e, std::string* error) {
+  for (const RunRecord& r : *e.runs) {
+    std::vector<TumPose> poses;
+    for (std::size_t j = 0; j < r.frames.size(); ++j) {
+      poses.push_back(
+          {1e-9 * static_cast<double>(e.sequence->frames[j].stamp_ns), r.frames[j].estimate});
+    }
+    const std::string path = out + "/" + e.prefix + "_" + Key(r) + "_tum.txt";
+    if (!WriteTum(path, poses)) {
+      *error = path + ": cannot write";
+      return false;
+    }
+    if (!WriteFrameTable(out + "/" + e.prefix + "_" + Key(r) + "_frames.tsv", r, *e.sequence,
+                         error)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+std::string JsonText(const Evaluation& e) {
+  JsonObject o = e.header;
+  JsonObject ate;
+  for (const RunRecord& r : *e.runs) {
+    if (r.Ok()) {
+      ate.Number(Key(r), r.errors.ate_rmse_m, r.errors.reason);
+    } else {
+      ate.Null(Key(r), "no score: " + std::string(ToString(r.verdict)) + ", " + r.reason);
+    }
+  }
+  o.Raw("ate_rmse_m", ate.Text(4));
+  o.Bool("all_runs_ok", AllOk(*e.runs));
+  for (const RunRecord& r : *e.runs) {
+    o.Raw(Key(r), RunJson(r, *e.sequence, e.prefix + "_" + Key(r) + "_tum.txt", 4));
+  }
+  return o.Text(2) + "\n";
+}
+
+bool WriteErrorSeries(const std::string& out, const Evaluation& e) {
+  std::vector<Series> series;
+  const std::size_t n = e.sequence->frames.size();
+  for (const RunRecord& r : *e.runs) {
+    Series aligned{r.options.name + " position error after SE(3) fit (m)",
+                   std::vector<double>(n, NAN)};
+    Series anchored{r.options.name + " position error, no fit (m)", std::vector<double>(n, NAN)};
+    for (std::size_t j = 0; j < r.frames.size(); ++j) {
+      anchored.y[j] = r.frames[j].anchored_error_m;
+      if (j < r.errors.aligned_error_m.size()) aligned.y[j] = r.errors.aligned_error_m[j];
+    }
+    series.push_back(aligned);
+    series.push_back(anchored);
+  }
+  return WriteExperiment(out, e.prefix + "_error", "frame", series,
+                         "  \"dataset\": " + JsonString(e.sequence->dir));
+}
+
+std::string Markdown(const Evaluation& e) {
+  const std::vector<RunRecord>& runs = *e.runs;
+  std::string md = "## " + e.title + "\n\n![" + e.prefix + "](eval/" + e.prefix +
+                   "_error.png)\n\n" + e.description + "\n\n" + RunsTable(runs) + "\n";
+  const std::string failures = FailureSentences(runs);
+  if (!failures.empty()) md += "**Not every run is scored.** " + failures + "\n\n";
+  if (runs.size() == 2) {
+    md += CompareSentence(runs[0], runs[0].errors.ate_rmse_m, runs[1], runs[1].errors.ate_rmse_m,
+                          "ATE") +
+          "\n\n";
+  }
+  if (!e.notes.empty()) md += e.notes + "\n\n";
+  return md;
+}
+
+// Writes every file of the evaluation and returns the exit status.
+int WriteEvaluation(const std::string& out, const Evaluation& e) {
+  std::string error;
+  if (!WriteTrajectories(out, e, &error) ||
+      !WriteJsonFile(out + "/" + e.prefix + ".json", JsonText(e), &error)) {
+    std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
+    return 1;
+  }
+  std::printf("swf-eval: wrote %s/%s.json\n", out.c_str(), e.prefix.c_str());
+  if (!WriteErrorSeries(out, e)) return 1;
+  std::ofstream md(out + "/" + e.prefix + ".md");
+  md << Markdown(e);
+  md.close();
+  if (!md) {
+    std::fprintf(stderr, "swf-eval: %s/%s.md: cannot write\n", out.c_str(), e.prefix.c_str());
+    return 1;
+  }
+  std::printf("swf-eval: wrote %s/%s.md\n", out.c_str(), e.prefix.c_str());
+  for (const RunRecord& r : *e.runs) {
+    if (r.Ok()) {
+      std::printf(
+          "swf-eval: %s ok: ATE %.4g m, last frame %.4g m without fit, %.0f tracked/frame\n",
+          r.options.name.c_str(), r.errors.ate_rmse_m, r.errors.final_anchored_error_m,
+          r.mean_tracked);
+    } else {
+      std::fprintf(stderr, "swf-eval: %s %s: %s\n", r.options.name.c_str(), ToString(r.verdict),
+                   r.reason.c_str());
+    }
+  }
+  return AllOk(*e.runs) ? 0 : kExitRunFailed;
+}
+
+// Strict number parsing: the whole argument must be a finite number.
+bool ParseNumber(const char* text, double* value) {
+  char* end = nullptr;
+  *value = std::strtod(text, &end);
+  return end != text && *end == '\0' && std::isfinite(*value);
+}
+
+bool ParsePair(const char* text, double* a, double* b) {
+  const std::string s = text;
+  const std::size_t comma = s.find(',');
+  return comma != std::string::npos && ParseNumber(s.substr(0, comma).c_str(), a) &&
+         ParseNumber(s.substr(comma + 1).c_str(), b) && *a > 0.0 && *b > 0.0;
+}
+
+int Usage(const std::string& why) {
+  std::fprintf(stderr, "swf-eval: %s\n%s", why.c_str(), SequenceUsage());
+  return 2;
+}
+
+// The options both commands share; false for an unknown flag or a malformed value.
+struct CommonArgs {
+  std::string out = "out/eval";
+  double window = 5;
+  double max_tracks = 150;
+  double sigma_m = 0.0;  // 0: the command's default
+  double sigma_rad = 0.0;
+  double divergence_m = 0.0;
+};
+
+bool ParseCommon(const std::string& flag, const char* value, CommonArgs* a, std::string* why) {
+  bool ok = true;
+  if (flag == "--out") {
+    a->out = value;
+  } else if (flag == "--window") {
+    ok = ParseNumber(value, &a->window);
+  } else if (flag == "--max-tracks") {
+    ok = ParseNumber(value, &a->max_tracks);
+  } else if (flag == "--motion-sigma") {
+    ok = ParsePair(value, &a->sigma_m, &a->sigma_rad);
+  } else if (flag == "--divergence-m") {
+    ok = ParseNumber(value, &a->divergence_m) && a->divergence_m > 0.0;
+  } else {
+    *why = "unknown option " + flag;
+    return false;
+  }
+  if (!ok) *why = "bad value for " + flag + ": " + value;
+  return ok;
+}
+
+bool CheckCommon(const CommonArgs& a, std::string* why) {
+  if (a.window < 2 || a.window > 10 || a.window != std::floor(a.window)) {
+    *why = "--window must be an integer in [2, 10] (the flight filter's capacity)";
+    return false;
+  }
+  if (a.max_tracks < 10 || a.max_tracks > static_cast<double>(frontend::kMaxTracks)) {
+    *why = "--max-tracks must be in [10, " + std::to_string(frontend::kMaxTracks) + "]";
+    return false;
+  }
+  return true;
+}
+
+// Shared paragraph: what ran.
+std::string PipelineSentence(const StereoSequence& s, const RunOptions& o) {
+  return Format(
+      "The flight pipeline (`swf::app::Pipeline`: %s, front end with at most %zu tracks and a "
+      "%d px disparity search, Sliding Window Filter window %d) with no motion input: the "
+      "constant-velocity process model carries the pose between frames (process noise %.3g m "
+      "and %.3g rad per frame). Stereo rig: f = %.1f px, baseline %.4f m, %d x %d px.",
+      s.rectify ? "rectification from the calibration files" : "images already rectified",
+      o.max_tracks, o.max_disparity_px, o.window, o.process_sigma_m, o.process_sigma_rad,
+      s.camera.fx, s.camera.baseline_m, s.width, s.height);
+}
+
+// A length for the text: "0.0123 m", or why there is no number.
+std::string Meters(double value) {
+  if (std::isfinite(value)) return Format("%.4g m", value);
+  return std::isnan(value) ? "not a number" : "not finite (overflow)";
+}
+
+// Where a run's error without fit was largest (or first stopped being a finite number).
+std::string LargestError(const RunRecord& run) {
+  const std::vector<FrameRecord>& f = run.frames;
+  if (f.empty()) return run.options.name + ": no frame processed.";
+  std::size_t worst = 0;
+  for (std::size_t j = 0; j < f.size(); ++j) {
+    if (!std::isfinite(f[j].anchored_error_m)) {
+      return Format("%s: the error without fit stops being a finite number at frame %zu.",
+                    run.options.name.c_str(), j);
+    }
+    if (f[j].anchored_error_m > f[worst].anchored_error_m) worst = j;
+  }
+  return Format("%s: largest error without fit %s at frame %zu, last frame %s.",
+                run.options.name.c_str(), Meters(f[worst].anchored_error_m).c_str(), worst,
+                Meters(f.back().anchored_error_m).c_str());
+}
+
+std::string CheckpointTable(const std::vector<RunRecord>& runs, const StereoSequence& s) {
+  std::string t = "| t (s) | frame |";
+  std::string rule = "|---|---|";
+  for (const RunRecord& r : runs) {
+    t += " " + r.options.name + " error, no fit | " + r.options.name + " 1-sigma |";
+    rule += "---|---|";
+  }
+  t += "\n" + rule + "\n";
+  const std::size_t n = s.frames.size();
+  for (int k = 1; k <= 6; ++k) {
+    const std::size_t j = std::min(n - 1, k * n / 6);
+    t += Format("| %.1f | %zu |",
+                1e-9 * static_cast<double>(s.frames[j].stamp_ns - s.frames[0].stamp_ns), j);
+    for (const RunRecord& r : runs) {
+      if (j < r.frames.size()) {
+        const double sigma = r.frames[j].position_sigma_m;
+        const std::string error = Meters(r.frames[j].anchored_error_m);
+        const std::string claimed = std::isnan(sigma) ? "no covariance" : Meters(sigma);
+        t += Format(" %s | %s |", error.c_str(), claimed.c_str());
+      } else {
+        t += " - | - |";
+      }
+    }
+    t += "\n";
+  }
+  return t;
+}
+
+// How far the error of a scored run grows over the run, from the numbers.
+std::string GrowthSentence(const RunRecord& r) {
+  if (!r.Ok()) return "";
+  const double median = Median(r.errors.aligned_error_m);
+  const double last = r.errors.final_aligned_error_m;
+  std::string s = Format("%s: median position error after the fit %.2f mm, last frame %.2f mm",
+                         r.options.name.c_str(), 1e3 * median, 1e3 * last);
+  if (last > 3.0 * median)
+    s +=
+        Format(" (%.1fx the median: the error grows over the run)", last / std::max(median, 1e-12));
+  return s + ".";
+}
+
+std::string EurocNotes(const EurocOptions& o, const EurocResult& r) {
+  std::string notes = Format(
+      "The ground truth's path over the %d recorded frames is %.3f m long and never more than "
+      "%.3f m from its start%s",
+      r.recorded_frames, r.gt_path_length_m, r.gt_extent_m,
+      r.gt_extent_m < 0.05 ? ": the camera is at rest, so the ATE measures drift and jitter at "
+                             "rest, not tracking over distance."
+                           : ".");
+  for (const RunRecord& run : r.runs) {
+    const std::string g = GrowthSentence(run);
+    if (!g.empty()) notes += " " + g;
+  }
+  if (o.loop_seconds > 0.0) {
+    notes += Format(
+        "\n\nLooped: the %d recorded frames played forwards and backwards (ping-pong) into %zu "
+        "frames, %.1f s at the recorded %.0f Hz, timestamps monotonic; the truth repeats with "
+        "the images. Error without fit (estimate and truth from their first frame) and the "
+        "navigation output's own position 1-sigma along the run:\n\n",
+        r.recorded_frames, r.sequence.frames.size(), o.loop_seconds, 1.0 / r.frame_interval_s);
+    notes += CheckpointTable(r.runs, r.sequence);
+    for (const RunRecord& run : r.runs) {
+      notes += '\n';
+      notes += LargestError(run);
+    }
+  }
+  if (r.skipped_frames > 0) {
+    notes += Format("\n\n%d listed frames had no ground truth within 5 ms and were left out.",
+                    r.skipped_frames);
+  }
+  return notes;
+}
+
+std::string KittiNotes(const KittiResult& r) {
+  const std::size_t n = r.sequence.frames.size();
+  std::string notes =
+      Format("The truth drives %.1f m in %zu frames (%.2f m per frame).", r.gt_path_length_m, n,
+             r.gt_path_length_m / static_cast<double>(std::max<std::size_t>(n - 1, 1)));
+  for (const RunRecord& run : r.runs) {
+    if (!run.Ok()) continue;
+    const TrajectoryErrors& e = run.errors;
+    notes += Format(
+        " %s ends %.2f m from the true final position without fit (%.1f%% of the path; "
+        "largest %.2f m); per-frame relative error %.2f%% of the distance driven and %.4f deg/m.",
+        run.options.name.c_str(), e.final_anchored_error_m,
+        100.0 * e.final_anchored_error_m / r.gt_path_length_m, e.max_anchored_error_m,
+        e.step_translation_percent, e.step_rotation_deg_per_m);
+  }
+  if (r.runs.size() == 2) {
+    notes += "\n\n" +
+             CompareSentence(r.runs[0], r.runs[0].errors.final_anchored_error_m, r.runs[1],
+                             r.runs[1].errors.final_anchored_error_m, "final position error") +
+             " " +
+             CompareSentence(r.runs[0], r.runs[0].errors.step_translation_mean_m, r.runs[1],
+                             r.runs[1].errors.step_translation_mean_m,
+                             "mean per-frame translation error");
+  }
+  return notes;
+}
+
+}  // namespace
+
+const char* SequenceUsage() {
+  return "usage: swf-eval euroc DIR [--out OUT] [--window K] [--max-tracks N]\n"
+         "                      [--motion-sigma M,RAD] [--loop-seconds S] [--divergence-m M]\n"
+         "       swf-eval kitti DIR [--out OUT] [--window K] [--max-tracks N] [--max-disparity D]\n"
+         "                      [--motion-sigma M,RAD] [--divergence-m M] [--frames N]\n"
+         "  exit status: 0 every run scored, 1 unusable input/output, 2 bad arguments,\n"
+         "  3 a run failed (non-finite, diverged, or a frame without tracked landmarks)\n";
+}
+
+int RunEurocCommand(int argc, char** argv) {
+  const std::string dir = argv[2];
+  CommonArgs a;
+  EurocOptions options;
+  std::string why;
+  for (int i = 3; i < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (i + 1 >= argc) return Usage(flag + " needs a value");
+    if (flag == "--loop-seconds") {
+      if (!ParseNumber(argv[i + 1], &options.loop_seconds) || options.loop_seconds <= 0.0 ||
+          options.loop_seconds > 3600.0) {
+        return Usage("--loop-seconds must be in (0, 3600]");
+      }
+    } else if (!ParseCommon(flag, argv[i + 1], &a, &why)) {
+      return Usage(why);
+    }
+  }
+  if (!CheckCommon(a, &why)) return Usage(why);
+  options.window = static_cast<int>(a.window);
+  options.max_tracks = static_cast<std::size_t>(a.max_tracks);
+  if (a.sigma_m > 0.0) {
+    options.motion_sigma_m = a.sigma_m;
+    options.motion_sigma_rad = a.sigma_rad;
+  }
+  if (a.divergence_m > 0.0) options.divergence_m = a.divergence_m;
+  std::string error;
+  if (!MakeDirectories(a.out, &error)) {
+    std::fprintf(stderr, "swf-eval euroc: %s\n", error.c_str());
+    return 1;
+  }
+  EurocResult result;
+  if (!RunEuroc(dir, options, &result, &error)) {
+    std::fprintf(stderr, "swf-eval euroc: %s\n", error.c_str());
+    return 1;
+  }
+  const bool looped = options.loop_seconds > 0.0;
+  Evaluation e;
+  e.prefix = looped ? "euroc_loop" : "euroc";
+  e.title = looped ? Format(
+                         "Real data: EuRoC looped, %.0f s at rest (`swf-eval euroc DIR "
+                         "--loop-seconds %g`)",
+                         options.loop_seconds, options.loop_seconds)
+                   : "Real data: EuRoC (`swf-eval euroc DIR`)";
+  e.sequence = &result.sequence;
+  e.runs = &result.runs;
+  e.header.String("experiment", e.prefix)
+      .String("dataset", dir)
+      .Integer("recorded_frames", result.recorded_frames)
+      .Integer("frames", static_cast<long long>(result.sequence.frames.size()))
+      .Number("loop_seconds", options.loop_seconds)
+      .Integer("skipped_frames_without_truth", result.skipped_frames)
+      .Integer("window", options.window)
+      .Integer("max_tracks", static_cast<long long>(options.max_tracks))
+      .Number("rectified_focal_px", result.sequence.camera.fx)
+      .Number("baseline_m", result.sequence.camera.baseline_m)
+      .Number("gt_path_length_m", result.gt_path_length_m)
+      .Number("gt_extent_m", result.gt_extent_m)
+      .Number("divergence_limit_m", options.divergence_m)
+      .String("alignment", "SE(3), Horn/Umeyama without scale, all frames; camera positions");
+  e.description =
+      Format("On `%s` (%d recorded stereo frames%s). ", dir.c_str(), result.recorded_frames,
+             looped ? Format(", looped into %zu", result.sequence.frames.size()).c_str() : "") +
+      PipelineSentence(result.sequence, result.runs.front().options) +
+      Format(
+          " The online estimate (newest pose after each frame, rectified left camera) is "
+          "written in TUM format (`%s_swf_tum.txt`, `%s_vo_tum.txt`) and compared with "
+          "`groundtruth_tum.txt` moved to the same camera; a run whose error without fit "
+          "exceeds %.3g m is called diverged and not scored.",
+          e.prefix.c_str(), e.prefix.c_str(), options.divergence_m);
+  e.notes = EurocNotes(options, result);
+  return WriteEvaluation(a.out, e);
+}
+
+int RunKittiCommand(int argc, char** argv) {
+  const std::string dir = argv[2];
+  CommonArgs a;
+  a.max_tracks = 300;
+  KittiOptions options;
+  std::string why;
+  for (int i = 3; i < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (i + 1 >= argc) return Usage(flag + " needs a value");
+    if (flag == "--max-disparity") {
+      double d = 0.0;
+      if (!ParseNumber(argv[i + 1], &d) || d < 16 || d > frontend::kMaxDisparity) {
+        return Usage("--max-disparity must be in [16, " + std::to_string(frontend::kMaxDisparity) +
+                     "]");
+      }
+      options.max_disparity_px = static_cast<int>(d);
+    } else if (flag == "--frames") {
+      double n = 0.0;
+      if (!ParseNumber(argv[i + 1], &n) || n < 3 || n != std::floor(n)) {
+        return Usage("--frames must be an integer >= 3");
+      }
+      options.max_frames = static_cast<int>(n);
+    } else if (!ParseCommon(flag, argv[i + 1], &a, &why)) {
+      return Usage(why);
+    }
+  }
+  if (!CheckCommon(a, &why)) return Usage(why);
+  options.window = static_cast<int>(a.window);
+  options.max_tracks = static_cast<std::size_t>(a.max_tracks);
+  if (a.sigma_m > 0.0) {
+    options.motion_sigma_m = a.sigma_m;
+    options.motion_sigma_rad = a.sigma_rad;
+  }
+  if (a.divergence_m > 0.0) options.divergence_m = a.divergence_m;
+  std::string error;
+  if (!MakeDirectories(a.out, &error)) {
+    std::fprintf(stderr, "swf-eval kitti: %s\n", error.c_str());
+    return 1;
+  }
+  KittiResult result;
+  if (!RunKitti(dir, options, &result, &error)) {
+    std::fprintf(stderr, "swf-eval kitti: %s\n", error.c_str());
+    return 1;
+  }
+  Evaluation e;
+  e.prefix = "kitti_odometry";
+  e.title = "Real data: KITTI odometry excerpt, the whole pipeline (`swf-eval kitti DIR`)";
+  e.sequence = &result.sequence;
+  e.runs = &result.runs;
+  e.header.String("experiment", e.prefix)
+      .String("dataset", dir)
+      .Integer("frames", static_cast<long long>(result.sequence.frames.size()))
+      .Integer("window", options.window)
+      .Integer("max_tracks", static_cast<long long>(options.max_tracks))
+      .Integer("max_disparity_px", options.max_disparity_px)
+      .Number("focal_px", result.sequence.camera.fx)
+      .Number("baseline_m", result.sequence.camera.baseline_m)
+      .Number("gt_path_length_m", result.gt_path_length_m)
+      .Number("divergence_limit_m", options.divergence_m)
+      .String("alignment", "SE(3), Horn/Umeyama without scale, all frames; left camera positions")
+      .String("relative_error", "per frame-to-frame motion: truth_step^-1 * estimate_step");
+  e.description =
+      Format("On `%s` (%zu rectified stereo pairs, 10 Hz). ", dir.c_str(),
+             result.sequence.frames.size()) +
+      PipelineSentence(result.sequence, result.runs.front().options) +
+      Format(
+          " The estimate's world is the first left camera, as is `poses.txt`'s, so the "
+          "error without fit is the plain difference; a run whose error without fit exceeds "
+          "%.3g m is called diverged and not scored. Relative error, KITTI-style per frame: "
+          "translation and rotation of truth_step^-1 * estimate_step.",
+          options.divergence_m);
+  e.notes = KittiNotes(result);
+  return WriteEvaluation(a.out, e);
+}
+
+}  // namespace swf::eval

@@ -1,0 +1,45 @@
+// swf-eval kitti: the flight pipeline (swf::app::Pipeline, frames already rectified) on a folder
+// in the KITTI odometry layout: image_0/NNNNNN.png (left), image_1/NNNNNN.png (right),
+// calib.txt (row-major 3x4 projection matrices P0 and P1, optionally labelled "P0:"), poses.txt
+// (one row-major 3x4 world_T_camera of the left camera per frame, world = the first camera).
+// No motion input: the pipeline's constant-velocity process model carries the pose between
+// frames. Frames are taken at 10 Hz (KITTI's rate; the excerpt has no times.txt).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "sequence.hpp"
+
+namespace swf::eval {
+
+struct KittiOptions {
+  int window = 5;
+  std::size_t max_tracks = 300;
+  int max_disparity_px = 128;
+  double sigma_px = 0.5;
+  double motion_sigma_m = 0.5;  // per frame: the car changes speed and heading slowly
+  double motion_sigma_rad = 0.02;
+  double divergence_m = 10.0;  // anchored position error that calls a run diverged
+  int max_frames = 0;          // > 0: only the first max_frames frames
+};
+
+struct KittiResult {
+  StereoSequence sequence;
+  double gt_path_length_m = 0.0;
+  std::vector<RunRecord> runs;  // SWF(window), VO(window)
+};
+
+// P0/P1 from calib.txt into the rectified rig: f, cx, cy from P0, baseline = -P1[0,3] / P1[0,0].
+bool ReadKittiCalibration(const std::string& path, estimator::StereoCamera<double>* camera,
+                          std::string* error);
+bool ReadKittiPoses(const std::string& path, std::vector<PoseD>* poses, std::string* error);
+
+bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult* result,
+               std::string* error);
+
+// LoadKitti, then SWF and VO with the same window. False only for unusable input.
+bool RunKitti(const std::string& dir, const KittiOptions& options, KittiResult* result,
+              std::string* error);
+
+}  // namespace swf::eval

@@ -1,0 +1,165 @@
+#include "report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+
+#include "json.hpp"
+
+namespace swf::eval {
+namespace {
+
+// Ten evenly spaced frames and the last: where a long run's error grew.
+std::string Checkpoints(const RunRecord& run, const StereoSequence& s, int indent) {
+  const std::size_t n = run.frames.size();
+  std::vector<std::size_t> frames;
+  for (int k = 1; k <= 10; ++k) frames.push_back(std::min(n - 1, k * n / 10));
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  std::string out = "[";
+  const std::string pad(static_cast<std::size_t>(indent), ' ');
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::size_t j = frames[i];
+    const FrameRecord& f = run.frames[j];
+    JsonObject o;
+    o.Integer("frame", static_cast<long long>(j))
+        .Number("t_s", 1e-9 * static_cast<double>(s.frames[j].stamp_ns - s.frames[0].stamp_ns))
+        .Number("anchored_error_m", f.anchored_error_m)
+        .Number("position_sigma_m", f.position_sigma_m)
+        .Integer("tracked", f.tracked)
+        .Integer("window_measurements", f.window_measurements)
+        .Integer("fault_bits", f.fault_bits);
+    out += (i ? ",\n" : "\n") + pad + "  " + o.Text(indent + 4);
+  }
+  return out + "\n" + pad + "]";
+}
+
+std::string Verdicted(const RunRecord& run) {
+  return run.options.name + " " + ToString(run.verdict);
+}
+
+}  // namespace
+
+std::string Format(const char* format, ...) {
+  char buf[4096];
+  va_list args;
+  va_start(args, format);
+  std::vsnprintf(buf, sizeof(buf), format, args);
+  va_end(args);
+  return buf;
+}
+
+bool AllOk(const std::vector<RunRecord>& runs) {
+  return std::all_of(runs.begin(), runs.end(), [](const RunRecord& r) { return r.Ok(); });
+}
+
+std::string RunJson(const RunRecord& run, const StereoSequence& sequence,
+                    const std::string& trajectory, int indent) {
+  const TrajectoryErrors& e = run.errors;
+  // A failed run has no score: its numbers would rank a broken run (a still estimate without
+  // measurements scores well on a still camera).
+  const std::string why =
+      run.Ok() ? "" : "no score: " + std::string(ToString(run.verdict)) + ", " + run.reason;
+  auto score = [&](JsonObject* o, const char* key, double value) {
+    if (run.Ok()) {
+      o->Number(key, value, e.finite ? "" : e.reason);
+    } else {
+      o->Null(key, why);
+    }
+  };
+  JsonObject o;
+  o.String("name", run.options.name)
+      .String("status", ToString(run.verdict))
+      .Integer("window", run.options.window)
+      .Integer("frames", static_cast<long long>(run.frames.size()));
+  if (!run.Ok()) o.String("reason", run.reason).Integer("failure_frame", run.failure_frame);
+  score(&o, "ate_rmse_m", e.ate_rmse_m);
+  score(&o, "ate_max_m", e.ate_max_m);
+  score(&o, "final_error_m", e.final_aligned_error_m);
+  score(&o, "final_anchored_error_m", e.final_anchored_error_m);
+  score(&o, "step_translation_mean_m", e.step_translation_mean_m);
+  score(&o, "step_translation_max_m", e.step_translation_max_m);
+  score(&o, "step_rotation_mean_deg", e.step_rotation_mean_deg);
+  score(&o, "step_rotation_max_deg", e.step_rotation_max_deg);
+  if (run.Ok() && !std::isfinite(e.step_translation_percent) && e.finite) {
+    o.Null("step_translation_percent", "the truth moved less than 1 cm: no percentage");
+    o.Null("step_rotation_deg_per_m", "the truth moved less than 1 cm: no rate per metre");
+  } else {
+    score(&o, "step_translation_percent", e.step_translation_percent);
+    score(&o, "step_rotation_deg_per_m", e.step_rotation_deg_per_m);
+  }
+  // Not scores but what happened: kept for failed runs too (null when not finite).
+  o.Number("max_anchored_error_m", e.max_anchored_error_m,
+           e.finite ? "" : "not computed: " + e.reason)
+      .Integer("update_failures", run.estimate_failures)
+      .Integer("frames_without_tracks", run.frames_without_tracks)
+      .Number("tracked_per_frame", run.mean_tracked, "no frame was processed")
+      .Number("seconds", run.seconds, "", 3);
+  if (!trajectory.empty()) o.String("trajectory", trajectory);
+  if (!run.frames.empty()) o.Raw("checkpoints", Checkpoints(run, sequence, indent));
+  return o.Text(indent);
+}
+
+std::string RunsTable(const std::vector<RunRecord>& runs) {
+  std::string t =
+      "| run | status | ATE RMSE (m) | last frame, no fit (m) | per-frame translation error "
+      "mean / max (m) | per-frame rotation error mean / max (deg) | tracked/frame |\n"
+      "|---|---|---|---|---|---|---|\n";
+  for (const RunRecord& r : runs) {
+    const TrajectoryErrors& e = r.errors;
+    if (r.Ok()) {
+      t += Format("| %s | ok | %.4f | %.4f | %.4f / %.4f | %.3f / %.3f | %.0f |\n",
+                  r.options.name.c_str(), e.ate_rmse_m, e.final_anchored_error_m,
+                  e.step_translation_mean_m, e.step_translation_max_m, e.step_rotation_mean_deg,
+                  e.step_rotation_max_deg, r.mean_tracked);
+    } else {
+      t += Format("| %s | **%s** at frame %d | - | - | - | - | %.0f |\n", r.options.name.c_str(),
+                  ToString(r.verdict), r.failure_frame, r.mean_tracked);
+    }
+  }
+  return t;
+}
+
+std::string CompareSentence(const RunRecord& a, double value_a, const RunRecord& b, double value_b,
+                            const std::string& what) {
+  if (!a.Ok() && !b.Ok()) {
+    return Format("Neither run is scored (%s, %s), so their %s is not compared.",
+                  Verdicted(a).c_str(), Verdicted(b).c_str(), what.c_str());
+  }
+  if (!a.Ok() || !b.Ok()) {
+    const RunRecord& bad = a.Ok() ? b : a;
+    const RunRecord& good = a.Ok() ? a : b;
+    return Format("%s is not scored (%s), so its %s is not compared with %s's (%.4g m).",
+                  bad.options.name.c_str(), ToString(bad.verdict), what.c_str(),
+                  good.options.name.c_str(), a.Ok() ? value_a : value_b);
+  }
+  if (!(value_a >= 0.0 && value_b >= 0.0 && std::isfinite(value_a) && std::isfinite(value_b))) {
+    return Format("The %s of %s or %s is not a finite number: not compared.", what.c_str(),
+                  a.options.name.c_str(), b.options.name.c_str());
+  }
+  const std::string head = Format("%s %s %.4g m against %s %.4g m", a.options.name.c_str(),
+                                  what.c_str(), value_a, b.options.name.c_str(), value_b);
+  const double ratio = value_a / std::max(value_b, 1e-300);
+  if (ratio < 0.8) {
+    return head + Format(": %s is lower by %.0f%% (ratio %.2f).", a.options.name.c_str(),
+                         100.0 * (1.0 - ratio), ratio);
+  }
+  if (ratio > 1.25) {
+    return head + Format(": %s is lower by %.0f%% (ratio %.2f).", b.options.name.c_str(),
+                         100.0 * (1.0 - 1.0 / ratio), ratio);
+  }
+  return head + Format(": within 20%% of each other (ratio %.2f), this run does not separate them.",
+                       ratio);
+}
+
+std::string FailureSentences(const std::vector<RunRecord>& runs) {
+  std::string out;
+  for (const RunRecord& r : runs) {
+    if (r.Ok()) continue;
+    out += Format("%s%s failed (%s): %s.", out.empty() ? "" : " ", r.options.name.c_str(),
+                  ToString(r.verdict), r.reason.c_str());
+  }
+  return out;
+}
+
+}  // namespace swf::eval

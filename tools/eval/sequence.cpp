@@ -1,0 +1,236 @@
+#include "sequence.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <memory>
+
+#include "swf/app/pipeline.hpp"
+#include "swf/image_io/image_io.hpp"
+
+namespace swf::eval {
+namespace {
+
+using core::Status;
+
+frontend::HarrisOptions DetectorFor(int width, int height) {
+  // About one bucket per 40 x 40 px, so the corners spread over the whole image.
+  frontend::HarrisOptions o;
+  o.bucket_cols = std::max(1, std::min(64, width / 40));
+  o.bucket_rows = std::max(1, std::min(64, height / 40));
+  return o;
+}
+
+app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
+  app::PipelineOptions o;
+  o.rectify = s.rectify;
+  o.left_calibration = s.calibration[0];
+  o.right_calibration = s.calibration[1];
+  o.camera = s.camera;
+  o.width_px = s.width;
+  o.height_px = s.height;
+  o.frontend.harris = DetectorFor(s.width, s.height);
+  o.frontend.max_tracks = r.max_tracks;
+  o.frontend.stereo.max_disparity = r.max_disparity_px;
+  o.swf.mode = r.mode;
+  o.swf.window_size = r.window;
+  o.measurement_sigma_px = r.sigma_px;
+  o.process_sigma_m = r.process_sigma_m;
+  o.process_sigma_rad = r.process_sigma_rad;
+  return o;  // initial_world_T_camera: identity, the estimate's world is the first camera
+}
+
+// Decoded images of the sequence; a file shown more than once (a looped sequence) is decoded
+// once and kept, every other one is decoded when needed.
+class ImageStore {
+ public:
+  explicit ImageStore(const StereoSequence& s) {
+    std::map<std::string, int> uses;
+    for (const SequenceFrame& f : s.frames) {
+      ++uses[f.left_path];
+      ++uses[f.right_path];
+    }
+    for (const auto& [path, n] : uses) {
+      if (n > 1) keep_[path] = image_io::GrayImage{};
+    }
+  }
+  // The image at `path`, or nullptr with *error.
+  const image_io::GrayImage* Get(const std::string& path, int slot, std::string* error) {
+    const auto kept = keep_.find(path);
+    image_io::GrayImage* image = kept != keep_.end() ? &kept->second : &scratch_[slot];
+    if (kept != keep_.end() && image->width > 0) return image;
+    if (!image_io::LoadGray(path, image, error)) return nullptr;
+    return image;
+  }
+
+ private:
+  std::map<std::string, image_io::GrayImage> keep_;
+  image_io::GrayImage scratch_[2];
+};
+
+// NaN when the output carries no covariance (all zero: the pipeline could not compute one), so
+// that a missing covariance never reads as certainty.
+double PositionSigma(const app::NavOutput& nav) {
+  const double trace = nav.covariance[0] + nav.covariance[7] + nav.covariance[14];
+  return trace > 0.0 ? std::sqrt(trace) : std::numeric_limits<double>::quiet_NaN();
+}
+
+PoseD PoseOf(const app::NavOutput& nav) {
+  PoseD p;
+  const Eigen::Quaterniond q(nav.orientation_world_q[0], nav.orientation_world_q[1],
+                             nav.orientation_world_q[2], nav.orientation_world_q[3]);
+  p.R = q.toRotationMatrix();
+  p.t = Vec3D(nav.position_world_m[0], nav.position_world_m[1], nav.position_world_m[2]);
+  return p;
+}
+
+std::string FrameName(const StereoSequence& s, std::size_t j) {
+  const SequenceFrame& f = s.frames[j];
+  std::string name = "frame " + std::to_string(j);
+  if (f.source != static_cast<int>(j)) name += " (recorded frame " + std::to_string(f.source) + ")";
+  return name + " [" + f.record + "]";
+}
+
+void Fail(RunRecord* run, Verdict verdict, int frame, const std::string& reason) {
+  if (!run->Ok()) return;  // the first failure is the one that explains the rest
+  run->verdict = verdict;
+  run->failure_frame = frame;
+  run->reason = reason;
+}
+
+// Runs the pipeline stages of frame j; false (with the run's verdict set) when the pipeline
+// refuses the input, after which nothing later can be scored.
+bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images,
+                  app::Pipeline* pipeline, RunRecord* run, FrameRecord* record) {
+  const SequenceFrame& f = s.frames[j];
+  std::string error;
+  const image_io::GrayImage* left = images->Get(f.left_path, 0, &error);
+  const image_io::GrayImage* right = left ? images->Get(f.right_path, 1, &error) : nullptr;
+  if (left == nullptr || right == nullptr) {
+    Fail(run, Verdict::kInputError, static_cast<int>(j), FrameName(s, j) + ": " + error);
+    return false;
+  }
+  app::PipelineFrame frame;
+  frame.left = left->View();
+  frame.right = right->View();
+  frame.utime = f.stamp_ns / 1000;
+  frame.seq = static_cast<std::int64_t>(j);
+  Status st = pipeline->Rectify(frame);
+  if (st == Status::kOk) st = pipeline->Track();
+  if (st != Status::kOk) {
+    Fail(run, Verdict::kInputError, static_cast<int>(j),
+         FrameName(s, j) + ": the pipeline refused the images (" + core::ToString(st) + "; " +
+             std::to_string(left->width) + "x" + std::to_string(left->height) + " px, expected " +
+             std::to_string(s.width) + "x" + std::to_string(s.height) + ")");
+    return false;
+  }
+  record->tracked = pipeline->NumFeatures();
+  st = pipeline->Estimate(nullptr);
+  record->status = static_cast<int>(st);
+  run->estimate_failures += st != Status::kOk;
+  app::NavOutput nav;
+  pipeline->MakeNav(&nav);
+  record->estimate = PoseOf(nav);
+  record->window_measurements = nav.num_measurements;
+  record->iterations = nav.iterations;
+  record->fault_bits = static_cast<std::uint32_t>(nav.fault_bits);
+  record->position_sigma_m = PositionSigma(nav);
+  return true;
+}
+
+// Checks frame j's estimate against the truth and the measurement count; sets the verdict at
+// the first frame that is non-finite, diverged or without tracked landmarks.
+void Judge(const StereoSequence& s, std::size_t j, const RunOptions& o, RunRecord* run,
+           FrameRecord* r) {
+  const int frame = static_cast<int>(j);
+  if (!IsFinite(r->estimate)) {
+    Fail(run, Verdict::kNonFinite, frame, FrameName(s, j) + ": the estimated pose is not finite");
+    r->anchored_error_m = std::numeric_limits<double>::quiet_NaN();
+    return;
+  }
+  const Vec3D truth = (s.frames[0].truth.Inverse() * s.frames[j].truth).t;
+  const Vec3D estimate =
+      (run->frames.empty() ? r->estimate : run->frames[0].estimate).Inverse().Apply(r->estimate.t);
+  r->anchored_error_m = (truth - estimate).norm();
+  if (!(r->anchored_error_m <= o.divergence_m)) {
+    char buf[256];
+    std::snprintf(buf, sizeof(buf),
+                  ": position error %.3g m from the truth (limit %.3g m), %d tracked landmarks, "
+                  "%d measurements in the window, fault bits 0x%x",
+                  r->anchored_error_m, o.divergence_m, r->tracked, r->window_measurements,
+                  r->fault_bits);
+    Fail(run, Verdict::kDiverged, frame, FrameName(s, j) + buf);
+  }
+  if (j > 0 && r->tracked == 0) {
+    ++run->frames_without_tracks;
+    Fail(run, Verdict::kNoMeasurements, frame,
+         FrameName(s, j) +
+             ": no landmark was tracked into this frame, so its pose is the process model's "
+             "guess (0 measurements: check the calibration and the images)");
+  }
+}
+
+}  // namespace
+
+const char* ToString(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::kOk: return "ok";
+    case Verdict::kInputError: return "input_error";
+    case Verdict::kNonFinite: return "non_finite";
+    case Verdict::kDiverged: return "diverged";
+    case Verdict::kNoMeasurements: return "no_measurements";
+  }
+  return "unknown";
+}
+
+RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options) {
+  RunRecord run;
+  run.options = options;
+  auto pipeline = std::make_unique<app::Pipeline>();
+  const Status st = pipeline->Configure(PipelineFor(sequence, options));
+  if (st != Status::kOk) {
+    Fail(&run, Verdict::kInputError, -1,
+         sequence.dir + ": the flight pipeline refused the configuration (" + core::ToString(st) +
+             ")");
+    return run;
+  }
+  ImageStore images(sequence);
+  const auto start = std::chrono::steady_clock::now();
+  double tracked = 0.0;
+  for (std::size_t j = 0; j < sequence.frames.size(); ++j) {
+    FrameRecord record;
+    if (!ProcessFrame(sequence, j, &images, pipeline.get(), &run, &record)) break;
+    Judge(sequence, j, options, &run, &record);
+    tracked += record.tracked;
+    run.frames.push_back(record);
+    if (run.verdict == Verdict::kNonFinite) break;  // nothing later can be scored
+  }
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (run.frames.empty()) return run;
+  run.mean_tracked = tracked / static_cast<double>(run.frames.size());
+  std::vector<PoseD> truth;
+  std::vector<PoseD> estimate;
+  for (std::size_t j = 0; j < run.frames.size(); ++j) {
+    truth.push_back(sequence.frames[j].truth);
+    estimate.push_back(run.frames[j].estimate);
+  }
+  run.errors = ScoreTrajectory(truth, estimate);
+  return run;
+}
+
+std::vector<int> PingPong(int n, int total) {
+  std::vector<int> out;
+  if (n <= 0) return out;
+  const int period = n > 1 ? 2 * (n - 1) : 1;
+  for (int k = 0; k < total; ++k) {
+    const int p = k % period;
+    out.push_back(p < n ? p : period - p);
+  }
+  return out;
+}
+
+}  // namespace swf::eval

@@ -1,0 +1,91 @@
+// A stereo image sequence with ground truth, run through the flight pipeline
+// (swf::app::Pipeline: rectification when the cameras are raw, front end, Sliding Window Filter
+// with the constant-velocity process model, navigation output), so that what swf-eval scores is
+// the code that flies. Dataset readers (euroc.hpp, kitti.hpp) build a StereoSequence; RunSequence
+// runs it once per estimator configuration and records every frame, and says in words why a run
+// is not to be trusted (an input the pipeline refused, a non-finite or diverged estimate, frames
+// without a single tracked measurement).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "swf/estimator/sliding_window_filter.hpp"
+#include "swf/frontend/rectify.hpp"
+#include "trajectory.hpp"
+
+namespace swf::eval {
+
+struct SequenceFrame {
+  std::string left_path;
+  std::string right_path;
+  std::int64_t stamp_ns = 0;
+  PoseD truth;         // world_T_camera of the (rectified) left camera, truth's world frame
+  int source = 0;      // index of the recorded frame shown (differs when the sequence loops)
+  std::string record;  // where the frame was listed, for messages ("cam0/data.csv:7")
+};
+
+struct StereoSequence {
+  std::string name;  // "EuRoC V1_01", "KITTI odometry excerpt"
+  std::string dir;
+  // Raw cameras (rectified by the pipeline) or already rectified images with `camera`.
+  bool rectify = false;
+  frontend::CameraCalibration calibration[2];
+  estimator::StereoCamera<double> camera;  // the rectified rig (filled in for raw cameras too)
+  int width = 0;  // image size the pipeline receives (raw size when rectifying)
+  int height = 0;
+  std::vector<SequenceFrame> frames;
+};
+
+struct RunOptions {
+  std::string name;  // "SWF(5)"
+  estimator::SwfMode mode = estimator::SwfMode::kSlidingWindow;
+  int window = 5;
+  std::size_t max_tracks = 150;
+  int max_disparity_px = 128;  // the front end's SAD search range
+  double sigma_px = 0.5;       // measurement noise the estimator assumes
+  // Constant-velocity process noise per frame (1 sigma of the change of the frame-to-frame
+  // motion).
+  double process_sigma_m = 0.05;
+  double process_sigma_rad = 0.02;
+  // An anchored position error beyond this calls the run diverged (not merely inaccurate).
+  double divergence_m = 1.0;
+};
+
+struct FrameRecord {
+  PoseD estimate;               // world_T_camera, world = the first camera
+  int tracked = 0;              // landmarks tracked from earlier frames into this one
+  int window_measurements = 0;  // measurements in the estimator's window
+  int iterations = 0;
+  std::uint32_t fault_bits = 0;
+  int status = 0;                 // core::Status of the estimate stage
+  double position_sigma_m = 0.0;  // sqrt(trace) of the navigation output's position covariance
+  double anchored_error_m = 0.0;  // against the truth, both from their first frame
+};
+
+enum class Verdict { kOk, kInputError, kNonFinite, kDiverged, kNoMeasurements };
+const char* ToString(Verdict verdict);  // "ok", "input_error", "non_finite", ...
+
+struct RunRecord {
+  RunOptions options;
+  std::vector<FrameRecord> frames;  // frames processed (all of them unless the input failed)
+  TrajectoryErrors errors;          // over the processed frames
+  Verdict verdict = Verdict::kOk;
+  std::string reason;  // why the verdict is not ok, naming the frame and its record
+  int failure_frame = -1;
+  int estimate_failures = 0;      // frames whose estimate stage did not return kOk
+  int frames_without_tracks = 0;  // frames after the first with no tracked landmark
+  double mean_tracked = 0.0;
+  double seconds = 0.0;  // wall time, images loaded once
+  bool Ok() const { return verdict == Verdict::kOk; }
+};
+
+// Runs the sequence; never throws, every problem ends in the verdict and reason.
+RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options);
+
+// `total` indices into n recorded frames, forwards then backwards (0, 1, ..., n-1, n-2, ..., 1,
+// 0, 1, ...): a ping-pong, so the image motion between consecutive frames stays continuous.
+std::vector<int> PingPong(int n, int total);
+
+}  // namespace swf::eval
