@@ -1,7 +1,11 @@
 // swf-vo: solves a stereo visual-odometry problem in the kitti-vo text format with the Sliding
 // Window Filter and prints one JSON object.
 //   swf-vo --calib F --poses F --factors F [--window K]
-// Without --window the whole problem is solved in batch (first pose fixed, sigma 1 px).
+// Without --window the whole problem is solved in batch (first pose fixed, sigma 1 px). The
+// filter instance is chosen to fit the problem (kitti_vo.hpp); exit 0 on success, 1 when the
+// input or the solve fails (the message names the file and line, pose or capacity), 2 on a
+// usage error.
+#include <climits>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -10,10 +14,27 @@
 
 namespace {
 
-int Usage(const char* why) {
-  std::fprintf(stderr, "swf-vo: %s\nusage: swf-vo --calib F --poses F --factors F [--window K]\n",
-               why);
+constexpr const char* kUsage =
+    "usage: swf-vo --calib F --poses F --factors F [--window K]\n"
+    "  --calib F    fx fy skew u0 v0 baseline_m\n"
+    "  --poses F    one line per pose: id + row-major 4x4 camera-to-world initial estimate\n"
+    "  --factors F  one line per stereo factor: pose_id landmark_id uL uR v X Y Z\n"
+    "  --window K   sliding window of K poses (default: batch over all poses)\n"
+    "  --help       this text\n"
+    "Prints one JSON object: mode, instance, needs, initial_cost, final_cost (0.5 x sum of\n"
+    "squared residuals, sigma 1 px), iterations, solve_time_ms, fault_bits, poses.\n";
+
+int Usage(const std::string& why) {
+  std::fprintf(stderr, "swf-vo: %s\n%s", why.c_str(), kUsage);
   return 2;
+}
+
+bool ParseWindow(const std::string& value, int* window) {
+  char* end = nullptr;
+  const long k = std::strtol(value.c_str(), &end, 10);
+  if (end == value.c_str() || *end != '\0' || k < 1 || k > INT_MAX) return false;
+  *window = static_cast<int>(k);
+  return true;
 }
 
 }  // namespace
@@ -25,22 +46,21 @@ int main(int argc, char** argv) {
   int window = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (i + 1 >= argc) return Usage(("missing value for " + arg).c_str());
+    if (arg == "--help" || arg == "-h") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    std::string* target = arg == "--calib"     ? &calib
+                          : arg == "--poses"   ? &poses
+                          : arg == "--factors" ? &factors
+                                               : nullptr;
+    if (target == nullptr && arg != "--window") return Usage("unknown option " + arg);
+    if (i + 1 >= argc) return Usage("missing value for " + arg);
     const std::string value = argv[++i];
-    if (arg == "--calib") {
-      calib = value;
-    } else if (arg == "--poses") {
-      poses = value;
-    } else if (arg == "--factors") {
-      factors = value;
-    } else if (arg == "--window") {
-      char* end = nullptr;
-      const long k = std::strtol(value.c_str(), &end, 10);
-      if (end == value.c_str() || *end != '\0' || k < 1)
-        return Usage("--window takes a positive integer");
-      window = static_cast<int>(k);
-    } else {
-      return Usage(("unknown option " + arg).c_str());
+    if (target != nullptr) {
+      *target = value;
+    } else if (!ParseWindow(value, &window)) {
+      return Usage("--window takes a positive integer");
     }
   }
   if (calib.empty() || poses.empty() || factors.empty())
@@ -56,19 +76,6 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "swf-vo: %s\n", r.error.c_str());
     return 1;
   }
-  std::printf(
-      "{\n  \"mode\": \"%s\",\n  \"window\": %d,\n  \"initial_cost\": %.17g,\n"
-      "  \"final_cost\": %.17g,\n  \"iterations\": %d,\n  \"solve_time_ms\": %.3f,\n"
-      "  \"fault_bits\": %u,\n  \"poses\": [\n",
-      window > 0 ? "sliding_window" : "batch", window, r.initial_cost, r.final_cost, r.iterations,
-      r.solve_time_ms, r.fault_bits);
-  for (std::size_t j = 0; j < r.poses.size(); ++j) {
-    const Eigen::Matrix4d m = r.poses[j].Matrix();
-    std::printf("    {\"id\": %lld, \"camera_to_world\": [",
-                static_cast<long long>(problem.pose_ids[j]));
-    for (int k = 0; k < 16; ++k) std::printf("%s%.17g", k == 0 ? "" : ", ", m(k / 4, k % 4));
-    std::printf("]}%s\n", j + 1 < r.poses.size() ? "," : "");
-  }
-  std::printf("  ]\n}\n");
+  std::fputs(swf::tools::KittiVoJson(problem, r, window).c_str(), stdout);
   return 0;
 }
