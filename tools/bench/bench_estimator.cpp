@@ -12,22 +12,28 @@
 //     so machine load cancels out.
 //   KittiVo_Swf/<build>, KittiVo_Ceres: the kitti-vo batch problem solved by swf-vo's solver
 //     (build 0: filter built once; 1: built every solve) and by Ceres (SPARSE_SCHUR, same cost,
-//     same tolerances), same process, same run.
+//     same tolerances), same process, same run. Kitti00_*: the same on a generated problem of
+//     KITTI sequence-00 size; Kitti00_SwfVsCeres runs both in one iteration (CPU ratio);
+//     Kitti00_SwfWindow/<window>: sliding windows over it (minutes; only with
+//     SWF_BENCH_KITTI00_WINDOWS=1 in the environment).
 // The estimator is single-threaded; run on an idle core and read medians (the JSON keeps all
 // repetitions).
 #include <benchmark/benchmark.h>
 #include <ceres/ceres.h>
 
 #include <Eigen/Cholesky>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <map>
 #include <memory>
 #include <random>
 #include <string>
 
 #include "../../estimator/test/synthetic_scene.hpp"
 #include "kitti_vo.hpp"
+#include "kitti_vo_ceres.hpp"
+#include "kitti_vo_synth.hpp"
 #include "swf/estimator/dense_cholesky.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
@@ -308,101 +314,149 @@ void BM_CholeskyRatio(benchmark::State& state) {
 }
 BENCHMARK(BM_CholeskyRatio)->Arg(120)->Arg(510)->Unit(benchmark::kMillisecond)->Repetitions(5);
 
+std::string KittiDir() {
+  const char* shared = std::getenv("SWF_SHARED_DIR");
+  return std::string(shared != nullptr ? shared : "../shared") + "/data/kitti-vo/";
+}
+
+[[noreturn]] void Die(const std::string& error) {
+  std::fprintf(stderr, "bench_estimator: %s\n", error.c_str());
+  std::exit(1);
+}
+
+// The kitti-vo sample: 26 poses, 2,634 landmarks, 8,189 factors.
 const swf::tools::KittiVoProblem& Kitti() {
   static const swf::tools::KittiVoProblem kProblem = [] {
-    const char* shared = std::getenv("SWF_SHARED_DIR");
-    const std::string dir =
-        std::string(shared != nullptr ? shared : "../shared") + "/data/kitti-vo/";
+    const std::string dir = KittiDir();
     swf::tools::KittiVoProblem p;
     std::string error;
     if (!swf::tools::LoadKittiVo(dir + "VO_calibration.txt", dir + "VO_camera_poses_large.txt",
-                                 dir + "VO_stereo_factors_large.txt", &p, &error)) {
-      std::fprintf(stderr, "bench_estimator: %s\n", error.c_str());
-      std::exit(1);
-    }
+                                 dir + "VO_stereo_factors_large.txt", &p, &error))
+      Die(error);
     return p;
   }();
   return kProblem;
 }
 
-// Arg 0: the solver (its ~40 MB fixed-capacity filter) is built once, as the flight process
+// A generated problem of KITTI sequence-00 size (77 poses, 15,638 landmarks, 52,544 factors,
+// ~680 per pose; kitti_vo_synth.hpp), with the data set's calibration.
+const swf::tools::KittiVoProblem& Kitti00() {
+  static const swf::tools::KittiVoProblem kProblem = [] {
+    swf::estimator::StereoCamera<double> camera;
+    swf::tools::KittiVoProblem p;
+    std::string error;
+    if (!swf::tools::LoadKittiVoCalibration(KittiDir() + "VO_calibration.txt", &camera, &error) ||
+        !swf::tools::GenerateKittiLike(camera, swf::tools::KittiLikeOptions{}, &p, nullptr, &error))
+      Die(error);
+    return p;
+  }();
+  return kProblem;
+}
+
+// Arg 0: the solver (its fixed-capacity filter instance) is built once, as the flight process
 // builds its filter at start-up, and each iteration feeds the problem and solves, like Ceres's
 // build + solve. Arg 1: the solver is built inside every iteration (a one-shot swf-vo run).
-// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
-void BM_KittiVo_Swf(benchmark::State& state) {
+void SwfSolves(benchmark::State& state, const swf::tools::KittiVoProblem& problem, int window) {
   const bool build_each_time = state.range(0) != 0;
   auto solver = std::make_unique<swf::tools::KittiVoSolver>();
-  double cost = 0;  // kept observable so the solve is not optimized away
+  swf::tools::KittiVoResult r;
   for (auto _ : state) {
     if (build_each_time) solver = std::make_unique<swf::tools::KittiVoSolver>();
-    const auto r = solver->Solve(Kitti(), 0);
-    cost = r.final_cost;
+    r = solver->Solve(problem, window);
+    if (!r.ok) Die(r.error);
+    // A const copy: DoNotOptimize on the member itself ("+m,r") corrupted the reported cost
+    // (GCC 12, Google Benchmark 1.7.1: 6.95e-310 read back).
+    const double cost = r.final_cost;
     benchmark::DoNotOptimize(cost);
   }
+  state.counters["final_cost"] = r.final_cost;
+  state.counters["instance_MB"] = static_cast<double>(r.instance.bytes) * 1e-6;
+  state.counters["iterations"] = r.iterations;
+  state.counters["max_prior_landmarks"] = r.max_prior_landmarks;
 }
-BENCHMARK(BM_KittiVo_Swf)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(5);
 
-struct StereoResidual {
-  StereoResidual(const swf::estimator::StereoCamera<double>& c, const Vec3<double>& z)
-      : cam(c), z(z) {}
-  template <typename T>
-  bool operator()(const T* q, const T* t, const T* l, T* r) const {
-    const Eigen::Quaternion<T> world_q_camera(q[3], q[0], q[1], q[2]);
-    const Eigen::Matrix<T, 3, 1> p =
-        world_q_camera.conjugate() *
-        (Eigen::Matrix<T, 3, 1>(l[0], l[1], l[2]) - Eigen::Matrix<T, 3, 1>(t[0], t[1], t[2]));
-    r[0] = T(z.x()) - (T(cam.cx) + T(cam.fx) * p.x() / p.z());
-    r[1] = T(z.y()) - (T(cam.cx) + T(cam.fx) * (p.x() - T(cam.baseline_m)) / p.z());
-    r[2] = T(z.z()) - (T(cam.cy) + T(cam.fy) * p.y() / p.z());
-    return true;
+// Ceres (kitti_vo_ceres.hpp: SPARSE_SCHUR, one thread, swf-vo's tolerances): problem build +
+// solve per iteration.
+void CeresSolves(benchmark::State& state, const swf::tools::KittiVoProblem& problem) {
+  double cost = 0;
+  for (auto _ : state) {
+    cost = swf::tools::SolveKittiVoWithCeres(problem).summary.final_cost;
+    benchmark::DoNotOptimize(cost);
   }
-  swf::estimator::StereoCamera<double> cam;
-  Vec3<double> z;
-};
+  state.counters["final_cost"] = cost;
+}
 
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
-void BM_KittiVo_Ceres(benchmark::State& state) {
-  const auto& problem = Kitti();
-  double cost = 0;  // kept observable so the solve is not optimized away
+void BM_KittiVo_Swf(benchmark::State& state) { SwfSolves(state, Kitti(), 0); }
+BENCHMARK(BM_KittiVo_Swf)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(5);
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_KittiVo_Ceres(benchmark::State& state) { CeresSolves(state, Kitti()); }
+BENCHMARK(BM_KittiVo_Ceres)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_Kitti00_Swf(benchmark::State& state) { SwfSolves(state, Kitti00(), 0); }
+BENCHMARK(BM_Kitti00_Swf)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(5);
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_Kitti00_Ceres(benchmark::State& state) { CeresSolves(state, Kitti00()); }
+BENCHMARK(BM_Kitti00_Ceres)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+// Both solvers in the same iteration, interleaved (swf-vo built per solve, as a one-shot run),
+// so the ratio does not depend on the machine's load: ratio = Ceres CPU / swf-vo CPU.
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_Kitti00_SwfVsCeres(benchmark::State& state) {
+  double swf_s = 0.0;
+  double ceres_s = 0.0;
+  double swf_cost = 0.0;
+  double ceres_cost = 0.0;
   for (auto _ : state) {
-    const int n = static_cast<int>(problem.poses.size());
-    std::vector<std::array<double, 4>> q(n);
-    std::vector<std::array<double, 3>> t(n);
-    for (int j = 0; j < n; ++j) {
-      const Eigen::Quaterniond qq(problem.poses[j].R);
-      q[j] = {qq.x(), qq.y(), qq.z(), qq.w()};
-      t[j] = {problem.poses[j].t.x(), problem.poses[j].t.y(), problem.poses[j].t.z()};
-    }
-    std::map<std::int64_t, std::array<double, 3>> points;
-    ceres::Problem cp;
-    for (const auto& f : problem.factors) {
-      if (points.count(f.landmark) == 0) {
-        Vec3<double> pc;
-        (void)problem.camera.Triangulate(f.z, &pc);
-        const Vec3<double> pw = problem.poses[f.pose].Apply(pc);
-        points[f.landmark] = {pw.x(), pw.y(), pw.z()};
-      }
-      cp.AddResidualBlock(new ceres::AutoDiffCostFunction<StereoResidual, 3, 4, 3, 3>(
-                              new StereoResidual(problem.camera, f.z)),
-                          nullptr, q[f.pose].data(), t[f.pose].data(), points[f.landmark].data());
-    }
-    for (int j = 0; j < n; ++j) cp.SetManifold(q[j].data(), new ceres::EigenQuaternionManifold);
-    cp.SetParameterBlockConstant(q[0].data());
-    cp.SetParameterBlockConstant(t[0].data());
-    ceres::Solver::Options options;
-    options.linear_solver_type = ceres::SPARSE_SCHUR;
-    options.max_num_iterations = 100;
-    options.function_tolerance = 1e-14;  // as swf-vo's relative cost tolerance
-    options.gradient_tolerance = 1e-16;
-    options.parameter_tolerance = 1e-12;  // as swf-vo's step tolerance
-    options.num_threads = 1;
-    ceres::Solver::Summary summary;
-    ceres::Solve(options, &cp, &summary);
-    cost = summary.final_cost;
+    const double t0 = ThreadCpuSeconds();
+    const swf::tools::KittiVoResult r = swf::tools::SolveKittiVo(Kitti00(), 0);
+    const double t1 = ThreadCpuSeconds();
+    ceres_cost = swf::tools::SolveKittiVoWithCeres(Kitti00()).summary.final_cost;
+    const double t2 = ThreadCpuSeconds();
+    if (!r.ok) Die(r.error);
+    swf_cost = r.final_cost;
+    swf_s += t1 - t0;
+    ceres_s += t2 - t1;
+  }
+  const auto iterations = static_cast<double>(state.iterations());
+  state.counters["swf_ms"] = 1e3 * swf_s / iterations;
+  state.counters["ceres_ms"] = 1e3 * ceres_s / iterations;
+  state.counters["ratio_ceres_over_swf"] = ceres_s / swf_s;
+  state.counters["cost_rel_diff"] = std::abs(swf_cost - ceres_cost) / ceres_cost;
+}
+BENCHMARK(BM_Kitti00_SwfVsCeres)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+// Sliding windows over the KITTI-00-sized problem (Arg: window; filter built once). Each holds
+// ~680 landmarks in its prior and one solve takes minutes, so these are registered only when
+// SWF_BENCH_KITTI00_WINDOWS is set (docs/benchmarks.md has the command).
+void Kitti00SwfWindow(benchmark::State& state) {
+  auto solver = std::make_unique<swf::tools::KittiVoSolver>();
+  swf::tools::KittiVoResult r;
+  for (auto _ : state) {
+    r = solver->Solve(Kitti00(), static_cast<int>(state.range(0)));
+    if (!r.ok) Die(r.error);
+    // A const copy: DoNotOptimize on the member itself ("+m,r") corrupted the reported cost
+    // (GCC 12, Google Benchmark 1.7.1: 6.95e-310 read back).
+    const double cost = r.final_cost;
     benchmark::DoNotOptimize(cost);
   }
+  state.counters["final_cost"] = r.final_cost;
+  state.counters["iterations"] = r.iterations;
+  state.counters["max_prior_landmarks"] = r.max_prior_landmarks;
+  state.counters["factors_behind_camera"] = r.factors_behind_camera;
 }
-BENCHMARK(BM_KittiVo_Ceres)->Unit(benchmark::kMillisecond)->Repetitions(5);
+[[maybe_unused]] const bool kKitti00WindowsRegistered = [] {
+  if (std::getenv("SWF_BENCH_KITTI00_WINDOWS") == nullptr) return false;
+  benchmark::RegisterBenchmark("BM_Kitti00_SwfWindow", Kitti00SwfWindow)
+      ->Arg(5)
+      ->Arg(10)
+      ->Arg(20)
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(1)
+      ->Repetitions(1);
+  return true;
+}();
 
 }  // namespace
 
