@@ -24,9 +24,10 @@ struct Evaluation {
   std::string title;   // markdown heading
   const StereoSequence* sequence = nullptr;
   const std::vector<RunRecord>* runs = nullptr;
-  JsonObject header;        // dataset fields, first in the JSON
-  std::string description;  // markdown before the table
-  std::string notes;        // markdown after the comparison, computed by the command
+  const std::vector<RunRecord>* diagnostics = nullptr;  // re-runs of failed runs, may be empty
+  JsonObject header;                                    // dataset fields, first in the JSON
+  std::string description;                              // markdown before the table
+  std::string notes;  // markdown after the comparison, computed by the command
 };
 
 std::string Key(const RunRecord& r) {
@@ -43,17 +44,20 @@ bool WriteFrameTable(const std::string& path, const RunRecord& r, const StereoSe
   }
   std::fprintf(f,
                "# frame\trecorded\tt_s\terror_no_fit_m\tsigma_m\ttracked\twindow_meas\t"
-               "iterations\tfault_bits\tstatus\test_x\test_y\test_z\ttrue_x\ttrue_y\ttrue_z\n");
+               "iterations\tfault_bits\tstatus\test_x\test_y\test_z\ttrue_x\ttrue_y\ttrue_z\t"
+               "integrity\tintegrity_flags\thpl_m\tvpl_m\terror_h_m\terror_v_m\n");
   for (std::size_t j = 0; j < r.frames.size(); ++j) {
     const FrameRecord& fr = r.frames[j];
     const Vec3D truth = (s.frames[0].truth.Inverse() * s.frames[j].truth).t;
-    const Vec3D est = (r.frames[0].estimate.Inverse() * fr.estimate).t;
-    std::fprintf(
-        f, "%zu\t%d\t%.3f\t%.6g\t%.6g\t%d\t%d\t%d\t0x%x\t%d\t%.6g\t%.6g\t%.6g\t%.6g\t%.6g\t%.6g\n",
-        j, s.frames[j].source,
-        1e-9 * static_cast<double>(s.frames[j].stamp_ns - s.frames[0].stamp_ns),
-        fr.anchored_error_m, fr.position_sigma_m, fr.tracked, fr.window_measurements, fr.iterations,
-        fr.fault_bits, fr.status, est.x(), est.y(), est.z(), truth.x(), truth.y(), truth.z());
+    const Vec3D est = fr.estimate.t;  // the estimate's world is the first camera
+    std::fprintf(f, "%zu\t%d\t%.3f\t%.6g\t%.6g\t%d\t%d\t%d\t0x%x\t%d\t", j, s.frames[j].source,
+                 1e-9 * static_cast<double>(s.frames[j].stamp_ns - s.frames[0].stamp_ns),
+                 fr.anchored_error_m, fr.position_sigma_m, fr.tracked, fr.window_measurements,
+                 fr.iterations, fr.fault_bits, fr.status);
+    std::fprintf(f, "%.6g\t%.6g\t%.6g\t%.6g\t%.6g\t%.6g\t%d\t0x%x\t%.6g\t%.6g\t%.6g\t%.6g\n",
+                 est.x(), est.y(), est.z(), truth.x(), truth.y(), truth.z(), fr.integrity,
+                 fr.integrity_flags, fr.hpl_m, fr.vpl_m, fr.horizontal_error_m,
+                 fr.vertical_error_m);
   }
   if (std::fclose(f) != 0) {
     *error = path + ": cannot write";
@@ -97,6 +101,11 @@ std::string JsonText(const Evaluation& e) {
   for (const RunRecord& r : *e.runs) {
     o.Raw(Key(r), RunJson(r, *e.sequence, e.prefix + "_" + Key(r) + "_tum.txt", 4));
   }
+  JsonObject diagnosis;
+  for (const RunRecord& r : *e.diagnostics) {
+    diagnosis.Raw(Key(r) + "_true_motion", RunJson(r, *e.sequence, "", 6));
+  }
+  o.Raw("diagnostics", diagnosis.Text(4));
   return o.Text(2) + "\n";
 }
 
@@ -118,6 +127,26 @@ bool WriteErrorSeries(const std::string& out, const Evaluation& e) {
                          "  \"dataset\": " + JsonString(e.sequence->dir));
 }
 
+// What the re-runs with the true motion say about the failed runs.
+std::string DiagnosisSentences(const std::vector<RunRecord>& diagnostics) {
+  std::string out;
+  for (const RunRecord& r : diagnostics) {
+    if (!out.empty()) out += " ";
+    if (r.Ok()) {
+      out += Format(
+          "Diagnosis: %s stays within the divergence limit over all %zu frames (largest error "
+          "without fit %.3g m, last frame %.3g m, ATE %.3g m): the images and the front end can "
+          "carry this trajectory, what fails is the estimate without a motion input.",
+          r.options.name.c_str(), r.frames.size(), r.errors.max_anchored_error_m,
+          r.errors.final_anchored_error_m, r.errors.ate_rmse_m);
+    } else {
+      out += Format("Diagnosis: %s fails too (%s): %s.", r.options.name.c_str(),
+                    ToString(r.verdict), r.reason.c_str());
+    }
+  }
+  return out;
+}
+
 std::string Markdown(const Evaluation& e) {
   const std::vector<RunRecord>& runs = *e.runs;
   std::string md = "## " + e.title + "\n\n![" + e.prefix + "](eval/" + e.prefix +
@@ -129,7 +158,13 @@ std::string Markdown(const Evaluation& e) {
                           "ATE") +
           "\n\n";
   }
+  md +=
+      "Integrity (error without fit, split along the vertical, against the navigation "
+      "output's horizontal and vertical protection levels): " +
+      IntegritySentences(runs) + "\n\n";
   if (!e.notes.empty()) md += e.notes + "\n\n";
+  const std::string diagnosis = DiagnosisSentences(*e.diagnostics);
+  if (!diagnosis.empty()) md += diagnosis + "\n\n";
   return md;
 }
 
@@ -417,6 +452,7 @@ int RunEurocCommand(int argc, char** argv) {
                    : "Real data: EuRoC (`swf-eval euroc DIR`)";
   e.sequence = &result.sequence;
   e.runs = &result.runs;
+  e.diagnostics = &result.diagnostics;
   e.header.String("experiment", e.prefix)
       .String("dataset", dir)
       .Integer("recorded_frames", result.recorded_frames)
@@ -494,6 +530,7 @@ int RunKittiCommand(int argc, char** argv) {
   e.title = "Real data: KITTI odometry excerpt, the whole pipeline (`swf-eval kitti DIR`)";
   e.sequence = &result.sequence;
   e.runs = &result.runs;
+  e.diagnostics = &result.diagnostics;
   e.header.String("experiment", e.prefix)
       .String("dataset", dir)
       .Integer("frames", static_cast<long long>(result.sequence.frames.size()))

@@ -346,6 +346,8 @@ bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult*
   if (!ReadTum(dir + "/groundtruth_tum.txt", &gt, error)) return false;
   Associate(mav0, left, right, gt, body_T_camera, result);
   result->recorded_frames = static_cast<int>(s.frames.size());
+  // EuRoC's world z is up (gravity): the vertical in the first camera's frame.
+  if (!s.frames.empty()) s.up_world = s.frames[0].truth.R.transpose() * Vec3D::UnitZ();
   if (result->recorded_frames < 3) {
     *error = dir + "/groundtruth_tum.txt: fewer than 3 of the " + std::to_string(left.size()) +
              " listed frames have a ground-truth pose within 5 ms";
@@ -376,6 +378,7 @@ bool RunEuroc(const std::string& dir, const EurocOptions& options, EurocResult* 
     o.divergence_m = options.divergence_m;
     result->runs.push_back(RunSequence(result->sequence, o));
   }
+  result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
   return true;
 }
 

@@ -50,9 +50,10 @@ struct EurocResult {
   int recorded_frames = 0;  // frames with both images and ground truth
   int skipped_frames = 0;   // listed frames without ground truth within 5 ms
   double frame_interval_s = 0.0;
-  double gt_path_length_m = 0.0;  // of the recorded frames
-  double gt_extent_m = 0.0;       // largest distance from the first ground-truth position
-  std::vector<RunRecord> runs;    // SWF(window), VO(window)
+  double gt_path_length_m = 0.0;       // of the recorded frames
+  double gt_extent_m = 0.0;            // largest distance from the first ground-truth position
+  std::vector<RunRecord> runs;         // SWF(window), VO(window)
+  std::vector<RunRecord> diagnostics;  // DiagnoseFailures(runs)
 };
 
 // Reads DIR into a sequence (truth: the rectified left camera, world = the ground truth's).

@@ -124,6 +124,7 @@ bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult*
   s.name = "KITTI odometry";
   s.dir = dir;
   s.rectify = false;
+  s.up_world = Vec3D(0.0, -1.0, 0.0);  // KITTI cameras: y down, mounted level on the car
   if (!ReadKittiCalibration(dir + "/calib.txt", &s.camera, error)) return false;
   std::vector<PoseD> poses;
   if (!ReadKittiPoses(dir + "/poses.txt", &poses, error)) return false;
@@ -175,6 +176,7 @@ bool RunKitti(const std::string& dir, const KittiOptions& options, KittiResult* 
     o.divergence_m = options.divergence_m;
     result->runs.push_back(RunSequence(result->sequence, o));
   }
+  result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
   return true;
 }
 

@@ -27,7 +27,8 @@ struct KittiOptions {
 struct KittiResult {
   StereoSequence sequence;
   double gt_path_length_m = 0.0;
-  std::vector<RunRecord> runs;  // SWF(window), VO(window)
+  std::vector<RunRecord> runs;         // SWF(window), VO(window)
+  std::vector<RunRecord> diagnostics;  // DiagnoseFailures(runs)
 };
 
 // P0/P1 from calib.txt into the rectified rig: f, cx, cy from P0, baseline = -P1[0,3] / P1[0,0].

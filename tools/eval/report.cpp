@@ -28,10 +28,26 @@ std::string Checkpoints(const RunRecord& run, const StereoSequence& s, int inden
         .Number("position_sigma_m", f.position_sigma_m)
         .Integer("tracked", f.tracked)
         .Integer("window_measurements", f.window_measurements)
-        .Integer("fault_bits", f.fault_bits);
+        .Integer("fault_bits", f.fault_bits)
+        .Integer("integrity", f.integrity)
+        .Number("hpl_m", f.hpl_m)
+        .Number("vpl_m", f.vpl_m);
     out += (i ? ",\n" : "\n") + pad + "  " + o.Text(indent + 4);
   }
   return out + "\n" + pad + "]";
+}
+
+// What the navigation output claimed against what the truth says: frames per status, and frames
+// whose error exceeded a protection level (misleading when the status was VALID).
+std::string IntegrityJson(const RunRecord& run, int indent) {
+  JsonObject o;
+  o.Integer("frames_valid", run.frames_by_integrity[0])
+      .Integer("frames_degraded", run.frames_by_integrity[1])
+      .Integer("frames_invalid", run.frames_by_integrity[2])
+      .Integer("misleading_frames", run.misleading_frames)
+      .Integer("first_misleading_frame", run.first_misleading_frame)
+      .Integer("degraded_beyond_protection", run.degraded_beyond_protection);
+  return o.Text(indent);
 }
 
 std::string Verdicted(const RunRecord& run) {
@@ -95,6 +111,7 @@ std::string RunJson(const RunRecord& run, const StereoSequence& sequence,
       .Integer("frames_without_tracks", run.frames_without_tracks)
       .Number("tracked_per_frame", run.mean_tracked, "no frame was processed")
       .Number("seconds", run.seconds, "", 3);
+  o.Raw("integrity", IntegrityJson(run, indent + 2));
   if (!trajectory.empty()) o.String("trajectory", trajectory);
   if (!run.frames.empty()) o.Raw("checkpoints", Checkpoints(run, sequence, indent));
   return o.Text(indent);
@@ -150,6 +167,36 @@ std::string CompareSentence(const RunRecord& a, double value_a, const RunRecord&
   }
   return head + Format(": within 20%% of each other (ratio %.2f), this run does not separate them.",
                        ratio);
+}
+
+std::string IntegritySentences(const std::vector<RunRecord>& runs) {
+  std::string out;
+  for (const RunRecord& r : runs) {
+    const int n = static_cast<int>(r.frames.size());
+    const int graded =
+        r.frames_by_integrity[0] + r.frames_by_integrity[1] + r.frames_by_integrity[2];
+    if (graded == 0) {
+      out +=
+          (out.empty() ? "" : " ") + r.options.name + ": the pipeline reports no integrity status.";
+      continue;
+    }
+    std::string s = Format("%s navigation output: %d VALID, %d DEGRADED, %d INVALID of %d frames",
+                           r.options.name.c_str(), r.frames_by_integrity[0],
+                           r.frames_by_integrity[1], r.frames_by_integrity[2], n);
+    if (r.misleading_frames > 0) {
+      s += Format(
+          "; **%d VALID frames had a position error beyond the protection level (first "
+          "at frame %d): wrong without saying so**",
+          r.misleading_frames, r.first_misleading_frame);
+    } else {
+      s += "; no VALID frame had an error beyond its protection level";
+    }
+    if (r.degraded_beyond_protection > 0) {
+      s += Format("; %d DEGRADED frames exceeded theirs", r.degraded_beyond_protection);
+    }
+    out += (out.empty() ? "" : " ") + s + ".";
+  }
+  return out;
 }
 
 std::string FailureSentences(const std::vector<RunRecord>& runs) {

@@ -27,6 +27,10 @@ std::string CompareSentence(const RunRecord& a, double value_a, const RunRecord&
 // "SWF(5) diverged at frame 412 [...]: ..." for every failed run, "" when all are ok.
 std::string FailureSentences(const std::vector<RunRecord>& runs);
 
+// Per run: frames per integrity status, and VALID frames whose error exceeded the protection
+// level (the navigation output was wrong without saying so).
+std::string IntegritySentences(const std::vector<RunRecord>& runs);
+
 bool AllOk(const std::vector<RunRecord>& runs);
 
 // Formats like printf into a std::string.

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 
+#include "report.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/image_io/image_io.hpp"
 
@@ -23,6 +24,27 @@ frontend::HarrisOptions DetectorFor(int width, int height) {
   o.bucket_cols = std::max(1, std::min(64, width / 40));
   o.bucket_rows = std::max(1, std::min(64, height / 40));
   return o;
+}
+
+// The integrity fields of the pipeline are adopted where its header has them (they arrive with
+// the integrity monitor); without them a frame's integrity is reported as unknown (-1).
+void SetUpWorld(const Vec3D& up, auto* options) {
+  if constexpr (requires { options->integrity.up_world; }) options->integrity.up_world = up;
+}
+
+void RecordIntegrity(const auto& nav, FrameRecord* record) {
+  if constexpr (requires {
+                  nav.integrity_flags;
+                  nav.horizontal_protection_m;
+                  nav.vertical_protection_m;
+                }) {
+    record->integrity = nav.status;
+    record->integrity_flags = static_cast<std::uint32_t>(nav.integrity_flags);
+    record->hpl_m = nav.horizontal_protection_m;
+    record->vpl_m = nav.vertical_protection_m;
+  } else {
+    record->integrity = -1;
+  }
 }
 
 app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
@@ -41,6 +63,7 @@ app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
   o.measurement_sigma_px = r.sigma_px;
   o.process_sigma_m = r.process_sigma_m;
   o.process_sigma_rad = r.process_sigma_rad;
+  SetUpWorld(s.up_world, &o);
   return o;  // initial_world_T_camera: identity, the estimate's world is the first camera
 }
 
@@ -102,6 +125,16 @@ void Fail(RunRecord* run, Verdict verdict, int frame, const std::string& reason)
   run->reason = reason;
 }
 
+// What the navigation output says about the frame.
+void RecordNav(const app::NavOutput& nav, FrameRecord* record) {
+  record->estimate = PoseOf(nav);
+  record->window_measurements = nav.num_measurements;
+  record->iterations = nav.iterations;
+  record->fault_bits = static_cast<std::uint32_t>(nav.fault_bits);
+  record->position_sigma_m = PositionSigma(nav);
+  RecordIntegrity(nav, record);
+}
+
 // Runs the pipeline stages of frame j; false (with the run's verdict set) when the pipeline
 // refuses the input, after which nothing later can be scored.
 bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images,
@@ -129,17 +162,39 @@ bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images,
     return false;
   }
   record->tracked = pipeline->NumFeatures();
-  st = pipeline->Estimate(nullptr);
+  PoseD truth_step;
+  if (run->options.truth_motion && j > 0) truth_step = s.frames[j - 1].truth.Inverse() * f.truth;
+  st = pipeline->Estimate(run->options.truth_motion && j > 0 ? &truth_step : nullptr);
   record->status = static_cast<int>(st);
   run->estimate_failures += st != Status::kOk;
   app::NavOutput nav;
   pipeline->MakeNav(&nav);
-  record->estimate = PoseOf(nav);
-  record->window_measurements = nav.num_measurements;
-  record->iterations = nav.iterations;
-  record->fault_bits = static_cast<std::uint32_t>(nav.fault_bits);
-  record->position_sigma_m = PositionSigma(nav);
+  RecordNav(nav, record);
   return true;
+}
+
+const char* IntegrityName(int status) {
+  static const char* const kNames[] = {"VALID", "DEGRADED", "INVALID"};
+  return status >= 0 && status <= 2 ? kNames[status] : "UNKNOWN";
+}
+
+// The pipeline's integrity at a frame, for a failure's reason: whether it had said so.
+std::string IntegrityAt(const FrameRecord& r) {
+  if (r.integrity < 0) return "";
+  return Format("; the navigation output said %s (flags 0x%x, HPL %.3g m, VPL %.3g m)",
+                IntegrityName(r.integrity), r.integrity_flags, r.hpl_m, r.vpl_m);
+}
+
+// Counts the frame's integrity status and whether its error exceeded what the output claimed.
+void CountIntegrity(std::size_t j, const FrameRecord& r, RunRecord* run) {
+  if (r.integrity >= 0 && r.integrity <= 2) ++run->frames_by_integrity[r.integrity];
+  const bool beyond = r.horizontal_error_m > r.hpl_m || r.vertical_error_m > r.vpl_m;
+  if (r.Misleading()) {
+    ++run->misleading_frames;
+    if (run->first_misleading_frame < 0) run->first_misleading_frame = static_cast<int>(j);
+  } else if (r.integrity == 1 && beyond) {
+    ++run->degraded_beyond_protection;
+  }
 }
 
 // Checks frame j's estimate against the truth and the measurement count; sets the verdict at
@@ -152,18 +207,21 @@ void Judge(const StereoSequence& s, std::size_t j, const RunOptions& o, RunRecor
     r->anchored_error_m = std::numeric_limits<double>::quiet_NaN();
     return;
   }
+  // The estimate's world is the first camera (the pipeline starts at identity), so the truth
+  // moved into its own first camera frame is directly comparable, as the protection levels are.
   const Vec3D truth = (s.frames[0].truth.Inverse() * s.frames[j].truth).t;
-  const Vec3D estimate =
-      (run->frames.empty() ? r->estimate : run->frames[0].estimate).Inverse().Apply(r->estimate.t);
-  r->anchored_error_m = (truth - estimate).norm();
+  const Vec3D error = r->estimate.t - truth;
+  r->anchored_error_m = error.norm();
+  r->vertical_error_m = std::fabs(error.dot(s.up_world));
+  r->horizontal_error_m = (error - error.dot(s.up_world) * s.up_world).norm();
   if (!(r->anchored_error_m <= o.divergence_m)) {
-    char buf[256];
-    std::snprintf(buf, sizeof(buf),
-                  ": position error %.3g m from the truth (limit %.3g m), %d tracked landmarks, "
-                  "%d measurements in the window, fault bits 0x%x",
-                  r->anchored_error_m, o.divergence_m, r->tracked, r->window_measurements,
-                  r->fault_bits);
-    Fail(run, Verdict::kDiverged, frame, FrameName(s, j) + buf);
+    Fail(run, Verdict::kDiverged, frame,
+         FrameName(s, j) +
+             Format(": position error %.3g m from the truth (limit %.3g m), %d tracked landmarks, "
+                    "%d measurements in the window, fault bits 0x%x",
+                    r->anchored_error_m, o.divergence_m, r->tracked, r->window_measurements,
+                    r->fault_bits) +
+             IntegrityAt(*r));
   }
   if (j > 0 && r->tracked == 0) {
     ++run->frames_without_tracks;
@@ -175,6 +233,10 @@ void Judge(const StereoSequence& s, std::size_t j, const RunOptions& o, RunRecor
 }
 
 }  // namespace
+
+bool FrameRecord::Misleading() const {
+  return integrity == 0 && (horizontal_error_m > hpl_m || vertical_error_m > vpl_m);
+}
 
 const char* ToString(Verdict verdict) {
   switch (verdict) {
@@ -205,6 +267,7 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
     FrameRecord record;
     if (!ProcessFrame(sequence, j, &images, pipeline.get(), &run, &record)) break;
     Judge(sequence, j, options, &run, &record);
+    CountIntegrity(j, record, &run);
     tracked += record.tracked;
     run.frames.push_back(record);
     if (run.verdict == Verdict::kNonFinite) break;  // nothing later can be scored
@@ -220,6 +283,19 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
   }
   run.errors = ScoreTrajectory(truth, estimate);
   return run;
+}
+
+std::vector<RunRecord> DiagnoseFailures(const StereoSequence& sequence,
+                                        const std::vector<RunRecord>& runs) {
+  std::vector<RunRecord> out;
+  for (const RunRecord& r : runs) {
+    if (r.verdict != Verdict::kDiverged && r.verdict != Verdict::kNonFinite) continue;
+    RunOptions o = r.options;
+    o.truth_motion = true;
+    o.name += " with the true motion as input";
+    out.push_back(RunSequence(sequence, o));
+  }
+  return out;
 }
 
 std::vector<int> PingPong(int n, int total) {

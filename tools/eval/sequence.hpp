@@ -35,6 +35,9 @@ struct StereoSequence {
   estimator::StereoCamera<double> camera;  // the rectified rig (filled in for raw cameras too)
   int width = 0;  // image size the pipeline receives (raw size when rectifying)
   int height = 0;
+  // The vertical in the estimate's world (the first camera's frame), for the pipeline's
+  // horizontal/vertical protection levels and to split the error the same way.
+  Vec3D up_world = Vec3D(0.0, -1.0, 0.0);
   std::vector<SequenceFrame> frames;
 };
 
@@ -51,6 +54,9 @@ struct RunOptions {
   double process_sigma_rad = 0.02;
   // An anchored position error beyond this calls the run diverged (not merely inaccurate).
   double divergence_m = 1.0;
+  // Diagnosis only: hand the pipeline the truth's frame-to-frame motion as its motion input
+  // (what an IMU would provide, with the process noise above) instead of constant velocity.
+  bool truth_motion = false;
 };
 
 struct FrameRecord {
@@ -62,6 +68,16 @@ struct FrameRecord {
   int status = 0;                 // core::Status of the estimate stage
   double position_sigma_m = 0.0;  // sqrt(trace) of the navigation output's position covariance
   double anchored_error_m = 0.0;  // against the truth, both from their first frame
+  // The navigation output's integrity (estimator::NavIntegrity: 0 VALID, 1 DEGRADED, 2 INVALID;
+  // -1 when the pipeline reports none), its flags and protection levels, and the error split
+  // along up_world to compare with them.
+  int integrity = -1;
+  std::uint32_t integrity_flags = 0;
+  double hpl_m = 0.0;
+  double vpl_m = 0.0;
+  double horizontal_error_m = 0.0;
+  double vertical_error_m = 0.0;
+  bool Misleading() const;  // error beyond a protection level while the output said VALID
 };
 
 enum class Verdict { kOk, kInputError, kNonFinite, kDiverged, kNoMeasurements };
@@ -74,8 +90,12 @@ struct RunRecord {
   Verdict verdict = Verdict::kOk;
   std::string reason;  // why the verdict is not ok, naming the frame and its record
   int failure_frame = -1;
-  int estimate_failures = 0;      // frames whose estimate stage did not return kOk
-  int frames_without_tracks = 0;  // frames after the first with no tracked landmark
+  int estimate_failures = 0;               // frames whose estimate stage did not return kOk
+  int frames_without_tracks = 0;           // frames after the first with no tracked landmark
+  int frames_by_integrity[3] = {0, 0, 0};  // VALID, DEGRADED, INVALID
+  int misleading_frames = 0;               // FrameRecord::Misleading()
+  int first_misleading_frame = -1;
+  int degraded_beyond_protection = 0;  // DEGRADED frames with the error beyond a protection level
   double mean_tracked = 0.0;
   double seconds = 0.0;  // wall time, images loaded once
   bool Ok() const { return verdict == Verdict::kOk; }
@@ -83,6 +103,12 @@ struct RunRecord {
 
 // Runs the sequence; never throws, every problem ends in the verdict and reason.
 RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options);
+
+// For every run that diverged or went non-finite, the same run with the truth's motion as the
+// motion input: when that one follows the truth, the images and the front end carry the
+// trajectory and what failed is the estimate without a motion input.
+std::vector<RunRecord> DiagnoseFailures(const StereoSequence& sequence,
+                                        const std::vector<RunRecord>& runs);
 
 // `total` indices into n recorded frames, forwards then backwards (0, 1, ..., n-1, n-2, ..., 1,
 // 0, 1, ...): a ping-pong, so the image motion between consecutive frames stays continuous.
