@@ -121,18 +121,100 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
   return o;
 }
 
+// The run's verdict, computed from the numbers (fsw/app/README.md "Results and exit codes"):
+//   failed   (exit 1) the run could not do its job: the loop or the source failed, the log was
+//            damaged, outputs were lost, the final estimate is INVALID, or (with truth) a VALID
+//            output's true error exceeded its protection level
+//   degraded (exit 3) it did, with reservations: an INVALID frame, a restart of the filter,
+//            more than kMaxDegradedFraction of the frames DEGRADED, or more than
+//            kMaxLostFraction of the frames dropped or failed in a stage
+//   ok       (exit 0) none of those
+struct Verdict {
+  const char* result = "ok";
+  int exit_code = 0;
+  std::string reasons;  // comma-separated, for the summary and the log
+};
+constexpr double kMaxLostFraction = 0.01;
+constexpr double kMaxDegradedFraction = 0.10;
+
+void Fail(Verdict* v, const std::string& reason) {
+  v->result = "failed";
+  v->exit_code = 1;
+  v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
+}
+void Degrade(Verdict* v, const std::string& reason) {
+  if (v->exit_code == 0) {
+    v->result = "degraded";
+    v->exit_code = 3;
+  }
+  v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
+}
+
+Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
+                 const IntegrityCounters& integrity, estimator::NavIntegrity final_status,
+                 const EvaluationResult* eval) {
+  Verdict v;
+  const double frames = static_cast<double>(std::max<std::int64_t>(1, counters.frames));
+  if (counters.frames == 0) Fail(&v, "no frame was processed");
+  if (counters.frames > 0 && final_status == estimator::NavIntegrity::kInvalid)
+    Fail(&v, "the final estimate is INVALID");
+  if (eval != nullptr && eval->protection_violations > 0) {
+    Fail(&v, std::to_string(eval->protection_violations) +
+                 " VALID outputs erred beyond their protection level");
+  }
+  if (integrity.frames_invalid > 0)
+    Degrade(&v, std::to_string(integrity.frames_invalid) + " INVALID frames");
+  if (integrity.restarts > 0) Degrade(&v, std::to_string(integrity.restarts) + " filter restarts");
+  if (integrity.frames_degraded > kMaxDegradedFraction * frames)
+    Degrade(&v, std::to_string(integrity.frames_degraded) + " DEGRADED frames");
+  const std::int64_t lost = health.frames_dropped + counters.stage_errors;
+  if (lost > kMaxLostFraction * frames)
+    Degrade(&v, std::to_string(lost) + " frames dropped or failed");
+  return v;
+}
+
+void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const EvaluationResult* eval) {
+  std::fprintf(f,
+               "  \"integrity\": {\"frames_valid\": %lld, \"frames_degraded\": %lld, "
+               "\"frames_invalid\": %lld, \"restarts\": %lld, \"last_recovery_frames\": %d, "
+               "\"measurements_gated\": %lld, \"measurements_rejected\": %lld, "
+               "\"landmarks_rejected\": %lld, \"new_landmarks_refused\": %lld, "
+               "\"gate_suspensions\": %lld",
+               static_cast<long long>(c.frames_valid), static_cast<long long>(c.frames_degraded),
+               static_cast<long long>(c.frames_invalid), static_cast<long long>(c.restarts),
+               c.last_recovery_frames, static_cast<long long>(c.measurements_gated),
+               static_cast<long long>(c.measurements_rejected),
+               static_cast<long long>(c.landmarks_rejected),
+               static_cast<long long>(c.new_landmarks_refused),
+               static_cast<long long>(c.gate_suspensions));
+  std::fprintf(f, ", \"flag_counts\": [");
+  for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
+    std::fprintf(f, "%s%lld", b > 0 ? ", " : "", static_cast<long long>(c.flag_counts[b]));
+  std::fprintf(f, "]");
+  if (eval != nullptr) {
+    std::fprintf(f,
+                 ", \"valid_outputs_vs_truth\": %lld, \"protection_violations\": %lld, "
+                 "\"max_error_over_protection\": %.4f",
+                 static_cast<long long>(eval->valid_navs),
+                 static_cast<long long>(eval->protection_violations),
+                 eval->max_error_over_protection);
+  }
+  std::fprintf(f, "},\n");
+}
+
 void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
                   const HealthRecord& health, const EvaluationResult* eval,
                   const HazardEvaluation* hazard, std::int64_t hazard_maps, bool locked, bool fifo,
-                  const char* result, const sim::Trajectory* trajectory,
-                  const sim::OrbitalTarget* target) {
+                  const Verdict& verdict, const IntegrityCounters& integrity,
+                  const sim::Trajectory* trajectory, const sim::OrbitalTarget* target) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) {
     std::fprintf(stderr, "swf-fsw: cannot write %s\n", path.c_str());
     return;
   }
-  std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"source\": \"%s\",\n", result,
-               SourceName(c.source));
+  std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"result_reasons\": \"%s\",\n", verdict.result,
+               verdict.reasons.c_str());
+  std::fprintf(f, "  \"source\": \"%s\",\n", SourceName(c.source));
   std::fprintf(f, "  \"frames\": %lld,\n", static_cast<long long>(counters.frames));
   std::fprintf(f, "  \"rate_hz\": %.3f,\n  \"window\": %d,\n  \"mode\": \"%s\",\n", c.rate_hz,
                c.window, c.mode.c_str());
@@ -173,6 +255,7 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                  eval->final_pose_error_m, static_cast<long long>(eval->navs),
                  static_cast<long long>(eval->maps));
   }
+  WriteIntegrity(f, integrity, eval);
   std::fprintf(f, "  \"stages\": {\n");
   for (int i = 0; i < kNumStages; ++i) {
     std::fprintf(f, "    \"%s\": {\"p50_ms\": %.3f, \"p99_ms\": %.3f, \"max_ms\": %.3f}%s\n",
@@ -261,26 +344,26 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   // ---- configuration: refused before anything starts ------------------------------------------
   FswConfig config;
   std::string error;
-  if (!LoadConfig(config_path, &config, &error)) {
+  const auto refuse = [&]() {
     std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
     return 2;
-  }
+  };
+  // The file and every --set are validated once, as a whole, so their order does not matter.
+  if (!LoadConfig(config_path, sets, &config, &error)) return refuse();
   if (replay) {
     config.source = SourceKind::kLog;
     config.log_path = log_path;
     config.record_frames = false;
-    config.record_path = record_given ? record_override : "";
-    if (!ValidateConfig(config, config_path, &error)) {
-      std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
-      return 2;
+    const auto record = config.origins.keys.find("record.path");
+    if (record_given) {
+      config.record_path = record_override;
+    } else if (record == config.origins.keys.end() || record->second != "--set") {
+      config.record_path = "";
     }
+    if (!ValidateConfig(config, config_path, &error)) return refuse();
   }
-  for (const std::string& s : sets) {
-    if (!OverrideConfig(s, &config, &error)) {
-      std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
-      return 2;
-    }
-  }
+  // Output paths are checked now, not discovered unwritable after the whole descent.
+  if (!CheckOutputPaths(config, &error)) return refuse();
 
   // ---- source and pipeline options --------------------------------------------------------------
   PipelineOptions po;
@@ -493,6 +576,10 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                  tool, core::ToString(s));
     return 2;
   }
+  if (!CheckEnvelopeDisparity(config, pipeline->Camera().fx, pipeline->Camera().baseline_m,
+                              po.width_px, &error)) {
+    return refuse();
+  }
   // Hazard mapping on the rectified pair (all of its memory now).
   auto hazard_stage = std::make_unique<MapperHazardStage>();
   {
@@ -624,15 +711,12 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
 
   // ---- report ---------------------------------------------------------------------------------
   const LoopCounters& counters = loop.Counters();
-  int exit_code = run_status == core::Status::kOk ? 0 : 1;
-  const char* result = run_status == core::Status::kOk ? "ok" : core::ToString(run_status);
-  if (log_source != nullptr && !log_source->LoadError().empty()) {
+  const bool damaged_log = log_source != nullptr && !log_source->LoadError().empty();
+  if (damaged_log) {
     std::fprintf(stderr,
                  "%s: stopped at a damaged log: %s (the %zu frames before it were "
                  "replayed)\n",
                  tool, log_source->LoadError().c_str(), log_source->NumFrames());
-    exit_code = 1;
-    result = "damaged log";
   }
 #if SWF_APP_HAVE_V4L2
   if (v4l2_source != nullptr && run_status != core::Status::kOk) {
@@ -675,19 +759,37 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                static_cast<long long>(counters.hazard_skipped),
                static_cast<long long>(loop.HazardErrors()), h.stages[kStageHazard].p50_ms);
   std::fprintf(stderr, "\n");
+  const IntegrityCounters& integrity = pipeline->Integrity();
+  Verdict verdict =
+      JudgeRun(counters, h, integrity, pipeline->LastIntegrity().status, evaluate ? &eval : nullptr);
+  if (run_status != core::Status::kOk)
+    Fail(&verdict, std::string("the frame group stopped: ") + core::ToString(run_status));
+  if (damaged_log) Fail(&verdict, "damaged log");
   if (output.Counters().record_errors > 0 || output.Counters().encode_errors > 0) {
     std::fprintf(stderr, "%s: %lld records could not be written, %lld not encoded\n", tool,
                  static_cast<long long>(output.Counters().record_errors),
                  static_cast<long long>(output.Counters().encode_errors));
-    exit_code = 1;
+    Fail(&verdict, "records lost");
   }
+  std::fprintf(stderr,
+               "%s: integrity: %lld VALID, %lld DEGRADED, %lld INVALID frames, %lld restarts, "
+               "%lld measurements gated, %lld rejected, %lld landmarks rejected\n",
+               tool, static_cast<long long>(integrity.frames_valid),
+               static_cast<long long>(integrity.frames_degraded),
+               static_cast<long long>(integrity.frames_invalid),
+               static_cast<long long>(integrity.restarts),
+               static_cast<long long>(integrity.measurements_gated),
+               static_cast<long long>(integrity.measurements_rejected),
+               static_cast<long long>(integrity.landmarks_rejected));
+  std::fprintf(stderr, "%s: result: %s%s%s\n", tool, verdict.result,
+               verdict.reasons.empty() ? "" : ": ", verdict.reasons.c_str());
   if (!config.summary_path.empty()) {
     WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr,
                  evaluate && hazard_counter.maps > 0 ? &hazard_eval : nullptr, hazard_counter.maps,
-                 locked, fifo, result, world ? &world->Trajectory() : nullptr,
+                 locked, fifo, verdict, integrity, world ? &world->Trajectory() : nullptr,
                  world ? &world->Target() : nullptr);
   }
-  return exit_code;
+  return verdict.exit_code;
 }
 
 }  // namespace swf::app

@@ -339,6 +339,7 @@ void FlightLoop::PublishHealth() {
   h.estimator_status = static_cast<std::int8_t>(pipeline_->LastStatus());
   h.num_features = pipeline_->NumFeatures();
   h.num_landmarks = pipeline_->NumLandmarks();
+  h.integrity = pipeline_->Integrity();
   for (int i = 0; i < kNumStages; ++i) {
     if (i != kStageHazard) h.stages[i] = stages_[i].Summarize();
   }

@@ -1,6 +1,7 @@
 #include "swf/app/pipeline.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <new>
 
@@ -18,6 +19,11 @@ Status Pipeline::Configure(const PipelineOptions& options) {
     return Status::kInvalidArgument;
   }
   if (options.swf.mode == estimator::SwfMode::kBatch) return Status::kInvalidArgument;
+  if (!(options.still_translation_m >= 0.0) || !(options.still_rotation_rad >= 0.0) ||
+      !(options.max_process_inflation >= 1.0) ||
+      monitor_.Configure(options.integrity) != Status::kOk) {
+    return Status::kInvalidArgument;
+  }
   options_ = options;
   // Everything large is created here, once, before the loop starts.
   frontend_.reset(new (std::nothrow) frontend::Frontend());
@@ -25,7 +31,9 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   swf_.reset(new (std::nothrow) FlightSwf());
   estimates_.reset(new (std::nothrow) frontend::LandmarkEstimate[kMaxLandmarks]);
   sightings_.reset(new (std::nothrow) FirstSighting[kMaxSightings]);
-  if (!frontend_ || !output_ || !swf_ || !estimates_ || !sightings_) return Status::kFull;
+  disparities_.reset(new (std::nothrow) float[2 * frontend::kMaxTracks]);
+  if (!frontend_ || !output_ || !swf_ || !estimates_ || !sightings_ || !disparities_)
+    return Status::kFull;
   if (options.rectify) {
     rectifier_.reset(new (std::nothrow) frontend::StereoRectifier());
     rect_left_.reset(new (std::nothrow) frontend::Image<std::uint8_t>());
@@ -57,6 +65,19 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   has_previous_pose_ = false;
   has_before_previous_ = false;
   frames_estimated_ = 0;
+  integrity_ = IntegrityCounters{};
+  report_ = estimator::IntegrityReport{};
+  trusted_pose_ = options_.initial_world_T_camera;
+  trusted_covariance_.setZero();
+  trusted_covariance_.diagonal() << Vec3<double>::Constant(options_.swf.first_pose_sigma_m *
+                                                           options_.swf.first_pose_sigma_m),
+      Vec3<double>::Constant(options_.swf.first_pose_sigma_rad * options_.swf.first_pose_sigma_rad);
+  since_trusted_ = Pose<double>();
+  frames_since_trusted_ = 0;
+  restart_pending_ = false;
+  frames_since_restart_ = -1;
+  velocity_world_.setZero();
+  last_dt_s_ = 0.0;
   configured_ = true;
   return Status::kOk;
 }
@@ -108,48 +129,184 @@ Status Pipeline::Track() {
 Status Pipeline::Estimate(const Pose<double>* motion) {
   if (!configured_) return Status::kNotConfigured;
   Status s;
-  if (swf_->NumPoses() == 0) {
-    // First frame, or re-initialization after the filter's local recovery (reset): start from
-    // the last good estimate.
-    s = swf_->AddPose(has_previous_pose_ ? previous_pose_ : options_.initial_world_T_camera);
-    has_before_previous_ = false;
+  if (swf_->NumPoses() == 0 && !has_previous_pose_) {
+    s = swf_->AddPose(options_.initial_world_T_camera);  // the very first frame
+    last_motion_ = Pose<double>();
+  } else if (swf_->NumPoses() == 0 || restart_pending_) {
+    s = RestartFromTrusted();
   } else {
-    // The navigation system's relative motion when there is one (IMU); otherwise repeat the last
-    // estimated motion (constant velocity: can run away under the rotation/translation
-    // ambiguity of a narrow field of view, estimator/README.md).
-    s = motion != nullptr ? swf_->AddPoseWithMotion(*motion, q_sqrt_)
-                          : swf_->AddPoseConstantVelocity(q_sqrt_);
+    s = AddPredictedPose(motion);
   }
   if (s != Status::kOk) {
     last_status_ = s;
     return s;
   }
+  AddMeasurements();
+  s = swf_->Update();
+  last_status_ = s;
+  covariance_valid_ = false;
+  const bool filter_reset = swf_->NumPoses() == 0;  // its local recovery from a non-finite state
+  if (!filter_reset) {
+    const double dt_s = static_cast<double>(utime_ - last_estimate_utime_) * 1e-6;
+    const Pose<double> newest = swf_->NewestPose();
+    velocity_world_ = has_previous_pose_ && dt_s > 0.0 ? Vec3<double>((newest.t - previous_pose_.t) / dt_s)
+                                                       : Vec3<double>::Zero();
+    if (dt_s > 0.0) last_dt_s_ = dt_s;
+    if (has_previous_pose_) {
+      before_previous_pose_ = previous_pose_;
+      has_before_previous_ = true;
+    }
+    previous_pose_ = newest;
+    has_previous_pose_ = true;
+    covariance_valid_ = swf_->ComputeCovariances() == Status::kOk;
+  }
+  last_estimate_utime_ = utime_;
+  AssessIntegrity(filter_reset, motion != nullptr);
+  ++frames_estimated_;
+  return s == Status::kNotConverged ? Status::kOk : s;
+}
+
+// The process factor of a new pose: the navigation system's relative motion when there is one
+// (IMU), else the bounded constant-velocity model, with its sigma inflated by the frames since
+// the last VALID estimate.
+Status Pipeline::AddPredictedPose(const Pose<double>* motion) {
+  last_motion_ = motion != nullptr ? *motion : BoundedConstantVelocity();
+  const double inflation = motion != nullptr
+                               ? 1.0
+                               : std::min(options_.max_process_inflation,
+                                          1.0 + static_cast<double>(frames_since_trusted_));
+  return swf_->AddPoseWithMotion(last_motion_, q_sqrt_ / inflation);
+}
+
+Pose<double> Pipeline::BoundedConstantVelocity() const {
+  if (!has_before_previous_) return Pose<double>();
+  Pose<double> u = before_previous_pose_.Inverse() * previous_pose_;
+  const double angle = estimator::LogSO3<double>(u.R).norm();
+  if (u.t.norm() < options_.still_translation_m && angle < options_.still_rotation_rad) {
+    return Pose<double>();  // a still scene stays still
+  }
+  const double max_step_m = options_.integrity.max_speed_mps * last_dt_s_;
+  if (last_dt_s_ > 0.0 && u.t.norm() > max_step_m) u.t *= max_step_m / u.t.norm();
+  return u;
+}
+
+// Restarts the filter from the last VALID pose carried forward by the motion predicted since,
+// with that pose's covariance grown by one process noise per frame since: the restarted
+// covariance (and protection levels) still covers the error made before the restart.
+Status Pipeline::RestartFromTrusted() {
+  swf_->Reset();
+  const Pose<double> start = trusted_pose_ * since_trusted_;
+  estimator::Mat6<double> covariance = trusted_covariance_;
+  const double n = static_cast<double>(std::max<std::int64_t>(1, frames_since_trusted_));
+  covariance.diagonal() += n * (q_sqrt_.diagonal().cwiseInverse().array().square()).matrix();
+  const Status s = swf_->AddFirstPose(start, covariance);
+  restart_pending_ = false;
+  has_before_previous_ = false;
+  last_motion_ = Pose<double>();
+  monitor_.NoteRestart();
+  ++integrity_.restarts;
+  frames_since_restart_ = 0;
+  return s;
+}
+
+// The front end's measurements into the filter (gated there), and the geometry evidence of the
+// frame: spread of the measured pixels and the median disparity.
+void Pipeline::AddMeasurements() {
+  double su = 0.0, sv = 0.0, suu = 0.0, svv = 0.0, suv = 0.0;
+  num_disparities_ = 0;
+  const auto note = [&](double u_left, double u_right, double v) {
+    su += u_left;
+    sv += v;
+    suu += u_left * u_left;
+    svv += v * v;
+    suv += u_left * v;
+    disparities_[num_disparities_++] = static_cast<float>(u_left - u_right);
+  };
   for (const frontend::StereoMeasurement& m : output_->measurements) {
     if (m.quality < options_.min_quality) continue;
-    (void)swf_->AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v), r_sqrt_);
+    if (swf_->AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v), r_sqrt_) ==
+        Status::kOk) {
+      note(m.u_left, m.u_right, m.v);
+    }
   }
   for (const frontend::NewLandmark& n : output_->new_landmarks) {
     if (swf_->AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v), r_sqrt_) ==
         Status::kOk) {
+      note(n.u_left, n.u_right, n.v);
       FirstSighting& f = sightings_[n.landmark_id % kMaxSightings];
       f.frame_seq = seq_;
       f.u_left = static_cast<float>(n.u_left);
       f.v = static_cast<float>(n.v);
     }
   }
-  s = swf_->Update();
-  last_status_ = s;
-  covariance_valid_ = false;
-  if (swf_->NumPoses() > 0) {
-    if (has_previous_pose_) {
-      before_previous_pose_ = previous_pose_;
-      has_before_previous_ = true;
-    }
-    previous_pose_ = swf_->NewestPose();
-    has_previous_pose_ = true;
+  image_spread_px_ = 0.0;
+  if (num_disparities_ > 1) {
+    const double k = 1.0 / num_disparities_;
+    const double cuu = suu * k - su * su * k * k;
+    const double cvv = svv * k - sv * sv * k * k;
+    const double cuv = suv * k - su * sv * k * k;
+    // Smaller eigenvalue of the 2x2 pixel covariance: small when the points lie on a line.
+    const double half_trace = 0.5 * (cuu + cvv);
+    const double root = std::sqrt(std::max(0.0, half_trace * half_trace - (cuu * cvv - cuv * cuv)));
+    image_spread_px_ = std::sqrt(std::max(0.0, half_trace - root));
   }
-  ++frames_estimated_;
-  return s == Status::kNotConverged ? Status::kOk : s;
+}
+
+void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
+  const estimator::SwfSummary& summary = swf_->Summary();
+  estimator::IntegrityEvidence e;
+  e.update_status = last_status_;
+  e.filter_reset = filter_reset;
+  e.gate_suspended = summary.gate_suspended;
+  e.has_motion_input = has_motion;
+  e.num_measurements = summary.num_measurements;
+  e.num_inliers = summary.num_inliers;
+  e.inlier_sigma = summary.inlier_sigma;
+  e.step_m = summary.newest_pose_step_m;
+  e.step_rad = summary.newest_pose_step_rad;
+  e.position_world = previous_pose_.t;
+  e.velocity_world = velocity_world_;
+  e.has_covariance = covariance_valid_;
+  if (covariance_valid_) e.covariance = swf_->NewestPoseCovariance();
+  e.image_spread_px = image_spread_px_;
+  if (num_disparities_ > 0) {
+    float* mid = disparities_.get() + num_disparities_ / 2;
+    std::nth_element(disparities_.get(), mid, disparities_.get() + num_disparities_);
+    e.median_disparity_px = *mid;
+  }
+  report_ = monitor_.Assess(e);
+  integrity_.measurements_gated += summary.measurements_gated;
+  integrity_.measurements_rejected += summary.measurements_rejected;
+  integrity_.landmarks_rejected += summary.landmarks_rejected;
+  integrity_.new_landmarks_refused += summary.new_landmarks_refused;
+  integrity_.gate_suspensions += summary.gate_suspended ? 1 : 0;
+  for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
+    integrity_.flag_counts[b] += (report_.flags >> b) & 1u;
+  if (frames_since_restart_ >= 0) ++frames_since_restart_;
+  switch (report_.status) {
+    case estimator::NavIntegrity::kValid:
+      ++integrity_.frames_valid;
+      trusted_pose_ = previous_pose_;
+      trusted_covariance_ = swf_->NewestPoseCovariance();
+      since_trusted_ = Pose<double>();
+      frames_since_trusted_ = 0;
+      if (frames_since_restart_ >= 0) {
+        integrity_.last_recovery_frames = static_cast<std::int32_t>(frames_since_restart_);
+        frames_since_restart_ = -1;
+      }
+      break;
+    case estimator::NavIntegrity::kDegraded:
+      ++integrity_.frames_degraded;
+      break;
+    case estimator::NavIntegrity::kInvalid:
+      ++integrity_.frames_invalid;
+      break;
+  }
+  if (report_.status != estimator::NavIntegrity::kValid) {
+    since_trusted_ = since_trusted_ * last_motion_;
+    ++frames_since_trusted_;
+  }
+  restart_pending_ = report_.restart || filter_reset;
 }
 
 void Pipeline::MakeNav(NavOutput* nav) {
@@ -162,22 +319,21 @@ void Pipeline::MakeNav(NavOutput* nav) {
   nav->orientation_world_q[1] = q.x();
   nav->orientation_world_q[2] = q.y();
   nav->orientation_world_q[3] = q.z();
-  const double dt_s = static_cast<double>(utime_ - previous_utime_) * 1e-6;
-  for (int i = 0; i < 3; ++i) {
-    nav->velocity_world_mps[i] =
-        has_before_previous_ && dt_s > 0.0 ? (pose.t[i] - before_previous_pose_.t[i]) / dt_s : 0.0;
-  }
-  previous_utime_ = utime_;
-  // The newest pose's marginal covariance (a dense solve over the reduced system).
-  if (swf_->NumPoses() > 0 && swf_->ComputeCovariances() == Status::kOk) {
-    covariance_valid_ = true;
+  for (int i = 0; i < 3; ++i) nav->velocity_world_mps[i] = velocity_world_[i];
+  // The newest pose's marginal covariance (computed by Estimate for the integrity checks).
+  if (covariance_valid_) {
     const estimator::Mat6<double>& c = swf_->NewestPoseCovariance();
     for (int r = 0; r < 6; ++r)
       for (int k = 0; k < 6; ++k) nav->covariance[6 * r + k] = c(r, k);
   } else {
     for (double& v : nav->covariance) v = 0.0;
   }
-  nav->status = static_cast<std::int8_t>(last_status_);
+  nav->status = static_cast<std::int8_t>(report_.status);
+  nav->integrity_flags = static_cast<std::int32_t>(report_.flags);
+  nav->horizontal_protection_m = report_.hpl_m;
+  nav->vertical_protection_m = report_.vpl_m;
+  nav->integrity_risk = options_.integrity.integrity_risk;
+  nav->update_status = static_cast<std::int8_t>(last_status_);
   nav->fault_bits = static_cast<std::int32_t>(swf_->FaultBits());
   nav->iterations = swf_->Summary().iterations;
   nav->num_measurements = swf_->Summary().num_measurements;

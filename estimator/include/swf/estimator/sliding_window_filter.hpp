@@ -61,6 +61,8 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -86,7 +88,28 @@ enum SwfFault : std::uint32_t {
                                         // measurement from the marginalized pose was dropped
   kFaultDegenerateLandmark = 1u << 8,   // a landmark's 3x3 block was singular; held fixed
   kFaultReset = 1u << 9,                // the state became non-finite; the filter was reset
+  kFaultGateSuspended = 1u << 10,       // more of a frame's measurements failed their gate than
+                                        // max_gated_fraction: the prediction, not the
+                                        // measurements, is suspect; they were all kept
 };
+
+// Upper quantile of the chi-square distribution with 3 degrees of freedom: the x with
+// P(chi2_3 <= x) = probability. CDF(x) = erf(sqrt(x/2)) - sqrt(2x/pi) exp(-x/2); solved by
+// bisection (bounded, configuration time only). 0 for a probability outside (0, 1).
+inline double ChiSquare3Quantile(double probability) {
+  if (!(probability > 0.0 && probability < 1.0)) return 0.0;
+  const auto cdf = [](double x) {
+    return std::erf(std::sqrt(0.5 * x)) - std::sqrt(2.0 * x / 3.14159265358979323846) *
+                                              std::exp(-0.5 * x);
+  };
+  double lo = 0.0;
+  double hi = 200.0;  // CDF(200) = 1 - 1e-41
+  for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (cdf(mid) < probability ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
 
 struct SwfOptions {
   SwfMode mode = SwfMode::kSlidingWindow;
@@ -103,6 +126,23 @@ struct SwfOptions {
   // Evaluate measurement Jacobians of prior landmarks at their estimate when they entered the
   // prior (FEJ, Huang/Mourikis/Roumeliotis). Off = relinearize everything (the paper's SWF).
   bool first_estimate_jacobians = true;
+  // Integrity gates (chi-square with 3 dof at gate_probability; 0 = no gates):
+  //  * before fusion, a measurement of a known landmark is tested against its prediction with
+  //    covariance R + J_p P_pose J_p^T + J_l P_l J_l^T (the predicted pose's and the landmark's
+  //    marginals from the last ComputeCovariances(); without them the test is skipped and
+  //    counted as unchecked);
+  //  * after the solve, a measurement whose whitened residual, in units of the inlier sigma,
+  //    stays above the gate is removed; a landmark whose window measurements all fail is
+  //    removed with them; then the window is solved again (at most max_gate_resolves times).
+  // Either gate stands down (keeps everything, kFaultGateSuspended) when more than
+  // max_gated_fraction of the measurements it checks fail: then the state, not the data, is
+  // wrong, and deleting the data would hide that from the health monitor.
+  double gate_probability = 0.9999;
+  double max_gated_fraction = 0.5;
+  int max_gate_resolves = 1;
+  // A new landmark's stereo triangulation must give a 3x3 information that is positive
+  // definite, and (when > 0) a largest 1-sigma world position error below this (metres).
+  double max_init_sigma_m = 0.0;
 
   core::Status Validate() const {
     if (max_iterations < 1 || max_iterations > 100) return core::Status::kInvalidArgument;
@@ -112,6 +152,11 @@ struct SwfOptions {
     if (!(huber_k > 0.0)) return core::Status::kInvalidArgument;
     if (!fix_first_pose && !(first_pose_sigma_m > 0.0 && first_pose_sigma_rad > 0.0))
       return core::Status::kInvalidArgument;
+    if (!(gate_probability >= 0.0 && gate_probability < 1.0)) return core::Status::kInvalidArgument;
+    if (!(max_gated_fraction >= 0.0 && max_gated_fraction <= 1.0))
+      return core::Status::kInvalidArgument;
+    if (max_gate_resolves < 0 || max_gate_resolves > 5) return core::Status::kInvalidArgument;
+    if (!(max_init_sigma_m >= 0.0)) return core::Status::kInvalidArgument;
     return core::Status::kOk;
   }
 };
@@ -130,6 +175,20 @@ struct SwfSummary {
   int landmarks_unplaced = 0;      // of those, retired without a position (inverse depth <= 0)
   int dense_dimension = 0;         // size of the reduced system S
   int state_dimension = 0;         // 6 * poses + 3 * active landmarks
+  // Evidence for the health monitor (integrity.hpp), at the end of the last solve.
+  double inlier_sigma = 1.0;        // robust scale of the whitened residuals (>= 1 = nominal)
+  double measurement_chi2 = 0.0;    // sum of squared whitened residuals (no robust kernel)
+  int num_inliers = 0;              // measurements with Huber weight 1
+  double newest_pose_step_m = 0.0;  // how far the solve moved the newest pose from its prediction
+  double newest_pose_step_rad = 0.0;
+  // Gates of this frame (see SwfOptions).
+  int gate_checked = 0;             // measurements of known landmarks tested before fusion
+  int gate_unchecked = 0;           // ... that could not be tested (no covariances yet)
+  int measurements_gated = 0;       // ... that failed and were not fused
+  int measurements_rejected = 0;    // removed after the solve
+  int landmarks_rejected = 0;       // removed after the solve with all their measurements
+  int new_landmarks_refused = 0;    // failed the depth, disparity or triangulation check
+  bool gate_suspended = false;      // a gate stood down (kFaultGateSuspended)
 };
 
 // A landmark that left the estimator in the last Update (its final estimate).
@@ -168,6 +227,7 @@ class SlidingWindowFilter {
     model_ = model;
     options_ = options;
     window_ = options.window_size == 0 ? K : options.window_size;
+    gate_threshold_ = S(ChiSquare3Quantile(options.gate_probability));
     configured_ = true;
     Reset();
     return core::Status::kOk;
@@ -187,6 +247,9 @@ class SlidingWindowFilter {
     tau_ = S(1e30);
     fault_bits_ = 0;
     summary_ = SwfSummary{};
+    pending_ = SwfSummary{};
+    covariances_current_ = false;
+    predicted_cov_valid_ = false;
     retired_.clear();
   }
 
@@ -194,6 +257,23 @@ class SlidingWindowFilter {
 
   // Adds a pose with an initial estimate and no process factor (bundle-adjustment style).
   core::Status AddPose(const PoseType& estimate) { return PushPose(estimate, nullptr, nullptr); }
+
+  // Adds the first pose with a Gaussian prior of this covariance (update coordinates) instead of
+  // first_pose_sigma_*: a restart from the last trusted state keeps its uncertainty, so the
+  // covariances (and protection levels) after it still cover the error made before it. A
+  // fixed first pose (fix_first_pose, VO) stays fixed.
+  core::Status AddFirstPose(const PoseType& estimate, const Mat6<S>& covariance) {
+    if (num_poses_ != 0) return core::Status::kInvalidArgument;
+    const Eigen::LLT<Mat6<S>> llt(covariance);
+    if (!covariance.allFinite() || llt.info() != Eigen::Success)
+      return core::Status::kInvalidArgument;
+    const core::Status status = PushPose(estimate, nullptr, nullptr);
+    if (status != core::Status::kOk || Slot(0).fixed) return status;
+    const Mat6<S> information = llt.solve(Mat6<S>::Identity());
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r < 6; ++r) prior_[c * kMaxPriorDim + r] = information(r, c);
+    return core::Status::kOk;
+  }
 
   // Adds a pose predicted by the process model from a relative-motion input u with
   // information W^T W = Q^-1 (process_sqrt_information = W).
@@ -223,14 +303,19 @@ class SlidingWindowFilter {
       return core::Status::kFull;
     }
     int slot = ids_.Find(landmark_id);
+    bool gate_failed = false;
     if (slot >= 0) {
       for (const Observation& o : pose.obs)
         if (o.landmark == slot) return core::Status::kInvalidArgument;  // duplicate in frame
+      gate_failed = FailsPredictionGate(pose.pose, landmarks_[slot], z, sqrt_information);
     } else {
       Vec3<S> params;
       LandmarkAnchor anchor{};
-      if (!model_.InitLandmark(pose.pose, z, &anchor, &params))
+      if (!model_.InitLandmark(pose.pose, z, &anchor, &params) ||
+          !TriangulationAcceptable(pose.pose, anchor, params, sqrt_information)) {
+        ++pending_.new_landmarks_refused;
         return core::Status::kInvalidArgument;
+      }
       if (free_slots_.empty()) {
         fault_bits_ |= kFaultLandmarkCapacity;
         return core::Status::kFull;
@@ -250,6 +335,7 @@ class SlidingWindowFilter {
     o.landmark = slot;
     o.z = z;
     o.sqrt_info = sqrt_information;
+    o.gate_failed = gate_failed;
     (void)pose.obs.push_back(o);
     ++landmarks_[slot].obs_in_window;
     ++landmarks_[slot].total_obs;
@@ -261,6 +347,7 @@ class SlidingWindowFilter {
     if (!configured_) return core::Status::kNotConfigured;
     summary_ = SwfSummary{};
     retired_.clear();
+    ApplyPredictionGate();
     if (num_poses_ > window_) {
       if (options_.mode == SwfMode::kVisualOdometry) {
         DeleteOldestPose();
@@ -271,6 +358,14 @@ class SlidingWindowFilter {
     }
     RetireUnsupportedLandmarks();
     core::Status status = Solve();
+    for (int pass = 0; pass < options_.max_gate_resolves && IsSolved(status); ++pass) {
+      if (RejectResidualOutliers() == 0) break;
+      RetireUnsupportedLandmarks();
+      status = Solve();
+    }
+    RecordEvidence();
+    covariances_current_ = false;
+    predicted_cov_valid_ = false;
     if (!StateIsFinite()) {
       // Local recovery: a non-finite state cannot be repaired in place. Start over; the caller
       // re-initializes with its next AddPose (it sees kNumericalFailure and the sticky bit).
@@ -293,9 +388,14 @@ class SlidingWindowFilter {
     if (status != core::Status::kOk) return status;
     const int np6 = 6 * num_poses_;
     // Pose block of S^-1 (needed for free landmarks) and the prior landmarks' diagonal blocks.
+    const int nq = static_cast<int>(prior_landmarks_.size());
     for (int c = 0; c < np6; ++c) {
       dense_.InverseColumn(c, column_);
       for (int r = 0; r < np6; ++r) pose_cov_[c * kMaxPosesDim + r] = column_[r];
+      if (c < np6 - 6) continue;
+      for (int q = 0; q < nq; ++q)  // Cov(newest pose, prior landmark q)
+        for (int r = 0; r < 3; ++r)
+          landmarks_[prior_landmarks_[q]].cross_newest(c - (np6 - 6), r) = column_[np6 + 3 * q + r];
     }
     // A fixed pose is known exactly; its identity rows in S only stand in for "no update".
     for (int j = 0; j < num_poses_; ++j) {
@@ -304,19 +404,27 @@ class SlidingWindowFilter {
         for (int m = 0; m < np6; ++m)
           pose_cov_[k * kMaxPosesDim + m] = pose_cov_[m * kMaxPosesDim + k] = S(0);
     }
+    for (int i = 0; i < N; ++i) landmarks_[i].covariance_valid = false;
     for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
       LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
       for (int k = 0; k < 3; ++k) {
         dense_.InverseColumn(np6 + 3 * q + k, column_);
         for (int r = 0; r < 3; ++r) l.covariance(r, k) = column_[np6 + 3 * q + r];
       }
+      l.covariance_valid = l.covariance.allFinite();
     }
     for (int i = 0; i < N; ++i) {
       LandmarkSlot& l = landmarks_[i];
       if (!l.used || l.prior_index >= 0 || !l.invertible) continue;
       Mat3<S> cross = Mat3<S>::Zero();  // sum_a sum_b W_a^T Sigma(ja, jb) W_b
+      // dl = h^-1 (b - sum_a W_a^T dp_a): Cov(newest, l) = -sum_a Sigma(newest, ja) W_a h^-1.
+      l.cross_newest.setZero();
       for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
         const Observation& oa = ObsAt(adj_[a]);
+        const Eigen::Map<const Mat6<S>, Eigen::Unaligned, Eigen::OuterStride<>> newest_a(
+            pose_cov_ + (6 * adj_[a].pose) * kMaxPosesDim + np6 - 6,
+            Eigen::OuterStride<>(kMaxPosesDim));
+        l.cross_newest -= newest_a * oa.w_pl * l.h_inv;
         for (int b = lm_begin_[i]; b < lm_begin_[i + 1]; ++b) {
           const Observation& ob = ObsAt(adj_[b]);
           const Eigen::Map<const Mat6<S>, Eigen::Unaligned, Eigen::OuterStride<>> sigma(
@@ -326,11 +434,13 @@ class SlidingWindowFilter {
         }
       }
       l.covariance = l.h_inv + l.h_inv * cross * l.h_inv;
+      l.covariance_valid = l.covariance.allFinite();
     }
     newest_pose_cov_.setZero();
     for (int c = 0; c < 6; ++c)
       for (int r = 0; r < 6; ++r)
         newest_pose_cov_(r, c) = pose_cov_[(np6 - 6 + c) * kMaxPosesDim + np6 - 6 + r];
+    covariances_current_ = newest_pose_cov_.allFinite();
     return core::Status::kOk;
   }
 
@@ -414,6 +524,7 @@ class SlidingWindowFilter {
     Eigen::Matrix<S, 6, 3> w_pl = Eigen::Matrix<S, 6, 3>::Zero();
     S weight = S(1);
     bool valid = false;
+    bool gate_failed = false;  // failed the prediction gate when it was added
   };
 
   struct PoseSlot {
@@ -442,6 +553,8 @@ class SlidingWindowFilter {
     bool invertible = false;
     Vec3<S> backup = Vec3<S>::Zero();
     Mat3<S> covariance = Mat3<S>::Zero();
+    Eigen::Matrix<S, 6, 3> cross_newest = Eigen::Matrix<S, 6, 3>::Zero();  // Cov(newest pose, l)
+    bool covariance_valid = false;  // both are from the last ComputeCovariances()
   };
 
   struct AdjEntry {
@@ -532,6 +645,11 @@ class SlidingWindowFilter {
     if (num_poses_ >= limit) return core::Status::kFull;
     if (num_poses_ == 0) head_ = 0;
     ++num_poses_;
+    predicted_cov_valid_ = u != nullptr && num_poses_ >= 2 && covariances_current_ &&
+                           PredictPoseCovariance(Slot(num_poses_ - 2).pose, estimate, *u,
+                                                 *sqrt_info, &predicted_pose_cov_,
+                                                 &prediction_transition_);
+    newest_prediction_ = estimate;
     PoseSlot& slot = Newest();
     slot.pose = estimate;
     slot.obs.clear();
@@ -575,6 +693,207 @@ class SlidingWindowFilter {
     for (int r = 0; r < prior_dim_; ++r)
       if (!std::isfinite(prior_g_[r])) return false;
     return true;
+  }
+
+  // ---- integrity gates (SwfOptions::gate_probability) ----------------------------------------
+
+  static bool IsSolved(core::Status s) {
+    return s == core::Status::kOk || s == core::Status::kNotConverged;
+  }
+
+  // Covariance of the pose predicted by the process model from `prev` (whose marginal is the
+  // last computed newest-pose covariance): linearizing r = f(prev, next, u) ~ N(0, Q) gives
+  // A d_prev + B d_next = w, so d_next = Phi d_prev + B^-1 w with Phi = -B^-1 A and
+  // P_next = B^-1 (A P_prev A^T + Q) B^-T. Phi carries prev's correlation with the landmarks.
+  bool PredictPoseCovariance(const PoseType& prev, const PoseType& next, const MotionType& u,
+                             const Mat6<S>& sqrt_info, Mat6<S>* covariance,
+                             Mat6<S>* transition) const {
+    Mat6<S> a;
+    Mat6<S> b;
+    (void)model_.ProcessResidual(prev, next, u, &a, &b);
+    const Eigen::FullPivLU<Mat6<S>> w(sqrt_info);
+    const Eigen::FullPivLU<Mat6<S>> lu(b);
+    if (!w.isInvertible() || !lu.isInvertible()) return false;
+    const Mat6<S> w_inv = w.inverse();
+    const Mat6<S> b_inv = lu.inverse();
+    *covariance = b_inv * (a * newest_pose_cov_ * a.transpose() + w_inv * w_inv.transpose()) *
+                  b_inv.transpose();
+    *transition = -b_inv * a;
+    return covariance->allFinite();
+  }
+
+  // Before fusion: the squared Mahalanobis distance of the innovation z - h against its
+  // covariance R + J_p P_pose J_p^T + J_l P_l J_l^T + J_p C J_l^T + (J_p C J_l^T)^T, with
+  // C = Phi Cov(prev pose, l). The correlation matters: pose and landmarks drift together, and
+  // without C the gate would be loose by the whole absolute uncertainty of the path.
+  bool FailsPredictionGate(const PoseType& pose, const LandmarkSlot& l, const Vec3<S>& z,
+                           const Mat3<S>& sqrt_info) {
+    if (gate_threshold_ <= S(0)) return false;
+    if (!predicted_cov_valid_ || !l.covariance_valid) {
+      ++pending_.gate_unchecked;
+      return false;
+    }
+    Vec3<S> h;
+    Mat36<S> jp;
+    Mat3<S> jl;
+    if (!model_.Predict(pose, l.anchor, l.params, &h, &jp, &jl)) {
+      ++pending_.gate_unchecked;
+      return false;
+    }
+    const Eigen::FullPivLU<Mat3<S>> w(sqrt_info);
+    if (!w.isInvertible()) return true;
+    const Mat3<S> w_inv = w.inverse();
+    const Mat3<S> coupling = jp * prediction_transition_ * l.cross_newest * jl.transpose();
+    const Mat3<S> innovation_cov = w_inv * w_inv.transpose() +
+                                   jp * predicted_pose_cov_ * jp.transpose() +
+                                   jl * l.covariance * jl.transpose() + coupling +
+                                   coupling.transpose();
+    const Eigen::LDLT<Mat3<S>> ldlt(innovation_cov);
+    ++pending_.gate_checked;
+    const Vec3<S> e = z - h;
+    const S d2 = e.dot(ldlt.solve(e));
+    return !(ldlt.info() == Eigen::Success && std::isfinite(d2) && d2 <= gate_threshold_);
+  }
+
+  // A new landmark's single stereo sighting must determine it: the 3x3 information J^T R^-1 J
+  // is positive definite and, with max_init_sigma_m, its world covariance is small enough.
+  bool TriangulationAcceptable(const PoseType& pose, const LandmarkAnchor& anchor,
+                               const Vec3<S>& params, const Mat3<S>& sqrt_info) const {
+    Vec3<S> h;
+    Mat36<S> jp;  // the models fill the landmark Jacobian only together with the pose's
+    Mat3<S> jl;
+    if (!model_.Predict(pose, anchor, params, &h, &jp, &jl)) return false;
+    const Mat3<S> jw = sqrt_info * jl;
+    const Eigen::LLT<Mat3<S>> llt(jw.transpose() * jw);
+    if (llt.info() != Eigen::Success) return false;
+    if (options_.max_init_sigma_m <= 0.0) return true;
+    Vec3<S> position;
+    Mat3<S> dl_dm;
+    if (!Model::LandmarkPosition(anchor, params, &position, &dl_dm)) return false;
+    const Mat3<S> world_cov = dl_dm * llt.solve(Mat3<S>::Identity()) * dl_dm.transpose();
+    const Eigen::SelfAdjointEigenSolver<Mat3<S>> eig(world_cov, Eigen::EigenvaluesOnly);
+    const S largest = eig.eigenvalues()(2);
+    return std::isfinite(largest) &&
+           largest <= S(options_.max_init_sigma_m * options_.max_init_sigma_m);
+  }
+
+  // Removes the newest pose's measurements that failed the prediction gate, unless too many
+  // failed (then the prediction is the suspect: keep them, flag kFaultGateSuspended).
+  void ApplyPredictionGate() {
+    summary_.gate_checked = pending_.gate_checked;
+    summary_.gate_unchecked = pending_.gate_unchecked;
+    summary_.new_landmarks_refused = pending_.new_landmarks_refused;
+    pending_ = SwfSummary{};
+    if (num_poses_ == 0) return;
+    PoseSlot& p = Newest();
+    int failed = 0;
+    for (const Observation& o : p.obs) failed += o.gate_failed ? 1 : 0;
+    if (failed == 0) return;
+    if (failed > S(options_.max_gated_fraction) * S(summary_.gate_checked)) {
+      summary_.gate_suspended = true;
+      fault_bits_ |= kFaultGateSuspended;
+      for (Observation& o : p.obs) o.gate_failed = false;
+      return;
+    }
+    for (std::size_t k = p.obs.size(); k-- > 0;) {
+      if (!p.obs[k].gate_failed) continue;
+      LandmarkSlot& l = landmarks_[p.obs[k].landmark];
+      --l.obs_in_window;
+      --l.total_obs;
+      p.obs.erase(k);
+      ++summary_.measurements_gated;
+    }
+  }
+
+  // After a solve: measurements whose whitened residual, in inlier sigmas, exceeds the gate
+  // are removed; a landmark with every window measurement failing is removed whole. Returns
+  // how many measurements went. Stands down (flags) when too many fail.
+  int RejectResidualOutliers() {
+    if (gate_threshold_ <= S(0)) return 0;
+    const S sigma = InlierSigma();
+    const S limit = gate_threshold_ * sigma * sigma;
+    int checked = 0;
+    int failed = 0;
+    for (int i = 0; i < N; ++i) landmarks_[i].lm_count = 0;
+    for (int j = 0; j < num_poses_; ++j) {
+      for (Observation& o : Slot(j).obs) {
+        o.gate_failed = o.valid && !(o.r.squaredNorm() <= limit);
+        if (!o.valid) continue;
+        ++checked;
+        if (o.gate_failed) {
+          ++failed;
+          ++landmarks_[o.landmark].lm_count;
+        }
+      }
+    }
+    if (failed == 0) return 0;
+    if (failed > S(options_.max_gated_fraction) * S(checked)) {
+      summary_.gate_suspended = true;
+      fault_bits_ |= kFaultGateSuspended;
+      return 0;
+    }
+    for (int i = 0; i < N; ++i) {
+      LandmarkSlot& l = landmarks_[i];
+      if (l.used && l.lm_count > 0 && l.lm_count == l.obs_in_window) {
+        RemoveLandmark(i);
+        ++summary_.landmarks_rejected;
+      }
+    }
+    for (int j = 0; j < num_poses_; ++j) {
+      PoseSlot& p = Slot(j);
+      for (std::size_t k = p.obs.size(); k-- > 0;) {
+        if (!p.obs[k].gate_failed) continue;
+        --landmarks_[p.obs[k].landmark].obs_in_window;
+        p.obs.erase(k);
+      }
+    }
+    summary_.measurements_rejected += failed;
+    return failed;
+  }
+
+  // Takes a landmark out with all its window measurements. A prior landmark is marginalized
+  // out of the prior (what earlier measurements told about the rest stays there).
+  void RemoveLandmark(int slot) {
+    LandmarkSlot& l = landmarks_[slot];
+    for (int j = 0; j < num_poses_; ++j) {
+      PoseSlot& p = Slot(j);
+      for (std::size_t k = p.obs.size(); k-- > 0;)
+        if (p.obs[k].landmark == slot) p.obs.erase(k);
+    }
+    if (l.prior_index >= 0 && !EliminatePriorLandmark(l.prior_index))
+      fault_bits_ |= kFaultNotPositiveDefinite;
+    ids_.Erase(l.id);
+    l.used = false;
+    l.obs_in_window = 0;
+    (void)free_slots_.push_back(slot);
+    --num_landmarks_;
+  }
+
+  S InlierSigma() const { return options_.robust && tau_ < S(1e29) ? tau_ / S(options_.huber_k) : S(1); }
+
+  // The health monitor's evidence from the final linearization (integrity.hpp).
+  void RecordEvidence() {
+    summary_.inlier_sigma = static_cast<double>(InlierSigma());
+    double chi2 = 0.0;
+    int inliers = 0;
+    int total = 0;
+    for (int j = 0; j < num_poses_; ++j) {
+      for (const Observation& o : Slot(j).obs) {
+        ++total;
+        if (!o.valid) continue;
+        chi2 += static_cast<double>(o.r.squaredNorm());
+        inliers += o.weight >= S(1) ? 1 : 0;
+      }
+    }
+    summary_.num_measurements = total;
+    summary_.measurement_chi2 = chi2;
+    summary_.num_inliers = inliers;
+    if (num_poses_ > 0) {
+      Mat6<S> unused;
+      const Vec6<S> d = Model::Difference(newest_prediction_, Newest().pose, &unused);
+      summary_.newest_pose_step_m = static_cast<double>(d.template head<3>().norm());
+      summary_.newest_pose_step_rad = static_cast<double>(d.template tail<3>().norm());
+    }
   }
 
   // ---- linearization -----------------------------------------------------------------------
@@ -1204,6 +1523,13 @@ class SlidingWindowFilter {
   S tau_ = S(1e30);
   std::uint32_t fault_bits_ = 0;
   SwfSummary summary_{};
+  SwfSummary pending_{};  // gate counts of the frame being added, moved to summary_ by Update
+  S gate_threshold_ = S(0);
+  bool covariances_current_ = false;  // ComputeCovariances() ran since the last Update()
+  bool predicted_cov_valid_ = false;  // predicted_pose_cov_ holds the newest pose's prediction
+  Mat6<S> predicted_pose_cov_ = Mat6<S>::Zero();
+  Mat6<S> prediction_transition_ = Mat6<S>::Zero();  // Phi: d_newest = Phi d_prev + noise
+  PoseType newest_prediction_{};
   core::StaticVector<RetiredLandmark<S>, N> retired_;
 };
 

@@ -25,6 +25,11 @@ struct EvaluationResult {
   double landmark_rms_error_m = 0.0;     // the last published map
   double landmark_median_error_m = 0.0;  // the last published map
   std::int64_t landmarks_evaluated = 0;  // in the last map
+  // Integrity against truth: VALID outputs, and those whose true horizontal or vertical error
+  // exceeded its protection level (each one an integrity failure: VALID promised otherwise).
+  std::int64_t valid_navs = 0;
+  std::int64_t protection_violations = 0;
+  double max_error_over_protection = 0.0;  // largest true error / protection level (VALID)
 };
 
 // The final hazard map against the simulator's hazard truth (sim/hazard.hpp, same thresholds).
@@ -63,6 +68,9 @@ class Evaluation : public OutputObserver {
   struct Nav {
     std::int64_t frame_seq;
     double p[3];
+    std::int8_t status;
+    double hpl_m;
+    double vpl_m;
   };
   struct Landmark {
     std::int64_t id;

@@ -1,9 +1,10 @@
 // Pipeline: the frame group's computation for one stereo pair, in flight form (no allocation,
 // no exceptions, no clocks, single-threaded, deterministic):
 //   rectify (raw cameras only) -> front end (track + stereo + new landmarks) -> Sliding Window
-//   Filter (constant-velocity process factor, stereo measurements, robust Gauss-Newton) ->
-//   navigation output (pose, velocity, covariance) and, on request, the landmark map with
-//   covariances for the slower hazard group.
+//   Filter (motion-input or bounded constant-velocity process factor, gated stereo
+//   measurements, robust Gauss-Newton) -> newest-pose covariance -> integrity monitor (status,
+//   protection levels, restart from the last trusted state on a detected divergence) ->
+//   navigation output and, on request, the landmark map with covariances for the hazard group.
 //
 // The estimator's world frame is the frame `initial_world_T_camera` is expressed in (the
 // simulator's local level frame, or whatever the navigation system hands over at start).
@@ -16,6 +17,7 @@
 
 #include "swf/core/status.hpp"
 #include "swf/estimator/geometry.hpp"
+#include "swf/estimator/integrity.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
 #include "swf/frontend/frontend.hpp"
@@ -52,7 +54,30 @@ struct PipelineOptions {
   // relative motion, camera frame of the previous pose.
   double process_sigma_m = 0.5;
   double process_sigma_rad = 0.01;
+  // Without a motion input the last estimated motion is repeated, but bounded: a motion below
+  // these per-frame thresholds is taken as standing still (noise must not integrate into a
+  // drift), one faster than integrity.max_speed_mps is clipped, and the process sigma grows
+  // with every frame since the last VALID one (at most max_process_inflation times).
+  double still_translation_m = 0.005;
+  double still_rotation_rad = 0.001;
+  double max_process_inflation = 10.0;
   estimator::Pose<double> initial_world_T_camera;
+  estimator::IntegrityOptions integrity;
+};
+
+// Integrity since Configure: statuses, restarts and every gate (health_t carries them).
+struct IntegrityCounters {
+  std::int64_t frames_valid = 0;
+  std::int64_t frames_degraded = 0;
+  std::int64_t frames_invalid = 0;
+  std::int64_t restarts = 0;
+  std::int32_t last_recovery_frames = -1;  // frames from the last restart to VALID
+  std::int64_t measurements_gated = 0;
+  std::int64_t measurements_rejected = 0;
+  std::int64_t landmarks_rejected = 0;
+  std::int64_t new_landmarks_refused = 0;
+  std::int64_t gate_suspensions = 0;
+  std::int64_t flag_counts[estimator::kNumIntegrityFlags] = {};
 };
 
 // The navigation output of one frame (nav_state_t without the transport fields).
@@ -63,7 +88,12 @@ struct NavOutput {
   double orientation_world_q[4] = {1, 0, 0, 0};  // w x y z
   double velocity_world_mps[3] = {0, 0, 0};
   double covariance[36] = {};
-  std::int8_t status = 0;
+  std::int8_t status = 2;  // estimator::NavIntegrity (nav_state_t.STATUS_*)
+  std::int32_t integrity_flags = 0;
+  double horizontal_protection_m = 0.0;
+  double vertical_protection_m = 0.0;
+  double integrity_risk = 0.0;
+  std::int8_t update_status = 0;  // core::Status of the filter update
   std::int32_t fault_bits = 0;
   std::int32_t iterations = 0;
   std::int32_t num_measurements = 0;
@@ -134,6 +164,8 @@ class Pipeline {
   int NumLandmarks() const { return swf_->NumLandmarks(); }
   std::uint32_t FaultBits() const { return swf_->FaultBits(); }
   core::Status LastStatus() const { return last_status_; }
+  const estimator::IntegrityReport& LastIntegrity() const { return report_; }
+  const IntegrityCounters& Integrity() const { return integrity_; }
   const FirstSighting& Sighting(std::int64_t id) const {
     return sightings_[static_cast<std::uint32_t>(id) % kMaxSightings];
   }
@@ -155,7 +187,6 @@ class Pipeline {
   frontend::StereoFrame current_{};
   std::int64_t utime_ = 0;
   std::int64_t seq_ = 0;
-  std::int64_t previous_utime_ = 0;
   bool has_previous_pose_ = false;
   estimator::Pose<double> previous_pose_;
   estimator::Pose<double> before_previous_pose_;
@@ -165,6 +196,30 @@ class Pipeline {
   estimator::Mat6<double> q_sqrt_ = estimator::Mat6<double>::Identity();
   std::int64_t frames_estimated_ = 0;
   bool covariance_valid_ = false;
+
+  // Integrity: the monitor, the last VALID state, and what happened since.
+  core::Status AddPredictedPose(const estimator::Pose<double>* motion);
+  core::Status RestartFromTrusted();
+  estimator::Pose<double> BoundedConstantVelocity() const;
+  void AddMeasurements();
+  void AssessIntegrity(bool filter_reset, bool has_motion);
+  estimator::IntegrityMonitor monitor_;
+  estimator::IntegrityReport report_{};
+  IntegrityCounters integrity_{};
+  estimator::Pose<double> trusted_pose_;
+  estimator::Mat6<double> trusted_covariance_ = estimator::Mat6<double>::Zero();
+  estimator::Pose<double> since_trusted_;  // motion predicted since the trusted pose
+  std::int64_t frames_since_trusted_ = 0;
+  bool restart_pending_ = false;
+  std::int64_t frames_since_restart_ = -1;  // -1: no restart waiting to recover
+  estimator::Pose<double> last_motion_;     // the motion the newest pose was predicted with
+  estimator::Vec3<double> velocity_world_ = estimator::Vec3<double>::Zero();
+  std::int64_t last_estimate_utime_ = 0;
+  double last_dt_s_ = 0.0;
+  // Evidence of the newest frame's measurements (image spread, disparities).
+  std::unique_ptr<float[]> disparities_;
+  int num_disparities_ = 0;
+  double image_spread_px_ = 0.0;
 };
 
 }  // namespace swf::app

@@ -72,6 +72,7 @@ struct HealthRecord {
   std::int8_t estimator_status = 0;
   std::int32_t num_features = 0;
   std::int32_t num_landmarks = 0;
+  IntegrityCounters integrity;
   StageSummary stages[kNumStages];
 };
 
