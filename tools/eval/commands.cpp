@@ -123,6 +123,12 @@ bool WriteErrorSeries(const std::string& out, const Evaluation& e) {
     series.push_back(aligned);
     series.push_back(anchored);
   }
+  // The diagnosis re-runs beside them: what the same images give with a motion input.
+  for (const RunRecord& r : *e.diagnostics) {
+    Series anchored{r.options.name + ", error no fit (m)", std::vector<double>(n, NAN)};
+    for (std::size_t j = 0; j < r.frames.size(); ++j) anchored.y[j] = r.frames[j].anchored_error_m;
+    series.push_back(anchored);
+  }
   return WriteExperiment(out, e.prefix + "_error", "frame", series,
                          "  \"dataset\": " + JsonString(e.sequence->dir));
 }
@@ -384,7 +390,7 @@ std::string KittiNotes(const KittiResult& r) {
         100.0 * e.final_anchored_error_m / r.gt_path_length_m, e.max_anchored_error_m,
         e.step_translation_percent, e.step_rotation_deg_per_m);
   }
-  if (r.runs.size() == 2) {
+  if (r.runs.size() == 2 && AllOk(r.runs)) {  // the ATE sentence already says why not
     notes += "\n\n" +
              CompareSentence(r.runs[0], r.runs[0].errors.final_anchored_error_m, r.runs[1],
                              r.runs[1].errors.final_anchored_error_m, "final position error") +
