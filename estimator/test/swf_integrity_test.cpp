@@ -42,8 +42,9 @@ SceneOptions Descent() {
 // Runs the scene with the motion input the truth gives and covariances every frame (as the
 // flight pipeline does); `corrupt(frame, id, z)` may change a measurement before it is added.
 template <typename Corrupt>
-std::vector<SwfSummary> RunGated(Filter* swf, const SyntheticScene& scene, const SwfOptions& options,
-                            const Corrupt& corrupt, bool covariances = true) {
+std::vector<SwfSummary> RunGated(Filter* swf, const SyntheticScene& scene,
+                                 const SwfOptions& options, const Corrupt& corrupt,
+                                 bool covariances = true) {
   StereoModel<double> model;
   model.camera = scene.camera();
   EXPECT_EQ(swf->Configure(model, options), core::Status::kOk);
@@ -84,7 +85,8 @@ TEST(Integrity, PredictionGateRefusesALookAlike) {
   const SyntheticScene scene(Descent());
   auto clean = std::make_unique<Filter>();
   auto planted = std::make_unique<Filter>();
-  const auto clean_summaries = RunGated(clean.get(), scene, ModeOptions(SwfMode::kSlidingWindow), kClean);
+  const auto clean_summaries =
+      RunGated(clean.get(), scene, ModeOptions(SwfMode::kSlidingWindow), kClean);
   const std::int64_t victim = scene.frames()[10].obs[3].id;
   const auto look_alike = [&](int frame, std::int64_t id, Vec3<double>* z) {
     if (frame == 10 && id == victim) {
@@ -123,8 +125,8 @@ TEST(Integrity, ResidualGateRemovesAMovingLandmark) {
     }
   };
   auto swf = std::make_unique<Filter>();
-  const auto summaries =
-      RunGated(swf.get(), scene, ModeOptions(SwfMode::kSlidingWindow), drift, /*covariances=*/false);
+  const auto summaries = RunGated(swf.get(), scene, ModeOptions(SwfMode::kSlidingWindow), drift,
+                                  /*covariances=*/false);
   int rejected = 0;
   int unchecked = 0;
   for (const SwfSummary& s : summaries) {
@@ -200,7 +202,8 @@ TEST(Integrity, RestartPriorCarriesItsCovariance) {
 TEST(Integrity, GatedFramesAllocateNothing) {
   const SyntheticScene scene(Descent());
   auto swf = std::make_unique<Filter>();
-  std::vector<SwfSummary> warm = RunGated(swf.get(), scene, ModeOptions(SwfMode::kSlidingWindow), kClean);
+  std::vector<SwfSummary> warm =
+      RunGated(swf.get(), scene, ModeOptions(SwfMode::kSlidingWindow), kClean);
   ASSERT_FALSE(warm.empty());
   std::uint64_t count = 0;
   {
@@ -216,9 +219,9 @@ TEST(Integrity, GatedFramesAllocateNothing) {
     swf::testing::AllocationScope scope;
     for (std::size_t j = 0; j < scene.frames().size(); ++j) {
       const auto& f = scene.frames()[j];
-      (void)(j == 0 ? swf->AddPose(f.truth)
-                    : swf->AddPoseWithMotion(scene.frames()[j - 1].truth.Inverse() * f.truth,
-                                             q_sqrt));
+      (void)(j == 0
+                 ? swf->AddPose(f.truth)
+                 : swf->AddPoseWithMotion(scene.frames()[j - 1].truth.Inverse() * f.truth, q_sqrt));
       for (const auto& o : f.obs) {
         Vec3<double> z = o.z;
         plant(static_cast<int>(j), o.id, &z);

@@ -174,19 +174,18 @@ Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
 }
 
 void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const EvaluationResult* eval) {
-  std::fprintf(f,
-               "  \"integrity\": {\"frames_valid\": %lld, \"frames_degraded\": %lld, "
-               "\"frames_invalid\": %lld, \"restarts\": %lld, \"last_recovery_frames\": %d, "
-               "\"measurements_gated\": %lld, \"measurements_rejected\": %lld, "
-               "\"landmarks_rejected\": %lld, \"new_landmarks_refused\": %lld, "
-               "\"gate_suspensions\": %lld",
-               static_cast<long long>(c.frames_valid), static_cast<long long>(c.frames_degraded),
-               static_cast<long long>(c.frames_invalid), static_cast<long long>(c.restarts),
-               c.last_recovery_frames, static_cast<long long>(c.measurements_gated),
-               static_cast<long long>(c.measurements_rejected),
-               static_cast<long long>(c.landmarks_rejected),
-               static_cast<long long>(c.new_landmarks_refused),
-               static_cast<long long>(c.gate_suspensions));
+  std::fprintf(
+      f,
+      "  \"integrity\": {\"frames_valid\": %lld, \"frames_degraded\": %lld, "
+      "\"frames_invalid\": %lld, \"restarts\": %lld, \"last_recovery_frames\": %d, "
+      "\"measurements_gated\": %lld, \"measurements_rejected\": %lld, "
+      "\"landmarks_rejected\": %lld, \"new_landmarks_refused\": %lld, "
+      "\"gate_suspensions\": %lld",
+      static_cast<long long>(c.frames_valid), static_cast<long long>(c.frames_degraded),
+      static_cast<long long>(c.frames_invalid), static_cast<long long>(c.restarts),
+      c.last_recovery_frames, static_cast<long long>(c.measurements_gated),
+      static_cast<long long>(c.measurements_rejected), static_cast<long long>(c.landmarks_rejected),
+      static_cast<long long>(c.new_landmarks_refused), static_cast<long long>(c.gate_suspensions));
   std::fprintf(f, ", \"flag_counts\": [");
   for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
     std::fprintf(f, "%s%lld", b > 0 ? ", " : "", static_cast<long long>(c.flag_counts[b]));
@@ -760,8 +759,8 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                static_cast<long long>(loop.HazardErrors()), h.stages[kStageHazard].p50_ms);
   std::fprintf(stderr, "\n");
   const IntegrityCounters& integrity = pipeline->Integrity();
-  Verdict verdict =
-      JudgeRun(counters, h, integrity, pipeline->LastIntegrity().status, evaluate ? &eval : nullptr);
+  Verdict verdict = JudgeRun(counters, h, integrity, pipeline->LastIntegrity().status,
+                             evaluate ? &eval : nullptr);
   if (run_status != core::Status::kOk)
     Fail(&verdict, std::string("the frame group stopped: ") + core::ToString(run_status));
   if (damaged_log) Fail(&verdict, "damaged log");

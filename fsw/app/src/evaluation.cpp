@@ -12,7 +12,9 @@ void Evaluation::OnNav(const NavRecord& r) {
   navs_.push_back(
       Nav{r.nav.frame_seq,
           {r.nav.position_world_m[0], r.nav.position_world_m[1], r.nav.position_world_m[2]},
-          r.nav.status, r.nav.horizontal_protection_m, r.nav.vertical_protection_m});
+          r.nav.status,
+          r.nav.horizontal_protection_m,
+          r.nav.vertical_protection_m});
 }
 
 void Evaluation::OnMap(const MapRecord& r) {
@@ -49,10 +51,12 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
       // The simulator's world is z-up: horizontal = x, y.
       const double eh = std::hypot(n.p[0] - t.x(), n.p[1] - t.y());
       const double ev = std::abs(n.p[2] - t.z());
-      const double ratio = std::max(n.hpl_m > 0.0 ? eh / n.hpl_m : 1e9, n.vpl_m > 0.0 ? ev / n.vpl_m : 1e9);
+      const double ratio =
+          std::max(n.hpl_m > 0.0 ? eh / n.hpl_m : 1e9, n.vpl_m > 0.0 ? ev / n.vpl_m : 1e9);
       ++result.valid_navs;
       result.protection_violations += ratio > 1.0 ? 1 : 0;
-      result.max_error_over_protection = std::max(result.max_error_over_protection, std::min(ratio, 1e9));
+      result.max_error_over_protection =
+          std::max(result.max_error_over_protection, std::min(ratio, 1e9));
     }
     if (traj != nullptr) {
       std::fprintf(traj, "%lld %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n",

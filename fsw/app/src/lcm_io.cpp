@@ -284,7 +284,8 @@ void OutputThread::Handle(const RecordRef& ref) {
       m.new_landmarks_refused = ic.new_landmarks_refused;
       m.gate_suspensions = ic.gate_suspensions;
       m.num_integrity_flags = estimator::kNumIntegrityFlags;
-      m.integrity_flag_counts.assign(ic.flag_counts, ic.flag_counts + estimator::kNumIntegrityFlags);
+      m.integrity_flag_counts.assign(ic.flag_counts,
+                                     ic.flag_counts + estimator::kNumIntegrityFlags);
       m.num_stages = kNumStages;
       m.stage_name.resize(kNumStages);
       m.stage_p50_ms.resize(kNumStages);

@@ -149,8 +149,9 @@ Status Pipeline::Estimate(const Pose<double>* motion) {
   if (!filter_reset) {
     const double dt_s = static_cast<double>(utime_ - last_estimate_utime_) * 1e-6;
     const Pose<double> newest = swf_->NewestPose();
-    velocity_world_ = has_previous_pose_ && dt_s > 0.0 ? Vec3<double>((newest.t - previous_pose_.t) / dt_s)
-                                                       : Vec3<double>::Zero();
+    velocity_world_ = has_previous_pose_ && dt_s > 0.0
+                          ? Vec3<double>((newest.t - previous_pose_.t) / dt_s)
+                          : Vec3<double>::Zero();
     if (dt_s > 0.0) last_dt_s_ = dt_s;
     if (has_previous_pose_) {
       before_previous_pose_ = previous_pose_;
@@ -295,12 +296,8 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
         frames_since_restart_ = -1;
       }
       break;
-    case estimator::NavIntegrity::kDegraded:
-      ++integrity_.frames_degraded;
-      break;
-    case estimator::NavIntegrity::kInvalid:
-      ++integrity_.frames_invalid;
-      break;
+    case estimator::NavIntegrity::kDegraded: ++integrity_.frames_degraded; break;
+    case estimator::NavIntegrity::kInvalid: ++integrity_.frames_invalid; break;
   }
   if (report_.status != estimator::NavIntegrity::kValid) {
     since_trusted_ = since_trusted_ * last_motion_;

@@ -37,41 +37,41 @@ enum class NavIntegrity : std::uint8_t { kValid = 0, kDegraded = 1, kInvalid = 2
 
 // One bit per check (values shared with nav_state_t.INTEGRITY_*); each is counted per frame.
 enum IntegrityFlag : std::uint32_t {
-  kFlagSolverFailed = 1u << 0,        // the update failed or the filter reset (INVALID)
-  kFlagImplausibleState = 1u << 1,    // non-finite, or speed beyond the envelope (INVALID)
-  kFlagDiverged = 1u << 2,            // residuals and step say the estimate left the data
-  kFlagTooFewTracks = 1u << 3,        // inliers below min_valid_tracks (INVALID)
-  kFlagFewTracks = 1u << 4,           // inliers below min_good_tracks
-  kFlagResidualsHigh = 1u << 5,       // inlier sigma above max_inlier_sigma, or few inliers
-  kFlagResidualJump = 1u << 6,        // inlier sigma rose by more than residual_jump_ratio
-  kFlagLargeStep = 1u << 7,           // the solve moved the newest pose far from its prediction
-  kFlagCovarianceBad = 1u << 8,       // covariance not finite / not positive (INVALID)
-  kFlagCovarianceLarge = 1u << 9,     // position sigma above max_position_sigma_m
-  kFlagDegenerateGeometry = 1u << 10, // measurements bunched in a small image region / a line
-  kFlagNoParallax = 1u << 11,         // median disparity too small to fix depth
-  kFlagGateSuspended = 1u << 12,      // a gate stood down (prediction and data disagree)
-  kFlagNoMotionInput = 1u << 13,      // constant-velocity (or still) prediction
-  kFlagRecovering = 1u << 14,         // within recovery_frames of a restart
+  kFlagSolverFailed = 1u << 0,         // the update failed or the filter reset (INVALID)
+  kFlagImplausibleState = 1u << 1,     // non-finite, or speed beyond the envelope (INVALID)
+  kFlagDiverged = 1u << 2,             // residuals and step say the estimate left the data
+  kFlagTooFewTracks = 1u << 3,         // inliers below min_valid_tracks (INVALID)
+  kFlagFewTracks = 1u << 4,            // inliers below min_good_tracks
+  kFlagResidualsHigh = 1u << 5,        // inlier sigma above max_inlier_sigma, or few inliers
+  kFlagResidualJump = 1u << 6,         // inlier sigma rose by more than residual_jump_ratio
+  kFlagLargeStep = 1u << 7,            // the solve moved the newest pose far from its prediction
+  kFlagCovarianceBad = 1u << 8,        // covariance not finite / not positive (INVALID)
+  kFlagCovarianceLarge = 1u << 9,      // position sigma above max_position_sigma_m
+  kFlagDegenerateGeometry = 1u << 10,  // measurements bunched in a small image region / a line
+  kFlagNoParallax = 1u << 11,          // median disparity too small to fix depth
+  kFlagGateSuspended = 1u << 12,       // a gate stood down (prediction and data disagree)
+  kFlagNoMotionInput = 1u << 13,       // constant-velocity (or still) prediction
+  kFlagRecovering = 1u << 14,          // within recovery_frames of a restart
 };
 inline constexpr int kNumIntegrityFlags = 15;
 
 struct IntegrityOptions {
-  double integrity_risk = 1e-3;    // alpha: probability the error exceeds a protection level
-  double pl_inflation = 1.0;       // extra factor on the covariance sigma (measured consistency)
+  double integrity_risk = 1e-3;  // alpha: probability the error exceeds a protection level
+  double pl_inflation = 1.0;     // extra factor on the covariance sigma (measured consistency)
   Vec3<double> up_world{0.0, 0.0, 1.0};  // the world's vertical (unit)
-  int min_valid_tracks = 8;        // fewer inlier measurements: INVALID
-  int min_good_tracks = 25;        // fewer: DEGRADED
-  double max_inlier_sigma = 3.0;   // robust residual scale in nominal sigmas
+  int min_valid_tracks = 8;              // fewer inlier measurements: INVALID
+  int min_good_tracks = 25;              // fewer: DEGRADED
+  double max_inlier_sigma = 3.0;         // robust residual scale in nominal sigmas
   double min_inlier_fraction = 0.5;
   double residual_jump_ratio = 4.0;
-  double max_step_m = 5.0;         // newest pose step from its prediction (m) ...
-  double max_step_rad = 0.2;       // ... and rad, beyond which the step is suspect
+  double max_step_m = 5.0;    // newest pose step from its prediction (m) ...
+  double max_step_rad = 0.2;  // ... and rad, beyond which the step is suspect
   double max_speed_mps = 300.0;
   double max_position_sigma_m = 100.0;
   double min_image_spread_px = 20.0;  // smallest principal std of the measured pixels
   double min_median_disparity_px = 1.0;
-  int divergence_frames = 2;       // consecutive frames of high residuals that mean divergence
-  int recovery_frames = 5;         // frames after a restart before VALID again
+  int divergence_frames = 2;  // consecutive frames of high residuals that mean divergence
+  int recovery_frames = 5;    // frames after a restart before VALID again
 
   core::Status Validate() const {
     const bool ok = integrity_risk > 0.0 && integrity_risk < 0.5 && pl_inflation >= 1.0 &&
@@ -90,19 +90,19 @@ struct IntegrityOptions {
 // covariance and the front end's measurements).
 struct IntegrityEvidence {
   core::Status update_status = core::Status::kOk;
-  bool filter_reset = false;        // the filter lost its state this frame
+  bool filter_reset = false;  // the filter lost its state this frame
   bool gate_suspended = false;
   bool has_motion_input = false;
   int num_measurements = 0;
   int num_inliers = 0;
   double inlier_sigma = 1.0;
-  double step_m = 0.0;              // SwfSummary::newest_pose_step_m
+  double step_m = 0.0;  // SwfSummary::newest_pose_step_m
   double step_rad = 0.0;
   Vec3<double> position_world = Vec3<double>::Zero();
   Vec3<double> velocity_world = Vec3<double>::Zero();
   bool has_covariance = false;
   Mat6<double> covariance = Mat6<double>::Zero();  // [rho (world, m); phi], as the filter's
-  double image_spread_px = 0.0;     // smallest principal std of the newest frame's pixels
+  double image_spread_px = 0.0;  // smallest principal std of the newest frame's pixels
   double median_disparity_px = 0.0;
 };
 
@@ -163,11 +163,10 @@ class IntegrityMonitor {
     if (e.gate_suspended) r.flags |= kFlagGateSuspended;
     r.restart = (r.flags & (kFlagDiverged | kFlagImplausibleState)) != 0;
     constexpr std::uint32_t kInvalidating = kFlagSolverFailed | kFlagImplausibleState |
-                                            kFlagDiverged | kFlagTooFewTracks |
-                                            kFlagCovarianceBad;
+                                            kFlagDiverged | kFlagTooFewTracks | kFlagCovarianceBad;
     // Flying on the process model alone is reported, not degrading: the covariance models it.
     constexpr std::uint32_t kInformational = kFlagNoMotionInput;
-    r.status = (r.flags & kInvalidating) != 0       ? NavIntegrity::kInvalid
+    r.status = (r.flags & kInvalidating) != 0     ? NavIntegrity::kInvalid
                : (r.flags & ~kInformational) != 0 ? NavIntegrity::kDegraded
                                                   : NavIntegrity::kValid;
     if (r.status == NavIntegrity::kInvalid) {
@@ -188,8 +187,8 @@ class IntegrityMonitor {
  private:
   std::uint32_t CheckSolve(const IntegrityEvidence& e) const {
     std::uint32_t f = 0;
-    const bool solved = e.update_status == core::Status::kOk ||
-                        e.update_status == core::Status::kNotConverged;
+    const bool solved =
+        e.update_status == core::Status::kOk || e.update_status == core::Status::kNotConverged;
     if (!solved || e.filter_reset) f |= kFlagSolverFailed;
     if (!e.position_world.allFinite() || !e.velocity_world.allFinite() ||
         e.velocity_world.norm() > options_.max_speed_mps) {
@@ -240,7 +239,8 @@ class IntegrityMonitor {
     const Mat3<double> p = e.covariance.topLeftCorner<3, 3>();
     const Vec3<double>& up = options_.up_world;
     // Horizontal basis: any two unit vectors orthogonal to up.
-    const Vec3<double> seed = std::abs(up.x()) < 0.9 ? Vec3<double>::UnitX() : Vec3<double>::UnitY();
+    const Vec3<double> seed =
+        std::abs(up.x()) < 0.9 ? Vec3<double>::UnitX() : Vec3<double>::UnitY();
     const Vec3<double> h1 = (seed - up * up.dot(seed)).normalized();
     const Vec3<double> h2 = up.cross(h1);
     Eigen::Matrix<double, 3, 2> h;

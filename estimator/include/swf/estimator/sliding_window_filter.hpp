@@ -99,8 +99,8 @@ enum SwfFault : std::uint32_t {
 inline double ChiSquare3Quantile(double probability) {
   if (!(probability > 0.0 && probability < 1.0)) return 0.0;
   const auto cdf = [](double x) {
-    return std::erf(std::sqrt(0.5 * x)) - std::sqrt(2.0 * x / 3.14159265358979323846) *
-                                              std::exp(-0.5 * x);
+    return std::erf(std::sqrt(0.5 * x)) -
+           std::sqrt(2.0 * x / 3.14159265358979323846) * std::exp(-0.5 * x);
   };
   double lo = 0.0;
   double hi = 200.0;  // CDF(200) = 1 - 1e-41
@@ -182,13 +182,13 @@ struct SwfSummary {
   double newest_pose_step_m = 0.0;  // how far the solve moved the newest pose from its prediction
   double newest_pose_step_rad = 0.0;
   // Gates of this frame (see SwfOptions).
-  int gate_checked = 0;             // measurements of known landmarks tested before fusion
-  int gate_unchecked = 0;           // ... that could not be tested (no covariances yet)
-  int measurements_gated = 0;       // ... that failed and were not fused
-  int measurements_rejected = 0;    // removed after the solve
-  int landmarks_rejected = 0;       // removed after the solve with all their measurements
-  int new_landmarks_refused = 0;    // failed the depth, disparity or triangulation check
-  bool gate_suspended = false;      // a gate stood down (kFaultGateSuspended)
+  int gate_checked = 0;           // measurements of known landmarks tested before fusion
+  int gate_unchecked = 0;         // ... that could not be tested (no covariances yet)
+  int measurements_gated = 0;     // ... that failed and were not fused
+  int measurements_rejected = 0;  // removed after the solve
+  int landmarks_rejected = 0;     // removed after the solve with all their measurements
+  int new_landmarks_refused = 0;  // failed the depth, disparity or triangulation check
+  bool gate_suspended = false;    // a gate stood down (kFaultGateSuspended)
 };
 
 // A landmark that left the estimator in the last Update (its final estimate).
@@ -645,10 +645,10 @@ class SlidingWindowFilter {
     if (num_poses_ >= limit) return core::Status::kFull;
     if (num_poses_ == 0) head_ = 0;
     ++num_poses_;
-    predicted_cov_valid_ = u != nullptr && num_poses_ >= 2 && covariances_current_ &&
-                           PredictPoseCovariance(Slot(num_poses_ - 2).pose, estimate, *u,
-                                                 *sqrt_info, &predicted_pose_cov_,
-                                                 &prediction_transition_);
+    predicted_cov_valid_ =
+        u != nullptr && num_poses_ >= 2 && covariances_current_ &&
+        PredictPoseCovariance(Slot(num_poses_ - 2).pose, estimate, *u, *sqrt_info,
+                              &predicted_pose_cov_, &prediction_transition_);
     newest_prediction_ = estimate;
     PoseSlot& slot = Newest();
     slot.pose = estimate;
@@ -744,10 +744,9 @@ class SlidingWindowFilter {
     if (!w.isInvertible()) return true;
     const Mat3<S> w_inv = w.inverse();
     const Mat3<S> coupling = jp * prediction_transition_ * l.cross_newest * jl.transpose();
-    const Mat3<S> innovation_cov = w_inv * w_inv.transpose() +
-                                   jp * predicted_pose_cov_ * jp.transpose() +
-                                   jl * l.covariance * jl.transpose() + coupling +
-                                   coupling.transpose();
+    const Mat3<S> innovation_cov =
+        w_inv * w_inv.transpose() + jp * predicted_pose_cov_ * jp.transpose() +
+        jl * l.covariance * jl.transpose() + coupling + coupling.transpose();
     const Eigen::LDLT<Mat3<S>> ldlt(innovation_cov);
     ++pending_.gate_checked;
     const Vec3<S> e = z - h;
@@ -869,7 +868,9 @@ class SlidingWindowFilter {
     --num_landmarks_;
   }
 
-  S InlierSigma() const { return options_.robust && tau_ < S(1e29) ? tau_ / S(options_.huber_k) : S(1); }
+  S InlierSigma() const {
+    return options_.robust && tau_ < S(1e29) ? tau_ / S(options_.huber_k) : S(1);
+  }
 
   // The health monitor's evidence from the final linearization (integrity.hpp).
   void RecordEvidence() {
