@@ -26,27 +26,6 @@ frontend::HarrisOptions DetectorFor(int width, int height) {
   return o;
 }
 
-// The integrity fields of the pipeline are adopted where its header has them (they arrive with
-// the integrity monitor); without them a frame's integrity is reported as unknown (-1).
-void SetUpWorld(const Vec3D& up, auto* options) {
-  if constexpr (requires { options->integrity.up_world; }) options->integrity.up_world = up;
-}
-
-void RecordIntegrity(const auto& nav, FrameRecord* record) {
-  if constexpr (requires {
-                  nav.integrity_flags;
-                  nav.horizontal_protection_m;
-                  nav.vertical_protection_m;
-                }) {
-    record->integrity = nav.status;
-    record->integrity_flags = static_cast<std::uint32_t>(nav.integrity_flags);
-    record->hpl_m = nav.horizontal_protection_m;
-    record->vpl_m = nav.vertical_protection_m;
-  } else {
-    record->integrity = -1;
-  }
-}
-
 app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
   app::PipelineOptions o;
   o.rectify = s.rectify;
@@ -63,7 +42,7 @@ app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
   o.measurement_sigma_px = r.sigma_px;
   o.process_sigma_m = r.process_sigma_m;
   o.process_sigma_rad = r.process_sigma_rad;
-  SetUpWorld(s.up_world, &o);
+  o.integrity.up_world = s.up_world;
   return o;  // initial_world_T_camera: identity, the estimate's world is the first camera
 }
 
@@ -132,7 +111,10 @@ void RecordNav(const app::NavOutput& nav, FrameRecord* record) {
   record->iterations = nav.iterations;
   record->fault_bits = static_cast<std::uint32_t>(nav.fault_bits);
   record->position_sigma_m = PositionSigma(nav);
-  RecordIntegrity(nav, record);
+  record->integrity = nav.status;
+  record->integrity_flags = static_cast<std::uint32_t>(nav.integrity_flags);
+  record->hpl_m = nav.horizontal_protection_m;
+  record->vpl_m = nav.vertical_protection_m;
 }
 
 // Runs the pipeline stages of frame j; false (with the run's verdict set) when the pipeline

@@ -69,7 +69,7 @@ struct FrameRecord {
   double position_sigma_m = 0.0;  // sqrt(trace) of the navigation output's position covariance
   double anchored_error_m = 0.0;  // against the truth, both from their first frame
   // The navigation output's integrity (estimator::NavIntegrity: 0 VALID, 1 DEGRADED, 2 INVALID;
-  // -1 when the pipeline reports none), its flags and protection levels, and the error split
+  // -1 before a frame is recorded), its flags and protection levels, and the error split
   // along up_world to compare with them.
   int integrity = -1;
   std::uint32_t integrity_flags = 0;

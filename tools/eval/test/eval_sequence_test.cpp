@@ -1,7 +1,7 @@
 // swf-eval on image sequences: the honest-report rules (valid JSON, failed runs have no score and
 // are never compared, exit status), the input checks (broken calibrations, shifted image lists,
-// names leaving data/), and the flight pipeline on real data (KITTI odometry excerpt) against
-// thresholds with margin.
+// names leaving data/), and the flight pipeline on real data (KITTI odometry excerpt, EuRoC
+// looped at rest) against thresholds with margin.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -336,6 +336,25 @@ TEST(EvalKitti, WithTheTrueMotionAsInputFollowsTheSixtyMetres) {
     EXPECT_LT(e.final_anchored_error_m, 0.05 * result.gt_path_length_m) << o.name;
   }
   EXPECT_LE(runs[0].errors.ate_rmse_m, runs[1].errors.ate_rmse_m);
+}
+
+// GIVEN the 40 EuRoC frames of a camera at rest looped forwards and backwards into 10 s (200
+// frames) WHEN the pipeline runs THEN both runs stay within 3 cm of the truth without any fit
+// along the whole run.
+TEST(EvalEuroc, LoopedTenSecondsAtRestStaysWithinCentimetres) {
+  EurocOptions options;
+  options.loop_seconds = 10.0;
+  EurocResult result;
+  std::string error;
+  ASSERT_TRUE(RunEuroc(EurocDir(), options, &result, &error)) << error;
+  ASSERT_EQ(result.sequence.frames.size(), 200u);
+  for (const RunRecord& run : result.runs) {
+    std::printf("euroc looped 10 s %s: %s, largest error %.4f m, last %.4f m %s\n",
+                run.options.name.c_str(), ToString(run.verdict), run.errors.max_anchored_error_m,
+                run.errors.final_anchored_error_m, run.reason.c_str());
+    ASSERT_TRUE(run.Ok()) << run.reason;
+    EXPECT_LT(run.errors.max_anchored_error_m, 0.03) << run.options.name;
+  }
 }
 
 }  // namespace
