@@ -348,6 +348,7 @@ std::string FaultNames(std::uint32_t bits) {
       {estimator::kFaultPriorCapacity, "prior capacity"},
       {estimator::kFaultDegenerateLandmark, "degenerate landmark"},
       {estimator::kFaultReset, "filter reset"},
+      {estimator::kFaultGateSuspended, "gate suspended"},
   };
   std::string out;
   for (const auto& [bit, name] : kNames) {

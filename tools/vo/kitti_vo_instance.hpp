@@ -44,17 +44,6 @@ KittiVoTier TierWindow128();
 
 std::string FaultNames(std::uint32_t bits);  // "not positive definite, non-finite, ..."
 
-// swf-vo solves the plain least-squares cost Ceres solves: every factor is used once. Filter
-// options that remove measurements after a solve (integrity gates, in filter versions that have
-// them) would make the filter's optimum differ from that cost's, so they are switched off
-// wherever the filter has them.
-template <typename O>
-auto DisableGates(O* options, int) -> decltype(options->gate_probability = 0.0, void()) {
-  options->gate_probability = 0.0;
-}
-template <typename O>
-void DisableGates(O* /*options*/, long) {}
-
 inline estimator::SwfOptions KittiVoOptions(int window_size, bool batch) {
   estimator::SwfOptions options;
   options.mode = batch ? estimator::SwfMode::kBatch : estimator::SwfMode::kSlidingWindow;
@@ -64,7 +53,9 @@ inline estimator::SwfOptions KittiVoOptions(int window_size, bool batch) {
   options.max_iterations = 100;
   options.relative_cost_tolerance = 1e-14;
   options.step_tolerance = 1e-12;
-  DisableGates(&options, 0);
+  // The plain least-squares cost Ceres solves uses every factor once: no integrity gates (they
+  // remove measurements after a solve, so the optimum would be another cost's).
+  options.gate_probability = 0.0;
   return options;
 }
 
