@@ -184,6 +184,61 @@ void BM_Fig13Update_K10(benchmark::State& state) {
 }
 BENCHMARK(BM_Fig13Update_K10)->Unit(benchmark::kMillisecond)->Iterations(5)->Repetitions(5);
 
+// Integrity cost at the Fig. 13 load, as the flight pipeline runs a frame: the newest pose's
+// covariance of the previous frame is computed (untimed here, BM_Fig13Covariances below), then
+// the timed part adds the frame (prediction gate per measurement) and updates (residual gate,
+// re-solve after rejections). Arg 0: gates off; 1: on (the flight default). Ratio = 1 / 0.
+// NOLINTNEXTLINE(readability-identifier-naming)
+void BM_Fig13Gates_K10(benchmark::State& state) {
+  using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
+  const SyntheticScene& scene = Fig13Scene();
+  auto swf = std::make_unique<Filter>();
+  constexpr std::size_t kFrame = 30;
+  SwfOptions options;
+  options.first_pose_sigma_m = 1e-3;
+  options.first_pose_sigma_rad = 1e-5;
+  options.gate_probability = state.range(0) == 0 ? 0.0 : SwfOptions{}.gate_probability;
+  StereoModel<double> model;
+  model.camera = scene.camera();
+  for (auto _ : state) {
+    state.PauseTiming();
+    if (swf->Configure(model, options) != swf::core::Status::kOk) std::abort();
+    for (std::size_t j = 0; j < kFrame; ++j) {
+      AddFrame(swf.get(), scene, j);
+      (void)swf->Update();
+      (void)swf->ComputeCovariances();
+    }
+    state.ResumeTiming();
+    AddFrame(swf.get(), scene, kFrame);
+    benchmark::DoNotOptimize(swf->Update());
+  }
+  state.counters["gate_checked"] = swf->Summary().gate_checked;
+  state.counters["iterations"] = swf->Summary().iterations;
+}
+BENCHMARK(BM_Fig13Gates_K10)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(5)
+    ->Repetitions(5);
+
+// The covariances the integrity checks need each frame (newest pose, every landmark and its
+// correlation with the newest pose), at the Fig. 13 load.
+// NOLINTNEXTLINE(readability-identifier-naming)
+void BM_Fig13Covariances_K10(benchmark::State& state) {
+  using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
+  const SyntheticScene& scene = Fig13Scene();
+  auto swf = std::make_unique<Filter>();
+  Configure(swf.get(), scene, SwfMode::kSlidingWindow);
+  for (std::size_t j = 0; j <= 30; ++j) {
+    AddFrame(swf.get(), scene, j);
+    (void)swf->Update();
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(swf->ComputeCovariances());
+  state.counters["dense_dim"] = swf->Summary().dense_dimension;
+}
+BENCHMARK(BM_Fig13Covariances_K10)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
 // ---- the dense factorization alone ----------------------------------------------------------
 
 using Dense540 = swf::estimator::DenseCholesky<double, 540>;

@@ -126,8 +126,9 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
 //            damaged, outputs were lost, the final estimate is INVALID, or (with truth) a VALID
 //            output's true error exceeded its protection level
 //   degraded (exit 3) it did, with reservations: an INVALID frame, a restart of the filter,
-//            more than kMaxDegradedFraction of the frames DEGRADED, or more than
-//            kMaxLostFraction of the frames dropped or failed in a stage
+//            more than kMaxDegradedFraction of the frames DEGRADED, an output lost to a full
+//            publisher queue, or more than kMaxLostFraction of the frames dropped or failed in
+//            a stage
 //   ok       (exit 0) none of those
 struct Verdict {
   const char* result = "ok";
@@ -167,6 +168,8 @@ Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
   if (integrity.restarts > 0) Degrade(&v, std::to_string(integrity.restarts) + " filter restarts");
   if (integrity.frames_degraded > kMaxDegradedFraction * frames)
     Degrade(&v, std::to_string(integrity.frames_degraded) + " DEGRADED frames");
+  if (health.outputs_dropped > 0)
+    Degrade(&v, std::to_string(health.outputs_dropped) + " outputs dropped (publisher queue full)");
   const std::int64_t lost = health.frames_dropped + counters.stage_errors;
   if (lost > kMaxLostFraction * frames)
     Degrade(&v, std::to_string(lost) + " frames dropped or failed");

@@ -3,9 +3,11 @@
 # network namespace (loopback only, 127.0.0.2 added) swf-fsw serves two fake cameras on
 # 127.0.0.1 / 127.0.0.2, opens them through AravisStereoSource over real GVCP/GVSP, triggers 20
 # pairs by software, rectifies them with the rig's calibrations and runs the whole pipeline.
-# Checks: exit 0, 20 frames in (20 stereo_frame_t recorded), 20 nav_state_t and 4 hazard maps
-# out, at most a few counted drops, no allocation on the real-time threads. A replay of the recording must
-# reproduce the navigation outputs bit for bit.
+# Checks: 20 frames in (20 stereo_frame_t recorded), 20 nav_state_t and 4 hazard maps out, at
+# most a few counted drops, no allocation on the real-time threads, and an honest verdict: the
+# fake cameras show both "eyes" the same test pattern, so there is no stereo to navigate by and
+# every frame must be INVALID, the result "failed" and the exit code 1 (a run that says ok here
+# is lying). A replay of the recording must reproduce the navigation outputs bit for bit.
 # usage: aravis_test.sh SWF-FSW SWF-REPLAY
 set -eu
 fsw=$1 replay=$2
@@ -17,11 +19,18 @@ if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
 $ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged userns)"
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
+rc=0
 $ns sh -c 'ip link set lo up && ip addr add 127.0.0.2/8 dev lo && exec "$0" "$@"' \
   "$fsw" --config "$cfg" --set "record.path: $dir/live.lcmlog" \
-  --set "summary.path: $dir/summary.json" 2> "$dir/err" || { cat "$dir/err" >&2; fail "swf-fsw failed"; }
+  --set "summary.path: $dir/summary.json" 2> "$dir/err" || rc=$?
 cat "$dir/err"
+[ "$rc" -eq 1 ] || fail "swf-fsw exit $rc: expected 1 (no stereo in the fake cameras' pattern)"
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
+[ "$(json "$dir/summary.json" "d['result']")" = failed ] || fail "the result does not say failed"
+[ "$(json "$dir/summary.json" "d['integrity']['frames_invalid']")" -eq 20 ] ||
+  fail "frames of the flat test pattern were not all INVALID"
+json "$dir/summary.json" "d['result_reasons']" | grep -q "final estimate is INVALID" ||
+  fail "the reason does not name the INVALID estimate"
 [ "$(json "$dir/summary.json" "d['source']")" = aravis ] || fail "not the aravis source"
 [ "$(json "$dir/summary.json" "d['frames']")" -eq 20 ] || fail "not 20 frames"
 # GVSP is UDP: on a loaded machine a loopback socket buffer can overflow and a frame arrive with
@@ -34,7 +43,8 @@ echo "frames dropped (counted, skipped): $dropped"
 [ "$($cmp --count SWF_STEREO "$dir/live.lcmlog")" -eq 20 ] || fail "frames not recorded"
 [ "$($cmp --count SWF_NAV "$dir/live.lcmlog")" -eq 20 ] || fail "not 20 nav_state_t"
 [ "$($cmp --count SWF_HAZARD "$dir/live.lcmlog")" -eq 4 ] || fail "not 4 hazard maps"
-"$replay" --config "$cfg" --log "$dir/live.lcmlog" --record "$dir/r1.lcmlog" 2> "$dir/err" ||
-  { cat "$dir/err" >&2; fail "replay failed"; }
+rc=0
+"$replay" --config "$cfg" --log "$dir/live.lcmlog" --record "$dir/r1.lcmlog" 2> "$dir/err" || rc=$?
+[ "$rc" -eq 1 ] || { cat "$dir/err" >&2; fail "replay exit $rc: expected the same verdict (1)"; }
 $cmp SWF_NAV "$dir/r1.lcmlog" "$dir/live.lcmlog" || fail "replay differs"
 echo PASS
