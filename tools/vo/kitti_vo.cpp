@@ -202,6 +202,8 @@ int MostLandmarksInSpan(const KittiVoProblem& problem, int span) {
 // Most landmarks in the prior while pose m is marginalized (m = 0 .. n-1-window): those seen
 // from m, and those seen before m that the window [m, m + window - 1] still observes (the
 // prior as the previous update left it; landmarks the window no longer sees were retired).
+// Exact for tracks without gaps; a track that leaves the window and comes back is a new landmark
+// to the filter, which this counts as held: an upper bound then.
 int MostPriorLandmarks(const KittiVoProblem& problem, int window) {
   const int n = static_cast<int>(problem.poses.size());
   const int last_marginalized = n - 1 - window;

@@ -1,7 +1,7 @@
 // Internal to swf_kitti_vo: one compiled SlidingWindowFilter instance behind a small interface,
-// and the solve that feeds a kitti-vo problem to it. Each tier (kitti_vo_tiers*.cpp) instantiates
-// MakeTier<K, N, M, P> in its own translation unit, so the tiers compile in parallel and nothing
-// else instantiates the filter.
+// and the solve that feeds a kitti-vo problem to it. The tiers instantiate MakeTier<K, N, M, P> in
+// three translation units (kitti_vo_tiers_*.cpp; each instantiation takes ~17 s to compile), so
+// they compile in parallel and the rest of the library does not instantiate the filter.
 #pragma once
 
 #include <algorithm>
@@ -31,15 +31,18 @@ struct KittiVoTier {
   std::unique_ptr<KittiVoInstance> (*make)() = nullptr;  // allocates the filter (info.bytes)
 };
 
-// The compiled tiers, three translation units (each instantiation takes ~17 s to compile).
-// Batch tiers have P = 1: without marginalization the prior spans the first pose only.
+// The compiled tiers. Batch tiers have P = 1: without marginalization the prior spans the first
+// pose only.
+// kitti_vo_tiers_batch.cpp
 KittiVoTier TierBatch32();   // the kitti-vo sample (26 poses, 2,634 landmarks)
 KittiVoTier TierBatch128();  // KITTI-00-sized excerpts (77 poses, 15,638 landmarks)
-KittiVoTier TierBatch512();  // kitti_vo_tiers_batch_large.cpp
+// kitti_vo_tiers_batch_large.cpp
+KittiVoTier TierBatch512();
 KittiVoTier TierBatch2048();
 KittiVoTier TierBatch4800();  // the longest KITTI odometry sequence (02: 4,661 frames)
-KittiVoTier TierWindow32();   // kitti_vo_tiers_window.cpp
-KittiVoTier TierWindow32Wide();
+// kitti_vo_tiers_window.cpp
+KittiVoTier TierWindow32();
+KittiVoTier TierWindow32Wide();  // KITTI-00-sized windows (up to 686 prior landmarks)
 KittiVoTier TierWindow128();
 
 std::string FaultNames(std::uint32_t bits);  // "not positive definite, non-finite, ..."
