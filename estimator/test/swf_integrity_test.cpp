@@ -244,6 +244,8 @@ IntegrityEvidence Healthy() {
   e.has_motion_input = true;
   e.num_measurements = 100;
   e.num_inliers = 98;
+  e.tracked_measurements = 60;
+  e.tracked_inliers = 59;
   e.inlier_sigma = 1.0;
   e.has_covariance = true;
   e.covariance.diagonal() << 1.0, 4.0, 9.0, 1e-6, 1e-6, 1e-6;
@@ -278,11 +280,21 @@ TEST(IntegrityMonitor, GradesEachCheck) {
   IntegrityMonitor m;
   ASSERT_EQ(m.Configure(IntegrityOptions{}), core::Status::kOk);
   IntegrityEvidence few = Healthy();
-  few.num_inliers = 3;
-  EXPECT_EQ(m.Assess(few).status, NavIntegrity::kInvalid);
-  few.num_inliers = 15;
-  few.num_measurements = 16;
+  few.tracked_inliers = 3;
+  few.tracked_measurements = 3;
+  EXPECT_EQ(m.Assess(Healthy()).status, NavIntegrity::kValid);
+  const IntegrityReport lost = m.Assess(few);
+  EXPECT_EQ(lost.status, NavIntegrity::kInvalid);
+  EXPECT_NE(lost.flags & kFlagTrackLoss, 0u);  // 60 tracks to 3 at once
+  few.tracked_inliers = 15;
+  few.tracked_measurements = 15;
   EXPECT_EQ(m.Assess(few).status, NavIntegrity::kDegraded);
+  IntegrityEvidence gated = Healthy();
+  gated.rejected_measurements = 20;  // of 80 offered
+  EXPECT_NE(m.Assess(gated).flags & kFlagMeasurementsRejected, 0u);
+  IntegrityEvidence spun = Healthy();
+  spun.covariance(5, 5) = 0.04;  // 0.2 rad
+  EXPECT_NE(m.Assess(spun).flags & kFlagCovarianceLarge, 0u);
   IntegrityEvidence line = Healthy();
   line.image_spread_px = 2.0;
   EXPECT_NE(m.Assess(line).flags & kFlagDegenerateGeometry, 0u);
@@ -302,10 +314,14 @@ TEST(IntegrityMonitor, GradesEachCheck) {
   IntegrityEvidence failed = Healthy();
   failed.update_status = core::Status::kNumericalFailure;
   EXPECT_EQ(m.Assess(failed).status, NavIntegrity::kInvalid);
+  // After those anomalies the output stays DEGRADED (recovering) for recovery_frames.
+  EXPECT_NE(m.Assess(Healthy()).flags & kFlagRecovering, 0u);
   // No motion input is reported, not degrading by itself.
+  IntegrityMonitor fresh;
+  ASSERT_EQ(fresh.Configure(IntegrityOptions{}), core::Status::kOk);
   IntegrityEvidence blind = Healthy();
   blind.has_motion_input = false;
-  const IntegrityReport b = m.Assess(blind);
+  const IntegrityReport b = fresh.Assess(blind);
   EXPECT_EQ(b.status, NavIntegrity::kValid);
   EXPECT_NE(b.flags & kFlagNoMotionInput, 0u);
   EXPECT_GT(m.FlagCount(3), 0);  // kFlagTooFewTracks was counted

@@ -73,6 +73,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
                                                            options_.swf.first_pose_sigma_m),
       Vec3<double>::Constant(options_.swf.first_pose_sigma_rad * options_.swf.first_pose_sigma_rad);
   since_trusted_ = Pose<double>();
+  trusted_motion_ = Pose<double>();
   frames_since_trusted_ = 0;
   restart_pending_ = false;
   frames_since_restart_ = -1;
@@ -132,10 +133,13 @@ Status Pipeline::Estimate(const Pose<double>* motion) {
   if (swf_->NumPoses() == 0 && !has_previous_pose_) {
     s = swf_->AddPose(options_.initial_world_T_camera);  // the very first frame
     last_motion_ = Pose<double>();
+    DeadReckon(nullptr);
   } else if (swf_->NumPoses() == 0 || restart_pending_) {
     s = RestartFromTrusted();
+    DeadReckon(nullptr);
   } else {
     s = AddPredictedPose(motion);
+    DeadReckon(motion);
   }
   if (s != Status::kOk) {
     last_status_ = s;
@@ -171,7 +175,10 @@ Status Pipeline::Estimate(const Pose<double>* motion) {
 // (IMU), else the bounded constant-velocity model, with its sigma inflated by the frames since
 // the last VALID estimate.
 Status Pipeline::AddPredictedPose(const Pose<double>* motion) {
-  last_motion_ = motion != nullptr ? *motion : BoundedConstantVelocity();
+  // Without a motion input, frames after the last VALID one repeat the trusted frame's motion.
+  last_motion_ = motion != nullptr           ? *motion
+                 : frames_since_trusted_ > 0 ? trusted_motion_
+                                             : BoundedConstantVelocity();
   const double inflation = motion != nullptr
                                ? 1.0
                                : std::min(options_.max_process_inflation,
@@ -253,6 +260,36 @@ void Pipeline::AddMeasurements() {
   }
 }
 
+// motion == nullptr on a (re)start: anchor at the filter's first pose. Without a motion input
+// there is nothing independent to reckon with.
+void Pipeline::DeadReckon(const Pose<double>* motion) {
+  if (motion == nullptr) {
+    dr_valid_ = swf_->NumPoses() == 1;
+    if (dr_valid_) dr_pose_ = swf_->NewestPose();
+    dr_variance_m2_ = options_.swf.first_pose_sigma_m * options_.swf.first_pose_sigma_m;
+    dr_distance_m_ = 0.0;
+    return;
+  }
+  if (!dr_valid_) return;
+  dr_pose_ = dr_pose_ * *motion;
+  dr_distance_m_ += motion->t.norm();
+  const double rotation_lever_m = options_.process_sigma_rad * dr_distance_m_;
+  dr_variance_m2_ +=
+      options_.process_sigma_m * options_.process_sigma_m + rotation_lever_m * rotation_lever_m;
+}
+
+// d^T (P_est + P_dr)^-1 d for d = estimate - dead reckoning (the two are treated as
+// independent; the estimate used the same inputs, so this understates the distance).
+double Pipeline::MotionDisagreement() const {
+  if (!dr_valid_ || !covariance_valid_ || swf_->NumPoses() == 0) return -1.0;
+  const Vec3<double> d = swf_->NewestPose().t - dr_pose_.t;
+  const estimator::Mat3<double> s = swf_->NewestPoseCovariance().topLeftCorner<3, 3>() +
+                                    dr_variance_m2_ * estimator::Mat3<double>::Identity();
+  const Eigen::LDLT<estimator::Mat3<double>> ldlt(s);
+  const double d2 = d.dot(ldlt.solve(d));
+  return ldlt.info() == Eigen::Success && std::isfinite(d2) ? d2 : -1.0;
+}
+
 void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   const estimator::SwfSummary& summary = swf_->Summary();
   estimator::IntegrityEvidence e;
@@ -262,6 +299,12 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   e.has_motion_input = has_motion;
   e.num_measurements = summary.num_measurements;
   e.num_inliers = summary.num_inliers;
+  // A (re)started window has nothing tracked yet: its first frame counts what it measured.
+  const bool first_frame = swf_->NumPoses() == 1;
+  e.tracked_inliers = first_frame ? summary.new_landmarks : summary.tracked_inliers;
+  e.tracked_measurements = first_frame ? summary.new_landmarks : summary.tracked_measurements;
+  e.rejected_measurements = summary.measurements_gated + summary.measurements_rejected;
+  e.motion_disagreement = has_motion ? MotionDisagreement() : -1.0;
   e.inlier_sigma = summary.inlier_sigma;
   e.step_m = summary.newest_pose_step_m;
   e.step_rad = summary.newest_pose_step_rad;
@@ -291,6 +334,7 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
       trusted_covariance_ = swf_->NewestPoseCovariance();
       since_trusted_ = Pose<double>();
       frames_since_trusted_ = 0;
+      trusted_motion_ = last_motion_;
       if (frames_since_restart_ >= 0) {
         integrity_.last_recovery_frames = static_cast<std::int32_t>(frames_since_restart_);
         frames_since_restart_ = -1;
@@ -300,7 +344,9 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
     case estimator::NavIntegrity::kInvalid: ++integrity_.frames_invalid; break;
   }
   if (report_.status != estimator::NavIntegrity::kValid) {
-    since_trusted_ = since_trusted_ * last_motion_;
+    // Carried forward by the motion input, or without one by the motion of the trusted frame:
+    // not by a constant-velocity extrapolation of the very estimates that are in doubt.
+    since_trusted_ = since_trusted_ * (has_motion ? last_motion_ : trusted_motion_);
     ++frames_since_trusted_;
   }
   restart_pending_ = report_.restart || filter_reset;

@@ -37,31 +37,40 @@ enum class NavIntegrity : std::uint8_t { kValid = 0, kDegraded = 1, kInvalid = 2
 
 // One bit per check (values shared with nav_state_t.INTEGRITY_*); each is counted per frame.
 enum IntegrityFlag : std::uint32_t {
-  kFlagSolverFailed = 1u << 0,         // the update failed or the filter reset (INVALID)
-  kFlagImplausibleState = 1u << 1,     // non-finite, or speed beyond the envelope (INVALID)
-  kFlagDiverged = 1u << 2,             // residuals and step say the estimate left the data
-  kFlagTooFewTracks = 1u << 3,         // inliers below min_valid_tracks (INVALID)
-  kFlagFewTracks = 1u << 4,            // inliers below min_good_tracks
-  kFlagResidualsHigh = 1u << 5,        // inlier sigma above max_inlier_sigma, or few inliers
-  kFlagResidualJump = 1u << 6,         // inlier sigma rose by more than residual_jump_ratio
-  kFlagLargeStep = 1u << 7,            // the solve moved the newest pose far from its prediction
-  kFlagCovarianceBad = 1u << 8,        // covariance not finite / not positive (INVALID)
-  kFlagCovarianceLarge = 1u << 9,      // position sigma above max_position_sigma_m
-  kFlagDegenerateGeometry = 1u << 10,  // measurements bunched in a small image region / a line
-  kFlagNoParallax = 1u << 11,          // median disparity too small to fix depth
-  kFlagGateSuspended = 1u << 12,       // a gate stood down (prediction and data disagree)
-  kFlagNoMotionInput = 1u << 13,       // constant-velocity (or still) prediction
-  kFlagRecovering = 1u << 14,          // within recovery_frames of a restart
+  kFlagSolverFailed = 1u << 0,           // the update failed or the filter reset (INVALID)
+  kFlagImplausibleState = 1u << 1,       // non-finite, or speed beyond the envelope (INVALID)
+  kFlagDiverged = 1u << 2,               // residuals and step say the estimate left the data
+  kFlagTooFewTracks = 1u << 3,           // inliers below min_valid_tracks (INVALID)
+  kFlagFewTracks = 1u << 4,              // inliers below min_good_tracks
+  kFlagResidualsHigh = 1u << 5,          // inlier sigma above max_inlier_sigma, or few inliers
+  kFlagResidualJump = 1u << 6,           // inlier sigma rose by more than residual_jump_ratio
+  kFlagLargeStep = 1u << 7,              // the solve moved the newest pose far from its prediction
+  kFlagCovarianceBad = 1u << 8,          // covariance not finite / not positive (INVALID)
+  kFlagCovarianceLarge = 1u << 9,        // position sigma above max_position_sigma_m
+  kFlagDegenerateGeometry = 1u << 10,    // measurements bunched in a small image region / a line
+  kFlagNoParallax = 1u << 11,            // median disparity too small to fix depth
+  kFlagGateSuspended = 1u << 12,         // a gate stood down (prediction and data disagree)
+  kFlagNoMotionInput = 1u << 13,         // constant-velocity (or still) prediction
+  kFlagRecovering = 1u << 14,            // within recovery_frames of a restart or an anomaly
+  kFlagMeasurementsRejected = 1u << 15,  // the gates removed a large share of the frame
+  kFlagTrackLoss = 1u << 16,             // most of the last frame's tracks were lost at once
+  kFlagMotionDisagrees = 1u << 17,       // the estimate left the motion input's dead reckoning
 };
-inline constexpr int kNumIntegrityFlags = 15;
+inline constexpr int kNumIntegrityFlags = 18;
 
 struct IntegrityOptions {
   double integrity_risk = 1e-3;  // alpha: probability the error exceeds a protection level
   double pl_inflation = 1.0;     // extra factor on the covariance sigma (measured consistency)
   Vec3<double> up_world{0.0, 0.0, 1.0};  // the world's vertical (unit)
-  int min_valid_tracks = 8;              // fewer inlier measurements: INVALID
+  int min_valid_tracks = 8;              // fewer inlier tracked measurements in the frame: INVALID
   int min_good_tracks = 25;              // fewer: DEGRADED
-  double max_inlier_sigma = 3.0;         // robust residual scale in nominal sigmas
+  double max_rejected_fraction = 0.1;    // of the frame's measurements removed by the gates
+  double max_track_loss = 0.5;           // fraction of the last frame's tracks lost at once
+  double max_rotation_sigma_rad = 0.1;
+  // Squared Mahalanobis distance between the estimate and the motion input's dead reckoning
+  // from the last (re)start, beyond which they disagree (chi-square, 3 dof, p = 0.999).
+  double max_motion_disagreement = 16.27;
+  double max_inlier_sigma = 3.0;  // robust residual scale in nominal sigmas
   double min_inlier_fraction = 0.5;
   double residual_jump_ratio = 4.0;
   double max_step_m = 5.0;    // newest pose step from its prediction (m) ...
@@ -81,7 +90,9 @@ struct IntegrityOptions {
                     residual_jump_ratio > 1.0 && max_step_m > 0.0 && max_step_rad > 0.0 &&
                     max_speed_mps > 0.0 && max_position_sigma_m > 0.0 &&
                     min_image_spread_px >= 0.0 && min_median_disparity_px >= 0.0 &&
-                    divergence_frames >= 1 && recovery_frames >= 0;
+                    divergence_frames >= 1 && recovery_frames >= 0 && max_rejected_fraction > 0.0 &&
+                    max_track_loss > 0.0 && max_track_loss <= 1.0 && max_rotation_sigma_rad > 0.0 &&
+                    max_motion_disagreement > 0.0;
     return ok ? core::Status::kOk : core::Status::kInvalidArgument;
   }
 };
@@ -95,6 +106,14 @@ struct IntegrityEvidence {
   bool has_motion_input = false;
   int num_measurements = 0;
   int num_inliers = 0;
+  // The newest frame (track checks): inliers among its measurements of landmarks seen before
+  // (on the very first frame, all of its measurements), and how many the gates removed.
+  int tracked_inliers = 0;
+  int tracked_measurements = 0;
+  int rejected_measurements = 0;
+  // Squared Mahalanobis distance of the position from the motion input's dead reckoning
+  // (negative: no dead reckoning, e.g. no motion input).
+  double motion_disagreement = -1.0;
   double inlier_sigma = 1.0;
   double step_m = 0.0;  // SwfSummary::newest_pose_step_m
   double step_rad = 0.0;
@@ -139,6 +158,8 @@ class IntegrityMonitor {
 
   void Reset() {
     high_residual_run_ = 0;
+    previous_tracked_ = -1;
+    frames_since_anomaly_ = options_.recovery_frames + 1;
     previous_sigma_ = 0.0;
     frames_since_restart_ = options_.recovery_frames;  // no restart yet
     for (std::int64_t& c : flag_counts_) c = 0;
@@ -149,6 +170,7 @@ class IntegrityMonitor {
   // The filter was restarted (from a trusted state or from scratch).
   void NoteRestart() {
     frames_since_restart_ = 0;
+    previous_tracked_ = -1;
     high_residual_run_ = 0;
     previous_sigma_ = 0.0;
     ++restarts_;
@@ -158,7 +180,17 @@ class IntegrityMonitor {
     IntegrityReport r;
     r.flags = CheckSolve(e) | CheckTracks(e) | CheckResiduals(e) | CheckGeometry(e);
     r.flags |= ProtectionLevels(e, &r.hpl_m, &r.vpl_m);
-    if (frames_since_restart_ < options_.recovery_frames) r.flags |= kFlagRecovering;
+    if (e.motion_disagreement > options_.max_motion_disagreement) r.flags |= kFlagMotionDisagrees;
+    // An anomaly (the state or the data in doubt) keeps the output DEGRADED until
+    // recovery_frames clean frames have followed it.
+    constexpr std::uint32_t kAnomalies =
+        kFlagResidualsHigh | kFlagResidualJump | kFlagLargeStep | kFlagMeasurementsRejected |
+        kFlagTrackLoss | kFlagTooFewTracks | kFlagSolverFailed | kFlagMotionDisagrees;
+    frames_since_anomaly_ = (r.flags & kAnomalies) != 0 ? 0 : frames_since_anomaly_ + 1;
+    if (frames_since_restart_ < options_.recovery_frames ||
+        (frames_since_anomaly_ > 0 && frames_since_anomaly_ <= options_.recovery_frames)) {
+      r.flags |= kFlagRecovering;
+    }
     if (!e.has_motion_input) r.flags |= kFlagNoMotionInput;
     if (e.gate_suspended) r.flags |= kFlagGateSuspended;
     r.restart = (r.flags & (kFlagDiverged | kFlagImplausibleState)) != 0;
@@ -198,9 +230,24 @@ class IntegrityMonitor {
     return f;
   }
 
-  std::uint32_t CheckTracks(const IntegrityEvidence& e) const {
-    if (e.num_inliers < options_.min_valid_tracks) return kFlagTooFewTracks | kFlagFewTracks;
-    return e.num_inliers < options_.min_good_tracks ? kFlagFewTracks : 0u;
+  // What the newest frame itself tracked: enough inliers, not a sudden loss of most tracks,
+  // not a large share removed by the gates.
+  std::uint32_t CheckTracks(const IntegrityEvidence& e) {
+    std::uint32_t f = 0;
+    if (e.tracked_inliers < options_.min_valid_tracks) {
+      f |= kFlagTooFewTracks | kFlagFewTracks;
+    } else if (e.tracked_inliers < options_.min_good_tracks) {
+      f |= kFlagFewTracks;
+    }
+    const int offered = e.tracked_measurements + e.rejected_measurements;
+    if (offered > 0 && e.rejected_measurements > options_.max_rejected_fraction * offered)
+      f |= kFlagMeasurementsRejected;
+    if (previous_tracked_ > 0 &&
+        e.tracked_measurements < (1.0 - options_.max_track_loss) * previous_tracked_) {
+      f |= kFlagTrackLoss;
+    }
+    previous_tracked_ = e.tracked_measurements;
+    return f;
   }
 
   // Residuals against their chi-square expectation (the robust scale is ~1 nominal sigma when
@@ -261,13 +308,19 @@ class IntegrityMonitor {
       return kFlagCovarianceBad;
     }
     const double sigma = std::sqrt(std::max(major, pv));
-    return sigma > options_.max_position_sigma_m ? kFlagCovarianceLarge : 0u;
+    const double rotation_sigma =
+        std::sqrt(std::max(0.0, e.covariance.bottomRightCorner<3, 3>().diagonal().maxCoeff()));
+    const bool large = sigma > options_.max_position_sigma_m ||
+                       !(rotation_sigma <= options_.max_rotation_sigma_rad);
+    return large ? kFlagCovarianceLarge : 0u;
   }
 
   IntegrityOptions options_{};
   double k_vertical_ = 0.0;
   double k_horizontal_ = 0.0;
   int high_residual_run_ = 0;
+  int previous_tracked_ = -1;
+  int frames_since_anomaly_ = 0;
   double previous_sigma_ = 0.0;
   int frames_since_restart_ = 0;
   std::int64_t flag_counts_[kNumIntegrityFlags] = {};

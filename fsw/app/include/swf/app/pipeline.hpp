@@ -57,10 +57,11 @@ struct PipelineOptions {
   // Without a motion input the last estimated motion is repeated, but bounded: a motion below
   // these per-frame thresholds is taken as standing still (noise must not integrate into a
   // drift), one faster than integrity.max_speed_mps is clipped, and the process sigma grows
-  // with every frame since the last VALID one (at most max_process_inflation times).
+  // with every frame since the last VALID one (at most max_process_inflation times); frames
+  // after the last VALID one repeat its motion rather than extrapolate the doubtful estimates.
   double still_translation_m = 0.005;
   double still_rotation_rad = 0.001;
-  double max_process_inflation = 10.0;
+  double max_process_inflation = 3.0;
   estimator::Pose<double> initial_world_T_camera;
   estimator::IntegrityOptions integrity;
 };
@@ -208,13 +209,23 @@ class Pipeline {
   IntegrityCounters integrity_{};
   estimator::Pose<double> trusted_pose_;
   estimator::Mat6<double> trusted_covariance_ = estimator::Mat6<double>::Zero();
-  estimator::Pose<double> since_trusted_;  // motion predicted since the trusted pose
+  estimator::Pose<double> since_trusted_;   // motion predicted since the trusted pose
+  estimator::Pose<double> trusted_motion_;  // the motion the trusted pose was predicted with
   std::int64_t frames_since_trusted_ = 0;
   bool restart_pending_ = false;
   std::int64_t frames_since_restart_ = -1;  // -1: no restart waiting to recover
   estimator::Pose<double> last_motion_;     // the motion the newest pose was predicted with
   estimator::Vec3<double> velocity_world_ = estimator::Vec3<double>::Zero();
   std::int64_t last_estimate_utime_ = 0;
+  // Dead reckoning of the motion input from the last (re)start, an independent check of the
+  // visual solution: its position and per-axis variance (the process noise summed, plus the
+  // rotation noise acting on the distance travelled).
+  void DeadReckon(const estimator::Pose<double>* motion);
+  double MotionDisagreement() const;
+  bool dr_valid_ = false;
+  estimator::Pose<double> dr_pose_;
+  double dr_variance_m2_ = 0.0;
+  double dr_distance_m_ = 0.0;
   double last_dt_s_ = 0.0;
   // Evidence of the newest frame's measurements (image spread, disparities).
   std::unique_ptr<float[]> disparities_;
