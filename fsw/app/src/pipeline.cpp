@@ -74,6 +74,8 @@ Status Pipeline::Configure(const PipelineOptions& options) {
       Vec3<double>::Constant(options_.swf.first_pose_sigma_rad * options_.swf.first_pose_sigma_rad);
   since_trusted_ = Pose<double>();
   trusted_motion_ = Pose<double>();
+  smoothed_step_m_ = 1e9;  // unknown until VALID frames have moved (or not)
+  smoothed_step_rad_ = 1e9;
   frames_since_trusted_ = 0;
   restart_pending_ = false;
   frames_since_restart_ = -1;
@@ -190,9 +192,13 @@ Pose<double> Pipeline::BoundedConstantVelocity() const {
   if (!has_before_previous_) return Pose<double>();
   Pose<double> u = before_previous_pose_.Inverse() * previous_pose_;
   const double angle = estimator::LogSO3<double>(u.R).norm();
-  if (u.t.norm() < options_.still_translation_m && angle < options_.still_rotation_rad) {
-    return Pose<double>();  // a still scene stays still
-  }
+  // A still scene stays still: judged on the last motion and on the smoothed speed of the
+  // VALID frames, so that one jumpy frame of a vehicle at rest does not start a drift.
+  const bool still_now =
+      u.t.norm() < options_.still_translation_m && angle < options_.still_rotation_rad;
+  const bool still_recently = smoothed_step_m_ < options_.still_translation_m &&
+                              smoothed_step_rad_ < options_.still_rotation_rad;
+  if (still_now || still_recently) return Pose<double>();
   const double max_step_m = options_.integrity.max_speed_mps * last_dt_s_;
   if (last_dt_s_ > 0.0 && u.t.norm() > max_step_m) u.t *= max_step_m / u.t.norm();
   return u;
@@ -334,7 +340,16 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
       trusted_covariance_ = swf_->NewestPoseCovariance();
       since_trusted_ = Pose<double>();
       frames_since_trusted_ = 0;
-      trusted_motion_ = last_motion_;
+      // Smoothed per-frame motion of the VALID frames (time constant ~5 frames).
+      {
+        const double step_m = last_motion_.t.norm();
+        const double step_rad = estimator::LogSO3<double>(last_motion_.R).norm();
+        const bool first = smoothed_step_m_ >= 1e8;  // no VALID frame yet
+        smoothed_step_m_ = first ? step_m : smoothed_step_m_ + 0.2 * (step_m - smoothed_step_m_);
+        smoothed_step_rad_ =
+            first ? step_rad : smoothed_step_rad_ + 0.2 * (step_rad - smoothed_step_rad_);
+      }
+      trusted_motion_ = BoundedConstantVelocity();
       if (frames_since_restart_ >= 0) {
         integrity_.last_recovery_frames = static_cast<std::int32_t>(frames_since_restart_);
         frames_since_restart_ = -1;

@@ -210,7 +210,9 @@ class Pipeline {
   estimator::Pose<double> trusted_pose_;
   estimator::Mat6<double> trusted_covariance_ = estimator::Mat6<double>::Zero();
   estimator::Pose<double> since_trusted_;   // motion predicted since the trusted pose
-  estimator::Pose<double> trusted_motion_;  // the motion the trusted pose was predicted with
+  estimator::Pose<double> trusted_motion_;  // bounded constant velocity at the trusted pose
+  double smoothed_step_m_ = 1e9;            // smoothed per-frame motion of the VALID frames
+  double smoothed_step_rad_ = 1e9;
   std::int64_t frames_since_trusted_ = 0;
   bool restart_pending_ = false;
   std::int64_t frames_since_restart_ = -1;  // -1: no restart waiting to recover
