@@ -422,25 +422,8 @@ struct CaseResult {
 };
 
 app::PipelineOptions Options(const eval::StereoSequence& s) {
-  // As swf-eval runs EuRoC (tools/eval/sequence.cpp PipelineFor with RunOptions' defaults).
-  const eval::RunOptions r;
-  app::PipelineOptions o;
-  o.rectify = s.rectify;
-  o.left_calibration = s.calibration[0];
-  o.right_calibration = s.calibration[1];
-  o.camera = s.camera;
-  o.width_px = s.width;
-  o.height_px = s.height;
-  o.frontend.harris.bucket_cols = std::max(1, std::min(64, s.width / 40));
-  o.frontend.harris.bucket_rows = std::max(1, std::min(64, s.height / 40));
-  o.frontend.max_tracks = r.max_tracks;
-  o.frontend.stereo.max_disparity = r.max_disparity_px;
-  o.swf.mode = r.mode;
-  o.swf.window_size = r.window;
-  o.measurement_sigma_px = r.sigma_px;
-  o.process_sigma_m = r.process_sigma_m;
-  o.process_sigma_rad = r.process_sigma_rad;
-  o.integrity.up_world = s.up_world;
+  // As swf-eval runs EuRoC, with RunOptions' defaults.
+  app::PipelineOptions o = eval::PipelineFor(s, eval::RunOptions{});
   // The monitor's envelope for this platform (a hand-carried / MAV rig indoors at 20 Hz; the
   // defaults, 300 m/s and 5 m per frame, are the lander's): faster than 2 m/s, or a solve moving
   // the newest pose more than 0.1 m from its prediction, is implausible here. Every other

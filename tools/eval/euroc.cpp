@@ -363,21 +363,14 @@ bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult*
 bool RunEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
               std::string* error) {
   if (!LoadEuroc(dir, options, result, error)) return false;
-  const std::string k = std::to_string(options.window);
-  result->runs.clear();
-  for (const auto mode :
-       {estimator::SwfMode::kSlidingWindow, estimator::SwfMode::kVisualOdometry}) {
-    RunOptions o;
-    o.name = (mode == estimator::SwfMode::kSlidingWindow ? "SWF(" : "VO(") + k + ")";
-    o.mode = mode;
-    o.window = options.window;
-    o.max_tracks = options.max_tracks;
-    o.sigma_px = options.sigma_px;
-    o.process_sigma_m = options.motion_sigma_m;
-    o.process_sigma_rad = options.motion_sigma_rad;
-    o.divergence_m = options.divergence_m;
-    result->runs.push_back(RunSequence(result->sequence, o));
-  }
+  RunOptions o;
+  o.window = options.window;
+  o.max_tracks = options.max_tracks;
+  o.sigma_px = options.sigma_px;
+  o.process_sigma_m = options.motion_sigma_m;
+  o.process_sigma_rad = options.motion_sigma_rad;
+  o.divergence_m = options.divergence_m;
+  result->runs = RunSwfAndVo(result->sequence, o);
   result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
   return true;
 }

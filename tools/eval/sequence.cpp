@@ -26,26 +26,6 @@ frontend::HarrisOptions DetectorFor(int width, int height) {
   return o;
 }
 
-app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
-  app::PipelineOptions o;
-  o.rectify = s.rectify;
-  o.left_calibration = s.calibration[0];
-  o.right_calibration = s.calibration[1];
-  o.camera = s.camera;
-  o.width_px = s.width;
-  o.height_px = s.height;
-  o.frontend.harris = DetectorFor(s.width, s.height);
-  o.frontend.max_tracks = r.max_tracks;
-  o.frontend.stereo.max_disparity = r.max_disparity_px;
-  o.swf.mode = r.mode;
-  o.swf.window_size = r.window;
-  o.measurement_sigma_px = r.sigma_px;
-  o.process_sigma_m = r.process_sigma_m;
-  o.process_sigma_rad = r.process_sigma_rad;
-  o.integrity.up_world = s.up_world;
-  return o;  // initial_world_T_camera: identity, the estimate's world is the first camera
-}
-
 // Decoded images of the sequence; a file shown more than once (a looped sequence) is decoded
 // once and kept, every other one is decoded when needed.
 class ImageStore {
@@ -215,6 +195,39 @@ void Judge(const StereoSequence& s, std::size_t j, const RunOptions& o, RunRecor
 }
 
 }  // namespace
+
+app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
+  app::PipelineOptions o;
+  o.rectify = s.rectify;
+  o.left_calibration = s.calibration[0];
+  o.right_calibration = s.calibration[1];
+  o.camera = s.camera;
+  o.width_px = s.width;
+  o.height_px = s.height;
+  o.frontend.harris = DetectorFor(s.width, s.height);
+  o.frontend.max_tracks = r.max_tracks;
+  o.frontend.stereo.max_disparity = r.max_disparity_px;
+  o.swf.mode = r.mode;
+  o.swf.window_size = r.window;
+  o.measurement_sigma_px = r.sigma_px;
+  o.process_sigma_m = r.process_sigma_m;
+  o.process_sigma_rad = r.process_sigma_rad;
+  o.integrity.up_world = s.up_world;
+  return o;  // initial_world_T_camera: identity, the estimate's world is the first camera
+}
+
+std::vector<RunRecord> RunSwfAndVo(const StereoSequence& sequence, const RunOptions& base) {
+  std::vector<RunRecord> runs;
+  const std::string k = std::to_string(base.window);
+  for (const auto mode :
+       {estimator::SwfMode::kSlidingWindow, estimator::SwfMode::kVisualOdometry}) {
+    RunOptions o = base;
+    o.name = (mode == estimator::SwfMode::kSlidingWindow ? "SWF(" : "VO(") + k + ")";
+    o.mode = mode;
+    runs.push_back(RunSequence(sequence, o));
+  }
+  return runs;
+}
 
 bool FrameRecord::Misleading() const {
   return integrity == 0 && (horizontal_error_m > hpl_m || vertical_error_m > vpl_m);

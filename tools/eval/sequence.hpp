@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/app/pipeline.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "trajectory.hpp"
@@ -101,8 +102,14 @@ struct RunRecord {
   bool Ok() const { return verdict == Verdict::kOk; }
 };
 
+// The flight pipeline's options for a run on this sequence (what swf-eval flies).
+app::PipelineOptions PipelineFor(const StereoSequence& sequence, const RunOptions& options);
+
 // Runs the sequence; never throws, every problem ends in the verdict and reason.
 RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options);
+
+// The same run as SWF(window) and as VO(window): name and mode set from `base`'s window.
+std::vector<RunRecord> RunSwfAndVo(const StereoSequence& sequence, const RunOptions& base);
 
 // For every run that diverged or went non-finite, the same run with the truth's motion as the
 // motion input: when that one follows the truth, the images and the front end carry the
