@@ -7,6 +7,23 @@
 #include "swf/app/realtime.hpp"
 
 namespace swf::app {
+namespace {
+
+// A free slot of an output pool. Under lockstep pacing the frame group waits (bounded, 20 s) for
+// the output thread instead of dropping: a lockstep run is a reference run and must lose no
+// output, whatever the machine's load. Real-time pacing never waits: a full pool is a counted
+// drop.
+template <typename Pool>
+std::int32_t AcquireOutput(Pool* pool, bool lockstep) {
+  std::int32_t slot = pool->Acquire();
+  for (int i = 0; slot < 0 && lockstep && i < 200000; ++i) {
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+    slot = pool->Acquire();
+  }
+  return slot;
+}
+
+}  // namespace
 
 using core::Status;
 using core::TimeNs;
@@ -125,7 +142,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
 
   Inject(kStageOutput);
   if (options_.record_frames) {
-    const std::int32_t slot = out_->frames.Acquire();
+    const std::int32_t slot = AcquireOutput(&out_->frames, options_.pacing == Pacing::kLockstep);
     const std::int32_t w = pair.left.width;
     const std::int32_t h = pair.left.height;
     if (slot < 0 || w * h > out_->frames[slot < 0 ? 0 : slot].capacity_bytes ||
@@ -164,7 +181,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   source_->Release(pair);
   if (pipeline_->FramesEstimated() > 0 &&
       (stage == Status::kOk || stage == Status::kNumericalFailure)) {
-    const std::int32_t slot = out_->navs.Acquire();
+    const std::int32_t slot = AcquireOutput(&out_->navs, options_.pacing == Pacing::kLockstep);
     if (slot < 0) {
       ++counters_.outputs_dropped;
     } else {
@@ -223,7 +240,7 @@ void FlightLoop::CopyRectified(HazardInput* h) {
 }
 
 void FlightLoop::TakeSnapshot(bool synchronous, std::int32_t hazard_slot) {
-  const std::int32_t slot = out_->maps.Acquire();
+  const std::int32_t slot = AcquireOutput(&out_->maps, options_.pacing == Pacing::kLockstep);
   if (slot < 0) {
     ++counters_.outputs_dropped;
     if (hazard_slot >= 0) out_->hazard_inputs.Release(hazard_slot);
@@ -318,7 +335,7 @@ void FlightLoop::HazardMain() {
 }
 
 void FlightLoop::PublishHealth() {
-  const std::int32_t slot = out_->healths.Acquire();
+  const std::int32_t slot = AcquireOutput(&out_->healths, options_.pacing == Pacing::kLockstep);
   if (slot < 0) {
     ++counters_.outputs_dropped;
     return;
