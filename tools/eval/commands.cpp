@@ -255,6 +255,18 @@ bool ParseCommon(const std::string& flag, const char* value, CommonArgs* a, std:
   return ok;
 }
 
+// The flags every dataset command shares, onto its options (the same field names).
+template <typename DatasetOptions>
+void ApplyCommon(const CommonArgs& a, DatasetOptions* options) {
+  options->window = static_cast<int>(a.window);
+  options->max_tracks = static_cast<std::size_t>(a.max_tracks);
+  if (a.sigma_m > 0.0) {
+    options->motion_sigma_m = a.sigma_m;
+    options->motion_sigma_rad = a.sigma_rad;
+  }
+  if (a.divergence_m > 0.0) options->divergence_m = a.divergence_m;
+}
+
 bool CheckCommon(const CommonArgs& a, std::string* why) {
   if (a.window < 2 || a.window > 10 || a.window != std::floor(a.window)) {
     *why = "--window must be an integer in [2, 10] (the flight filter's capacity)";
@@ -431,13 +443,7 @@ int RunEurocCommand(int argc, char** argv) {
     }
   }
   if (!CheckCommon(a, &why)) return Usage(why);
-  options.window = static_cast<int>(a.window);
-  options.max_tracks = static_cast<std::size_t>(a.max_tracks);
-  if (a.sigma_m > 0.0) {
-    options.motion_sigma_m = a.sigma_m;
-    options.motion_sigma_rad = a.sigma_rad;
-  }
-  if (a.divergence_m > 0.0) options.divergence_m = a.divergence_m;
+  ApplyCommon(a, &options);
   std::string error;
   if (!MakeDirectories(a.out, &error)) {
     std::fprintf(stderr, "swf-eval euroc: %s\n", error.c_str());
@@ -514,13 +520,7 @@ int RunKittiCommand(int argc, char** argv) {
     }
   }
   if (!CheckCommon(a, &why)) return Usage(why);
-  options.window = static_cast<int>(a.window);
-  options.max_tracks = static_cast<std::size_t>(a.max_tracks);
-  if (a.sigma_m > 0.0) {
-    options.motion_sigma_m = a.sigma_m;
-    options.motion_sigma_rad = a.sigma_rad;
-  }
-  if (a.divergence_m > 0.0) options.divergence_m = a.divergence_m;
+  ApplyCommon(a, &options);
   std::string error;
   if (!MakeDirectories(a.out, &error)) {
     std::fprintf(stderr, "swf-eval kitti: %s\n", error.c_str());

@@ -363,14 +363,7 @@ bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult*
 bool RunEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
               std::string* error) {
   if (!LoadEuroc(dir, options, result, error)) return false;
-  RunOptions o;
-  o.window = options.window;
-  o.max_tracks = options.max_tracks;
-  o.sigma_px = options.sigma_px;
-  o.process_sigma_m = options.motion_sigma_m;
-  o.process_sigma_rad = options.motion_sigma_rad;
-  o.divergence_m = options.divergence_m;
-  result->runs = RunSwfAndVo(result->sequence, o);
+  result->runs = RunSwfAndVo(result->sequence, RunOptionsFrom(options));
   result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
   return true;
 }

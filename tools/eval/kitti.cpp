@@ -160,14 +160,8 @@ bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult*
 bool RunKitti(const std::string& dir, const KittiOptions& options, KittiResult* result,
               std::string* error) {
   if (!LoadKitti(dir, options, result, error)) return false;
-  RunOptions o;
-  o.window = options.window;
-  o.max_tracks = options.max_tracks;
+  RunOptions o = RunOptionsFrom(options);
   o.max_disparity_px = options.max_disparity_px;
-  o.sigma_px = options.sigma_px;
-  o.process_sigma_m = options.motion_sigma_m;
-  o.process_sigma_rad = options.motion_sigma_rad;
-  o.divergence_m = options.divergence_m;
   result->runs = RunSwfAndVo(result->sequence, o);
   result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
   return true;
