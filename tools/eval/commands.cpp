@@ -255,6 +255,17 @@ bool ParseCommon(const std::string& flag, const char* value, CommonArgs* a, std:
   return ok;
 }
 
+// Creates the output directory and runs the dataset; false, after saying why, when either fails.
+template <typename Run>
+bool PrepareAndRun(const char* tool, const std::string& out, const Run& run) {
+  std::string error;
+  if (!MakeDirectories(out, &error) || !run(&error)) {
+    std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
+    return false;
+  }
+  return true;
+}
+
 // The flags every dataset command shares, onto its options (the same field names).
 template <typename DatasetOptions>
 void ApplyCommon(const CommonArgs& a, DatasetOptions* options) {
@@ -444,14 +455,9 @@ int RunEurocCommand(int argc, char** argv) {
   }
   if (!CheckCommon(a, &why)) return Usage(why);
   ApplyCommon(a, &options);
-  std::string error;
-  if (!MakeDirectories(a.out, &error)) {
-    std::fprintf(stderr, "swf-eval euroc: %s\n", error.c_str());
-    return 1;
-  }
   EurocResult result;
-  if (!RunEuroc(dir, options, &result, &error)) {
-    std::fprintf(stderr, "swf-eval euroc: %s\n", error.c_str());
+  if (!PrepareAndRun("swf-eval euroc", a.out,
+                     [&](std::string* error) { return RunEuroc(dir, options, &result, error); })) {
     return 1;
   }
   const bool looped = options.loop_seconds > 0.0;
@@ -521,14 +527,9 @@ int RunKittiCommand(int argc, char** argv) {
   }
   if (!CheckCommon(a, &why)) return Usage(why);
   ApplyCommon(a, &options);
-  std::string error;
-  if (!MakeDirectories(a.out, &error)) {
-    std::fprintf(stderr, "swf-eval kitti: %s\n", error.c_str());
-    return 1;
-  }
   KittiResult result;
-  if (!RunKitti(dir, options, &result, &error)) {
-    std::fprintf(stderr, "swf-eval kitti: %s\n", error.c_str());
+  if (!PrepareAndRun("swf-eval kitti", a.out,
+                     [&](std::string* error) { return RunKitti(dir, options, &result, error); })) {
     return 1;
   }
   Evaluation e;
