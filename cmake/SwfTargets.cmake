@@ -82,3 +82,26 @@ function(swf_add_lint_target)
     COMMENT "clang-format and clang-tidy"
     VERBATIM)
 endfunction()
+
+# swf_fuzz_target(<name> SOURCES ... LIBS ... CORPUS <dir>)
+# One decoder's fuzz entry point (LLVMFuzzerTestOneInput in SOURCES). Always builds <name>, a
+# replay program over the committed corpus <dir> (seeds and former crashers), registered as the
+# CTest entry <name>. With SWF_FUZZ=ON and clang it also builds <name>_libfuzzer with
+# -fsanitize=fuzzer,address,undefined for the coverage-guided search (`tools/run fuzz`).
+option(SWF_FUZZ "Build libFuzzer programs (needs clang)" OFF)
+function(swf_fuzz_target name)
+  if(NOT SWF_BUILD_TESTS)
+    return()
+  endif()
+  cmake_parse_arguments(ARG "" "CORPUS" "SOURCES;LIBS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES} ${PROJECT_SOURCE_DIR}/tests/support/src/fuzz_replay_main.cpp)
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS})
+  add_test(NAME ${name} COMMAND ${name} ${ARG_CORPUS} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+  set_tests_properties(${name} PROPERTIES TIMEOUT 300 LABELS fuzz)
+  if(SWF_FUZZ AND CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    add_executable(${name}_libfuzzer ${ARG_SOURCES})
+    target_link_libraries(${name}_libfuzzer PRIVATE ${ARG_LIBS})
+    target_compile_options(${name}_libfuzzer PRIVATE -fsanitize=fuzzer,address,undefined)
+    target_link_options(${name}_libfuzzer PRIVATE -fsanitize=fuzzer,address,undefined)
+  endif()
+endfunction()

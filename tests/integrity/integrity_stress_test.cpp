@@ -435,10 +435,10 @@ app::PipelineOptions Options(const eval::StereoSequence& s) {
 
 std::string FlagNames(std::uint32_t flags) {
   static const char* const kNames[est::kNumIntegrityFlags] = {
-      "SOLVER_FAILED",   "IMPLAUSIBLE",   "DIVERGED",        "TOO_FEW_TRACKS",  "FEW_TRACKS",
-      "RESIDUALS_HIGH",  "RESIDUAL_JUMP", "LARGE_STEP",      "COV_BAD",         "COV_LARGE",
-      "DEGENERATE_GEOM", "NO_PARALLAX",   "GATE_SUSPENDED",  "NO_MOTION_INPUT", "RECOVERING",
-      "REJECTED",        "TRACK_LOSS",    "MOTION_DISAGREES"};
+      "SOLVER_FAILED",   "IMPLAUSIBLE",   "DIVERGED",         "TOO_FEW_TRACKS",  "FEW_TRACKS",
+      "RESIDUALS_HIGH",  "RESIDUAL_JUMP", "LARGE_STEP",       "COV_BAD",         "COV_LARGE",
+      "DEGENERATE_GEOM", "NO_PARALLAX",   "GATE_SUSPENDED",   "NO_MOTION_INPUT", "RECOVERING",
+      "REJECTED",        "TRACK_LOSS",    "MOTION_DISAGREES", "CAMERA_OUTAGE",   "MOTION_REJECTED"};
   std::string out;
   for (int b = 0; b < est::kNumIntegrityFlags; ++b) {
     if (((flags >> b) & 1u) == 0) continue;

@@ -55,8 +55,10 @@ enum IntegrityFlag : std::uint32_t {
   kFlagMeasurementsRejected = 1u << 15,  // the gates removed a large share of the frame
   kFlagTrackLoss = 1u << 16,             // most of the last frame's tracks were lost at once
   kFlagMotionDisagrees = 1u << 17,       // the estimate left the motion input's dead reckoning
+  kFlagCameraOutage = 1u << 18,          // no stereo pair this cycle: coasting on the motion input
+  kFlagMotionRejected = 1u << 19,        // the motion input failed its gate and was not fused
 };
-inline constexpr int kNumIntegrityFlags = 18;
+inline constexpr int kNumIntegrityFlags = 20;
 
 struct IntegrityOptions {
   double integrity_risk = 1e-3;  // alpha: probability the error exceeds a protection level
