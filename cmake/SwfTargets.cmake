@@ -14,13 +14,19 @@ endif()
 set(SWF_FORBIDDEN_HEADERS_DIR ${CMAKE_CURRENT_LIST_DIR}/forbidden_headers)
 
 # Flight code rules (STYLE.md): warnings are errors, no exceptions, no RTTI, never -ffast-math.
-set(SWF_FLIGHT_FLAGS -Wall -Wextra -Werror -fno-exceptions -fno-rtti)
+# UBSan's vptr check reads the type information of the object's vtable, which -fno-rtti does not
+# emit: without RTTI the check can only fail to link or misreport, so it is off where RTTI is.
+set(SWF_FLIGHT_FLAGS -Wall -Wextra -Werror -fno-exceptions -fno-rtti -fno-sanitize=vptr)
 
-# swf_flight_library(<name> ALIAS <ns::name> [SOURCES ...] [FP_CONTRACT_OFF])
+# swf_flight_library(<name> ALIAS <ns::name> [SOURCES ...] [FP_CONTRACT_OFF] [POLYMORPHIC])
 # Declares a flight library. Its own include directory is include/; it may not see the I/O and
 # middleware headers (LCM, V4L2, Aravis): a shadow directory answers those includes with #error.
+# POLYMORPHIC: the library defines classes with virtual functions, whose vtables it emits without
+# type information. Code with RTTI that calls them would vptr-check them (UBSan): "undefined
+# reference to typeinfo" when linking, an "invalid vptr" report at run time. Its consumers
+# therefore compile without the vptr check; the rest of UBSan stays on.
 function(swf_flight_library name)
-  cmake_parse_arguments(ARG "FP_CONTRACT_OFF;HEADER_ONLY" "ALIAS" "SOURCES" ${ARGN})
+  cmake_parse_arguments(ARG "FP_CONTRACT_OFF;HEADER_ONLY;POLYMORPHIC" "ALIAS" "SOURCES" ${ARGN})
   if(ARG_HEADER_ONLY)
     add_library(${name} INTERFACE)
     target_include_directories(${name} INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/include)
@@ -28,6 +34,9 @@ function(swf_flight_library name)
     add_library(${name} STATIC ${ARG_SOURCES})
     target_include_directories(${name} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/include)
     swf_apply_flight_rules(${name} ${ARG_FP_CONTRACT_OFF})
+  endif()
+  if(ARG_POLYMORPHIC)
+    target_compile_options(${name} INTERFACE -fno-sanitize=vptr)
   endif()
   add_library(${ARG_ALIAS} ALIAS ${name})
 endfunction()
@@ -65,6 +74,7 @@ function(swf_test name)
   endif()
   set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
                        ENVIRONMENT "SWF_SHARED_DIR=${PROJECT_SOURCE_DIR}/../shared")
+  swf_scale_test_timeouts()
 endfunction()
 
 # `lint`: clang-format over every tracked C++ file and clang-tidy (naming rules) over our sources.
@@ -85,19 +95,31 @@ endfunction()
 
 # swf_fuzz_target(<name> SOURCES ... LIBS ... CORPUS <dir>)
 # One decoder's fuzz entry point (LLVMFuzzerTestOneInput in SOURCES). Always builds <name>, a
-# replay program over the committed corpus <dir> (seeds and former crashers), registered as the
-# CTest entry <name>. With SWF_FUZZ=ON and clang it also builds <name>_libfuzzer with
-# -fsanitize=fuzzer,address,undefined for the coverage-guided search (`tools/run fuzz`).
+# replay program over the committed corpus <dir> (seeds and former crashers; a relative <dir> is
+# taken from the calling CMakeLists' directory), registered as the CTest entry <name>. With
+# SWF_FUZZ=ON and clang it also builds <name>_libfuzzer with -fsanitize=fuzzer,address,undefined
+# for the coverage-guided search. Every target is listed as "<name> <absolute corpus dir>" in
+# <build>/fuzz_targets.txt, the list `tools/run fuzz` runs.
 option(SWF_FUZZ "Build libFuzzer programs (needs clang)" OFF)
 function(swf_fuzz_target name)
   if(NOT SWF_BUILD_TESTS)
     return()
   endif()
   cmake_parse_arguments(ARG "" "CORPUS" "SOURCES;LIBS" ${ARGN})
+  set(corpus ${ARG_CORPUS})
+  if(NOT IS_ABSOLUTE ${corpus})
+    if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${corpus})
+      set(corpus ${CMAKE_CURRENT_SOURCE_DIR}/${corpus})
+    else()
+      set(corpus ${PROJECT_SOURCE_DIR}/${corpus})
+    endif()
+  endif()
   add_executable(${name} ${ARG_SOURCES} ${PROJECT_SOURCE_DIR}/tests/support/src/fuzz_replay_main.cpp)
   target_link_libraries(${name} PRIVATE ${ARG_LIBS})
-  add_test(NAME ${name} COMMAND ${name} ${ARG_CORPUS} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+  add_test(NAME ${name} COMMAND ${name} ${corpus} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
   set_tests_properties(${name} PROPERTIES TIMEOUT 300 LABELS fuzz)
+  swf_scale_test_timeouts()
+  set_property(GLOBAL APPEND PROPERTY SWF_FUZZ_TARGET_LIST "${name} ${corpus}")
   if(SWF_FUZZ AND CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
     add_executable(${name}_libfuzzer ${ARG_SOURCES})
     target_link_libraries(${name}_libfuzzer PRIVATE ${ARG_LIBS})
@@ -105,3 +127,38 @@ function(swf_fuzz_target name)
     target_link_options(${name}_libfuzzer PRIVATE -fsanitize=fuzzer,address,undefined)
   endif()
 endfunction()
+
+# Time limits are set for the release build. A sanitizer build runs the same tests several times
+# slower (ASan + UBSan, the numerical tests the most), so its preset scales every TIMEOUT by
+# SWF_TEST_TIMEOUT_SCALE instead of raising the limits of every build. swf_test and
+# swf_fuzz_target scale their directory's tests, once all of them are declared (raw add_test
+# entries included); a directory with only raw add_test entries calls swf_scale_test_timeouts().
+set(SWF_TEST_TIMEOUT_SCALE 1 CACHE STRING "Multiplier for every test's TIMEOUT (sanitizer builds)")
+
+function(swf_scale_test_timeouts)
+  get_directory_property(registered SWF_TIMEOUTS_SCALED)
+  if(registered OR SWF_TEST_TIMEOUT_SCALE EQUAL 1)
+    return()
+  endif()
+  set_directory_properties(PROPERTIES SWF_TIMEOUTS_SCALED ON)
+  cmake_language(DEFER CALL swf_scale_directory_timeouts_now)
+endfunction()
+
+function(swf_scale_directory_timeouts_now)
+  get_directory_property(tests TESTS)
+  foreach(test IN LISTS tests)
+    get_test_property(${test} TIMEOUT timeout)
+    if(timeout)
+      math(EXPR timeout "${timeout} * ${SWF_TEST_TIMEOUT_SCALE}")
+      set_tests_properties(${test} PROPERTIES TIMEOUT ${timeout})
+    endif()
+  endforeach()
+endfunction()
+
+# The list of fuzz targets, written once every CMakeLists has declared its own.
+function(swf_write_fuzz_target_list)
+  get_property(fuzz_targets GLOBAL PROPERTY SWF_FUZZ_TARGET_LIST)
+  list(JOIN fuzz_targets "\n" lines)
+  file(CONFIGURE OUTPUT ${CMAKE_BINARY_DIR}/fuzz_targets.txt CONTENT "${lines}\n" @ONLY)
+endfunction()
+cmake_language(DEFER DIRECTORY ${CMAKE_SOURCE_DIR} CALL swf_write_fuzz_target_list)
