@@ -93,16 +93,15 @@ struct AravisStereoSource::Camera {
   }
 };
 
-// Fires software triggers for Next(). Owns references to the cameras and shares its state with the
-// source through a shared_ptr, so Stop() can detach it even while a trigger to a dead camera is
-// still timing out.
+// Fires software triggers on one camera for Next(). Owns a reference to the camera and shares its
+// state with the source through a shared_ptr, so Stop() can detach it even while a trigger to a
+// dead camera is still timing out.
 struct AravisStereoSource::TriggerWorker {
   std::mutex mutex;
   std::condition_variable wake;
   bool request = false;
   bool quit = false;
-  ArvCamera* cameras[2] = {nullptr, nullptr};
-  int count = 0;
+  ArvCamera* camera = nullptr;
 
   static void Run(const std::shared_ptr<TriggerWorker>& self) {
     for (;;) {
@@ -112,14 +111,27 @@ struct AravisStereoSource::TriggerWorker {
         if (self->quit) break;
         self->request = false;
       }
-      // Back to back so both exposures start within one GVCP round trip of each other.
-      for (int i = 0; i < self->count; ++i) {
-        GError* error = nullptr;
-        arv_camera_software_trigger(self->cameras[i], &error);
-        g_clear_error(&error);  // a lost trigger shows up as a retry, a timeout or a lost camera
-      }
+      GError* error = nullptr;
+      arv_camera_software_trigger(self->camera, &error);
+      g_clear_error(&error);  // a lost trigger shows up as a retry, a timeout or a lost camera
     }
-    for (int i = 0; i < self->count; ++i) g_object_unref(self->cameras[i]);
+    g_object_unref(self->camera);
+  }
+
+  void Request() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      request = true;
+    }
+    wake.notify_one();
+  }
+
+  void Quit() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      quit = true;
+    }
+    wake.notify_one();
   }
 };
 
@@ -245,10 +257,13 @@ core::Status AravisStereoSource::OpenCamera(int side, const char* id) {
     return s;
   }
   if (ARV_IS_GV_STREAM(cam->stream)) {
+    // Resend repairs lost packets while the frame is still being received; a socket buffer of
+    // one payload keeps a burst of a whole frame from overflowing it before the receive thread
+    // runs (a loaded host).
     g_object_set(cam->stream, "packet-resend",
                  options_.packet_resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS
                                         : ARV_GV_STREAM_PACKET_RESEND_NEVER,
-                 nullptr);
+                 "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_AUTO, nullptr);
   }
   for (std::int32_t i = 0; i < options_.buffer_count; ++i) {
     arv_stream_push_buffer(cam->stream, arv_buffer_new_allocate(cam->payload));
@@ -304,12 +319,11 @@ core::Status AravisStereoSource::Start() {
   }
   trigger_pending_ = false;
   if (options_.trigger == TriggerMode::kSoftware) {
-    trigger_ = std::make_shared<TriggerWorker>();
     for (int side = 0; side < SideCount(); ++side) {
-      trigger_->cameras[trigger_->count++] =
-          static_cast<ArvCamera*>(g_object_ref(cameras_[side]->camera));
+      trigger_[side] = std::make_shared<TriggerWorker>();
+      trigger_[side]->camera = static_cast<ArvCamera*>(g_object_ref(cameras_[side]->camera));
+      std::thread([worker = trigger_[side]] { TriggerWorker::Run(worker); }).detach();
     }
-    std::thread([worker = trigger_] { TriggerWorker::Run(worker); }).detach();
   }
   started_ = true;
   return core::Status::kOk;
@@ -326,21 +340,7 @@ core::Status AravisStereoSource::Fill(int side, std::int64_t wait_us) {
   Camera& cam = *cameras_[side];
   ArvBuffer* buffer = wait_us > 0 ? arv_stream_timeout_pop_buffer(cam.stream, wait_us)
                                   : arv_stream_try_pop_buffer(cam.stream);
-  const char* id = side == 0 ? options_.left_id : options_.right_id;
-  if (buffer == nullptr) {
-    if (cam.control_lost.load()) {
-      cam.lost = true;
-      return Fail(core::Status::kDeviceLost, "aravis %s: control channel lost", id);
-    }
-    if (options_.device_lost_after_ns > 0 &&
-        core::MonotonicNs() - last_frame_ns_[side] > options_.device_lost_after_ns) {
-      cam.lost = true;
-      return Fail(
-          core::Status::kDeviceLost, "aravis %s: no frame for %lld ms (camera gone?)", id,
-          static_cast<long long>((core::MonotonicNs() - last_frame_ns_[side]) / core::kNsPerMs));
-    }
-    return core::Status::kOk;
-  }
+  if (buffer == nullptr) return CheckSilence(side);
   last_frame_ns_[side] = core::MonotonicNs();
   // Block ids count every frame the camera sent, good or bad: gaps are frames lost entirely.
   const std::uint32_t lost = sequence_[side].Observe(arv_buffer_get_frame_id(buffer));
@@ -376,6 +376,48 @@ core::Status AravisStereoSource::Fill(int side, std::int64_t wait_us) {
   held_[side].buffer = buffer;
   held_[side].arrival_ns = arrival_ns;
   return core::Status::kOk;
+}
+
+core::Status AravisStereoSource::CheckSilence(int side) {
+  Camera& cam = *cameras_[side];
+  if (cam.control_lost.load()) {
+    cam.lost = true;
+    ++extra_.devices_lost;
+    return Fail(core::Status::kDeviceLost, "aravis %s: control channel lost (no GVCP answer)",
+                Id(side));
+  }
+  const core::TimeNs now = core::MonotonicNs();
+  if (options_.device_lost_after_ns <= 0 ||
+      now - last_frame_ns_[side] <= options_.device_lost_after_ns) {
+    return core::Status::kOk;
+  }
+  // Only a camera that the pair waits for can be silent: a side holding a frame has delivered.
+  cam.lost = true;
+  ++extra_.devices_lost;
+  const int other = 1 - side;
+  const bool other_silent = SideCount() == 2 && held_[other].buffer == nullptr &&
+                            now - last_frame_ns_[other] > options_.device_lost_after_ns;
+  if (other_silent) {
+    cameras_[other]->lost = true;
+    return Fail(core::Status::kDeviceLost,
+                "aravis %s and %s: no frame from either for %lld ms (stalled, unplugged or "
+                "powered off)",
+                options_.left_id, options_.right_id,
+                static_cast<long long>((now - last_frame_ns_[side]) / core::kNsPerMs));
+  }
+  return Fail(core::Status::kDeviceLost,
+              "aravis %s: no frame for %lld ms (stalled, unplugged or powered off)", Id(side),
+              static_cast<long long>((now - last_frame_ns_[side]) / core::kNsPerMs));
+}
+
+void AravisStereoSource::FireTriggers() {
+  // The triggers go out on the worker threads: a GVCP write allocates and, to a dead camera,
+  // blocks for seconds of retries, neither of which Next() may do.
+  for (int side = 0; side < SideCount(); ++side) {
+    if (trigger_[side] != nullptr) trigger_[side]->Request();
+  }
+  trigger_pending_ = true;
+  trigger_time_ns_ = core::MonotonicNs();
 }
 
 core::Status AravisStereoSource::Emit(std::int32_t slot_index, StereoPair* pair) {
@@ -446,17 +488,7 @@ core::Status AravisStereoSource::Next(core::TimeNs timeout_ns, StereoPair* pair)
     if (trigger_pending_ && core::MonotonicNs() - trigger_time_ns_ > options_.trigger_retry_ns) {
       trigger_pending_ = false;
     }
-    if (options_.trigger == TriggerMode::kSoftware && !trigger_pending_ && trigger_ != nullptr) {
-      // The trigger goes out on the worker thread: a GVCP write allocates and, to a dead camera,
-      // blocks for seconds of retries, neither of which Next() may do.
-      {
-        const std::lock_guard<std::mutex> lock(trigger_->mutex);
-        trigger_->request = true;
-      }
-      trigger_->wake.notify_one();
-      trigger_pending_ = true;
-      trigger_time_ns_ = core::MonotonicNs();
-    }
+    if (options_.trigger == TriggerMode::kSoftware && !trigger_pending_) FireTriggers();
     const core::TimeNs remaining_ns = deadline_ns - core::MonotonicNs();
     std::int64_t wait_us = remaining_ns / core::kNsPerUs;
     if (wait_us > kMaxPopWaitUs) wait_us = kMaxPopWaitUs;
@@ -510,13 +542,10 @@ void AravisStereoSource::Release(const StereoPair& pair) {
 }
 
 void AravisStereoSource::Stop() {
-  if (trigger_ != nullptr) {
-    {
-      const std::lock_guard<std::mutex> lock(trigger_->mutex);
-      trigger_->quit = true;
-    }
-    trigger_->wake.notify_one();
-    trigger_.reset();
+  for (std::shared_ptr<TriggerWorker>& worker : trigger_) {
+    if (worker == nullptr) continue;
+    worker->Quit();
+    worker.reset();
   }
   // Held buffers go back to their stream so the stream frees them with itself.
   for (int side = 0; side < 2; ++side) {
@@ -534,6 +563,11 @@ void AravisStereoSource::Stop() {
     guint64 completed = 0, failures = 0, underruns = 0;
     arv_stream_get_statistics(cameras_[side]->stream, &completed, &failures, &underruns);
     extra_.stream_underruns += underruns;
+    if (ARV_IS_GV_STREAM(cameras_[side]->stream)) {
+      guint64 resent = 0, missing = 0;
+      arv_gv_stream_get_statistics(ARV_GV_STREAM(cameras_[side]->stream), &resent, &missing);
+      extra_.resent_packets += resent;
+    }
     cameras_[side].reset();
   }
   started_ = false;

@@ -96,6 +96,7 @@ core::Status V4l2StereoSource::Start() {
     lost_since_pair_[side] = 0;
   }
   consecutive_io_errors_[kLeft] = consecutive_io_errors_[kRight] = 0;
+  last_frame_ns_[kLeft] = last_frame_ns_[kRight] = core::MonotonicNs();
   started_ = true;
   return core::Status::kOk;
 }
@@ -112,6 +113,7 @@ core::Status V4l2StereoSource::Fill(int side) {
   V4l2Frame frame;
   const core::Status s = camera.Dequeue(&frame);
   if (s == core::Status::kTimeout) return core::Status::kOk;
+  last_frame_ns_[side] = core::MonotonicNs();
   if (s == core::Status::kCorruptData) {
     // EIO from DQBUF or a nonsense index: no frame, the stream goes on unless it persists.
     ++stats_.frames_rejected;
@@ -287,7 +289,26 @@ core::Status V4l2StereoSource::Next(core::TimeNs timeout_ns, StereoPair* pair) {
     if (!core::IsOk(w)) return w;
   }
   ++stats_.timeouts;
+  NameSilentDevice();
   return core::Status::kTimeout;
+}
+
+void V4l2StereoSource::NameSilentDevice() {
+  const core::TimeNs now = core::MonotonicNs();
+  // The pair waits for the side that holds no frame; when neither does, both are silent.
+  const bool left_silent = !held_[kLeft].valid;
+  const bool right_silent = !options_.side_by_side && !held_[kRight].valid;
+  const int side = left_silent ? kLeft : kRight;
+  const char* device = side == kLeft ? options_.left.device : options_.right.device;
+  const long long silent_ms = static_cast<long long>((now - last_frame_ns_[side]) / core::kNsPerMs);
+  if (left_silent && right_silent) {
+    std::snprintf(last_error_, sizeof(last_error_),
+                  "v4l2 %s and %s: no frame from either for %lld ms (stalled or disconnected)",
+                  options_.left.device, options_.right.device, silent_ms);
+  } else {
+    std::snprintf(last_error_, sizeof(last_error_),
+                  "v4l2 %s: no frame for %lld ms (stalled or disconnected)", device, silent_ms);
+  }
 }
 
 void V4l2StereoSource::Release(const StereoPair& pair) {

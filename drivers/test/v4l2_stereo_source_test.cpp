@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -322,6 +323,36 @@ TEST_F(V4l2Source, PairsByTimestampAfterOneCameraSlips) {
   ExpectNoLeaks();
 }
 
+// GIVEN a right camera whose exposures drift 10 ms (5x the 2 ms tolerance, a fifth of a period)
+// behind the left's from its frame 2 to frame 4 THEN those frames are never paired (no pair
+// leaves the source with exposures further apart than the tolerance), each refusal is counted,
+// and pairing resumes when the cameras agree again.
+TEST_F(V4l2Source, DesynchronizedFramesAreRefusedAndCounted) {
+  AddPair();
+  kernel_.Script(right_, 2, KernelEvent::kTimeShift, 10'000'000);
+  kernel_.Script(right_, 5, KernelEvent::kTimeShift, -10'000'000);
+  V4l2StereoOptions options = Options();
+  options.left.buffer_count = options.right.buffer_count = 8;
+  ASSERT_EQ(source_.Configure(options), core::Status::kOk);
+  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  std::uint64_t served = 0;
+  for (int i = 0; i < 8; ++i) {
+    StereoPair pair;
+    const core::Status s = source_.Next(kTimeout, &pair);
+    if (s == core::Status::kTimeout) continue;
+    ASSERT_EQ(s, core::Status::kOk) << source_.LastError();
+    EXPECT_LE(std::abs(pair.left_exposure_ns - pair.right_exposure_ns), options.pair_tolerance_ns);
+    ++served;
+    source_.Release(pair);
+  }
+  // Right frames 2, 3, 4 are each refused against a left frame, and so are the left frames they
+  // displaced: three left and three right frames, all counted, none served.
+  EXPECT_EQ(source_.Stats().pairing_failures, 6u);
+  EXPECT_EQ(served, source_.Stats().pairs_served);
+  EXPECT_GE(served, 5u);
+  ExpectNoLeaks();
+}
+
 TEST_F(V4l2Source, StalledCameraTimesOutAndResumes) {
   AddPair();
   ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
@@ -330,6 +361,10 @@ TEST_F(V4l2Source, StalledCameraTimesOutAndResumes) {
   StereoPair pair;
   EXPECT_EQ(source_.Next(5 * core::kNsPerMs, &pair), core::Status::kTimeout);
   EXPECT_EQ(source_.Stats().timeouts, 1u);
+  // The timeout names the camera the pair waits for, not its healthy partner.
+  EXPECT_NE(std::strstr(source_.LastError(), "/dev/video1: no frame"), nullptr)
+      << source_.LastError();
+  EXPECT_EQ(std::strstr(source_.LastError(), "/dev/video0"), nullptr) << source_.LastError();
   kernel_.SetStalled(right_, false);
   ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk);
   EXPECT_TRUE(ImageIs(pair.left, 0));

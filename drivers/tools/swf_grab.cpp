@@ -240,7 +240,7 @@ int Grab(const GrabArgs& a) {
     next_ms.push_back(core::NsToMs(watch.ElapsedNs()));
     if (!core::IsOk(status)) {
       ++failures;
-      std::fprintf(stderr, "pair %d: %s\n", i, core::ToString(status));
+      std::fprintf(stderr, "pair %d: %s: %s\n", i, core::ToString(status), source->LastError());
       if (status == core::Status::kDeviceLost || status == core::Status::kIoError) break;
       continue;
     }

@@ -8,8 +8,13 @@
 // trigger Next() triggers both cameras back to back and pairs the two frames answering that trigger
 // (answers to earlier triggers are discarded as stale). Bad buffers (missing packets, timeouts,
 // size mismatch) are counted and recycled, block-id gaps are counted as drops, and a camera that
-// stops delivering or loses its control channel gives kDeviceLost; Stop() + Start() reconnects when
-// it is back.
+// stops delivering or loses its control channel gives kDeviceLost naming that camera (not its
+// healthy partner) in LastError(); Stop() + Start() reconnects when it is back.
+//
+// Packet loss: with packet_resend the GigE stream asks the camera to resend missing packets
+// (GVCP PACKETRESEND) and its socket buffer is sized to the payload, so a loss rate the resend
+// can repair costs nothing; a frame it cannot repair in time arrives with MISSING_PACKETS and
+// costs that frame only (counted in AravisStats, the stream goes on).
 #pragma once
 
 #include <atomic>
@@ -68,6 +73,8 @@ struct AravisStats {
   std::uint64_t buffer_timeouts = 0;   // ARV_BUFFER_STATUS_TIMEOUT
   std::uint64_t other_bad = 0;         // size mismatch, wrong packet id, aborted, ...
   std::uint64_t stream_underruns = 0;  // frames Aravis dropped for lack of a free buffer (at Stop)
+  std::uint64_t resent_packets = 0;    // GVSP packets the camera resent on request (at Stop)
+  std::uint64_t devices_lost = 0;      // kDeviceLost returned by Next() (silence, control lost)
 };
 
 class AravisStereoSource final : public StereoSource {
@@ -90,7 +97,7 @@ class AravisStereoSource final : public StereoSource {
   const char* Name() const override { return "aravis"; }
 
   AravisStats ExtraStats() const { return extra_; }
-  const char* LastError() const { return last_error_; }
+  const char* LastError() const override { return last_error_; }
 
   // Generic GenICam access on a running camera (side 0 = left, 1 = right) for features the
   // options do not cover. Not for the flight loop: GenICam access allocates.
@@ -119,6 +126,10 @@ class AravisStereoSource final : public StereoSource {
   core::Status Fill(int side, std::int64_t wait_us);
   void Recycle(int side, _ArvBuffer* buffer);
   core::Status Emit(std::int32_t slot_index, StereoPair* pair);
+  // kDeviceLost naming the camera(s) that delivered nothing for device_lost_after_ns, else kOk.
+  core::Status CheckSilence(int side);
+  void FireTriggers();
+  const char* Id(int side) const { return side == 0 ? options_.left_id : options_.right_id; }
 
   std::unique_ptr<Camera> cameras_[2];
   AravisStereoOptions options_;
@@ -128,7 +139,10 @@ class AravisStereoSource final : public StereoSource {
   SequenceTracker sequence_[2];
   std::uint32_t lost_since_pair_[2] = {0, 0};
   core::TimeNs last_frame_ns_[2] = {0, 0};
-  std::shared_ptr<TriggerWorker> trigger_;
+  // One trigger worker per camera: a GVCP write to a dead camera blocks its worker for seconds of
+  // retries and must not hold back the other camera's trigger (whose silence would then be
+  // blamed on the wrong camera).
+  std::shared_ptr<TriggerWorker> trigger_[2];
   bool trigger_pending_ = false;
   core::TimeNs trigger_time_ns_ = 0;
   Slot slots_[kMaxPairsHeld];

@@ -63,6 +63,10 @@ class StereoSource {
 
   // A short static name for logs ("v4l2", "aravis", "sim", "log").
   virtual const char* Name() const = 0;
+
+  // Why the last call failed, naming the device and the cause (never null; "" when the source
+  // has nothing to say). Valid until the next call on the source.
+  virtual const char* LastError() const { return ""; }
 };
 
 }  // namespace swf::drivers

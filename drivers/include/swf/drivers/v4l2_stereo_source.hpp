@@ -43,8 +43,9 @@ class V4l2StereoSource final : public StereoSource {
   SourceStats Stats() const override { return stats_; }
   const char* Name() const override { return "v4l2"; }
 
-  // The reason of the last failure (never null): device, call and errno.
-  const char* LastError() const { return last_error_; }
+  // The reason of the last failure (never null): device, call and errno, or the device that has
+  // been silent when Next() timed out.
+  const char* LastError() const override { return last_error_; }
   // Driver buffers currently dequeued and not yet returned (for tests and health).
   std::int32_t BuffersOutstanding() const;
 
@@ -72,6 +73,8 @@ class V4l2StereoSource final : public StereoSource {
   void Discard(int side);
   core::Status WaitReadable(core::TimeNs remaining_ns);
   core::Status Emit(Slot& slot, std::int32_t slot_index, StereoPair* pair);
+  // Names the device(s) silent the longest in LastError() when Next() times out.
+  void NameSilentDevice();
 
   V4l2Kernel* kernel_;
   V4l2Camera left_;
@@ -83,6 +86,7 @@ class V4l2StereoSource final : public StereoSource {
   SequenceTracker sequence_[2];
   std::uint32_t lost_since_pair_[2] = {0, 0};
   std::int32_t consecutive_io_errors_[2] = {0, 0};
+  core::TimeNs last_frame_ns_[2] = {0, 0};  // when each side last dequeued anything
   Slot slots_[kMaxPairsHeld];
   std::uint64_t next_seq_ = 0;
   SourceStats stats_;
