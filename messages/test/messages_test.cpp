@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
@@ -88,6 +89,196 @@ TEST(Messages, NavStateLandmarksHazardHealthRoundTrip) {
   health.stage_p99_ms = {2.5f};
   health.stage_max_ms = {3.5f};
   EXPECT_EQ(RoundTrip(health, &buffer).stage_name[0], "track");
+}
+
+// ---- checked decoding ------------------------------------------------------------------------
+using swf::messages::CheckedDecode;
+using swf::messages::DecodeError;
+using swf::messages::DecodeResult;
+
+template <typename Msg>
+std::vector<std::uint8_t> Encode(const Msg& msg) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
+  EXPECT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// Overwrites the big-endian int32 at `offset` (counted from the start, fingerprint included).
+std::vector<std::uint8_t> WithInt32(std::vector<std::uint8_t> bytes, std::size_t offset,
+                                    std::int32_t value) {
+  const auto u = static_cast<std::uint32_t>(value);
+  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(u >> (24 - 8 * i));
+  return bytes;
+}
+
+template <typename Msg>
+DecodeError Decode(const std::vector<std::uint8_t>& bytes) {
+  Msg msg;
+  return CheckedDecode(bytes.data(), bytes.size(), &msg);
+}
+
+// Every shorter prefix is refused and one byte more is refused: exactly one message fills a buffer.
+template <typename Msg>
+void ExpectEveryTruncationAndAnExtraByteRefused(const std::vector<std::uint8_t>& bytes) {
+  for (std::size_t n = 0; n < bytes.size(); ++n) {
+    const std::vector<std::uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<long>(n));
+    EXPECT_EQ(Decode<Msg>(cut).result, DecodeResult::kTruncated) << n << " bytes";
+  }
+  std::vector<std::uint8_t> longer = bytes;
+  longer.push_back(0);
+  EXPECT_EQ(Decode<Msg>(longer).result, DecodeResult::kTrailingBytes);
+}
+
+swf_msgs::stereo_frame_t SmallFrame() {
+  swf_msgs::stereo_frame_t frame{};
+  frame.seq = 3;
+  frame.width = 4;
+  frame.height = 2;
+  frame.num_bytes = 8;
+  frame.left.assign(8, 7);
+  frame.right.assign(8, 9);
+  return frame;
+}
+
+// Field offsets in the encoded bytes (8-byte fingerprint first; messages/*.lcm in order).
+constexpr std::size_t kStereoWidth = 8 + 86;
+constexpr std::size_t kStereoHeight = kStereoWidth + 4;
+constexpr std::size_t kStereoNumBytes = kStereoWidth + 8;
+constexpr std::size_t kNumLandmarks = 8 + 24;
+constexpr std::size_t kHazardNumCells = 8 + 72 + 8;
+constexpr std::size_t kHealthNumFlags = 8 + 153;
+
+TEST(CheckedDecode, StereoFrameLengthsAreCheckedBeforeAnyAllocation) {
+  const std::vector<std::uint8_t> bytes = Encode(SmallFrame());
+  swf_msgs::stereo_frame_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.right[7], 9);
+  // GIVEN the length fields a flipped bit or a hostile sender makes WHEN decoded THEN each is
+  // refused, naming the field (lcm-gen's decode() throws std::length_error or allocates 2 GB).
+  DecodeError e = Decode<swf_msgs::stereo_frame_t>(WithInt32(bytes, kStereoNumBytes, -1));
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  EXPECT_STREQ(e.field, "num_bytes");
+  EXPECT_EQ(e.value, -1);
+  e = Decode<swf_msgs::stereo_frame_t>(WithInt32(bytes, kStereoNumBytes, 2147483647));
+  EXPECT_EQ(e.result, DecodeResult::kOverLimit);
+  EXPECT_STREQ(e.field, "num_bytes");
+  e = Decode<swf_msgs::stereo_frame_t>(
+      WithInt32(WithInt32(bytes, kStereoWidth, 65537), kStereoHeight, 65537));
+  EXPECT_EQ(e.result, DecodeResult::kOverLimit);
+  EXPECT_STREQ(e.field, "width");
+  e = Decode<swf_msgs::stereo_frame_t>(WithInt32(bytes, kStereoHeight, 3));  // 4 x 3 != 8
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  EXPECT_STREQ(e.field, "num_bytes");
+  // Consistent and within limits, but more bytes than the record holds.
+  e = Decode<swf_msgs::stereo_frame_t>(
+      WithInt32(WithInt32(bytes, kStereoHeight, 4), kStereoNumBytes, 16));
+  EXPECT_EQ(e.result, DecodeResult::kTruncated);
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::stereo_frame_t>(bytes);
+  char text[96];
+  swf::messages::Describe(Decode<swf_msgs::stereo_frame_t>(WithInt32(bytes, kStereoNumBytes, -1)),
+                          text, sizeof text);
+  EXPECT_STREQ(text, "num_bytes -1: bad length");
+}
+
+TEST(CheckedDecode, LandmarkMapCountIsCheckedAgainstTheBytesAndTheLimit) {
+  swf_msgs::landmark_map_t map{};
+  map.num_landmarks = 2;
+  map.id = {5, 6};
+  map.position_world_m = {{1, 2, 3}, {4, 5, 6}};
+  map.covariance_m2 = {{1, 0, 0, 1, 0, 1}, {2, 0, 0, 2, 0, 2}};
+  map.num_observations = {3, 4};
+  const std::vector<std::uint8_t> bytes = Encode(map);
+  swf_msgs::landmark_map_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.position_world_m[1][2], 6.0);
+  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, -1)).result,
+            DecodeResult::kBadLength);
+  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, 1 << 30)).result,
+            DecodeResult::kOverLimit);
+  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, 3)).result,
+            DecodeResult::kTruncated);
+  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, 1)).result,
+            DecodeResult::kTrailingBytes);
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::landmark_map_t>(bytes);
+}
+
+TEST(CheckedDecode, HazardMapCellsAndClassesAreChecked) {
+  swf_msgs::hazard_map_t hazard{};
+  hazard.rows = 1;
+  hazard.cols = 2;
+  hazard.num_cells = 2;
+  hazard.elevation_m = {0.5f, 0.25f};
+  hazard.sigma_m = {0.1f, 0.1f};
+  hazard.slope_deg = {1.0f, 2.0f};
+  hazard.roughness_m = {0.0f, 0.3f};
+  hazard.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_ROCK};
+  hazard.safe_site_score = 0.5;
+  const std::vector<std::uint8_t> bytes = Encode(hazard);
+  swf_msgs::hazard_map_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.safe_site_score, 0.5);  // the fields after the cells are where they should be
+  DecodeError e = Decode<swf_msgs::hazard_map_t>(WithInt32(bytes, kHazardNumCells, -2));
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  EXPECT_STREQ(e.field, "num_cells");
+  e = Decode<swf_msgs::hazard_map_t>(WithInt32(bytes, kHazardNumCells, 3));  // != 1 x 2
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  e = Decode<swf_msgs::hazard_map_t>(WithInt32(bytes, kHazardNumCells - 8, -1));
+  EXPECT_STREQ(e.field, "rows");
+  hazard.hazard_class[1] = 42;
+  e = Decode<swf_msgs::hazard_map_t>(Encode(hazard));
+  EXPECT_EQ(e.result, DecodeResult::kBadValue);
+  EXPECT_EQ(e.value, 42);
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::hazard_map_t>(bytes);
+}
+
+TEST(CheckedDecode, HealthCountsAndStringLengthsAreChecked) {
+  swf_msgs::health_t health{};
+  health.frames_rejected = 4;
+  health.num_integrity_flags = 2;
+  health.integrity_flag_counts = {1, 2};
+  health.num_stages = 2;
+  health.stage_name = {"track", "estimate"};
+  health.stage_p50_ms = {1.5f, 2.0f};
+  health.stage_p99_ms = {2.5f, 3.0f};
+  health.stage_max_ms = {3.5f, 4.0f};
+  const std::vector<std::uint8_t> bytes = Encode(health);
+  swf_msgs::health_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.frames_rejected, 4);
+  EXPECT_EQ(out.stage_name[1], "estimate");
+  EXPECT_EQ(out.stage_max_ms[1], 4.0f);
+  EXPECT_EQ(Decode<swf_msgs::health_t>(WithInt32(bytes, kHealthNumFlags, -1)).result,
+            DecodeResult::kBadLength);
+  EXPECT_EQ(Decode<swf_msgs::health_t>(WithInt32(bytes, kHealthNumFlags, 33)).result,
+            DecodeResult::kOverLimit);
+  const std::size_t num_stages = kHealthNumFlags + 4 + 2 * 8;
+  EXPECT_EQ(Decode<swf_msgs::health_t>(WithInt32(bytes, num_stages, -7)).result,
+            DecodeResult::kBadLength);
+  // The first name's length: 0 (lcm-gen would take -1 characters) and negative.
+  DecodeError e = Decode<swf_msgs::health_t>(WithInt32(bytes, num_stages + 4, 0));
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  EXPECT_STREQ(e.field, "stage_name");
+  EXPECT_EQ(Decode<swf_msgs::health_t>(WithInt32(bytes, num_stages + 4, -100)).result,
+            DecodeResult::kBadLength);
+  EXPECT_EQ(Decode<swf_msgs::health_t>(WithInt32(bytes, num_stages + 4, 1000)).result,
+            DecodeResult::kOverLimit);
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::health_t>(bytes);
+}
+
+TEST(CheckedDecode, NavStateAndForeignBytes) {
+  swf_msgs::nav_state_t nav{};
+  nav.seq = 9;
+  const std::vector<std::uint8_t> bytes = Encode(nav);
+  swf_msgs::nav_state_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.seq, 9);
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::nav_state_t>(bytes);
+  // Another type's bytes, and bytes that are no message at all.
+  EXPECT_EQ(Decode<swf_msgs::nav_state_t>(Encode(SmallFrame())).result, DecodeResult::kWrongType);
+  EXPECT_EQ(Decode<swf_msgs::health_t>(bytes).result, DecodeResult::kWrongType);
+  const std::vector<std::uint8_t> garbage(100, 0xff);
+  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(garbage).result, DecodeResult::kWrongType);
 }
 
 }  // namespace

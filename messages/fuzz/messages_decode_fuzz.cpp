@@ -1,0 +1,65 @@
+// Fuzz entry point for the checked decoder (swf/messages/checked_decode.hpp): the same bytes go to
+// every message type (each checks its fingerprint first). No input may crash, throw or allocate
+// past a stated limit; a message that decodes has the sizes its length fields state, and
+// re-encodes to the very bytes it came from (health_t excepted: its strings are cut at a NUL).
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "swf/messages/checked_decode.hpp"
+
+namespace {
+
+using swf::messages::CheckedDecode;
+
+void Expect(bool condition) {
+  if (!condition) __builtin_trap();
+}
+
+template <typename Msg>
+void ExpectSameBytes(const Msg& msg, const std::uint8_t* data, std::size_t size) {
+  std::vector<std::uint8_t> again(static_cast<std::size_t>(msg.getEncodedSize()));
+  Expect(again.size() == size);
+  Expect(msg.encode(again.data(), 0, static_cast<int>(again.size())) == static_cast<int>(size));
+  Expect(std::memcmp(again.data(), data, size) == 0);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  swf_msgs::stereo_frame_t frame;
+  if (CheckedDecode(data, size, &frame).Ok()) {
+    Expect(frame.num_bytes == frame.width * frame.height);
+    Expect(frame.left.size() == static_cast<std::size_t>(frame.num_bytes));
+    Expect(frame.right.size() == static_cast<std::size_t>(frame.num_bytes));
+    ExpectSameBytes(frame, data, size);
+  }
+  swf_msgs::nav_state_t nav;
+  if (CheckedDecode(data, size, &nav).Ok()) ExpectSameBytes(nav, data, size);
+  swf_msgs::landmark_map_t map;
+  if (CheckedDecode(data, size, &map).Ok()) {
+    Expect(map.num_landmarks <= swf::messages::kMaxMapLandmarks);
+    Expect(map.id.size() == static_cast<std::size_t>(map.num_landmarks));
+    Expect(map.num_observations.size() == map.id.size());
+    ExpectSameBytes(map, data, size);
+  }
+  swf_msgs::hazard_map_t hazard;
+  if (CheckedDecode(data, size, &hazard).Ok()) {
+    Expect(hazard.num_cells == hazard.rows * hazard.cols);
+    Expect(hazard.hazard_class.size() == static_cast<std::size_t>(hazard.num_cells));
+    for (const std::int8_t c : hazard.hazard_class) {
+      Expect(c >= swf_msgs::hazard_map_t::CLASS_UNKNOWN &&
+             c <= swf_msgs::hazard_map_t::CLASS_UNCERTAIN);
+    }
+    ExpectSameBytes(hazard, data, size);
+  }
+  swf_msgs::health_t health;
+  if (CheckedDecode(data, size, &health).Ok()) {
+    Expect(health.stage_name.size() == static_cast<std::size_t>(health.num_stages));
+    Expect(health.stage_max_ms.size() == health.stage_name.size());
+    Expect(health.integrity_flag_counts.size() ==
+           static_cast<std::size_t>(health.num_integrity_flags));
+  }
+  return 0;
+}
