@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
+
+#include "swf/messages/checked_decode.hpp"
 
 namespace swf::guidance {
 
@@ -15,28 +18,37 @@ GuidanceMonitor::GuidanceMonitor(lcm::LCM* lcm, const std::string& prefix, bool 
 
 template <typename Msg>
 bool GuidanceMonitor::Decode(const lcm::ReceiveBuffer* buffer, Msg* msg, ChannelStats* stats) {
-  const int size = static_cast<int>(buffer->data_size);
-  if (msg->decode(buffer->data, 0, size) != size) {
+  // Checked: a hostile length field is counted here, never thrown or allocated.
+  if (!messages::CheckedDecode(buffer->data, buffer->data_size, msg).Ok()) {
     ++stats->malformed;
     return false;
   }
   return true;
 }
 
-void GuidanceMonitor::Sequence(std::int64_t seq, ChannelStats* stats) {
+bool GuidanceMonitor::Sequence(std::int64_t seq, ChannelStats* stats) {
+  // Sequence numbers count up from 0: a negative one is not a number the publisher sends.
+  if (seq < 0) {
+    ++stats->malformed;
+    return false;
+  }
+  constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();
   if (stats->received > 0 && seq < stats->next_seq) {
     ++stats->out_of_order;
   } else {
-    if (seq > stats->next_seq) stats->lost += seq - stats->next_seq;
-    stats->next_seq = seq + 1;
+    // Both are non-negative, so the gap cannot overflow; the running total saturates.
+    const std::int64_t gap = seq - stats->next_seq;
+    stats->lost = gap > kMax - stats->lost ? kMax : stats->lost + gap;
+    stats->next_seq = seq == kMax ? kMax : seq + 1;
   }
   ++stats->received;
+  return true;
 }
 
 void GuidanceMonitor::OnNav(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   swf_msgs::nav_state_t msg;
   if (!Decode(buffer, &msg, &nav_)) return;
-  Sequence(msg.seq, &nav_);
+  if (!Sequence(msg.seq, &nav_)) return;
   last_nav_ = msg;
   if (print_) {
     std::printf(
@@ -53,7 +65,7 @@ void GuidanceMonitor::OnLandmarks(const lcm::ReceiveBuffer* buffer,
                                   const std::string& /*channel*/) {
   swf_msgs::landmark_map_t msg;
   if (!Decode(buffer, &msg, &landmarks_)) return;
-  Sequence(msg.seq, &landmarks_);
+  if (!Sequence(msg.seq, &landmarks_)) return;
   last_map_ = msg;
   if (print_) {
     std::printf("landmarks %lld frame %lld: %d landmarks\n", static_cast<long long>(msg.seq),
@@ -64,7 +76,7 @@ void GuidanceMonitor::OnLandmarks(const lcm::ReceiveBuffer* buffer,
 void GuidanceMonitor::OnHealth(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   swf_msgs::health_t msg;
   if (!Decode(buffer, &msg, &health_)) return;
-  Sequence(msg.seq, &health_);
+  if (!Sequence(msg.seq, &health_)) return;
   last_health_ = msg;
   if (print_) {
     std::printf("health %lld: %lld frames, %lld overruns, %lld allocations, faults %d\n",
@@ -77,22 +89,13 @@ void GuidanceMonitor::OnHealth(const lcm::ReceiveBuffer* buffer, const std::stri
 void GuidanceMonitor::OnHazard(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   swf_msgs::hazard_map_t msg;
   if (!Decode(buffer, &msg, &hazard_)) return;
-  // Decodes but is inconsistent: counted as malformed, like a message that does not decode.
-  bool consistent = msg.rows >= 0 && msg.cols >= 0 &&
-                    static_cast<std::int64_t>(msg.rows) * msg.cols == msg.num_cells;
   int safe = 0;
   int hazards = 0;
   for (std::int8_t c : msg.hazard_class) {
-    consistent = consistent && c >= swf_msgs::hazard_map_t::CLASS_UNKNOWN &&
-                 c <= swf_msgs::hazard_map_t::CLASS_UNCERTAIN;
     safe += c == swf_msgs::hazard_map_t::CLASS_SAFE;
     hazards += c == swf_msgs::hazard_map_t::CLASS_ROCK || c == swf_msgs::hazard_map_t::CLASS_SLOPE;
   }
-  if (!consistent) {
-    ++hazard_.malformed;
-    return;
-  }
-  Sequence(msg.seq, &hazard_);
+  if (!Sequence(msg.seq, &hazard_)) return;
   if (print_) {
     std::printf("hazard %lld frame %lld: %dx%d cells of %.3f m, %d safe, %d hazard, site %s",
                 static_cast<long long>(msg.seq), static_cast<long long>(msg.frame_seq), msg.cols,

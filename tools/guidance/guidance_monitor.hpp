@@ -1,7 +1,8 @@
 // GuidanceMonitor: the guidance side of the LCM interface. Subscribes to the flight process's
 // outputs, decodes them, checks their sequence numbers (a gap = lost outputs, a repeat or step
 // back = out of order) and counts, without stopping, anything on a subscribed channel that does
-// not decode as that channel's type.
+// not decode as that channel's type (swf/messages/checked_decode.hpp: lengths and ranges are
+// checked before anything is allocated, so no message can abort or exhaust the consumer).
 #pragma once
 
 #include <cstdint>
@@ -19,7 +20,7 @@ struct ChannelStats {
   std::int64_t received = 0;
   std::int64_t lost = 0;          // missing sequence numbers
   std::int64_t out_of_order = 0;  // a sequence number at or below the previous one
-  std::int64_t malformed = 0;     // did not decode: counted and ignored
+  std::int64_t malformed = 0;     // refused by the checked decoder: counted and ignored
   std::int64_t next_seq = 0;
 };
 
@@ -34,7 +35,7 @@ class GuidanceMonitor {
   const swf_msgs::nav_state_t& LastNav() const { return last_nav_; }
   const swf_msgs::landmark_map_t& LastMap() const { return last_map_; }
   const swf_msgs::health_t& LastHealth() const { return last_health_; }
-  // The last hazard map that decoded and was consistent (num_cells = rows * cols, classes known).
+  // The last hazard map that decoded (num_cells = rows * cols, classes known: the decoder checks).
   const swf_msgs::hazard_map_t& LastHazard() const { return last_hazard_; }
   std::int64_t Malformed() const {
     return nav_.malformed + landmarks_.malformed + health_.malformed + hazard_.malformed;
@@ -53,7 +54,8 @@ class GuidanceMonitor {
  private:
   template <typename Msg>
   bool Decode(const lcm::ReceiveBuffer* buffer, Msg* msg, ChannelStats* stats);
-  static void Sequence(std::int64_t seq, ChannelStats* stats);
+  // False (counted as malformed) for a negative sequence number.
+  static bool Sequence(std::int64_t seq, ChannelStats* stats);
 
   bool print_;
   ChannelStats nav_;

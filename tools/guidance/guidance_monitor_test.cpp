@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace swf::guidance {
@@ -77,6 +79,80 @@ TEST(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
   EXPECT_EQ(monitor.Hazard().malformed, 2);
   EXPECT_EQ(monitor.Hazard().lost, 0);
   EXPECT_EQ(monitor.LastHazard().frame_seq, 9);
+}
+
+// Overwrites the big-endian int32 at byte `offset` of an encoded message.
+void PutInt32(std::vector<std::uint8_t>* bytes, std::size_t offset, std::int32_t value) {
+  const auto u = static_cast<std::uint32_t>(value);
+  for (int i = 0; i < 4; ++i) (*bytes)[offset + i] = static_cast<std::uint8_t>(u >> (24 - 8 * i));
+}
+
+template <typename Msg>
+std::vector<std::uint8_t> Encode(const Msg& msg) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
+  EXPECT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// GIVEN landmark maps and health messages whose length fields are negative, huge or disagree with
+// the bytes (lcm-gen's decode() threw std::length_error on the first: swf-guidance aborted)
+// WHEN they arrive THEN each is counted as malformed and ignored, and the good ones around them
+// are still received in sequence.
+TEST(GuidanceMonitorTest, HostileLengthFieldsAreCountedNotFatal) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  GuidanceMonitor monitor(&lcm, "SWF_", false);
+  swf_msgs::landmark_map_t map{};
+  map.num_landmarks = 1;
+  map.id = {7};
+  map.position_world_m = {{1, 2, 3}};
+  map.covariance_m2 = {{1, 0, 0, 1, 0, 1}};
+  map.num_observations = {2};
+  ASSERT_EQ(lcm.publish("SWF_LANDMARKS", &map), 0);
+  constexpr std::size_t kNumLandmarks = 8 + 24;  // fingerprint, utime, seq, frame_seq
+  for (const std::int32_t bad : {-1, 2147483647, 2}) {
+    std::vector<std::uint8_t> bytes = Encode(map);
+    PutInt32(&bytes, kNumLandmarks, bad);
+    ASSERT_EQ(lcm.publish("SWF_LANDMARKS", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
+  }
+  swf_msgs::health_t health{};
+  health.num_stages = 1;
+  health.stage_name = {"track"};
+  health.stage_p50_ms = {1.0f};
+  health.stage_p99_ms = {1.0f};
+  health.stage_max_ms = {1.0f};
+  std::vector<std::uint8_t> bytes = Encode(health);
+  PutInt32(&bytes, 8 + 153 + 4 + 4, 0);  // the stage name's length: 0 (with its NUL it is >= 1)
+  ASSERT_EQ(lcm.publish("SWF_HEALTH", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
+  map.seq = 1;
+  map.position_world_m[0][2] = 4.0;
+  ASSERT_EQ(lcm.publish("SWF_LANDMARKS", &map), 0);
+  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
+  }
+  EXPECT_EQ(monitor.Landmarks().received, 2);
+  EXPECT_EQ(monitor.Landmarks().malformed, 3);
+  EXPECT_EQ(monitor.Landmarks().lost, 0);
+  EXPECT_EQ(monitor.Health().malformed, 1);
+  EXPECT_DOUBLE_EQ(monitor.LastMap().position_world_m[0][2], 4.0);
+}
+
+// GIVEN sequence numbers a publisher never sends (negative, the largest int64) WHEN they arrive
+// THEN the negative one is malformed and the largest counts a (saturating) gap without overflow.
+TEST(GuidanceMonitorTest, ExtremeSequenceNumbersDoNotOverflow) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  GuidanceMonitor monitor(&lcm, "SWF_", false);
+  PublishNav(&lcm, -5);
+  PublishNav(&lcm, 0);
+  PublishNav(&lcm, std::numeric_limits<std::int64_t>::max());
+  PublishNav(&lcm, 5);  // a step back: out of order
+  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
+  }
+  EXPECT_EQ(monitor.Nav().malformed, 1);
+  EXPECT_EQ(monitor.Nav().received, 3);
+  EXPECT_EQ(monitor.Nav().lost, std::numeric_limits<std::int64_t>::max() - 1);
+  EXPECT_EQ(monitor.Nav().out_of_order, 1);
 }
 
 }  // namespace
