@@ -2,24 +2,182 @@
 
 #include <stb_image.h>
 #include <stb_image_write.h>
+#include <zlib.h>
 
+#include <cctype>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 namespace swf::image_io {
 
 namespace {
 
-bool Load(const std::string& path, GrayImage* image, std::string* error, bool channel0) {
+// ---- files -------------------------------------------------------------------------------------
+
+// The whole file, refused (naming it) when it is not a regular file or is larger than max_bytes:
+// its size is known before anything is read.
+bool ReadBytes(const std::string& path, std::size_t max_bytes, std::vector<std::uint8_t>* bytes,
+               std::string* error) {
+  std::error_code ec;
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) {
+    *error = path + ": cannot open (no such file)";
+    return false;
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    *error = path + ": not a regular file";
+    return false;
+  }
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec || size > max_bytes) {
+    *error =
+        path + ": " +
+        (ec ? "cannot read its size"
+            : std::to_string(size) + " bytes, above the limit of " + std::to_string(max_bytes));
+    return false;
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = path + ": cannot open";
+    return false;
+  }
+  bytes->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (in.bad() || bytes->size() != size) {
+    *error = path + ": read error";
+    return false;
+  }
+  return true;
+}
+
+// ---- image headers -----------------------------------------------------------------------------
+
+std::uint32_t BigEndian32(const std::uint8_t* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         std::uint32_t{p[3]};
+}
+
+bool CheckDimensions(std::int64_t w, std::int64_t h, const std::string& name, std::string* error) {
+  if (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide || w * h > kMaxImagePixels) {
+    *error = name + ": header says " + std::to_string(w) + " x " + std::to_string(h) +
+             " px, outside the limits (1.." + std::to_string(kMaxImageSide) + " px a side, " +
+             std::to_string(kMaxImagePixels) + " px in all)";
+    return false;
+  }
+  return true;
+}
+
+constexpr std::uint8_t kPngSignature[8] = {137, 80, 78, 71, 13, 10, 26, 10};
+
+bool IsPng(const std::uint8_t* d, std::size_t n) {
+  return n >= 8 && std::memcmp(d, kPngSignature, 8) == 0;
+}
+bool IsJpeg(const std::uint8_t* d, std::size_t n) {
+  return n >= 3 && d[0] == 0xFF && d[1] == 0xD8 && d[2] == 0xFF;
+}
+bool IsBinaryPnm(const std::uint8_t* d, std::size_t n) {
+  return n >= 2 && d[0] == 'P' && (d[1] == '5' || d[1] == '6');
+}
+
+// Walks every chunk of a PNG: lengths inside the file, each chunk's CRC-32 (over type and data),
+// IHDR first with dimensions inside the limits, IEND present. stb checks none of the CRCs, so a
+// corrupt file would otherwise decode into wrong pixels.
+bool CheckPng(const std::uint8_t* d, std::size_t n, const std::string& name, std::string* error) {
+  std::size_t at = 8;
+  bool first = true;
+  while (true) {
+    if (n - at < 12) {
+      *error = name + ": PNG cut short at byte " + std::to_string(at) +
+               (first ? " (no complete IHDR header)" : " (no IEND chunk)");
+      return false;
+    }
+    const std::uint32_t length = BigEndian32(d + at);
+    const std::uint8_t* type = d + at + 4;
+    const std::string type_name(reinterpret_cast<const char*>(type), 4);
+    for (char c : type_name) {
+      if (!std::isalpha(static_cast<unsigned char>(c))) {
+        *error = name + ": PNG chunk at byte " + std::to_string(at) + " has no valid type";
+        return false;
+      }
+    }
+    if (length > n - at - 12) {
+      *error = name + ": PNG chunk " + type_name + " at byte " + std::to_string(at) + " claims " +
+               std::to_string(length) + " bytes, past the end of the file (cut short?)";
+      return false;
+    }
+    const uLong crc = crc32(crc32(0L, Z_NULL, 0), type, static_cast<uInt>(length + 4));
+    if (crc != BigEndian32(type + 4 + length)) {
+      *error = name + ": PNG chunk " + type_name + " at byte " + std::to_string(at) +
+               " fails its CRC check (the file is corrupt)";
+      return false;
+    }
+    if (first) {
+      if (type_name != "IHDR" || length != 13) {
+        *error = name + ": PNG does not start with a 13-byte IHDR chunk";
+        return false;
+      }
+      if (!CheckDimensions(BigEndian32(type + 4), BigEndian32(type + 8), name, error)) return false;
+      first = false;
+    }
+    at += 12 + static_cast<std::size_t>(length);
+    if (type_name == "IEND") return true;
+  }
+}
+
+// The image's size from its header (stb reads only the header), against the limits; PNGs get
+// their chunks checked first and JPEGs must end with their end-of-image marker.
+bool CheckHeader(const std::uint8_t* d, std::size_t n, const std::string& name, int* w, int* h,
+                 std::string* error) {
+  if (n > static_cast<std::size_t>(INT_MAX)) {
+    *error = name + ": larger than " + std::to_string(INT_MAX) + " bytes";
+    return false;
+  }
+  if (IsPng(d, n)) {
+    if (!CheckPng(d, n, name, error)) return false;
+  } else if (IsJpeg(d, n)) {
+    // A JPEG cut short still decodes (the rest becomes grey); its end marker tells.
+    if (n < 4 || d[n - 2] != 0xFF || d[n - 1] != 0xD9) {
+      *error = name + ": JPEG cut short (does not end with the end-of-image marker FF D9)";
+      return false;
+    }
+  } else if (!IsBinaryPnm(d, n)) {
+    *error = name + ": not a PNG, JPEG or binary PGM/PPM file (" + std::to_string(n) + " bytes)";
+    return false;
+  }
+  int channels = 0;
+  if (stbi_info_from_memory(d, static_cast<int>(n), w, h, &channels) == 0) {
+    const char* why = stbi_failure_reason();
+    *error = name + ": unreadable image header" +
+             (why != nullptr && why[0] != '\0' ? std::string(" (") + why + ")" : std::string());
+    return false;
+  }
+  return CheckDimensions(*w, *h, name, error);
+}
+
+bool Decode(const std::uint8_t* d, std::size_t n, const std::string& name, bool channel0,
+            GrayImage* image, std::string* error) {
+  int header_w = 0;
+  int header_h = 0;
+  if (!CheckHeader(d, n, name, &header_w, &header_h, error)) return false;
   int w = 0;
   int h = 0;
   int channels = 0;
-  stbi_uc* data = stbi_load(path.c_str(), &w, &h, &channels, channel0 ? 0 : 1);
+  stbi_uc* data =
+      stbi_load_from_memory(d, static_cast<int>(n), &w, &h, &channels, channel0 ? 0 : 1);
   if (data == nullptr) {
-    *error = path + ": " + (stbi_failure_reason() ? stbi_failure_reason() : "unreadable");
+    const char* why = stbi_failure_reason();
+    *error = name + ": cannot decode the image data" +
+             (why != nullptr && why[0] != '\0' ? std::string(" (") + why + ")" : std::string());
+    return false;
+  }
+  if (w != header_w || h != header_h || channels < 1) {
+    stbi_image_free(data);
+    *error = name + ": decoded size differs from its header";
     return false;
   }
   image->Resize(w, h);
@@ -28,6 +186,14 @@ bool Load(const std::string& path, GrayImage* image, std::string* error, bool ch
   stbi_image_free(data);
   return true;
 }
+
+bool Load(const std::string& path, GrayImage* image, std::string* error, bool channel0) {
+  std::vector<std::uint8_t> bytes;
+  if (!ReadBytes(path, kMaxImageFileBytes, &bytes, error)) return false;
+  return Decode(bytes.data(), bytes.size(), path, channel0, image, error);
+}
+
+// ---- calibration text --------------------------------------------------------------------------
 
 // The numbers of the first [...] list after `key:` (searched from `from`), or empty.
 std::vector<double> ListAfter(const std::string& text, const std::string& key,
@@ -57,6 +223,85 @@ bool ScalarAfter(const std::string& text, const std::string& key, double* value)
   return std::sscanf(text.c_str() + k + key.size() + 1, "%lf", value) == 1;
 }
 
+// A resolution read as doubles, checked before it becomes an int.
+bool SetResolution(double w, double h, const std::string& name, frontend::CameraCalibration* c,
+                   std::string* error) {
+  if (!(w >= 1.0 && w <= kMaxImageSide && h >= 1.0 && h <= kMaxImageSide) || w != std::floor(w) ||
+      h != std::floor(h)) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), ": resolution %g x %g is not whole pixels in 1..%d", w, h,
+                  kMaxImageSide);
+    *error = name + buf;
+    return false;
+  }
+  c->width = static_cast<int>(w);
+  c->height = static_cast<int>(h);
+  return true;
+}
+
+bool ParseIntrinsics(const std::string& text, const std::string& name,
+                     frontend::CameraCalibration* c, std::vector<double>* distortion,
+                     std::string* error) {
+  const std::vector<double> intrinsics = ListAfter(text, "intrinsics");
+  if (intrinsics.size() == 4) {  // EuRoC / Kalibr
+    c->fx = intrinsics[0];
+    c->fy = intrinsics[1];
+    c->cx = intrinsics[2];
+    c->cy = intrinsics[3];
+    const std::vector<double> resolution = ListAfter(text, "resolution");
+    if (resolution.size() != 2) {
+      *error = name + ": resolution [w, h] missing";
+      return false;
+    }
+    *distortion = ListAfter(text, "distortion_coefficients");
+    return SetResolution(resolution[0], resolution[1], name, c, error);
+  }
+  // ROS camera_info / OpenCV
+  const std::size_t k = text.find("camera_matrix:");
+  const std::vector<double> m =
+      k == std::string::npos ? std::vector<double>{} : ListAfter(text, "data", k);
+  double w = 0.0;
+  double h = 0.0;
+  if (m.size() != 9 || !ScalarAfter(text, "image_width", &w) ||
+      !ScalarAfter(text, "image_height", &h)) {
+    *error = name + ": neither EuRoC intrinsics nor ROS camera_matrix/image_width found";
+    return false;
+  }
+  c->fx = m[0];
+  c->cx = m[2];
+  c->fy = m[4];
+  c->cy = m[5];
+  const std::size_t d = text.find("distortion_coefficients:");
+  if (d != std::string::npos) *distortion = ListAfter(text, "data", d);
+  return SetResolution(w, h, name, c, error);
+}
+
+// T_BS (camera in body), when given: 16 finite numbers, a rotation block and a last row 0 0 0 1.
+bool ParseExtrinsics(const std::string& text, const std::string& name,
+                     frontend::CameraCalibration* c, std::string* error) {
+  const std::size_t t = text.find("T_BS:");
+  if (t == std::string::npos) return true;
+  const std::vector<double> m = ListAfter(text, "data", t);
+  if (m.size() != 16) {
+    *error = name + ": T_BS must hold 16 numbers";
+    return false;
+  }
+  Eigen::Matrix4d mat;
+  for (int i = 0; i < 16; ++i) mat(i / 4, i % 4) = m[i];
+  const Eigen::Matrix3d r = mat.topLeftCorner<3, 3>();
+  if (!mat.allFinite() || (r.transpose() * r - Eigen::Matrix3d::Identity()).norm() > 1e-3 ||
+      r.determinant() < 0.0) {
+    *error = name + ": T_BS's 3x3 block is not a rotation";
+    return false;
+  }
+  if (mat.row(3) != Eigen::RowVector4d(0.0, 0.0, 0.0, 1.0)) {
+    *error = name + ": T_BS's last row is not 0 0 0 1";
+    return false;
+  }
+  c->body_T_camera = estimator::Pose<double>::FromMatrix(mat);
+  return true;
+}
+
 }  // namespace
 
 bool LoadGray(const std::string& path, GrayImage* image, std::string* error) {
@@ -65,6 +310,22 @@ bool LoadGray(const std::string& path, GrayImage* image, std::string* error) {
 
 bool LoadChannel0(const std::string& path, GrayImage* image, std::string* error) {
   return Load(path, image, error, true);
+}
+
+bool DecodeGray(const std::uint8_t* data, std::size_t size, const std::string& name,
+                GrayImage* image, std::string* error) {
+  return Decode(data, size, name, false, image, error);
+}
+
+bool DecodeChannel0(const std::uint8_t* data, std::size_t size, const std::string& name,
+                    GrayImage* image, std::string* error) {
+  return Decode(data, size, name, true, image, error);
+}
+
+bool ReadImageSize(const std::string& path, int* width, int* height, std::string* error) {
+  std::vector<std::uint8_t> bytes;
+  if (!ReadBytes(path, kMaxImageFileBytes, &bytes, error)) return false;
+  return CheckHeader(bytes.data(), bytes.size(), path, width, height, error);
 }
 
 bool SavePng(const std::string& path, const RgbImage& image, std::string* error) {
@@ -82,81 +343,49 @@ bool FlowField::Known(int x, int y) const {
   return std::isfinite(u) && std::isfinite(v) && std::fabs(u) < 1e9f && std::fabs(v) < 1e9f;
 }
 
-bool LoadFlo(const std::string& path, FlowField* flow, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    *error = path + ": cannot open";
-    return false;
-  }
+bool DecodeFlo(const std::uint8_t* data, std::size_t size, const std::string& name, FlowField* flow,
+               std::string* error) {
+  constexpr std::size_t kHeaderBytes = 12;  // magic, width, height
   float magic = 0.0f;
   std::int32_t w = 0;
   std::int32_t h = 0;
-  in.read(reinterpret_cast<char*>(&magic), 4);
-  in.read(reinterpret_cast<char*>(&w), 4);
-  in.read(reinterpret_cast<char*>(&h), 4);
-  if (!in || magic != 202021.25f || w <= 0 || h <= 0 || w > 100000 || h > 100000) {
-    *error = path + ": not a Middlebury .flo file";
+  if (size >= kHeaderBytes) {
+    std::memcpy(&magic, data, 4);
+    std::memcpy(&w, data + 4, 4);
+    std::memcpy(&h, data + 8, 4);
+  }
+  if (size < kHeaderBytes || magic != 202021.25f) {
+    *error = name + ": not a Middlebury .flo file";
+    return false;
+  }
+  if (!CheckDimensions(w, h, name, error)) return false;
+  const std::size_t values = 2 * static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  if (size - kHeaderBytes != values * sizeof(float)) {
+    *error = name + ": " + std::to_string(size) + " bytes, a " + std::to_string(w) + " x " +
+             std::to_string(h) + " .flo file has " +
+             std::to_string(kHeaderBytes + values * sizeof(float)) + " (truncated or padded)";
     return false;
   }
   flow->width = w;
   flow->height = h;
-  flow->uv.resize(2 * static_cast<std::size_t>(w) * h);
-  in.read(reinterpret_cast<char*>(flow->uv.data()),
-          static_cast<std::streamsize>(flow->uv.size() * sizeof(float)));
-  if (!in) {
-    *error = path + ": truncated";
-    return false;
-  }
+  flow->uv.resize(values);
+  std::memcpy(flow->uv.data(), data + kHeaderBytes, values * sizeof(float));
   return true;
 }
 
-bool LoadCalibration(const std::string& path, frontend::CameraCalibration* c, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = path + ": cannot open";
-    return false;
-  }
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
+bool LoadFlo(const std::string& path, FlowField* flow, std::string* error) {
+  std::vector<std::uint8_t> bytes;
+  if (!ReadBytes(path, kMaxImageFileBytes, &bytes, error)) return false;
+  return DecodeFlo(bytes.data(), bytes.size(), path, flow, error);
+}
+
+bool ParseCalibration(const std::string& text, const std::string& name,
+                      frontend::CameraCalibration* c, std::string* error) {
   *c = frontend::CameraCalibration{};
   std::vector<double> distortion;
-  const std::vector<double> intrinsics = ListAfter(text, "intrinsics");
-  if (intrinsics.size() == 4) {  // EuRoC / Kalibr
-    c->fx = intrinsics[0];
-    c->fy = intrinsics[1];
-    c->cx = intrinsics[2];
-    c->cy = intrinsics[3];
-    const std::vector<double> resolution = ListAfter(text, "resolution");
-    if (resolution.size() != 2) {
-      *error = path + ": resolution [w, h] missing";
-      return false;
-    }
-    c->width = static_cast<int>(resolution[0]);
-    c->height = static_cast<int>(resolution[1]);
-    distortion = ListAfter(text, "distortion_coefficients");
-  } else {  // ROS camera_info / OpenCV
-    const std::size_t k = text.find("camera_matrix:");
-    const std::vector<double> m =
-        k == std::string::npos ? std::vector<double>{} : ListAfter(text, "data", k);
-    double w = 0.0;
-    double h = 0.0;
-    if (m.size() != 9 || !ScalarAfter(text, "image_width", &w) ||
-        !ScalarAfter(text, "image_height", &h)) {
-      *error = path + ": neither EuRoC intrinsics nor ROS camera_matrix/image_width found";
-      return false;
-    }
-    c->fx = m[0];
-    c->cx = m[2];
-    c->fy = m[4];
-    c->cy = m[5];
-    c->width = static_cast<int>(w);
-    c->height = static_cast<int>(h);
-    const std::size_t d = text.find("distortion_coefficients:");
-    if (d != std::string::npos) distortion = ListAfter(text, "data", d);
-  }
+  if (!ParseIntrinsics(text, name, c, &distortion, error)) return false;
   if (distortion.size() < 4 || distortion.size() > 5) {
-    *error = path + ": need 4 or 5 radial-tangential distortion coefficients";
+    *error = name + ": need 4 or 5 radial-tangential distortion coefficients";
     return false;
   }
   c->k1 = distortion[0];
@@ -164,22 +393,30 @@ bool LoadCalibration(const std::string& path, frontend::CameraCalibration* c, st
   c->p1 = distortion[2];
   c->p2 = distortion[3];
   c->k3 = distortion.size() == 5 ? distortion[4] : 0.0;
-  const std::size_t t = text.find("T_BS:");
-  if (t != std::string::npos) {
-    const std::vector<double> m = ListAfter(text, "data", t);
-    if (m.size() != 16) {
-      *error = path + ": T_BS must hold 16 numbers";
+  if (!ParseExtrinsics(text, name, c, error)) return false;
+  const double values[] = {c->fx, c->fy, c->cx, c->cy, c->k1, c->k2, c->p1, c->p2, c->k3};
+  for (double v : values) {
+    if (!std::isfinite(v)) {
+      *error = name + ": non-finite intrinsics or distortion";
       return false;
     }
-    Eigen::Matrix4d mat;
-    for (int i = 0; i < 16; ++i) mat(i / 4, i % 4) = m[i];
-    c->body_T_camera = estimator::Pose<double>::FromMatrix(mat);
   }
-  if (!(c->fx > 0.0 && c->fy > 0.0 && c->width > 0 && c->height > 0)) {
-    *error = path + ": invalid intrinsics or size";
+  if (!(c->fx > 0.0 && c->fy > 0.0)) {
+    *error = name + ": focal lengths must be positive";
     return false;
   }
   return true;
+}
+
+bool LoadCalibration(const std::string& path, frontend::CameraCalibration* c, std::string* error) {
+  std::vector<std::uint8_t> bytes;
+  if (!ReadBytes(path, kMaxCalibrationFileBytes, &bytes, error)) return false;
+  const std::string text(bytes.begin(), bytes.end());
+  if (text.find('\0') != std::string::npos) {
+    *error = path + ": contains a NUL byte (not a text file)";
+    return false;
+  }
+  return ParseCalibration(text, path, c, error);
 }
 
 }  // namespace swf::image_io
