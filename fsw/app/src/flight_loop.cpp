@@ -346,6 +346,7 @@ void FlightLoop::PublishHealth() {
   h.frames = counters_.frames;
   h.frames_dropped =
       counters_.frames_dropped + static_cast<std::int64_t>(source_->Stats().frames_dropped);
+  h.frames_rejected = static_cast<std::int64_t>(source_->Stats().frames_rejected);
   h.overruns = counters_.overruns;
   h.outputs_dropped =
       counters_.outputs_dropped + hazard_outputs_dropped_.load() + counters_.hazard_skipped;

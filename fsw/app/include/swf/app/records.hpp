@@ -65,6 +65,7 @@ struct HealthRecord {
   std::int64_t seq = 0;
   std::int64_t frames = 0;
   std::int64_t frames_dropped = 0;
+  std::int64_t frames_rejected = 0;  // received but refused by the source (SourceStats)
   std::int64_t overruns = 0;
   std::int64_t outputs_dropped = 0;
   std::int64_t allocations_after_start = 0;  // -1 when this binary does not count them
