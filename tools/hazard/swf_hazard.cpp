@@ -8,7 +8,10 @@
 //       Writes OUTDIR/hazard_eval.json, *.dat, hazard_*.png (gnuplot) and hazard_map_*.png.
 //   swf-hazard map OUT.png [--preset plains|craters|rocks] [--seed S] [--shared DIR]
 //       one fused descent, the final hazard map as PNG.
+// Every failure prints one line "swf-hazard: ..." naming the file (or option) and the cause, and
+// exits 1; `eval` exits 2 when a selected site lies on a true hazard.
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -82,6 +85,68 @@ const char* Arg(int argc, char** argv, const char* name, const char* fallback) {
   return fallback;
 }
 
+// Every failure: one line naming what failed (and the file), exit status 1.
+int Fail(const std::string& why) {
+  std::fprintf(stderr, "swf-hazard: %s\n", why.c_str());
+  return 1;
+}
+
+// The hazard mapper refuses images smaller than this a side (HazardMapper::Configure), and the
+// renderer would produce them: refused up front with the reason instead of as a configuration
+// failure.
+constexpr int kMinImageSide = 32;
+
+// A whole decimal number within [lo, hi] from --flag, or false with *why.
+bool IntArg(int argc, char** argv, const char* name, long fallback, long lo, long hi, long* value,
+            std::string* why) {
+  const char* text = Arg(argc, argv, name, nullptr);
+  if (text == nullptr) {
+    *value = fallback;
+    return true;
+  }
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || errno != 0 || v < lo || v > hi) {
+    *why = std::string(name) + " takes a whole number in " + std::to_string(lo) + ".." +
+           std::to_string(hi) + ", not '" + std::string(text).substr(0, 40) + "'";
+    return false;
+  }
+  *value = v;
+  return true;
+}
+
+// Configures the world and the mapper, or says which failed and why.
+bool Prepare(World* world, swf::hazard::HazardMapper* mapper, swf::sim::TerrainPreset preset,
+             std::uint64_t seed, const EvalOptions& eo, std::string* why) {
+  if (eo.image_width < kMinImageSide || eo.image_height < kMinImageSide) {
+    *why = "the image " + std::to_string(eo.image_width) + "x" + std::to_string(eo.image_height) +
+           " px is smaller than the hazard mapper's minimum of " + std::to_string(kMinImageSide) +
+           "x" + std::to_string(kMinImageSide) + " px (--width, --height)";
+    return false;
+  }
+  if (world->Configure(preset, seed, eo, why) != swf::core::Status::kOk) return false;
+  const swf::core::Status s = mapper->Configure(world->MapperOptions());
+  if (s != swf::core::Status::kOk) {
+    *why = std::string("the hazard mapper refuses its options (") + swf::core::ToString(s) +
+           "; image " + std::to_string(eo.image_width) + "x" + std::to_string(eo.image_height) +
+           " px, downsample " + std::to_string(eo.downsample) + ")";
+    return false;
+  }
+  return true;
+}
+
+std::string StepFailure(int frame, double altitude_m, swf::core::Status s) {
+  char buf[128];
+  std::snprintf(buf, sizeof(buf), "frame %d at %.1f m: the hazard update failed (%s)", frame,
+                altitude_m, swf::core::ToString(s));
+  return buf;
+}
+
+std::string WriteFailure(const std::string& path) {
+  return path + ": cannot write the hazard map PNG";
+}
+
 void Json(FILE* f, double v) {
   if (std::isfinite(v)) {
     std::fprintf(f, "%.6g", v);
@@ -93,10 +158,7 @@ void Json(FILE* f, double v) {
 int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_seeds,
          int only_preset) {
   FILE* json = std::fopen((out + "/hazard_eval.json").c_str(), "w");
-  if (json == nullptr) {
-    std::fprintf(stderr, "cannot write %s/hazard_eval.json\n", out.c_str());
-    return 1;
-  }
+  if (json == nullptr) return Fail(out + "/hazard_eval.json: cannot write");
   constexpr int kNumAlt = sizeof(kSweepAltitudes) / sizeof(kSweepAltitudes[0]);
   std::vector<std::vector<Acc>> sweep(3, std::vector<Acc>(kNumAlt));
   std::vector<Acc> all_alt(kNumAlt);
@@ -105,12 +167,9 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
     for (int s = 0; s < sweep_seeds; ++s) {
       World world;
       const auto seed = static_cast<std::uint64_t>(100 + s);
-      if (world.Configure(static_cast<swf::sim::TerrainPreset>(p), seed, eo) !=
-          swf::core::Status::kOk) {
-        std::fprintf(stderr, "world configure failed (--shared?)\n");
-        return 1;
-      }
-      if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+      std::string why;
+      if (!Prepare(&world, mapper.get(), static_cast<swf::sim::TerrainPreset>(p), seed, eo, &why))
+        return Fail(why);
       swf::sim::Rng rng(seed * 7919);
       for (int a = 0; a < kNumAlt; ++a) {
         mapper->Reset();
@@ -118,9 +177,10 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
         const double y = rng.Uniform(-20.0, 20.0);
         const auto pose = CameraPose(world, x, y, kSweepAltitudes[a], rng.Uniform(0.0, 6.283));
         double ms = 0.0;
-        if (world.Step(pose, a, seed * 1000 + a, mapper.get(), &ms) != swf::core::Status::kOk) {
-          std::fprintf(stderr, "update failed\n");
-          return 1;
+        if (const swf::core::Status st = world.Step(pose, a, seed * 1000 + a, mapper.get(), &ms);
+            st != swf::core::Status::kOk) {
+          return Fail(std::string(kPresetNames[p]) + " seed " + std::to_string(seed) + ": " +
+                      StepFailure(a, kSweepAltitudes[a], st));
         }
         FrameMetrics m = world.Evaluate(*mapper, kSweepAltitudes[a]);
         m.update_ms = ms;
@@ -151,11 +211,9 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
     for (int s = 0; s < descents; ++s) {
       World world;
       const auto seed = static_cast<std::uint64_t>(1000 + s);
-      if (world.Configure(static_cast<swf::sim::TerrainPreset>(p), seed, eo) !=
-          swf::core::Status::kOk) {
-        return 1;
-      }
-      if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+      std::string why;
+      if (!Prepare(&world, mapper.get(), static_cast<swf::sim::TerrainPreset>(p), seed, eo, &why))
+        return Fail(why);
       swf::sim::Rng rng(seed * 104729);
       const double x0 = rng.Uniform(-20.0, 20.0);
       const double y0 = rng.Uniform(-20.0, 20.0);
@@ -166,8 +224,10 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
         const auto pose =
             CameraPose(world, x0 + 0.2 * rng.Gaussian(), y0 + 0.2 * rng.Gaussian(), alt, heading);
         double ms = 0.0;
-        if (world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms) != swf::core::Status::kOk) {
-          return 1;
+        if (const swf::core::Status st = world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms);
+            st != swf::core::Status::kOk) {
+          return Fail(std::string(kPresetNames[p]) + " descent seed " + std::to_string(seed) +
+                      ": " + StepFailure(f, alt, st));
         }
         ++f;
         m = world.Evaluate(*mapper, alt);
@@ -195,6 +255,10 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
                eo.max_slope_deg);
   std::fprintf(json, "  \"sweep_seeds_per_preset\": %d,\n  \"sweep\": [\n", sweep_seeds);
   FILE* dat = std::fopen((out + "/hazard_sweep.dat").c_str(), "w");
+  if (dat == nullptr) {
+    std::fclose(json);
+    return Fail(out + "/hazard_sweep.dat: cannot write");
+  }
   std::fprintf(dat,
                "# altitude pd_all far_all pd_plains pd_craters pd_rocks slope_med slope_p90 "
                "within1 within2 sigma_med cell_m dz_formula pflag_all\n");
@@ -288,10 +352,11 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
                  r.valid ? "true" : "false", r.on_hazard ? "true" : "false", r.clearance, r.stable);
   }
   std::fprintf(json, "]\n  }\n}\n");
-  std::fclose(json);
+  if (std::fclose(json) != 0) return Fail(out + "/hazard_eval.json: write failed");
   // Plots.
   const std::string gp = out + "/hazard_plots.gp";
   FILE* g = std::fopen(gp.c_str(), "w");
+  if (g == nullptr) return Fail(gp + ": cannot write");
   std::fprintf(g,
                "set terminal pngcairo size 900,600\nset grid\nset key bottom right\n"
                "set xlabel 'altitude (m)'\n"
@@ -322,18 +387,21 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
 int Map(const std::string& path, const EvalOptions& eo, swf::sim::TerrainPreset preset,
         std::uint64_t seed) {
   World world;
-  if (world.Configure(preset, seed, eo) != swf::core::Status::kOk) return 1;
   auto mapper = std::make_unique<swf::hazard::HazardMapper>();
-  if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+  std::string why;
+  if (!Prepare(&world, mapper.get(), preset, seed, eo, &why)) return Fail(path + ": " + why);
   int f = 0;
   for (double alt : kDescentAltitudes) {
-    if (world.Step(CameraPose(world, 0.0, 0.0, alt, 0.0), f, seed * 1000 + f, mapper.get(),
-                   nullptr) != swf::core::Status::kOk) {
-      return 1;
+    if (const swf::core::Status st = world.Step(CameraPose(world, 0.0, 0.0, alt, 0.0), f,
+                                                seed * 1000 + f, mapper.get(), nullptr);
+        st != swf::core::Status::kOk) {
+      return Fail(path + ": " + StepFailure(f, alt, st));
     }
     ++f;
   }
-  return swf::hazard_eval::WriteHazardMapPng(*mapper, path) == swf::core::Status::kOk ? 0 : 1;
+  if (swf::hazard_eval::WriteHazardMapPng(*mapper, path) != swf::core::Status::kOk)
+    return Fail(WriteFailure(path));
+  return 0;
 }
 
 // Disparity error of the mapper's last SGM against the rendered exact depth (working pixels).
@@ -455,15 +523,14 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
   SwfPoses poses;
   const int frames = static_cast<int>(std::floor(90.0 / step + 1e-9)) + 1;
   if (swf && !RunSwfAlongDescent(frames, step, seed, &poses)) {
-    std::fprintf(stderr, "SWF covariance failed\n");
-    return 1;
+    return Fail("the SWF along the descent could not compute its covariances");
   }
   World world;
-  if (world.Configure(preset, seed, eo) != swf::core::Status::kOk) return 1;
   auto mapper = std::make_unique<swf::hazard::HazardMapper>();
-  if (mapper->Configure(world.MapperOptions()) != swf::core::Status::kOk) return 1;
+  std::string why;
+  if (!Prepare(&world, mapper.get(), preset, seed, eo, &why)) return Fail(why);
   FILE* dat = std::fopen((out + "/flight.dat").c_str(), "w");
-  if (dat == nullptr) return 1;
+  if (dat == nullptr) return Fail(out + "/flight.dat: cannot write");
   const char* head =
       "# alt cell known safe unc slope rock in1s in2s sig_med err_med slope_err_med "
       "sgm_valid sgm_med_abs sgm_robust_sigma sgm_rms_clip sgm_over1 site clear rocks_res "
@@ -478,9 +545,12 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     pose.R = swf::sim::NadirRotation(0.0);
     pose.t = {x0, y0, alt};
     double ms = 0.0;
-    if (world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms, swf ? &poses.error[f] : nullptr,
-                   swf ? &poses.covariance[f] : nullptr) != swf::core::Status::kOk) {
-      return 1;
+    if (const swf::core::Status st =
+            world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms, swf ? &poses.error[f] : nullptr,
+                       swf ? &poses.covariance[f] : nullptr);
+        st != swf::core::Status::kOk) {
+      std::fclose(dat);
+      return Fail(StepFailure(f, alt, st));
     }
     if (swf) {
       std::printf(
@@ -569,10 +639,10 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
                 rock.center_m.x(), rock.center_m.y(), rock.height_m, rock.diameter_m,
                 mapper->Sigma()[c], static_cast<int>(mapper->Classes()[c]));
   }
-  return swf::hazard_eval::WriteHazardMapPng(*mapper, out + "/flight_map.png") ==
-                 swf::core::Status::kOk
-             ? 0
-             : 1;
+  if (swf::hazard_eval::WriteHazardMapPng(*mapper, out + "/flight_map.png") !=
+      swf::core::Status::kOk)
+    return Fail(WriteFailure(out + "/flight_map.png"));
+  return 0;
 }
 
 }  // namespace
@@ -589,9 +659,18 @@ int main(int argc, char** argv) {
   EvalOptions eo;
   const char* env = std::getenv("SWF_SHARED_DIR");
   eo.shared_dir = Arg(argc, argv, "--shared", env != nullptr ? env : "../shared");
-  eo.image_width = std::atoi(Arg(argc, argv, "--width", "512"));
-  eo.image_height = std::atoi(Arg(argc, argv, "--height", "384"));
-  eo.downsample = std::atoi(Arg(argc, argv, "--downsample", "1"));
+  long width = 0;
+  long height = 0;
+  long downsample = 0;
+  std::string why;
+  if (!IntArg(argc, argv, "--width", 512, 1, 16384, &width, &why) ||
+      !IntArg(argc, argv, "--height", 384, 1, 16384, &height, &why) ||
+      !IntArg(argc, argv, "--downsample", 1, 1, 4, &downsample, &why)) {
+    return Fail(why);
+  }
+  eo.image_width = static_cast<int>(width);
+  eo.image_height = static_cast<int>(height);
+  eo.downsample = static_cast<int>(downsample);
   const std::string verb = argv[1];
   if (verb == "eval") {
     swf::sim::TerrainPreset only = swf::sim::TerrainPreset::kCraterField;
@@ -604,16 +683,16 @@ int main(int argc, char** argv) {
   if (verb == "map") {
     swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kRockField;
     if (!swf::sim::ParseTerrainPreset(Arg(argc, argv, "--preset", "rocks"), &preset)) {
-      std::fprintf(stderr, "unknown preset\n");
-      return 1;
+      return Fail(std::string("unknown --preset ") + Arg(argc, argv, "--preset", "") +
+                  " (plains, craters or rocks)");
     }
     return Map(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10));
   }
   if (verb == "flight") {
     swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kCraterField;
     if (!swf::sim::ParseTerrainPreset(Arg(argc, argv, "--preset", "craters"), &preset)) {
-      std::fprintf(stderr, "unknown preset\n");
-      return 1;
+      return Fail(std::string("unknown --preset ") + Arg(argc, argv, "--preset", "") +
+                  " (plains, craters or rocks)");
     }
     eo.terrain_size = std::atoi(Arg(argc, argv, "--terrain-size", "2048"));
     return Flight(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10),
@@ -621,6 +700,5 @@ int main(int argc, char** argv) {
                   std::atof(Arg(argc, argv, "--step", "5")),
                   std::atoi(Arg(argc, argv, "--swf", "0")) != 0);
   }
-  std::fprintf(stderr, "unknown verb %s\n", verb.c_str());
-  return 1;
+  return Fail("unknown verb " + verb.substr(0, 40) + " (eval, map or flight)");
 }

@@ -45,6 +45,13 @@ bool Load(const char* path, GrayImage* image) {
                  image->height, swf::frontend::kMaxImageWidth, swf::frontend::kMaxImageHeight);
     return false;
   }
+  // The detector needs its border on both sides plus a 3 px interior.
+  const int min_side = 2 * HarrisOptions{}.border_px + 3;
+  if (image->width < min_side || image->height < min_side) {
+    std::fprintf(stderr, "swf-track: %s: %dx%d is smaller than the front end's minimum of %dx%d\n",
+                 path, image->width, image->height, min_side, min_side);
+    return false;
+  }
   return true;
 }
 
@@ -57,11 +64,13 @@ HarrisOptions DetectorOptions(int width, int height) {
   return o;
 }
 
-bool Detect(const GrayImage& image, CornerList* corners) {
+bool Detect(const char* path, const GrayImage& image, CornerList* corners) {
   auto detector = std::make_unique<HarrisDetector>();
-  if (detector->Configure(DetectorOptions(image.width, image.height)) != Status::kOk ||
-      detector->Detect(image.View(), nullptr, 0, corners) != Status::kOk) {
-    std::fprintf(stderr, "swf-track: detection failed\n");
+  Status st = detector->Configure(DetectorOptions(image.width, image.height));
+  if (st == Status::kOk) st = detector->Detect(image.View(), nullptr, 0, corners);
+  if (st != Status::kOk) {
+    std::fprintf(stderr, "swf-track: %s: feature detection failed (%s)\n", path,
+                 swf::core::ToString(st));
     return false;
   }
   return true;
@@ -72,11 +81,12 @@ int Flow(const char* a_path, const char* b_path) {
   GrayImage b;
   if (!Load(a_path, &a) || !Load(b_path, &b)) return 1;
   if (a.width != b.width || a.height != b.height) {
-    std::fprintf(stderr, "swf-track: images differ in size\n");
+    std::fprintf(stderr, "swf-track: %s is %dx%d but %s is %dx%d\n", b_path, b.width, b.height,
+                 a_path, a.width, a.height);
     return 1;
   }
   auto corners = std::make_unique<CornerList>();
-  if (!Detect(a, corners.get())) return 1;
+  if (!Detect(a_path, a, corners.get())) return 1;
   auto prev = std::make_unique<swf::frontend::Pyramid>();
   auto cur = std::make_unique<swf::frontend::Pyramid>();
   swf::frontend::PatchTracker tracker;
@@ -84,7 +94,7 @@ int Flow(const char* a_path, const char* b_path) {
   if (prev->Build(a.View(), options.pyramid_levels) != Status::kOk ||
       cur->Build(b.View(), options.pyramid_levels) != Status::kOk ||
       tracker.Configure(options) != Status::kOk) {
-    std::fprintf(stderr, "swf-track: tracker set-up failed\n");
+    std::fprintf(stderr, "swf-track: %s, %s: tracker set-up failed\n", a_path, b_path);
     return 1;
   }
   std::printf(
@@ -110,18 +120,19 @@ int Stereo(const char* l_path, const char* r_path) {
   GrayImage r;
   if (!Load(l_path, &l) || !Load(r_path, &r)) return 1;
   if (l.width != r.width || l.height != r.height) {
-    std::fprintf(stderr, "swf-track: images differ in size\n");
+    std::fprintf(stderr, "swf-track: %s is %dx%d but %s is %dx%d\n", r_path, r.width, r.height,
+                 l_path, l.width, l.height);
     return 1;
   }
   auto corners = std::make_unique<CornerList>();
-  if (!Detect(l, corners.get())) return 1;
+  if (!Detect(l_path, l, corners.get())) return 1;
   swf::frontend::StereoMatcher matcher;
   swf::frontend::StereoMatcherOptions options;
   options.max_disparity = std::min(swf::frontend::kMaxDisparity, l.width / 4);
   auto matches = std::make_unique<swf::frontend::StereoMatchList>();
   if (matcher.Configure(options) != Status::kOk ||
       matcher.MatchAll(l.View(), r.View(), *corners, matches.get()) != Status::kOk) {
-    std::fprintf(stderr, "swf-track: stereo matching failed\n");
+    std::fprintf(stderr, "swf-track: %s, %s: stereo matching failed\n", l_path, r_path);
     return 1;
   }
   std::printf(
@@ -153,7 +164,8 @@ int Rectify(const char* cam0, const char* cam1, const char* l_path, const char* 
   if (!Load(l_path, &l) || !Load(r_path, &r)) return 1;
   auto rectifier = std::make_unique<swf::frontend::StereoRectifier>();
   if (rectifier->Configure(c0, c1, swf::frontend::RectifyOptions{}) != Status::kOk) {
-    std::fprintf(stderr, "swf-track: calibration cannot be rectified\n");
+    std::fprintf(stderr, "swf-track: %s, %s: the rectifier refuses this calibration pair\n", cam0,
+                 cam1);
     return 1;
   }
   GrayImage rl;
@@ -161,7 +173,8 @@ int Rectify(const char* cam0, const char* cam1, const char* l_path, const char* 
   rl.Resize(rectifier->Width(), rectifier->Height());
   rr.Resize(rectifier->Width(), rectifier->Height());
   if (rectifier->Rectify(l.View(), r.View(), rl.MutableView(), rr.MutableView()) != Status::kOk) {
-    std::fprintf(stderr, "swf-track: image size does not match the calibration\n");
+    std::fprintf(stderr, "swf-track: %s (%dx%d), %s (%dx%d): image size does not match %s\n",
+                 l_path, l.width, l.height, r_path, r.width, r.height, cam0);
     return 1;
   }
   swf::image_io::RgbImage out;

@@ -11,14 +11,24 @@
 
 namespace swf::hazard_eval {
 
-core::Status World::Configure(sim::TerrainPreset preset, std::uint64_t seed, const EvalOptions& o) {
+core::Status World::Configure(sim::TerrainPreset preset, std::uint64_t seed, const EvalOptions& o,
+                              std::string* error) {
+  std::string unused;
+  std::string& why = error != nullptr ? *error : unused;
   options_ = o;
   sim::TerrainOptions to = sim::TerrainPresetOptions(preset, seed);
   to.size = o.terrain_size;
   to.largest_wavelength_m = std::min(to.largest_wavelength_m, o.terrain_size * to.cell_m);
-  if (core::Status s = terrain_.Configure(to); s != core::Status::kOk) return s;
-  if (core::Status s = appearance_.Configure(terrain_, sim::DefaultImagery(o.shared_dir));
-      s != core::Status::kOk) {
+  if (core::Status s = terrain_.Configure(to); s != core::Status::kOk) {
+    why = "the terrain generator refuses a terrain of " + std::to_string(o.terrain_size) +
+          " nodes (" + core::ToString(s) + ")";
+    return s;
+  }
+  const sim::AppearanceOptions imagery = sim::DefaultImagery(o.shared_dir);
+  if (core::Status s = appearance_.Configure(terrain_, imagery); s != core::Status::kOk) {
+    why = "cannot build the surface appearance from " + imagery.intensity_image_path + ", " +
+          imagery.mask_image_path + " and " + imagery.global_albedo_path + " (" +
+          core::ToString(s) + "; --shared or SWF_SHARED_DIR must name the shared folder)";
     return s;
   }
   sim::RenderOptions ro;
@@ -26,12 +36,18 @@ core::Status World::Configure(sim::TerrainPreset preset, std::uint64_t seed, con
   ro.rig.width_px = o.image_width;
   ro.rig.height_px = o.image_height;
   ro.seed = seed;
-  if (core::Status s = renderer_.Configure(ro); s != core::Status::kOk) return s;
+  if (core::Status s = renderer_.Configure(ro); s != core::Status::kOk) {
+    why = "the renderer refuses a " + std::to_string(o.image_width) + "x" +
+          std::to_string(o.image_height) + " px image (" + core::ToString(s) + ")";
+    return s;
+  }
   sim::HazardOptions ho;
   ho.max_rock_height_m = o.max_rock_height_m;
   ho.max_slope_deg = o.max_slope_deg;
   ho.slope_baseline_m = 2.0 * o.footprint_radius_m;
-  return sim::ComputeHazardTruth(terrain_, ho, &truth_);
+  const core::Status s = sim::ComputeHazardTruth(terrain_, ho, &truth_);
+  if (s != core::Status::kOk) why = std::string("hazard truth failed (") + core::ToString(s) + ")";
+  return s;
 }
 
 hazard::HazardMapperOptions World::MapperOptions() const {

@@ -53,8 +53,10 @@ struct FrameMetrics {
 
 class World {
  public:
-  // Builds terrain (preset, seed, reduced size) + appearance + renderer + truth.
-  core::Status Configure(sim::TerrainPreset preset, std::uint64_t seed, const EvalOptions& o);
+  // Builds terrain (preset, seed, reduced size) + appearance + renderer + truth. On failure
+  // *error (when given) says which part failed and names the imagery files it read.
+  core::Status Configure(sim::TerrainPreset preset, std::uint64_t seed, const EvalOptions& o,
+                         std::string* error = nullptr);
   const sim::Terrain& Terrain() const { return terrain_; }
   const sim::HazardMap& Truth() const { return truth_; }
   const sim::Renderer& Renderer() const { return renderer_; }
