@@ -8,7 +8,6 @@ namespace {
 // Byte counts of the fixed fields between the fingerprint and each message's first length field,
 // and after its arrays, in schema order (messages/*.lcm). messages_test holds them against the
 // generated encoder: a schema change that moves a field fails there.
-constexpr std::size_t kFingerprintBytes = 8;
 // stereo_frame_t: utime, seq, left/right_exposure_utime (4 x 8), dropped_before (4), rectified,
 // has_motion (1 + 1), motion_translation_m, motion_rotation_rad (6 x 8); then width, height,
 // num_bytes (3 x 4).
