@@ -127,8 +127,10 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
 //            output's true error exceeded its protection level
 //   degraded (exit 3) it did, with reservations: an INVALID frame, a restart of the filter,
 //            more than kMaxDegradedFraction of the frames DEGRADED, an output lost to a full
-//            publisher queue, or more than kMaxLostFraction of the frames dropped or failed in
-//            a stage
+//            publisher queue, more than kMaxLostFraction of the frames dropped, refused by the
+//            source or failed in a stage, or (a replayed log) any frame missing from the log or
+//            refused as duplicated or out of order: a log is a record, and a record with a hole
+//            or a swapped frame does not replay the run it recorded
 //   ok       (exit 0) none of those
 struct Verdict {
   const char* result = "ok";
@@ -153,7 +155,7 @@ void Degrade(Verdict* v, const std::string& reason) {
 
 Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
                  const IntegrityCounters& integrity, estimator::NavIntegrity final_status,
-                 const EvaluationResult* eval) {
+                 const EvaluationResult* eval, const LogStreamStats* log) {
   Verdict v;
   const double frames = static_cast<double>(std::max<std::int64_t>(1, counters.frames));
   if (counters.frames == 0) Fail(&v, "no frame was processed");
@@ -170,9 +172,15 @@ Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
     Degrade(&v, std::to_string(integrity.frames_degraded) + " DEGRADED frames");
   if (health.outputs_dropped > 0)
     Degrade(&v, std::to_string(health.outputs_dropped) + " outputs dropped (publisher queue full)");
-  const std::int64_t lost = health.frames_dropped + counters.stage_errors;
+  const std::int64_t lost = health.frames_dropped + health.frames_rejected + counters.stage_errors;
   if (lost > kMaxLostFraction * frames)
-    Degrade(&v, std::to_string(lost) + " frames dropped or failed");
+    Degrade(&v, std::to_string(lost) + " frames dropped, refused or failed");
+  if (log != nullptr && log->frames_missing > 0)
+    Degrade(&v, "log: " + std::to_string(log->frames_missing) + " frames missing (sequence gaps)");
+  if (log != nullptr && log->duplicates > 0)
+    Degrade(&v, "log: " + std::to_string(log->duplicates) + " duplicated frames refused");
+  if (log != nullptr && log->out_of_order > 0)
+    Degrade(&v, "log: " + std::to_string(log->out_of_order) + " out-of-order frames refused");
   return v;
 }
 
@@ -208,7 +216,8 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                   const HealthRecord& health, const EvaluationResult* eval,
                   const HazardEvaluation* hazard, std::int64_t hazard_maps, bool locked, bool fifo,
                   const Verdict& verdict, const IntegrityCounters& integrity,
-                  const sim::Trajectory* trajectory, const sim::OrbitalTarget* target) {
+                  const sim::Trajectory* trajectory, const sim::OrbitalTarget* target,
+                  const LogStreamStats* log) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) {
     std::fprintf(stderr, "swf-fsw: cannot write %s\n", path.c_str());
@@ -265,17 +274,26 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                  health.stages[i].max_ms, i + 1 < kNumStages ? "," : "");
   }
   std::fprintf(f, "  },\n");
-  std::fprintf(f,
-               "  \"overruns\": %lld,\n  \"allocations_after_start\": %lld,\n"
-               "  \"outputs_dropped\": %lld,\n  \"frames_dropped\": %lld,\n"
-               "  \"stage_errors\": %lld,\n  \"fault_bits\": %d,\n  \"num_landmarks\": %d,\n"
-               "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n",
-               static_cast<long long>(counters.overruns),
-               static_cast<long long>(health.allocations_after_start),
-               static_cast<long long>(health.outputs_dropped),
-               static_cast<long long>(health.frames_dropped),
-               static_cast<long long>(counters.stage_errors), health.fault_bits,
-               health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
+  std::fprintf(
+      f,
+      "  \"overruns\": %lld,\n  \"allocations_after_start\": %lld,\n"
+      "  \"outputs_dropped\": %lld,\n  \"frames_dropped\": %lld,\n"
+      "  \"frames_rejected\": %lld,\n"
+      "  \"stage_errors\": %lld,\n  \"fault_bits\": %d,\n  \"num_landmarks\": %d,\n"
+      "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n",
+      static_cast<long long>(counters.overruns),
+      static_cast<long long>(health.allocations_after_start),
+      static_cast<long long>(health.outputs_dropped), static_cast<long long>(health.frames_dropped),
+      static_cast<long long>(health.frames_rejected), static_cast<long long>(counters.stage_errors),
+      health.fault_bits, health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
+  if (log != nullptr) {
+    std::fprintf(f,
+                 "  \"log\": {\"frames_missing\": %lld, \"duplicates_refused\": %lld, "
+                 "\"out_of_order_refused\": %lld},\n",
+                 static_cast<long long>(log->frames_missing),
+                 static_cast<long long>(log->duplicates),
+                 static_cast<long long>(log->out_of_order));
+  }
   if (hazard == nullptr) {
     std::fprintf(f, "  \"hazard_maps\": %lld,\n  \"hazard\": null,\n  \"safe_site\": null\n}\n",
                  static_cast<long long>(hazard_maps));
@@ -762,8 +780,17 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                static_cast<long long>(loop.HazardErrors()), h.stages[kStageHazard].p50_ms);
   std::fprintf(stderr, "\n");
   const IntegrityCounters& integrity = pipeline->Integrity();
+  const LogStreamStats* log_stream = log_source != nullptr ? &log_source->StreamStats() : nullptr;
+  if (log_stream != nullptr && (log_stream->frames_missing > 0 || log_stream->Refused() > 0)) {
+    std::fprintf(stderr,
+                 "%s: log: %lld frames missing (sequence gaps), %lld duplicated and %lld "
+                 "out-of-order frames refused\n",
+                 tool, static_cast<long long>(log_stream->frames_missing),
+                 static_cast<long long>(log_stream->duplicates),
+                 static_cast<long long>(log_stream->out_of_order));
+  }
   Verdict verdict = JudgeRun(counters, h, integrity, pipeline->LastIntegrity().status,
-                             evaluate ? &eval : nullptr);
+                             evaluate ? &eval : nullptr, log_stream);
   if (run_status != core::Status::kOk)
     Fail(&verdict, std::string("the frame group stopped: ") + core::ToString(run_status));
   if (damaged_log) Fail(&verdict, "damaged log");
@@ -789,7 +816,7 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr,
                  evaluate && hazard_counter.maps > 0 ? &hazard_eval : nullptr, hazard_counter.maps,
                  locked, fifo, verdict, integrity, world ? &world->Trajectory() : nullptr,
-                 world ? &world->Target() : nullptr);
+                 world ? &world->Target() : nullptr, log_stream);
   }
   return verdict.exit_code;
 }

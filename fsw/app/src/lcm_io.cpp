@@ -8,8 +8,13 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <sstream>
+
+#include "swf/messages/checked_decode.hpp"
 
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
@@ -265,6 +270,7 @@ void OutputThread::Handle(const RecordRef& ref) {
       m.seq = r.seq;
       m.frames = r.frames;
       m.frames_dropped = r.frames_dropped;
+      m.frames_rejected = r.frames_rejected;
       m.overruns = r.overruns;
       m.outputs_dropped = r.outputs_dropped;
       m.allocations_after_start = r.allocations_after_start;
@@ -314,6 +320,11 @@ void OutputThread::Handle(const RecordRef& ref) {
 
 namespace {
 constexpr std::uint32_t kLogMagic = 0xEDA1DA01u;
+constexpr std::size_t kRecordHeaderBytes = 4 + 8 + 8 + 4 + 4;  // sync, eventnum, time, lengths
+constexpr std::int64_t kMaxChannelBytes = 256;                 // LCM's own channel name limit
+// Exposure times in microseconds that still fit in nanoseconds (core::TimeNs, int64).
+constexpr std::int64_t kMaxUtime = std::numeric_limits<std::int64_t>::max() / core::kNsPerUs;
+
 std::uint32_t Be32(const std::uint8_t* p) {
   return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
          std::uint32_t{p[3]};
@@ -324,53 +335,72 @@ std::int64_t Be64(const std::uint8_t* p) {
 }  // namespace
 
 bool LogReader::Open(const std::string& path, std::string* error) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
+  auto file = std::make_unique<std::ifstream>(path, std::ios::binary);
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!*file || ec || std::filesystem::is_directory(path)) {
     *error = path + ": cannot open the log";
     return false;
   }
-  bytes_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   path_ = path;
+  in_ = std::move(file);
+  size_ = size;
   pos_ = 0;
   index_ = 0;
   return true;
 }
 
+void LogReader::OpenBytes(std::string bytes, const std::string& name) {
+  path_ = name;
+  size_ = bytes.size();
+  in_ = std::make_unique<std::istringstream>(std::move(bytes), std::ios::binary);
+  pos_ = 0;
+  index_ = 0;
+}
+
 int LogReader::Next(LogEvent* event, std::string* error) {
-  if (pos_ == bytes_.size()) return 0;
-  const std::size_t left = bytes_.size() - pos_;
+  if (in_ == nullptr || pos_ == size_) return 0;
+  const std::uint64_t left = size_ - pos_;
   auto fail = [&](const std::string& why) {
     *error = path_ + ": record " + std::to_string(index_) + " at byte " + std::to_string(pos_) +
              ": " + why;
     return -1;
   };
-  constexpr std::size_t kHeader = 4 + 8 + 8 + 4 + 4;
-  if (left < kHeader) {
-    return fail("truncated header (" + std::to_string(left) + " of " + std::to_string(kHeader) +
-                " bytes)");
+  if (left < kRecordHeaderBytes) {
+    return fail("truncated header (" + std::to_string(left) + " of " +
+                std::to_string(kRecordHeaderBytes) + " bytes)");
   }
-  const std::uint8_t* p = bytes_.data() + pos_;
-  if (Be32(p) != kLogMagic) return fail("bad sync word (corrupt record)");
-  const std::int64_t eventnum = Be64(p + 4);
-  const std::int64_t timestamp = Be64(p + 12);
-  const std::int64_t channel_len = static_cast<std::int32_t>(Be32(p + 20));
-  const std::int64_t data_len = static_cast<std::int32_t>(Be32(p + 24));
-  if (channel_len <= 0 || channel_len > 256) {
+  std::uint8_t header[kRecordHeaderBytes];
+  if (!in_->read(reinterpret_cast<char*>(header), sizeof header)) return fail("read error");
+  if (Be32(header) != kLogMagic) return fail("bad sync word (corrupt record)");
+  const std::int64_t eventnum = Be64(header + 4);
+  const std::int64_t timestamp = Be64(header + 12);
+  const std::int64_t channel_len = static_cast<std::int32_t>(Be32(header + 20));
+  const std::int64_t data_len = static_cast<std::int32_t>(Be32(header + 24));
+  if (channel_len <= 0 || channel_len > kMaxChannelBytes) {
     return fail("bad channel length " + std::to_string(channel_len));
   }
   if (data_len < 0) return fail("bad data length " + std::to_string(data_len));
-  const std::uint64_t need =
-      kHeader + static_cast<std::uint64_t>(channel_len) + static_cast<std::uint64_t>(data_len);
+  if (data_len > messages::kMaxEncodedBytes) {
+    return fail("data length " + std::to_string(data_len) + " over the largest message (" +
+                std::to_string(messages::kMaxEncodedBytes) + " bytes)");
+  }
+  const std::uint64_t need = kRecordHeaderBytes + static_cast<std::uint64_t>(channel_len) +
+                             static_cast<std::uint64_t>(data_len);
   if (need > left) {
     return fail("truncated (" + std::to_string(left) + " of " + std::to_string(need) + " bytes)");
+  }
+  // Both lengths are now bounded and present in the file.
+  event->channel.resize(static_cast<std::size_t>(channel_len));
+  event->data.resize(static_cast<std::size_t>(data_len));
+  if (!in_->read(event->channel.data(), channel_len) ||
+      !in_->read(reinterpret_cast<char*>(event->data.data()), data_len)) {
+    return fail("read error");
   }
   event->index = index_;
   event->offset = static_cast<std::int64_t>(pos_);
   event->eventnum = eventnum;
   event->timestamp = timestamp;
-  event->channel.assign(reinterpret_cast<const char*>(p + kHeader),
-                        static_cast<std::size_t>(channel_len));
-  event->data.assign(p + kHeader + channel_len, p + need);
   pos_ += need;
   ++index_;
   return 1;
@@ -380,30 +410,54 @@ bool LogStereoSource::Load(const std::string& path, const std::string& channel,
                            std::string* error) {
   LogReader reader;
   if (!reader.Open(path, error)) return false;
+  Load(&reader, channel);
+  return true;
+}
+
+namespace {
+// A decoded frame's fields that the decoder cannot judge: "" when usable, else why not.
+std::string CheckFrameFields(const swf_msgs::stereo_frame_t& msg) {
+  if (msg.width <= 0 || msg.height <= 0) {
+    return "empty image (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) + ")";
+  }
+  if (msg.seq < 0) return "negative seq " + std::to_string(msg.seq);
+  if (msg.dropped_before < 0)
+    return "negative dropped_before " + std::to_string(msg.dropped_before);
+  for (const std::int64_t t : {msg.utime, msg.left_exposure_utime, msg.right_exposure_utime}) {
+    if (t < 0 || t > kMaxUtime) return "exposure time " + std::to_string(t) + " us out of range";
+  }
+  return "";
+}
+}  // namespace
+
+void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
   frames_.clear();
   load_error_.clear();
+  stream_ = LogStreamStats{};
   LogEvent event;
   swf_msgs::stereo_frame_t msg;
   for (;;) {
     std::string why;
-    const int r = reader.Next(&event, &why);
+    const int r = reader->Next(&event, &why);
     if (r == 0) break;
     if (r < 0) {
       load_error_ = why;
       break;
     }
     if (event.channel != channel) continue;
-    const int n = msg.decode(event.data.data(), 0, static_cast<int>(event.data.size()));
-    const std::string where = path + ": record " + std::to_string(event.index) + " (" +
+    const std::string where = reader->Path() + ": record " + std::to_string(event.index) + " (" +
                               event.channel + ", event " + std::to_string(event.eventnum) + ")";
-    if (n < 0 || n != static_cast<int>(event.data.size())) {
-      load_error_ = where + ": stereo_frame_t does not decode (corrupt or wrong type)";
+    const messages::DecodeError decoded =
+        messages::CheckedDecode(event.data.data(), event.data.size(), &msg);
+    if (!decoded.Ok()) {
+      char what[128];
+      messages::Describe(decoded, what, sizeof what);
+      load_error_ = where + ": stereo_frame_t does not decode (" + what + ")";
       break;
     }
-    if (msg.width <= 0 || msg.height <= 0 || msg.num_bytes != msg.width * msg.height ||
-        static_cast<int>(msg.left.size()) != msg.num_bytes ||
-        static_cast<int>(msg.right.size()) != msg.num_bytes) {
-      load_error_ = where + ": inconsistent image size";
+    const std::string bad = CheckFrameFields(msg);
+    if (!bad.empty()) {
+      load_error_ = where + ": " + bad;
       break;
     }
     if (!frames_.empty() && (msg.width != width_ || msg.height != height_)) {
@@ -415,7 +469,7 @@ bool LogStereoSource::Load(const std::string& path, const std::string& channel,
     rectified_ = msg.rectified;
     Frame f;
     f.seq = msg.seq;
-    f.left_ns = msg.left_exposure_utime * core::kNsPerUs;
+    f.left_ns = msg.left_exposure_utime * core::kNsPerUs;  // in range: CheckFrameFields
     f.right_ns = msg.right_exposure_utime * core::kNsPerUs;
     f.dropped_before = msg.dropped_before;
     f.has_motion = msg.has_motion;
@@ -425,9 +479,29 @@ bool LogStereoSource::Load(const std::string& path, const std::string& channel,
     }
     f.left = std::move(msg.left);
     f.right = std::move(msg.right);
-    frames_.push_back(std::move(f));
+    Admit(std::move(f));
   }
-  return true;
+}
+
+void LogStereoSource::Admit(Frame frame) {
+  if (!frames_.empty()) {
+    const Frame& last = frames_.back();
+    if (frame.seq == last.seq) {
+      ++stream_.duplicates;
+      return;
+    }
+    if (frame.seq < last.seq || frame.left_ns <= last.left_ns) {
+      ++stream_.out_of_order;
+      return;
+    }
+    // Both sequence numbers are non-negative: the gap cannot overflow.
+    const std::int64_t gap = frame.seq - last.seq - 1;
+    stream_.frames_missing += gap;
+    const std::int64_t dropped = std::int64_t{frame.dropped_before} + gap;
+    frame.dropped_before = static_cast<std::int32_t>(
+        std::min<std::int64_t>(dropped, std::numeric_limits<std::int32_t>::max()));
+  }
+  frames_.push_back(std::move(frame));
 }
 
 bool LogStereoSource::Motion(std::uint64_t seq, MotionInput* input) {
@@ -441,6 +515,8 @@ bool LogStereoSource::Motion(std::uint64_t seq, MotionInput* input) {
 core::Status LogStereoSource::Start() {
   next_ = 0;
   stats_ = drivers::SourceStats{};
+  // Refused while loading; gaps are counted through each pair's dropped_before instead.
+  stats_.frames_rejected = static_cast<std::uint64_t>(stream_.Refused());
   return core::Status::kOk;
 }
 

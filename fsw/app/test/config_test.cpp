@@ -38,8 +38,11 @@ bool Accepted(const std::string& text, FswConfig* c = nullptr) {
 }
 
 // The fsw/app directory of the source tree (config/, test/).
+// fsw/app in the source tree. __FILE__ is relative to the build directory when ccache rewrites
+// paths (CCACHE_BASEDIR); ctest runs the tests from the source root, where "fsw/app" is.
 std::string AppDir() {
-  std::string here = __FILE__;  // .../fsw/app/test/config_test.cpp
+  const std::string here = __FILE__;  // .../fsw/app/test/config_test.cpp
+  if (here.empty() || here[0] != '/') return "fsw/app";
   return here.substr(0, here.rfind("/test/"));
 }
 

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "swf_msgs/stereo_frame_t.hpp"
 
@@ -24,6 +25,8 @@ void WriteLog(const std::string& path, int n) {
   for (int i = 0; i < n; ++i) {
     swf_msgs::stereo_frame_t f{};
     f.utime = 1000 * i;
+    f.left_exposure_utime = f.utime;  // advancing, as the sequence checks require
+    f.right_exposure_utime = f.utime;
     f.seq = i;
     f.rectified = true;
     f.has_motion = i > 0;
@@ -131,6 +134,256 @@ TEST(LcmIoTest, MissingLogIsAnError) {
   std::string error;
   EXPECT_FALSE(source.Load("/nonexistent/x.lcmlog", "SWF_STEREO", &error));
   EXPECT_NE(error.find("/nonexistent/x.lcmlog"), std::string::npos);
+}
+
+// ---- sequence and time checks, hostile records ----------------------------------------------
+
+struct FrameSpec {
+  std::int64_t seq = 0;
+  std::int64_t utime = 0;  // exposure time of both images, microseconds
+  const char* channel = "SWF_STEREO";
+};
+
+std::vector<std::uint8_t> EncodeFrame(const FrameSpec& spec) {
+  swf_msgs::stereo_frame_t f{};
+  f.utime = spec.utime;
+  f.seq = spec.seq;
+  f.left_exposure_utime = spec.utime;
+  f.right_exposure_utime = spec.utime;
+  f.rectified = true;
+  f.width = 4;
+  f.height = 2;
+  f.num_bytes = 8;
+  f.left.assign(8, static_cast<std::uint8_t>(spec.seq));
+  f.right.assign(8, static_cast<std::uint8_t>(spec.seq + 1));
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(f.getEncodedSize()));
+  EXPECT_EQ(f.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  return buf;
+}
+
+void WriteRecords(const std::string& path, const std::vector<FrameSpec>& specs,
+                  const std::vector<std::vector<std::uint8_t>>& payloads) {
+  lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "w");
+  ASSERT_NE(log, nullptr);
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    lcm_eventlog_event_t e{};
+    e.timestamp = specs[i].utime;
+    e.channellen = static_cast<std::int32_t>(std::strlen(specs[i].channel));
+    e.channel = const_cast<char*>(specs[i].channel);
+    e.datalen = static_cast<std::int32_t>(payloads[i].size());
+    e.data = const_cast<std::uint8_t*>(payloads[i].data());
+    ASSERT_EQ(lcm_eventlog_write_event(log, &e), 0);
+  }
+  lcm_eventlog_destroy(log);
+}
+
+// A log of 4x2 frames with the given sequence numbers, 100 ms apart unless `utimes` says otherwise.
+std::string WriteSequence(const char* name, const std::vector<std::int64_t>& seqs,
+                          std::vector<std::int64_t> utimes = {}) {
+  std::vector<FrameSpec> specs;
+  std::vector<std::vector<std::uint8_t>> payloads;
+  for (std::size_t i = 0; i < seqs.size(); ++i) {
+    FrameSpec spec;
+    spec.seq = seqs[i];
+    spec.utime = utimes.empty() ? 100000 * (seqs[i] + 1) : utimes[i];
+    specs.push_back(spec);
+    payloads.push_back(EncodeFrame(spec));
+  }
+  const std::string path = TempPath(name);
+  WriteRecords(path, specs, payloads);
+  return path;
+}
+
+struct Served {
+  std::vector<std::uint64_t> seqs;
+  std::vector<std::uint32_t> dropped_before;
+  drivers::SourceStats stats;
+};
+
+Served ServeAll(LogStereoSource* source) {
+  Served out;
+  EXPECT_EQ(source->Start(), core::Status::kOk);
+  drivers::StereoPair pair;
+  for (std::size_t i = 0; i < 1000 && source->Next(0, &pair) == core::Status::kOk; ++i) {
+    out.seqs.push_back(pair.seq);
+    out.dropped_before.push_back(pair.dropped_before);
+  }
+  out.stats = source->Stats();
+  return out;
+}
+
+// GIVEN a log whose frame 2 is missing WHEN replayed THEN the gap reaches the flight loop as
+// dropped_before on the next frame and is counted as missing (it replayed as 0 dropped frames).
+TEST(LcmIoTest, AGapInTheSequenceIsCountedAsDroppedFrames) {
+  LogStereoSource source;
+  std::string error;
+  ASSERT_TRUE(source.Load(WriteSequence("gap.lcmlog", {0, 1, 3, 4}), "SWF_STEREO", &error));
+  EXPECT_TRUE(source.LoadError().empty()) << source.LoadError();
+  const Served s = ServeAll(&source);
+  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3, 4}));
+  EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 0, 1, 0}));
+  EXPECT_EQ(source.StreamStats().frames_missing, 1);
+  EXPECT_EQ(source.StreamStats().Refused(), 0);
+  EXPECT_EQ(s.stats.frames_rejected, 0u);
+}
+
+// GIVEN a frame recorded twice WHEN replayed THEN the second copy is refused, counted as a
+// duplicate and as a frame the source rejected.
+TEST(LcmIoTest, ADuplicatedFrameIsRefused) {
+  LogStereoSource source;
+  std::string error;
+  ASSERT_TRUE(source.Load(WriteSequence("dup.lcmlog", {0, 1, 1, 2}), "SWF_STEREO", &error));
+  const Served s = ServeAll(&source);
+  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 2}));
+  EXPECT_EQ(source.StreamStats().duplicates, 1);
+  EXPECT_EQ(source.StreamStats().frames_missing, 0);
+  EXPECT_EQ(s.stats.frames_rejected, 1u);
+}
+
+// GIVEN frames 1 and 2 swapped WHEN replayed THEN frame 2 is served with one frame missing before
+// it and frame 1, now behind, is refused, never fused out of order.
+TEST(LcmIoTest, ASwappedPairIsAGapAndARefusal) {
+  LogStereoSource source;
+  std::string error;
+  ASSERT_TRUE(source.Load(WriteSequence("swap.lcmlog", {0, 2, 1, 3}), "SWF_STEREO", &error));
+  const Served s = ServeAll(&source);
+  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 2, 3}));
+  EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 1, 0}));
+  EXPECT_EQ(source.StreamStats().out_of_order, 1);
+  EXPECT_EQ(source.StreamStats().frames_missing, 1);
+  EXPECT_EQ(s.stats.frames_rejected, 1u);
+}
+
+// GIVEN consecutive sequence numbers whose exposure times go back (frames renumbered after a
+// swap) WHEN replayed THEN the frame behind in time is refused as out of order.
+TEST(LcmIoTest, AnExposureTimeGoingBackIsRefused) {
+  LogStereoSource source;
+  std::string error;
+  ASSERT_TRUE(source.Load(WriteSequence("time.lcmlog", {0, 1, 2, 3}, {100, 300, 200, 400}),
+                          "SWF_STEREO", &error));
+  const Served s = ServeAll(&source);
+  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3}));
+  EXPECT_EQ(source.StreamStats().out_of_order, 1);
+  // The refused frame's number is then missing from the stream that was served.
+  EXPECT_EQ(source.StreamStats().frames_missing, 1);
+}
+
+// GIVEN a frame on a misspelled channel WHEN replayed THEN it is not silently skipped: the hole
+// it leaves in the sequence is counted.
+TEST(LcmIoTest, AFrameOnAMisnamedChannelLeavesACountedGap) {
+  std::vector<FrameSpec> specs(3);
+  std::vector<std::vector<std::uint8_t>> payloads;
+  for (int i = 0; i < 3; ++i) {
+    specs[i].seq = i;
+    specs[i].utime = 1000 * (i + 1);
+  }
+  specs[1].channel = "SWF_STEREOO";
+  for (const FrameSpec& spec : specs) payloads.push_back(EncodeFrame(spec));
+  const std::string path = TempPath("misnamed.lcmlog");
+  WriteRecords(path, specs, payloads);
+  LogStereoSource source;
+  std::string error;
+  ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error));
+  EXPECT_EQ(source.NumFrames(), 2u);
+  EXPECT_EQ(source.StreamStats().frames_missing, 1);
+}
+
+// Overwrites the big-endian int32 / int64 at `offset` of a payload.
+void PutBe(std::vector<std::uint8_t>* bytes, std::size_t offset, std::uint64_t value, int width) {
+  for (int i = 0; i < width; ++i) {
+    (*bytes)[offset + i] = static_cast<std::uint8_t>(value >> (8 * (width - 1 - i)));
+  }
+}
+
+// Loads a log of three frames whose second payload `corrupt` altered; returns the load error.
+template <typename Corrupt>
+std::string LoadWithCorruptSecondFrame(const char* name, Corrupt corrupt, std::size_t* frames) {
+  std::vector<FrameSpec> specs(3);
+  std::vector<std::vector<std::uint8_t>> payloads;
+  for (int i = 0; i < 3; ++i) {
+    specs[i].seq = i;
+    specs[i].utime = 1000 * (i + 1);
+    payloads.push_back(EncodeFrame(specs[i]));
+  }
+  corrupt(&payloads[1]);
+  const std::string path = TempPath(name);
+  WriteRecords(path, specs, payloads);
+  LogStereoSource source;
+  std::string error;
+  EXPECT_TRUE(source.Load(path, "SWF_STEREO", &error));
+  *frames = source.NumFrames();
+  return source.LoadError();
+}
+
+// Payload offsets (stereo_frame_t after its 8-byte fingerprint; messages/stereo_frame_t.lcm).
+constexpr std::size_t kLeftExposure = 8 + 16;
+constexpr std::size_t kWidth = 8 + 86;
+constexpr std::size_t kNumBytes = kWidth + 8;
+
+// GIVEN length fields and times a flipped bit or a hostile writer makes (each aborted swf-replay
+// with std::length_error, or overflowed) WHEN the log is loaded THEN loading stops at that
+// record with an error naming the record and the field, keeping the frame before it.
+TEST(LcmIoTest, HostileFieldsStopTheLoadNamingRecordAndField) {
+  std::size_t frames = 0;
+  std::string e = LoadWithCorruptSecondFrame(
+      "neg.lcmlog", [](auto* p) { PutBe(p, kNumBytes, 0xffffffffu, 4); }, &frames);
+  EXPECT_EQ(frames, 1u);
+  EXPECT_NE(e.find("record 1 (SWF_STEREO"), std::string::npos) << e;
+  EXPECT_NE(e.find("num_bytes -1: bad length"), std::string::npos) << e;
+  e = LoadWithCorruptSecondFrame(
+      "huge.lcmlog", [](auto* p) { PutBe(p, kNumBytes, 0x7fffffffu, 4); }, &frames);
+  EXPECT_NE(e.find("num_bytes 2147483647: over the stated limit"), std::string::npos) << e;
+  e = LoadWithCorruptSecondFrame(
+      "square.lcmlog",
+      [](auto* p) {
+        PutBe(p, kWidth, 65537, 4);
+        PutBe(p, kWidth + 4, 65537, 4);
+      },
+      &frames);
+  EXPECT_NE(e.find("width 65537: over the stated limit"), std::string::npos) << e;
+  e = LoadWithCorruptSecondFrame(
+      "time.lcmlog", [](auto* p) { PutBe(p, kLeftExposure, 0x7fffffffffffffffu, 8); }, &frames);
+  EXPECT_EQ(frames, 1u);
+  EXPECT_NE(e.find("exposure time 9223372036854775807 us out of range"), std::string::npos) << e;
+  e = LoadWithCorruptSecondFrame(
+      "zero.lcmlog",
+      [](auto* p) {
+        PutBe(p, kWidth, 0, 4);
+        PutBe(p, kNumBytes, 0, 4);
+        p->resize(p->size() - 16);
+      },
+      &frames);
+  EXPECT_NE(e.find("empty image"), std::string::npos) << e;
+}
+
+// GIVEN a record header whose data length is negative or larger than any message WHEN read THEN
+// the reader refuses it before allocating, naming the record.
+TEST(LcmIoTest, RecordLengthsAreCheckedBeforeAllocating) {
+  const std::string path = WriteSequence("len.lcmlog", {0, 1});
+  const std::string bytes = Slurp(path);
+  const std::size_t second = bytes.size() / 2;  // two records of the same size
+  for (const std::uint32_t len : {0xffffffffu, 0x7fffffffu}) {
+    std::string bad = bytes;
+    for (int i = 0; i < 4; ++i) bad[second + 24 + i] = static_cast<char>(len >> (24 - 8 * i));
+    LogReader reader;
+    reader.OpenBytes(bad, "mem.lcmlog");
+    LogStereoSource source;
+    source.Load(&reader, "SWF_STEREO");
+    EXPECT_EQ(source.NumFrames(), 1u);
+    EXPECT_NE(source.LoadError().find("mem.lcmlog: record 1 at byte"), std::string::npos)
+        << source.LoadError();
+    EXPECT_NE(
+        source.LoadError().find(len == 0xffffffffu ? "bad data length -1" : "over the largest"),
+        std::string::npos)
+        << source.LoadError();
+  }
+}
+
+TEST(LcmIoTest, ADirectoryIsNotALog) {
+  LogStereoSource source;
+  std::string error;
+  EXPECT_FALSE(source.Load(::testing::TempDir(), "SWF_STEREO", &error));
+  EXPECT_NE(error.find("cannot open the log"), std::string::npos) << error;
 }
 
 }  // namespace
