@@ -1,6 +1,7 @@
 #include "swf/app/flight_loop.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 
 #include "swf/app/alloc_meter.hpp"
@@ -48,6 +49,7 @@ FlightLoop::~FlightLoop() {
     hazard_wake_.release();
     hazard_thread_.join();
   }
+  StopRecoveryThread();
 }
 
 Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
@@ -56,7 +58,8 @@ Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
   if (pipeline == nullptr || source == nullptr || outputs == nullptr ||
       !(options.rate_hz > 0.0 && options.rate_hz <= 1000.0) || options.hazard_every < 1 ||
       options.health_every < 1 || options.max_frames < 0 || options.acquire_timeout_ns <= 0 ||
-      options.max_consecutive_timeouts < 1) {
+      options.restart_after_ns <= 0 || options.restart_interval_ns <= 0 ||
+      options.max_outage_ns < options.restart_after_ns) {
     return Status::kInvalidArgument;
   }
   options_ = options;
@@ -71,6 +74,13 @@ Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
   hazard_spare_slot_ = -1;
   hazard_summary_ = StageSummary{};
   counters_ = LoopCounters{};
+  cycles_ = 0;
+  outage_cycles_ = 0;
+  cycles_since_restart_ = 0;
+  expected_seq_ = 0;
+  seq_offset_ = 0;
+  source_fault_[0] = '\0';
+  source_down_.store(false);
   configured_ = true;
   return Status::kOk;
 }
@@ -93,20 +103,21 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
                          TimeNs* processing_ns) {
   *processing_ns = 0;
   const TimeNs t0 = core::MonotonicNs();
+  // kNotConfigured: the source is down (being restarted, or its last restart failed).
+  if (SourceDown()) return MissCycle(Status::kNotConfigured, synchronous_hazard);
+  // A camera outage waits one period per missed cycle, whatever the pacing.
   drivers::StereoPair pair;
-  Status s = source_->Next(acquire_timeout_ns, &pair);
+  Status s = source_->Next(outage_cycles_ > 0 ? period_ns_ : acquire_timeout_ns, &pair);
   const TimeNs t1 = core::MonotonicNs();
   stages_[kStageAcquire].Add(t1 - t0);
-  if (s == Status::kTimeout) {
-    ++counters_.source_timeouts;
-    return ++consecutive_timeouts_ >= options_.max_consecutive_timeouts ? Status::kDeviceLost
-                                                                        : Status::kTimeout;
+  if (s == Status::kTimeout || s == Status::kDeviceLost || s == Status::kIoError) {
+    return MissCycle(s, synchronous_hazard);
   }
   if (s != Status::kOk) {
     if (s != Status::kEmpty) ++counters_.source_errors;
     return s;
   }
-  consecutive_timeouts_ = 0;
+  EndOutage();
   counters_.frames_dropped += pair.dropped_before;
 
   PipelineFrame frame;
@@ -115,10 +126,18 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   frame.right = frontend::GrayView{pair.right.data, pair.right.width, pair.right.height,
                                    pair.right.stride_bytes};
   frame.utime = pair.left_exposure_ns / core::kNsPerUs;
-  frame.seq = static_cast<std::int64_t>(pair.seq);
+  // Frame numbers continue across outages: a source that numbers only the pairs it served (not
+  // the frames its camera missed) is shifted past the cycles coasted in between.
+  frame.seq = static_cast<std::int64_t>(pair.seq) + seq_offset_;
+  if (frame.seq < expected_seq_) {
+    seq_offset_ += expected_seq_ - frame.seq;
+    frame.seq = expected_seq_;
+  }
+  expected_seq_ = frame.seq + 1;
   last_frame_utime_ = frame.utime;
   MotionInput motion;
-  frame.has_motion = motion_ != nullptr && motion_->Motion(pair.seq, &motion);
+  frame.has_motion =
+      motion_ != nullptr && motion_->Motion(static_cast<std::uint64_t>(frame.seq), &motion);
   if (frame.has_motion) {
     frame.motion.t = estimator::Vec3<double>(motion.translation_m[0], motion.translation_m[1],
                                              motion.translation_m[2]);
@@ -181,16 +200,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   source_->Release(pair);
   if (pipeline_->FramesEstimated() > 0 &&
       (stage == Status::kOk || stage == Status::kNumericalFailure)) {
-    const std::int32_t slot = AcquireOutput(&out_->navs, options_.pacing == Pacing::kLockstep);
-    if (slot < 0) {
-      ++counters_.outputs_dropped;
-    } else {
-      NavRecord& r = out_->navs[slot];
-      r.seq = nav_seq_++;
-      r.mode = options_.nav_mode;
-      pipeline_->MakeNav(&r.nav);
-      Push(&out_->frame_group, RecordRef{RecordKind::kNav, slot});
-    }
+    PublishNav();
   }
   const TimeNs t5 = core::MonotonicNs();
   stages_[kStageOutput].Add(t5 - t4);
@@ -205,8 +215,138 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   }
   stages_[kStageCycle].Add(t6 - t1);
   *processing_ns = t6 - t1;
-  if (counters_.frames % options_.health_every == 0) PublishHealth();
+  if (++cycles_ % options_.health_every == 0) PublishHealth();
   return Status::kOk;
+}
+
+void FlightLoop::PublishNav() {
+  const std::int32_t slot = AcquireOutput(&out_->navs, options_.pacing == Pacing::kLockstep);
+  if (slot < 0) {
+    ++counters_.outputs_dropped;
+    return;
+  }
+  NavRecord& r = out_->navs[slot];
+  r.seq = nav_seq_++;
+  r.mode = options_.nav_mode;
+  pipeline_->MakeNav(&r.nav);
+  Push(&out_->frame_group, RecordRef{RecordKind::kNav, slot});
+}
+
+std::int64_t FlightLoop::CyclesOf(TimeNs duration_ns) const {
+  const std::int64_t cycles = (duration_ns + period_ns_ - 1) / period_ns_;
+  return cycles < 1 ? 1 : cycles;
+}
+
+Status FlightLoop::MissCycle(Status source_status, bool synchronous) {
+  if (source_status == Status::kTimeout) {
+    ++counters_.source_timeouts;
+  } else if (source_status != Status::kNotConfigured) {
+    ++counters_.source_errors;
+  }
+  if (outage_cycles_ == 0) {
+    ++counters_.camera_outages;
+    cycles_since_restart_ = 0;
+  }
+  ++outage_cycles_;
+  ++cycles_since_restart_;
+  ++counters_.cycles_missed;
+  if (outage_cycles_ > counters_.longest_outage_cycles) {
+    counters_.longest_outage_cycles = outage_cycles_;
+  }
+  // The source's own words name the camera and the cause (kept from before any restart).
+  if (source_status != Status::kNotConfigured && source_->LastError()[0] != '\0') {
+    std::snprintf(source_fault_, sizeof source_fault_, "%s", source_->LastError());
+  }
+  if (RestartDue(source_status)) RequestRestart(synchronous);
+  if (outage_cycles_ > CyclesOf(options_.max_outage_ns)) return Status::kDeviceLost;
+
+  // The cycle the missing frame would have had: its motion input, a coasted state, its output.
+  const TimeNs t1 = core::MonotonicNs();
+  MotionInput motion;
+  estimator::Pose<double> camera_prev_T_camera;
+  const bool has_motion =
+      motion_ != nullptr && motion_->Motion(static_cast<std::uint64_t>(expected_seq_), &motion);
+  if (has_motion) {
+    camera_prev_T_camera.t = estimator::Vec3<double>(
+        motion.translation_m[0], motion.translation_m[1], motion.translation_m[2]);
+    camera_prev_T_camera.R = estimator::ExpSO3<double>(estimator::Vec3<double>(
+        motion.rotation_rad[0], motion.rotation_rad[1], motion.rotation_rad[2]));
+  }
+  ++expected_seq_;
+  if (pipeline_->Coast(has_motion ? &camera_prev_T_camera : nullptr) == Status::kOk) {
+    ++counters_.cycles_coasted;
+    PublishNav();
+  }
+  stages_[kStageOutput].Add(core::MonotonicNs() - t1);
+  if (++cycles_ % options_.health_every == 0) PublishHealth();
+  // A lockstep group has no clock but the camera's: a cycle that did not wait a period in
+  // Next() waits it here.
+  if (options_.pacing == Pacing::kLockstep && !synchronous && source_status != Status::kTimeout) {
+    SleepUntil(t1 + period_ns_);
+  }
+  return Status::kTimeout;
+}
+
+bool FlightLoop::RestartDue(Status source_status) const {
+  if (restart_busy_.load(std::memory_order_acquire)) return false;
+  if (source_down_.load(std::memory_order_acquire)) {
+    return cycles_since_restart_ >= CyclesOf(options_.restart_interval_ns);
+  }
+  return source_status == Status::kDeviceLost || source_status == Status::kIoError ||
+         cycles_since_restart_ >= CyclesOf(options_.restart_after_ns);
+}
+
+void FlightLoop::EndOutage() {
+  if (outage_cycles_ == 0) return;
+  ++counters_.source_recoveries;
+  outage_cycles_ = 0;
+  cycles_since_restart_ = 0;
+}
+
+bool FlightLoop::SourceDown() const {
+  return restart_busy_.load(std::memory_order_acquire) ||
+         source_down_.load(std::memory_order_acquire);
+}
+
+void FlightLoop::RequestRestart(bool synchronous) {
+  ++counters_.source_restarts;
+  cycles_since_restart_ = 0;
+  source_down_.store(true, std::memory_order_release);
+  if (synchronous) {
+    // Step(): no threads; the caller accepts that a restart blocks and allocates.
+    source_->Stop();
+    source_down_.store(source_->Start() != Status::kOk, std::memory_order_release);
+    return;
+  }
+  restart_busy_.store(true, std::memory_order_release);
+  recovery_wake_.release();
+}
+
+void FlightLoop::RecoveryMain() {
+  for (;;) {
+    recovery_wake_.acquire();
+    if (recovery_quit_.load(std::memory_order_acquire)) return;
+    char fault[sizeof source_fault_];
+    std::snprintf(fault, sizeof fault, "%s", source_->LastError());
+    source_->Stop();
+    const Status s = source_->Start();
+    source_down_.store(s != Status::kOk, std::memory_order_release);
+    if (s == Status::kOk) {
+      std::fprintf(stderr, "frame group: camera fault (%s): the %s source restarted\n", fault,
+                   source_->Name());
+    } else {
+      std::fprintf(stderr, "frame group: camera fault (%s): restarting the %s source: %s: %s\n",
+                   fault, source_->Name(), core::ToString(s), source_->LastError());
+    }
+    restart_busy_.store(false, std::memory_order_release);
+  }
+}
+
+void FlightLoop::StopRecoveryThread() {
+  if (!recovery_thread_.joinable()) return;
+  recovery_quit_.store(true, std::memory_order_release);
+  recovery_wake_.release();
+  recovery_thread_.join();
 }
 
 std::int32_t FlightLoop::AcquireHazardInput(bool wait) {
@@ -381,6 +521,9 @@ Status FlightLoop::Run() {
   stop_.store(false);
   hazard_quit_.store(false);
   hazard_thread_ = std::thread([this] { HazardMain(); });
+  recovery_quit_.store(false);
+  restart_busy_.store(false);
+  recovery_thread_ = std::thread([this] { RecoveryMain(); });
   BeginRealtimeAllocationCounting();
   Status result = Status::kOk;
   TimeNs next = core::MonotonicNs();
@@ -414,7 +557,15 @@ Status FlightLoop::Run() {
   hazard_quit_.store(true, std::memory_order_release);
   hazard_wake_.release();
   hazard_thread_.join();
+  StopRecoveryThread();
   PublishHealth();
+  if (result == Status::kDeviceLost) {
+    std::fprintf(stderr,
+                 "frame group: camera lost for %lld cycles (max_outage %.1f s): %s; navigation "
+                 "ended\n",
+                 static_cast<long long>(outage_cycles_), core::NsToMs(options_.max_outage_ns) / 1e3,
+                 source_fault_);
+  }
   return result;
 }
 

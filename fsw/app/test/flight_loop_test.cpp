@@ -1,7 +1,8 @@
 // The frame group over a simulated descent: no heap allocation on the real-time path (counted
 // with tests/support's counter around every cycle, hazard mapping included), hazard maps of the
-// threaded hazard group identical to synchronous ones, and an injected slow stage is an overrun
-// while the group keeps its rate.
+// threaded hazard group identical to synchronous ones, an injected slow stage is an overrun
+// while the group keeps its rate, and a camera outage is coasted on the motion input, published
+// as CAMERA_OUTAGE and recovered from.
 #include "swf/app/flight_loop.hpp"
 
 #include <gtest/gtest.h>
@@ -245,6 +246,137 @@ TEST(FlightLoopTest, InjectedSlowStageIsAnOverrunAndTheGroupKeepsItsRate) {
   std::printf("40 cycles at 20 Hz with a 75 ms stall: %.1f ms, %lld overruns, %lld ticks skipped\n",
               elapsed_ms, static_cast<long long>(loop.Counters().overruns),
               static_cast<long long>(loop.Counters().ticks_skipped));
+}
+
+// The simulator's camera with an outage: frames [first, first + count) are taken from the
+// simulator (their time passes) but never delivered: Next() says kTimeout, or kDeviceLost at the
+// outage's first frame when `lost`. A restart (Start(); the simulator was started by the rig)
+// fails `failed_starts` times first (a camera still away), then resumes where the simulator is.
+class OutageSource final : public drivers::StereoSource {
+ public:
+  OutageSource(drivers::StereoSource* inner, std::uint64_t first, std::uint64_t count)
+      : inner_(inner), first_(first), count_(count) {}
+  bool lost = false;
+  int failed_starts = 0;
+  int starts = 0;
+
+  core::Status Start() override {
+    ++starts;
+    return failed_starts-- > 0 ? core::Status::kDeviceLost : core::Status::kOk;
+  }
+  core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override {
+    const core::Status s = inner_->Next(timeout_ns, pair);
+    if (s != core::Status::kOk || pair->seq < first_ || pair->seq >= first_ + count_) return s;
+    inner_->Release(*pair);
+    return lost && pair->seq == first_ ? core::Status::kDeviceLost : core::Status::kTimeout;
+  }
+  void Release(const drivers::StereoPair& pair) override { inner_->Release(pair); }
+  void Stop() override {}
+  drivers::SourceStats Stats() const override { return inner_->Stats(); }
+  const char* Name() const override { return "outage"; }
+  const char* LastError() const override { return "outage camera-7: no frame (scripted)"; }
+
+ private:
+  drivers::StereoSource* inner_;
+  std::uint64_t first_;
+  std::uint64_t count_;
+};
+
+class NavCollector : public OutputObserver {
+ public:
+  void OnNav(const NavRecord& r) override { navs.push_back(r.nav); }
+  std::vector<NavOutput> navs;
+};
+
+bool Outage(const NavOutput& nav) {
+  return (nav.integrity_flags & estimator::kFlagCameraOutage) != 0;
+}
+
+// GIVEN a descent at 10 Hz whose camera delivers nothing for frames 30-39 (1 s) WHEN it runs
+// cycle by cycle THEN every one of the 10 missed cycles publishes a coasted output flagged
+// CAMERA_OUTAGE, never VALID, numbered as the missing frame and carried by that frame's motion
+// input (so it stays near the truth), one outage is counted and recovered, the 81 frames are
+// estimated from images, and the estimate is VALID again before the end.
+TEST(FlightLoopTest, CameraOutageIsCoastedOnTheMotionInputAndRecovered) {
+  Rig rig(
+      "source: sim\nsim.width_px: 256\nsim.height_px: 192\nsim.terrain_size: 1024\n"
+      "rate_hz: 10\n");
+  OutageSource source(rig.source.get(), 30, 10);
+  NavCollector navs;
+  rig.output.AddObserver(&navs);
+  FlightLoop loop;
+  rig.loop_options.max_outage_ns = 5 * core::kNsPerS;
+  ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), &source, rig.channels.get(),
+                           rig.world.get(), rig.hazard.get()),
+            core::Status::kOk);
+  std::uint64_t allocations = 0;
+  for (int cycle = 0; cycle < 200; ++cycle) {
+    core::Status s;
+    {
+      testing::AllocationScope scope;
+      s = loop.Step();
+      allocations += scope.Count();
+    }
+    rig.output.DrainOnce();
+    if (s == core::Status::kEmpty) break;
+    ASSERT_TRUE(s == core::Status::kOk || s == core::Status::kTimeout) << core::ToString(s);
+  }
+  const LoopCounters& c = loop.Counters();
+  EXPECT_EQ(c.frames, 81);
+  EXPECT_EQ(c.cycles_missed, 10);
+  EXPECT_EQ(c.cycles_coasted, 10);
+  EXPECT_EQ(c.camera_outages, 1);
+  EXPECT_EQ(c.source_recoveries, 1);
+  EXPECT_EQ(c.longest_outage_cycles, 10);
+  EXPECT_EQ(c.source_restarts, 1);  // silent for restart_after (1 s = 10 cycles): one restart
+  EXPECT_EQ(allocations, 0u);       // the scripted restart allocates nothing either
+  EXPECT_STREQ(loop.SourceFault(), "outage camera-7: no frame (scripted)");
+  ASSERT_EQ(navs.navs.size(), 91u);
+  for (std::size_t i = 0; i < navs.navs.size(); ++i) {
+    const NavOutput& nav = navs.navs[i];
+    EXPECT_EQ(nav.frame_seq, static_cast<std::int64_t>(i));
+    const bool missed = i >= 30 && i < 40;
+    EXPECT_EQ(Outage(nav), missed) << "frame " << i;
+    if (!missed) continue;
+    EXPECT_NE(nav.status, static_cast<std::int8_t>(estimator::NavIntegrity::kValid)) << i;
+    const Eigen::Vector3d truth = rig.world->Trajectory().WorldTCamera(static_cast<int>(i)).t;
+    const Eigen::Vector3d coasted(nav.position_world_m[0], nav.position_world_m[1],
+                                  nav.position_world_m[2]);
+    // The motion input's noise is 2 cm per frame: after 10 frames well inside a metre, while
+    // the descent covers 10 m in that second.
+    EXPECT_LT((coasted - truth).norm(), 1.0) << "frame " << i << ": " << coasted.transpose();
+  }
+  EXPECT_EQ(navs.navs.back().status, static_cast<std::int8_t>(estimator::NavIntegrity::kValid));
+}
+
+// GIVEN the same descent whose camera is lost (kDeviceLost) at frame 20 and whose restarts fail
+// three times WHEN it runs on its threads (lockstep) THEN the restarts happen on the recovery
+// thread, the run goes on to the end of the descent, and the outage is counted and recovered.
+TEST(FlightLoopTest, LostCameraIsRestartedOffTheRealTimeThread) {
+  Rig rig(
+      "source: sim\nsim.frames: 40\nsim.width_px: 128\nsim.height_px: 96\n"
+      "sim.terrain_size: 512\nmax_disparity_px: 40\nrate_hz: 20\n");
+  OutageSource source(rig.source.get(), 20, 1);
+  source.lost = true;
+  source.failed_starts = 3;
+  FlightLoop loop;
+  rig.loop_options.rate_hz = 20.0;
+  rig.loop_options.pacing = Pacing::kLockstep;
+  rig.loop_options.restart_interval_ns = core::kNsPerS / 20;  // every cycle
+  ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), &source, rig.channels.get(),
+                           rig.world.get()),
+            core::Status::kOk);
+  rig.output.Start();
+  ASSERT_EQ(loop.Run(), core::Status::kOk);
+  rig.output.StopAndDrain();
+  const LoopCounters& c = loop.Counters();
+  EXPECT_EQ(c.frames, 39);
+  EXPECT_EQ(c.camera_outages, 1);
+  EXPECT_EQ(c.source_recoveries, 1);
+  EXPECT_EQ(c.source_restarts, 4);  // three failed, the fourth works
+  EXPECT_EQ(source.starts, 4);
+  EXPECT_GE(c.cycles_missed, 4);  // at least one cycle per restart attempt
+  EXPECT_EQ(c.source_errors, 1);  // the one kDeviceLost
 }
 
 }  // namespace

@@ -3,8 +3,9 @@
 // /dev/video devices. The scripted kernel's uniform frames get a texture seen by a stereo rig
 // (right view = left view shifted by a fixed disparity, the scene sliding one pixel per frame),
 // so the front end tracks and the filter estimates on real pixel data: 10 pairs in, 10 navigation
-// outputs out, no allocation on the frame path after start, and an unplugged camera stops the
-// flight loop with the device named.
+// outputs out, no allocation on the frame path after start, and an unplugged camera is a counted
+// outage (coasted, published as CAMERA_OUTAGE) that ends when it is plugged back in, or that ends
+// the run naming the device when it stays away beyond the outage limit.
 #include <gtest/gtest.h>
 #include <linux/videodev2.h>
 
@@ -60,13 +61,21 @@ class TexturingKernel final : public drivers::V4l2Kernel {
     if (fd >= 0) fds_.push_back({fd, left_path_ == path});
     return fd;
   }
-  int Close(int fd) override { return inner_->Close(fd); }
+  // A restarted source reopens its devices and gets the same fd numbers: forget the old ones.
+  int Close(int fd) override {
+    std::erase_if(fds_, [fd](const FdSide& s) { return s.fd == fd; });
+    std::erase_if(offsets_, [fd](const Offset& o) { return o.fd == fd; });
+    return inner_->Close(fd);
+  }
   int Map(int fd, std::size_t length, std::int64_t offset, void** address) override {
     const int r = inner_->Map(fd, length, offset, address);
     if (r >= 0) maps_.push_back({fd, offset, static_cast<std::uint8_t*>(*address), length});
     return r;
   }
-  int Unmap(void* address, std::size_t length) override { return inner_->Unmap(address, length); }
+  int Unmap(void* address, std::size_t length) override {
+    std::erase_if(maps_, [address](const Mapping& m) { return m.data == address; });
+    return inner_->Unmap(address, length);
+  }
   int Poll(pollfd* fds, int count, int timeout_ms) override {
     return inner_->Poll(fds, count, timeout_ms);
   }
@@ -207,7 +216,11 @@ struct V4l2Rig {
     lo.pacing = Pacing::kLockstep;
     lo.hazard_every = 5;
     lo.acquire_timeout_ns = core::kNsPerS / 10;
-    lo.max_consecutive_timeouts = 2;
+    // In cycles at 20 Hz (Step() counts cycles, not clock time): restart 5 cycles after a
+    // silence, retry every 2, give up after 20.
+    lo.restart_after_ns = core::kNsPerS / 4;
+    lo.restart_interval_ns = core::kNsPerS / 10;
+    lo.max_outage_ns = core::kNsPerS;
     EXPECT_EQ(
         loop.Configure(lo, pipeline.get(), source.get(), channels.get(), nullptr, hazard.get()),
         core::Status::kOk);
@@ -245,26 +258,71 @@ TEST(AppV4l2Test, TenPairsInTenNavsOutWithoutAllocation) {
   EXPECT_GT(rig.pipeline->NumLandmarks(), 20);
 }
 
-// GIVEN the same rig WHEN the left camera is unplugged at its 5th dequeue (ENODEV) THEN the
-// frame group stops with kDeviceLost after the pairs before it, and the source names the device.
-TEST(AppV4l2Test, UnpluggedCameraStopsTheLoopNamingTheDevice) {
+// GIVEN the same rig WHEN the left camera is unplugged at its 5th dequeue (ENODEV) and plugged
+// back in 6 cycles later THEN the frame group goes on: every missed cycle publishes a coasted
+// output flagged CAMERA_OUTAGE and not VALID, the source is restarted (its first attempts fail
+// while the device is away), the fault names /dev/video0, and pairs flow again after the replug.
+TEST(AppV4l2Test, UnpluggedCameraIsACountedOutageThatRecovers) {
+  V4l2Rig rig;
+  ASSERT_NE(rig.source, nullptr);
+  rig.scripted.Script(rig.left_device, 4, KernelEvent::kUnplug);
+  ASSERT_EQ(rig.source->Start(), core::Status::kOk) << rig.source->LastError();
+  int frames = 0;
+  int missed = 0;
+  for (int i = 0; i < 20; ++i) {
+    if (missed == 6) rig.scripted.Replug(rig.left_device);
+    const core::Status s = rig.loop.Step();
+    rig.output.DrainOnce();
+    if (s == core::Status::kOk) {
+      ++frames;
+    } else {
+      ASSERT_EQ(s, core::Status::kTimeout) << rig.loop.SourceFault();
+      ++missed;
+    }
+  }
+  rig.source->Stop();
+  const LoopCounters& c = rig.loop.Counters();
+  EXPECT_EQ(c.camera_outages, 1);
+  EXPECT_EQ(c.source_recoveries, 1);
+  EXPECT_EQ(c.cycles_missed, missed);
+  EXPECT_GE(missed, 6);
+  EXPECT_LE(missed, 8);  // at most one retry interval after the replug
+  EXPECT_EQ(c.cycles_coasted, missed);
+  EXPECT_GE(c.source_restarts, 2);
+  EXPECT_EQ(frames + missed, 20);
+  EXPECT_NE(std::strstr(rig.loop.SourceFault(), "/dev/video0"), nullptr) << rig.loop.SourceFault();
+  ASSERT_EQ(rig.navs.navs.size(), 20U);
+  int outage_outputs = 0;
+  for (const NavOutput& nav : rig.navs.navs) {
+    if ((nav.integrity_flags & estimator::kFlagCameraOutage) == 0) continue;
+    ++outage_outputs;
+    EXPECT_NE(nav.status, static_cast<std::int8_t>(estimator::NavIntegrity::kValid));
+  }
+  EXPECT_EQ(outage_outputs, missed);
+  // The first frame after the outage is estimated from images again.
+  EXPECT_EQ(rig.navs.navs.back().integrity_flags & estimator::kFlagCameraOutage, 0);
+  EXPECT_EQ(rig.scripted.OpenFds(), 0);
+  EXPECT_EQ(rig.scripted.MappedBuffers(), 0);
+}
+
+// GIVEN the same rig WHEN the left camera is unplugged and never comes back THEN the frame group
+// coasts for max_outage (20 cycles) and then ends with kDeviceLost, the fault naming the device.
+TEST(AppV4l2Test, CameraLostBeyondTheOutageLimitEndsTheRunNamingIt) {
   V4l2Rig rig;
   ASSERT_NE(rig.source, nullptr);
   rig.scripted.Script(rig.left_device, 4, KernelEvent::kUnplug);
   ASSERT_EQ(rig.source->Start(), core::Status::kOk) << rig.source->LastError();
   core::Status s = core::Status::kOk;
-  int frames = 0;
-  for (int i = 0; i < 10 && s == core::Status::kOk; ++i) {
+  int cycles = 0;
+  for (; cycles < 100 && s != core::Status::kDeviceLost; ++cycles) {
     s = rig.loop.Step();
     rig.output.DrainOnce();
-    if (s == core::Status::kOk) ++frames;
   }
   rig.source->Stop();
   EXPECT_EQ(s, core::Status::kDeviceLost);
-  EXPECT_GE(frames, 3);
-  EXPECT_LE(frames, 4);
-  EXPECT_NE(std::strstr(rig.source->LastError(), "/dev/video0"), nullptr)
-      << rig.source->LastError();
+  EXPECT_EQ(rig.loop.Counters().cycles_missed, 21);  // 20 coasted, the 21st ends the run
+  EXPECT_EQ(rig.loop.Counters().frames, 4);
+  EXPECT_NE(std::strstr(rig.loop.SourceFault(), "/dev/video0"), nullptr) << rig.loop.SourceFault();
   EXPECT_EQ(rig.scripted.OpenFds(), 0);
   EXPECT_EQ(rig.scripted.MappedBuffers(), 0);
 }

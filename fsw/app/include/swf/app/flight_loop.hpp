@@ -15,6 +15,19 @@
 //     waits for a free snapshot slot instead of skipping, so published hazard maps are
 //     deterministic (realtime pacing skips and counts, LoopCounters::hazard_skipped).
 //   output thread (normal priority, not here): drains OutputChannels (see records.hpp).
+//   source recovery thread (normal priority): restarts a lost camera (Stop + Start: GVCP
+//     discovery, buffer and stream allocation, seconds of retries to a dead camera), which the
+//     real-time thread may neither wait for nor do.
+//
+// Camera outage (a stall, a loss, a restart): the frame group keeps its rate. Each cycle without a
+// pair is a missed cycle: the pipeline coasts (Pipeline::Coast, the motion input the missing frame
+// would have carried, else bounded constant velocity) and the coasted state is published
+// (CAMERA_OUTAGE, DEGRADED or INVALID). A lost source (kDeviceLost, kIoError) or one silent for
+// restart_after_ns is restarted on the recovery thread every restart_interval_ns until it is back;
+// only an outage longer than max_outage_ns ends the run (kDeviceLost), with the source's own
+// words naming the camera in SourceFault(). Outage lengths are counted in missed cycles of the
+// frame group (one period each), not measured on the clock, so a loaded machine cannot change
+// the verdict of a test.
 //
 // After Run() starts nothing allocates or blocks on I/O on the real-time threads: outputs go to
 // preallocated slots, a full pool is a counted drop.
@@ -44,8 +57,12 @@ struct LoopOptions {
   bool record_frames = true;       // copy every input pair to the output thread
   std::int64_t max_frames = 0;     // stop after this many frames (0: until the source ends)
   std::int8_t nav_mode = 0;        // nav_state_t.MODE_*
-  core::TimeNs acquire_timeout_ns = core::kNsPerS;  // lockstep: wait this long for a pair
-  std::int32_t max_consecutive_timeouts = 10;       // then the source is declared lost
+  // Lockstep: wait this long for a pair (a camera outage then waits one period per cycle).
+  core::TimeNs acquire_timeout_ns = core::kNsPerS;
+  // Camera outage (see above), in time at rate_hz, counted in frame-group cycles.
+  core::TimeNs restart_after_ns = core::kNsPerS;         // silent this long: restart the source
+  core::TimeNs restart_interval_ns = core::kNsPerS / 2;  // between restart attempts
+  core::TimeNs max_outage_ns = 30 * core::kNsPerS;       // lost this long: end the run
   // Thread set-up of the hazard group (the frame group runs on the caller's thread).
   int hazard_priority = 0;  // SCHED_FIFO priority, 0 = normal scheduling
   // Fault injection for tests: busy-wait inject_ms in stage inject_stage for frames
@@ -75,6 +92,13 @@ struct LoopCounters {
   std::int64_t source_errors = 0;
   std::int64_t hazard_skipped = 0;  // realtime pacing: snapshots not taken, hazard group busy
   std::int64_t stage_errors = 0;    // frames whose rectify/track/estimate stage failed
+  // Camera outages: cycles without a pair (each coasted, published if there was a state).
+  std::int64_t camera_outages = 0;         // outages begun (first missed cycle after a pair)
+  std::int64_t cycles_missed = 0;          // frame-group cycles without a pair
+  std::int64_t cycles_coasted = 0;         // of those, navigation outputs carried by Coast()
+  std::int64_t source_restarts = 0;        // restart attempts (Stop + Start) of a lost source
+  std::int64_t source_recoveries = 0;      // outages ended by a pair
+  std::int64_t longest_outage_cycles = 0;  // missed cycles of the longest outage
 };
 
 class FlightLoop {
@@ -102,6 +126,9 @@ class FlightLoop {
   void PublishHealth();
 
   const LoopCounters& Counters() const { return counters_; }
+  // The source's description of the newest camera fault ("" if none): which camera, what
+  // happened. Read it after Run()/Step() returned.
+  const char* SourceFault() const { return source_fault_; }
   std::int64_t HazardErrors() const { return hazard_errors_.load(); }
   StageSummary Summary(int stage) { return stages_[stage].Summarize(); }
 
@@ -116,6 +143,17 @@ class FlightLoop {
   void CopyRectified(HazardInput* h);
   void RunHazard(std::int32_t input_slot, core::SpscQueue<RecordRef, kOrderQueueSize>* q,
                  bool wait);
+  void PublishNav();
+  // A cycle without a pair: count it, restart the source when due, coast and publish. kTimeout
+  // to go on, kDeviceLost once the outage is longer than max_outage_ns.
+  core::Status MissCycle(core::Status source_status, bool synchronous);
+  bool SourceDown() const;
+  bool RestartDue(core::Status source_status) const;
+  void RequestRestart(bool synchronous);
+  void EndOutage();
+  void RecoveryMain();
+  void StopRecoveryThread();
+  std::int64_t CyclesOf(core::TimeNs duration_ns) const;
 
   LoopOptions options_;
   Pipeline* pipeline_ = nullptr;
@@ -133,8 +171,22 @@ class FlightLoop {
   std::int64_t hazard_seq_ = 0;          // hazard thread (or Step()) only
   std::int32_t hazard_spare_slot_ = -1;  // hazards slot kept after a failed update
   std::int64_t health_seq_ = 0;
-  std::int32_t consecutive_timeouts_ = 0;
   std::int64_t last_frame_utime_ = 0;
+  std::int64_t cycles_ = 0;  // frame-group cycles, missed ones included (health cadence)
+
+  // Camera outage state (frame group) and the recovery thread's hand-over: while restart_busy_
+  // the recovery thread owns the source and the frame group does not touch it; source_down_ from
+  // a restart request until a Start() succeeded.
+  std::int64_t outage_cycles_ = 0;         // missed cycles of the current outage
+  std::int64_t cycles_since_restart_ = 0;  // missed cycles since the last restart request
+  std::int64_t expected_seq_ = 0;          // sequence number of the next frame
+  std::int64_t seq_offset_ = 0;            // added to pair.seq after outages the source skipped
+  char source_fault_[256] = "";
+  std::atomic<bool> restart_busy_{false};
+  std::atomic<bool> source_down_{false};
+  std::atomic<bool> recovery_quit_{false};
+  std::binary_semaphore recovery_wake_{0};
+  std::thread recovery_thread_;
 
   std::atomic<bool> stop_{false};
   std::atomic<bool> hazard_quit_{false};
