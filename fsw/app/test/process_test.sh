@@ -5,7 +5,11 @@
 #     map per hazard_every = 5 frames: 6 maps);
 #  2. a truncated log: swf-replay stops with an error naming the damaged record, after publishing
 #     the outputs of every frame before it;
-#  3. a bad configuration is refused before start, naming the field.
+#  3. crafted logs (fsw/app/test/log_mutate.py on the live log's 11th frame): a dropped frame, a
+#     duplicated frame and a swapped pair replay to the end and are reported degraded (exit 3)
+#     with the count in the summary; a record with num_bytes = -1 stops the replay there (exit 1)
+#     naming the record and the field;
+#  4. a bad configuration is refused before start, naming the field.
 # usage: process_test.sh SWF-FSW SWF-REPLAY CONFIG
 set -eu
 fsw=$1 replay=$2 cfg=$3
@@ -41,6 +45,28 @@ replayed=$($cmp --count SWF_NAV "$dir/r3.lcmlog")
 [ "$replayed" -gt 10 ] && [ "$replayed" -lt 30 ] || fail "replayed $replayed frames"
 grep -q "the $replayed frames before it were replayed" "$dir/err" ||
   fail "not every frame before the damaged record was processed"
+
+echo "== crafted logs"
+mutate="/usr/bin/python3 $here/log_mutate.py"
+# replay_case OP EXPECTED-EXIT STDERR-PATTERN SUMMARY-PATTERN
+replay_case() {
+  $mutate "$dir/live.lcmlog" "$dir/$1.lcmlog" SWF_STEREO "$1" 10
+  rc=0
+  "$replay" --config "$cfg" --log "$dir/$1.lcmlog" --set "summary.path: $dir/$1.json" \
+    2> "$dir/err" || rc=$?
+  grep "result\|log:" "$dir/err"
+  [ "$rc" -eq "$2" ] || fail "$1: exit code $rc, expected $2"
+  grep -q "$3" "$dir/err" || fail "$1: stderr lacks '$3'"
+  grep -q "$4" "$dir/$1.json" || fail "$1: summary lacks '$4'"
+}
+replay_case drop 3 "log: 1 frames missing" '"log": {"frames_missing": 1, "duplicates_refused": 0'
+grep -q '"frames_dropped": 1,' "$dir/drop.json" || fail "drop: frames_dropped is not 1"
+replay_case duplicate 3 "1 duplicated frames refused" '"frames_rejected": 1,'
+grep -q '"result": "degraded"' "$dir/duplicate.json" || fail "duplicate: not degraded"
+replay_case swap 3 "1 out-of-order frames refused" '"out_of_order_refused": 1}'
+replay_case neglen 1 "record [0-9]* (SWF_STEREO, event [0-9]*): .*num_bytes -1: bad length" \
+  '"result_reasons": "damaged log"'
+grep -q "the 10 frames before it were replayed" "$dir/err" || fail "neglen: frames before it"
 
 echo "== bad configuration"
 printf 'source: sim\nwindow: 99\n' > "$dir/bad.cfg"

@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""Writes a damaged copy of an LCM log, for the crafted-log cases of process_test.sh.
+
+usage: log_mutate.py IN OUT CHANNEL OP K
+  drop K       leave out the K-th record on CHANNEL (0-based)
+  duplicate K  write the K-th record on CHANNEL twice
+  swap K       write the K-th and (K+1)-th records on CHANNEL in the other order
+  neglen K     set the K-th record's stereo_frame_t.num_bytes to -1
+"""
+import struct
+import sys
+
+HEADER = struct.Struct(">IqqII")  # sync word, event number, timestamp, channel and data length
+NUM_BYTES = 8 + 86 + 8  # stereo_frame_t.num_bytes: fingerprint, fixed fields, width, height
+
+
+def records(data):
+    pos = 0
+    while pos < len(data):
+        _, eventnum, utime, clen, dlen = HEADER.unpack_from(data, pos)
+        start = pos + HEADER.size
+        channel = data[start:start + clen].decode()
+        yield eventnum, utime, channel, bytearray(data[start + clen:start + clen + dlen])
+        pos = start + clen + dlen
+
+
+def main():
+    src, dst, channel, op, k = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], int(sys.argv[5])
+    out = []
+    recs = list(records(open(src, "rb").read()))
+    stereo = [i for i, r in enumerate(recs) if r[2] == channel]
+    target = stereo[k]
+    for i, rec in enumerate(recs):
+        if i == target and op == "drop":
+            continue
+        if i == target and op == "swap":
+            out.append(recs[stereo[k + 1]])
+            out.append(rec)
+            continue
+        if op == "swap" and i == stereo[k + 1]:
+            continue
+        if i == target and op == "neglen":
+            rec[3][NUM_BYTES:NUM_BYTES + 4] = struct.pack(">i", -1)
+        out.append(rec)
+        if i == target and op == "duplicate":
+            out.append(rec)
+    with open(dst, "wb") as f:
+        for n, (_, utime, ch, payload) in enumerate(out):
+            f.write(HEADER.pack(0xEDA1DA01, n, utime, len(ch), len(payload)))
+            f.write(ch.encode())
+            f.write(payload)
+
+
+if __name__ == "__main__":
+    main()
