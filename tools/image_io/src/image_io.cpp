@@ -145,7 +145,14 @@ bool CheckHeader(const std::uint8_t* d, std::size_t n, const std::string& name, 
       *error = name + ": JPEG cut short (does not end with the end-of-image marker FF D9)";
       return false;
     }
-  } else if (!IsBinaryPnm(d, n)) {
+  } else if (IsBinaryPnm(d, n)) {
+    // stb converts a 16-bit PPM's channels with its 8-bit routine and reads past its buffer
+    // (found by image_decode_fuzz): 16-bit PGM/PPM is refused.
+    if (stbi_is_16_bit_from_memory(d, static_cast<int>(n)) != 0) {
+      *error = name + ": 16-bit PGM/PPM (maximum value above 255) is not supported";
+      return false;
+    }
+  } else {
     *error = name + ": not a PNG, JPEG or binary PGM/PPM file (" + std::to_string(n) + " bytes)";
     return false;
   }

@@ -43,9 +43,9 @@ struct GrayImage {
   }
 };
 
-// Loads a PNG, JPEG or binary PGM/PPM (8 or 16 bit, grey or colour) and converts it to 8-bit
-// grey (stb's luma). Refused, with a reason naming the file: other formats, a size above the
-// limits, a PNG chunk whose CRC does not match or a PNG/JPEG cut short.
+// Loads a PNG or JPEG (8 or 16 bit, grey or colour) or an 8-bit binary PGM/PPM and converts it
+// to 8-bit grey (stb's luma). Refused, with a reason naming the file: other formats, a size above
+// the limits, a PNG chunk whose CRC does not match or a PNG/JPEG cut short.
 bool LoadGray(const std::string& path, GrayImage* image, std::string* error);
 // Loads an image keeping its first channel's raw value (for ground-truth disparity PNGs).
 bool LoadChannel0(const std::string& path, GrayImage* image, std::string* error);
