@@ -1,0 +1,231 @@
+#include "swf/app/log_reader.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "swf/messages/checked_decode.hpp"
+#include "swf_msgs/stereo_frame_t.hpp"
+
+namespace swf::app {
+
+namespace {
+constexpr std::uint32_t kLogMagic = 0xEDA1DA01u;
+constexpr std::size_t kRecordHeaderBytes = 4 + 8 + 8 + 4 + 4;  // sync, eventnum, time, lengths
+constexpr std::int64_t kMaxChannelBytes = 256;                 // LCM's own channel name limit
+// Exposure times in microseconds that still fit in nanoseconds (core::TimeNs, int64).
+constexpr std::int64_t kMaxUtime = std::numeric_limits<std::int64_t>::max() / core::kNsPerUs;
+
+std::uint32_t Be32(const std::uint8_t* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         std::uint32_t{p[3]};
+}
+std::int64_t Be64(const std::uint8_t* p) {
+  return static_cast<std::int64_t>((std::uint64_t{Be32(p)} << 32) | Be32(p + 4));
+}
+}  // namespace
+
+bool LogReader::Open(const std::string& path, std::string* error) {
+  auto file = std::make_unique<std::ifstream>(path, std::ios::binary);
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!*file || ec || std::filesystem::is_directory(path)) {
+    *error = path + ": cannot open the log";
+    return false;
+  }
+  path_ = path;
+  in_ = std::move(file);
+  size_ = size;
+  pos_ = 0;
+  index_ = 0;
+  return true;
+}
+
+void LogReader::OpenBytes(std::string bytes, const std::string& name) {
+  path_ = name;
+  size_ = bytes.size();
+  in_ = std::make_unique<std::istringstream>(std::move(bytes), std::ios::binary);
+  pos_ = 0;
+  index_ = 0;
+}
+
+int LogReader::Next(LogEvent* event, std::string* error) {
+  if (in_ == nullptr || pos_ == size_) return 0;
+  const std::uint64_t left = size_ - pos_;
+  auto fail = [&](const std::string& why) {
+    *error = path_ + ": record " + std::to_string(index_) + " at byte " + std::to_string(pos_) +
+             ": " + why;
+    return -1;
+  };
+  if (left < kRecordHeaderBytes) {
+    return fail("truncated header (" + std::to_string(left) + " of " +
+                std::to_string(kRecordHeaderBytes) + " bytes)");
+  }
+  std::uint8_t header[kRecordHeaderBytes];
+  if (!in_->read(reinterpret_cast<char*>(header), sizeof header)) return fail("read error");
+  if (Be32(header) != kLogMagic) return fail("bad sync word (corrupt record)");
+  const std::int64_t eventnum = Be64(header + 4);
+  const std::int64_t timestamp = Be64(header + 12);
+  const std::int64_t channel_len = static_cast<std::int32_t>(Be32(header + 20));
+  const std::int64_t data_len = static_cast<std::int32_t>(Be32(header + 24));
+  if (channel_len <= 0 || channel_len > kMaxChannelBytes) {
+    return fail("bad channel length " + std::to_string(channel_len));
+  }
+  if (data_len < 0) return fail("bad data length " + std::to_string(data_len));
+  if (data_len > messages::kMaxEncodedBytes) {
+    return fail("data length " + std::to_string(data_len) + " over the largest message (" +
+                std::to_string(messages::kMaxEncodedBytes) + " bytes)");
+  }
+  const std::uint64_t need = kRecordHeaderBytes + static_cast<std::uint64_t>(channel_len) +
+                             static_cast<std::uint64_t>(data_len);
+  if (need > left) {
+    return fail("truncated (" + std::to_string(left) + " of " + std::to_string(need) + " bytes)");
+  }
+  // Both lengths are now bounded and present in the file.
+  event->channel.resize(static_cast<std::size_t>(channel_len));
+  event->data.resize(static_cast<std::size_t>(data_len));
+  if (!in_->read(event->channel.data(), channel_len) ||
+      !in_->read(reinterpret_cast<char*>(event->data.data()), data_len)) {
+    return fail("read error");
+  }
+  event->index = index_;
+  event->offset = static_cast<std::int64_t>(pos_);
+  event->eventnum = eventnum;
+  event->timestamp = timestamp;
+  pos_ += need;
+  ++index_;
+  return 1;
+}
+
+bool LogStereoSource::Load(const std::string& path, const std::string& channel,
+                           std::string* error) {
+  LogReader reader;
+  if (!reader.Open(path, error)) return false;
+  Load(&reader, channel);
+  return true;
+}
+
+namespace {
+// A decoded frame's fields that the decoder cannot judge: "" when usable, else why not.
+std::string CheckFrameFields(const swf_msgs::stereo_frame_t& msg) {
+  if (msg.width <= 0 || msg.height <= 0) {
+    return "empty image (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) + ")";
+  }
+  if (msg.seq < 0) return "negative seq " + std::to_string(msg.seq);
+  if (msg.dropped_before < 0)
+    return "negative dropped_before " + std::to_string(msg.dropped_before);
+  for (const std::int64_t t : {msg.utime, msg.left_exposure_utime, msg.right_exposure_utime}) {
+    if (t < 0 || t > kMaxUtime) return "exposure time " + std::to_string(t) + " us out of range";
+  }
+  return "";
+}
+}  // namespace
+
+void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
+  frames_.clear();
+  load_error_.clear();
+  stream_ = LogStreamStats{};
+  LogEvent event;
+  swf_msgs::stereo_frame_t msg;
+  for (;;) {
+    std::string why;
+    const int r = reader->Next(&event, &why);
+    if (r == 0) break;
+    if (r < 0) {
+      load_error_ = why;
+      break;
+    }
+    if (event.channel != channel) continue;
+    const std::string where = reader->Path() + ": record " + std::to_string(event.index) + " (" +
+                              event.channel + ", event " + std::to_string(event.eventnum) + ")";
+    const messages::DecodeError decoded =
+        messages::CheckedDecode(event.data.data(), event.data.size(), &msg);
+    if (!decoded.Ok()) {
+      char what[128];
+      messages::Describe(decoded, what, sizeof what);
+      load_error_ = where + ": stereo_frame_t does not decode (" + what + ")";
+      break;
+    }
+    const std::string bad = CheckFrameFields(msg);
+    if (!bad.empty()) {
+      load_error_ = where + ": " + bad;
+      break;
+    }
+    if (!frames_.empty() && (msg.width != width_ || msg.height != height_)) {
+      load_error_ = where + ": image size changed within the log";
+      break;
+    }
+    width_ = msg.width;
+    height_ = msg.height;
+    rectified_ = msg.rectified;
+    Frame f;
+    f.seq = msg.seq;
+    f.left_ns = msg.left_exposure_utime * core::kNsPerUs;  // in range: CheckFrameFields
+    f.right_ns = msg.right_exposure_utime * core::kNsPerUs;
+    f.dropped_before = msg.dropped_before;
+    f.has_motion = msg.has_motion;
+    for (int i = 0; i < 3; ++i) {
+      f.motion.translation_m[i] = msg.motion_translation_m[i];
+      f.motion.rotation_rad[i] = msg.motion_rotation_rad[i];
+    }
+    f.left = std::move(msg.left);
+    f.right = std::move(msg.right);
+    Admit(std::move(f));
+  }
+}
+
+void LogStereoSource::Admit(Frame frame) {
+  if (!frames_.empty()) {
+    const Frame& last = frames_.back();
+    if (frame.seq == last.seq) {
+      ++stream_.duplicates;
+      return;
+    }
+    if (frame.seq < last.seq || frame.left_ns <= last.left_ns) {
+      ++stream_.out_of_order;
+      return;
+    }
+    // Both sequence numbers are non-negative: the gap cannot overflow.
+    const std::int64_t gap = frame.seq - last.seq - 1;
+    stream_.frames_missing += gap;
+    const std::int64_t dropped = std::int64_t{frame.dropped_before} + gap;
+    frame.dropped_before = static_cast<std::int32_t>(
+        std::min<std::int64_t>(dropped, std::numeric_limits<std::int32_t>::max()));
+  }
+  frames_.push_back(std::move(frame));
+}
+
+bool LogStereoSource::Motion(std::uint64_t seq, MotionInput* input) {
+  // Frames are served in order; the one just served is next_ - 1.
+  if (next_ == 0 || frames_[next_ - 1].seq != static_cast<std::int64_t>(seq)) return false;
+  if (!frames_[next_ - 1].has_motion) return false;
+  *input = frames_[next_ - 1].motion;
+  return true;
+}
+
+core::Status LogStereoSource::Start() {
+  next_ = 0;
+  stats_ = drivers::SourceStats{};
+  // Refused while loading; gaps are counted through each pair's dropped_before instead.
+  stats_.frames_rejected = static_cast<std::uint64_t>(stream_.Refused());
+  return core::Status::kOk;
+}
+
+core::Status LogStereoSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoPair* pair) {
+  if (next_ >= frames_.size()) return core::Status::kEmpty;
+  const Frame& f = frames_[next_];
+  pair->left = drivers::ImageView{f.left.data(), width_, height_, width_};
+  pair->right = drivers::ImageView{f.right.data(), width_, height_, width_};
+  pair->left_exposure_ns = f.left_ns;
+  pair->right_exposure_ns = f.right_ns;
+  pair->seq = static_cast<std::uint64_t>(f.seq);
+  pair->dropped_before = static_cast<std::uint32_t>(f.dropped_before);
+  pair->handle = static_cast<std::int32_t>(next_);
+  ++next_;
+  ++stats_.pairs_served;
+  return core::Status::kOk;
+}
+
+}  // namespace swf::app
