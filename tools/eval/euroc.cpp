@@ -2,31 +2,36 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
 #include <sstream>
 
+#include "report.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "swf/image_io/image_io.hpp"
 
 namespace swf::eval {
 namespace {
 
-struct ListedImage {
-  std::int64_t stamp_ns = 0;
-  std::string name;
-  int line = 0;
-};
+// A file name as quoted in a message: at most 120 characters of it (a hostile list may hold a
+// line of megabytes).
+std::string Quoted(const std::string& name) {
+  constexpr std::size_t kMaxQuoted = 120;
+  return "'" + (name.size() <= kMaxQuoted ? name : name.substr(0, kMaxQuoted) + "...") + "'";
+}
 
 // One data.csv line "timestamp_ns,filename" (already trimmed, not a comment).
 bool ParseCsvLine(const std::string& line, const std::string& where, ListedImage* f,
                   std::string* error) {
   const std::size_t comma = line.find(',');
   char* end = nullptr;
+  errno = 0;
   f->stamp_ns = std::strtoll(line.c_str(), &end, 10);
-  if (comma == std::string::npos || end != line.c_str() + comma || f->stamp_ns <= 0) {
+  if (comma == std::string::npos || end != line.c_str() + comma || f->stamp_ns <= 0 ||
+      errno == ERANGE) {
     *error = where + ": expected: timestamp_ns,filename";
     return false;
   }
@@ -40,9 +45,10 @@ bool ParseCsvLine(const std::string& line, const std::string& where, ListedImage
   // ASL names the image after its timestamp: a name that says otherwise is a shifted list.
   const std::size_t dot = f->name.find('.');
   const std::string stem = f->name.substr(0, dot);
-  if (!stem.empty() && std::all_of(stem.begin(), stem.end(), ::isdigit) &&
+  const auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  if (!stem.empty() && std::all_of(stem.begin(), stem.end(), digit) &&
       stem != std::to_string(f->stamp_ns)) {
-    *error = where + ": the image " + f->name + " is listed at timestamp " +
+    *error = where + ": the image " + Quoted(f->name) + " is listed at timestamp " +
              std::to_string(f->stamp_ns) + " ns (the list is shifted against its files)";
     return false;
   }
@@ -55,28 +61,7 @@ bool ReadCsv(const std::string& path, std::vector<ListedImage>* frames, std::str
     *error = path + ": cannot open";
     return false;
   }
-  std::string line;
-  int number = 0;
-  while (std::getline(csv, line)) {
-    ++number;
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    ListedImage f;
-    f.line = number;
-    const std::string where = path + ":" + std::to_string(number);
-    if (!ParseCsvLine(line, where, &f, error)) return false;
-    if (!frames->empty() && f.stamp_ns <= frames->back().stamp_ns) {
-      *error = where + ": timestamp " + std::to_string(f.stamp_ns) +
-               " ns does not increase (previous line " + std::to_string(frames->back().line) + ")";
-      return false;
-    }
-    frames->push_back(f);
-  }
-  if (frames->empty()) {
-    *error = path + ": no frames";
-    return false;
-  }
-  return true;
+  return ParseImageList(csv, path, frames, error);
 }
 
 // A stereo pair is exposed together: line k of cam1's list must carry line k of cam0's
@@ -152,6 +137,28 @@ bool RectifiedRig(const std::string& mav0, StereoSequence* s, PoseD* body_T_came
   return true;
 }
 
+// The images must have the size the calibration was made for: the first image of each list is
+// checked (the pipeline refuses any later frame of another size, naming it).
+bool CheckImageSizes(const std::string& mav0, const StereoSequence& s,
+                     const std::vector<ListedImage>& left, const std::vector<ListedImage>& right,
+                     std::string* error) {
+  const ListedImage* first[2] = {&left.front(), &right.front()};
+  for (int c = 0; c < 2; ++c) {
+    const std::string cam = mav0 + "/cam" + std::to_string(c);
+    const std::string image = cam + "/data/" + first[c]->name;
+    int w = 0;
+    int h = 0;
+    if (!image_io::ReadImageSize(image, &w, &h, error)) return false;
+    const frontend::CameraCalibration& k = s.calibration[c];
+    if (w != k.width || h != k.height) {
+      *error = image + Format(" is %d x %d px but ", w, h) + cam +
+               Format("/sensor.yaml's resolution is %d x %d", k.width, k.height);
+      return false;
+    }
+  }
+  return true;
+}
+
 double MedianInterval(const std::vector<ListedImage>& frames) {
   std::vector<double> d;
   for (std::size_t k = 1; k < frames.size(); ++k) {
@@ -209,43 +216,126 @@ void PathStats(EurocResult* r) {
 
 }  // namespace
 
+bool ParseImageList(std::istream& csv, const std::string& path, std::vector<ListedImage>* frames,
+                    std::string* error) {
+  std::string line;
+  int number = 0;
+  while (std::getline(csv, line)) {
+    ++number;
+    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    ListedImage f;
+    f.line = number;
+    const std::string where = path + ":" + std::to_string(number);
+    if (!ParseCsvLine(line, where, &f, error)) return false;
+    if (!frames->empty() && f.stamp_ns <= frames->back().stamp_ns) {
+      *error = where + ": timestamp " + std::to_string(f.stamp_ns) +
+               " ns does not increase (previous line " + std::to_string(frames->back().line) + ")";
+      return false;
+    }
+    frames->push_back(f);
+  }
+  if (frames->empty()) {
+    *error = path + ": no frames";
+    return false;
+  }
+  return true;
+}
+
 bool CheckImageName(const std::string& name, std::string* error) {
   if (name.empty()) {
     *error = "empty image file name";
     return false;
   }
+  for (char c : name) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) {
+      *error = "image name contains a control character (refused: not a file name)";
+      return false;
+    }
+  }
   if (name.front() == '/') {
-    *error = "image name '" + name + "' is an absolute path (refused: names are inside data/)";
+    *error =
+        "image name " + Quoted(name) + " is an absolute path (refused: names are inside data/)";
     return false;
   }
   std::stringstream parts(name);
   std::string part;
   while (std::getline(parts, part, '/')) {
     if (part == "..") {
-      *error = "image name '" + name + "' contains '..' (refused: names are inside data/)";
+      *error = "image name " + Quoted(name) + " contains '..' (refused: names are inside data/)";
       return false;
     }
   }
   return true;
 }
 
+namespace {
+
+// The index of the first value whose magnitude exceeds `bound` (or is not a number), or -1.
+int FirstBeyond(const double* values, int n, double bound) {
+  for (int i = 0; i < n; ++i) {
+    if (!(std::fabs(values[i]) <= bound)) return i;
+  }
+  return -1;
+}
+
+// Focal lengths that give a believable lens over the image (see the bounds in euroc.hpp).
+bool CheckFocalLengths(const frontend::CameraCalibration& c, const std::string& path,
+                       std::string* error) {
+  const double fov_deg = 2.0 * std::atan(0.5 * c.width / c.fx) * 180.0 / M_PI;
+  const double aspect = c.fx / c.fy;
+  if (fov_deg < kMinFieldOfViewDeg || fov_deg > kMaxFieldOfViewDeg) {
+    *error = path + Format(
+                        ": focal length fx %g px over %d px gives a horizontal field of view of "
+                        "%.3g deg, outside %g..%g deg",
+                        c.fx, c.width, fov_deg, kMinFieldOfViewDeg, kMaxFieldOfViewDeg);
+    return false;
+  }
+  if (!(aspect <= kMaxPixelAspect && aspect >= 1.0 / kMaxPixelAspect)) {
+    *error = path + Format(": focal lengths fx %g and fy %g px differ by more than a factor of %g",
+                           c.fx, c.fy, kMaxPixelAspect);
+    return false;
+  }
+  return true;
+}
+
+bool CheckDistortionBounds(const frontend::CameraCalibration& c, const std::string& path,
+                           std::string* error) {
+  static const char* const kRadial[] = {"k1", "k2", "k3"};
+  static const char* const kTangential[] = {"p1", "p2"};
+  const double radial[] = {c.k1, c.k2, c.k3};
+  const double tangential[] = {c.p1, c.p2};
+  const int r = FirstBeyond(radial, 3, kMaxRadialCoefficient);
+  if (r >= 0) {
+    *error = path + Format(": distortion coefficient %s = %g is beyond |%s| <= %g", kRadial[r],
+                           radial[r], kRadial[r], kMaxRadialCoefficient);
+    return false;
+  }
+  const int t = FirstBeyond(tangential, 2, kMaxTangentialCoefficient);
+  if (t >= 0) {
+    *error = path + Format(": distortion coefficient %s = %g is beyond |%s| <= %g", kTangential[t],
+                           tangential[t], kTangential[t], kMaxTangentialCoefficient);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool CheckCalibration(const frontend::CameraCalibration& c, const std::string& path,
                       std::string* error) {
-  char buf[256];
   if (!(c.fx > 0.0 && c.fy > 0.0) || c.width <= 0 || c.height <= 0) {
-    std::snprintf(buf, sizeof(buf),
-                  ": focal lengths (%g, %g) and resolution (%d x %d) must be "
-                  "positive",
-                  c.fx, c.fy, c.width, c.height);
-    *error = path + buf;
+    *error = path + Format(": focal lengths (%g, %g) and resolution (%d x %d) must be positive",
+                           c.fx, c.fy, c.width, c.height);
     return false;
   }
+  if (!CheckFocalLengths(c, path, error)) return false;
   if (!(c.cx >= 0.0 && c.cx < c.width && c.cy >= 0.0 && c.cy < c.height)) {
-    std::snprintf(buf, sizeof(buf), ": principal point (%g, %g) lies outside the %d x %d image",
-                  c.cx, c.cy, c.width, c.height);
-    *error = path + buf;
+    *error = path + Format(": principal point (%g, %g) lies outside the %d x %d image", c.cx, c.cy,
+                           c.width, c.height);
     return false;
   }
+  if (!CheckDistortionBounds(c, path, error)) return false;
   // The distorted radius r (1 + k1 r^2 + k2 r^4 + k3 r^6) must keep growing from the centre
   // until it reaches the farthest image corner, or some pixels have two (or no) undistorted
   // directions and rectification cannot be inverted there.
@@ -260,11 +350,11 @@ bool CheckCalibration(const frontend::CameraCalibration& c, const std::string& p
   for (double r = 1e-3; r <= 10.0; r += 1e-3) {
     const double d = distorted(r);
     if (!(d > previous)) {
-      std::snprintf(buf, sizeof(buf),
-                    ": the radial distortion (k1 %g, k2 %g, k3 %g) folds back at a distorted "
-                    "radius of %.3g, inside the image (corner at %.3g): not a usable calibration",
-                    c.k1, c.k2, c.k3, previous, corner);
-      *error = path + buf;
+      *error = path + Format(
+                          ": the radial distortion (k1 %g, k2 %g, k3 %g) folds back at a "
+                          "distorted radius of %.3g, inside the image (corner at %.3g): not a "
+                          "usable calibration",
+                          c.k1, c.k2, c.k3, previous, corner);
       return false;
     }
     if (d >= corner) return true;
@@ -341,7 +431,9 @@ bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult*
   const std::string left_csv = mav0 + "/cam0/data.csv";
   const std::string right_csv = mav0 + "/cam1/data.csv";
   if (!ReadCsv(left_csv, &left, error) || !ReadCsv(right_csv, &right, error)) return false;
-  if (!CheckPairs(left_csv, left, right_csv, right, error)) return false;
+  if (!CheckPairs(left_csv, left, right_csv, right, error) ||
+      !CheckImageSizes(mav0, s, left, right, error))
+    return false;
   std::vector<TumPose> gt;
   if (!ReadTum(dir + "/groundtruth_tum.txt", &gt, error)) return false;
   Associate(mav0, left, right, gt, body_T_camera, result);

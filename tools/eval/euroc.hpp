@@ -8,6 +8,8 @@
 // monotonic timestamps, a stress case for a camera at rest.
 #pragma once
 
+#include <cstdint>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -24,15 +26,38 @@ struct TumPose {
 bool ReadTum(const std::string& path, std::vector<TumPose>* poses, std::string* error);
 bool WriteTum(const std::string& path, const std::vector<TumPose>& poses);
 
-// False with *error naming `path` when the calibration cannot describe a real camera over its
-// image: focal lengths not positive, principal point outside the image, or a radial distortion
-// that folds back (stops growing with the radius) before the image corners.
+// Bounds a calibration must meet to be believed (CheckCalibration; KITTI's calib.txt too).
+inline constexpr double kMinFieldOfViewDeg = 1.0;         // horizontal, from fx and the width
+inline constexpr double kMaxFieldOfViewDeg = 170.0;       // wider needs a fisheye model
+inline constexpr double kMaxPixelAspect = 1.5;            // fx / fy and fy / fx
+inline constexpr double kMaxRadialCoefficient = 5.0;      // |k1|, |k2|, |k3|
+inline constexpr double kMaxTangentialCoefficient = 0.1;  // |p1|, |p2|
+
+// False with *error naming `path` and the field when the calibration cannot describe a real
+// camera over its image: focal lengths not positive or implausible (a horizontal field of view
+// outside kMinFieldOfViewDeg..kMaxFieldOfViewDeg, pixels more than kMaxPixelAspect from square),
+// principal point outside the image, distortion coefficients beyond the bounds above, or a
+// radial distortion that folds back (stops growing with the radius) before the image corners.
 bool CheckCalibration(const frontend::CameraCalibration& c, const std::string& path,
                       std::string* error);
 
-// False with *error when `name` (an image file name from a list) is absolute or has a ".."
-// component: the lists may only name files inside their data folder.
+// False with *error when `name` (an image file name from a list) is absolute, has a ".."
+// component or a control character: the lists may only name files inside their data folder.
 bool CheckImageName(const std::string& name, std::string* error);
+
+// One line of an ASL data.csv: the image's timestamp and file name.
+struct ListedImage {
+  std::int64_t stamp_ns = 0;
+  std::string name;
+  int line = 0;  // in the list (1-based), for messages
+};
+
+// Reads an ASL image list ("timestamp_ns,filename" per line, '#' comments). Refused, naming
+// path:line: a malformed line, a name CheckImageName refuses, a numeric file name that is not
+// the line's timestamp (a list shifted against its files), timestamps that do not increase, and
+// a list without frames.
+bool ParseImageList(std::istream& csv, const std::string& path, std::vector<ListedImage>* frames,
+                    std::string* error);
 
 struct EurocOptions {
   int window = 5;                // poses in the window, for SWF and VO alike

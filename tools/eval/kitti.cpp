@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "euroc.hpp"  // CheckCalibration: the same bounds
 #include "report.hpp"
 #include "swf/image_io/image_io.hpp"
 
@@ -29,13 +30,9 @@ bool ReadTwelve(const std::string& line, const std::string& where, double v[12],
   return true;
 }
 
-bool ReadMatrices(const std::string& path, std::vector<std::vector<double>>* rows,
-                  std::vector<int>* lines, std::string* error) {
-  std::ifstream file(path);
-  if (!file) {
-    *error = path + ": cannot open";
-    return false;
-  }
+bool ReadMatrices(std::istream& file, const std::string& path,
+                  std::vector<std::vector<double>>* rows, std::vector<int>* lines,
+                  std::string* error) {
   std::string line;
   int number = 0;
   while (std::getline(file, line)) {
@@ -55,13 +52,41 @@ std::string FramePath(const std::string& dir, int camera, int k) {
   return dir + name;
 }
 
+// The image size from the first pair's headers; both must agree (the pipeline refuses any later
+// frame of another size, naming it).
+bool ImageSize(const std::string& dir, int* width, int* height, std::string* error) {
+  int w[2] = {0, 0};
+  int h[2] = {0, 0};
+  for (int c = 0; c < 2; ++c) {
+    if (!image_io::ReadImageSize(FramePath(dir, c, 0), &w[c], &h[c], error)) return false;
+  }
+  if (w[0] != w[1] || h[0] != h[1]) {
+    *error = FramePath(dir, 1, 0) + Format(" is %d x %d px but ", w[1], h[1]) +
+             FramePath(dir, 0, 0) + Format(" is %d x %d px: not a rectified pair", w[0], h[0]);
+    return false;
+  }
+  *width = w[0];
+  *height = h[0];
+  return true;
+}
+
 }  // namespace
 
 bool ReadKittiCalibration(const std::string& path, estimator::StereoCamera<double>* camera,
                           std::string* error) {
+  std::ifstream file(path);
+  if (!file) {
+    *error = path + ": cannot open";
+    return false;
+  }
+  return ParseKittiCalibration(file, path, camera, error);
+}
+
+bool ParseKittiCalibration(std::istream& file, const std::string& path,
+                           estimator::StereoCamera<double>* camera, std::string* error) {
   std::vector<std::vector<double>> p;
   std::vector<int> lines;
-  if (!ReadMatrices(path, &p, &lines, error)) return false;
+  if (!ReadMatrices(file, path, &p, &lines, error)) return false;
   if (p.size() < 2) {
     *error =
         path + ": expected two projection matrices P0 and P1, found " + std::to_string(p.size());
@@ -94,9 +119,19 @@ bool ReadKittiCalibration(const std::string& path, estimator::StereoCamera<doubl
 }
 
 bool ReadKittiPoses(const std::string& path, std::vector<PoseD>* poses, std::string* error) {
+  std::ifstream file(path);
+  if (!file) {
+    *error = path + ": cannot open";
+    return false;
+  }
+  return ParseKittiPoses(file, path, poses, error);
+}
+
+bool ParseKittiPoses(std::istream& file, const std::string& path, std::vector<PoseD>* poses,
+                     std::string* error) {
   std::vector<std::vector<double>> rows;
   std::vector<int> lines;
-  if (!ReadMatrices(path, &rows, &lines, error)) return false;
+  if (!ReadMatrices(file, path, &rows, &lines, error)) return false;
   for (std::size_t k = 0; k < rows.size(); ++k) {
     PoseD p;
     for (int r = 0; r < 3; ++r) {
@@ -131,16 +166,20 @@ bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult*
   if (options.max_frames >= 3 && poses.size() > static_cast<std::size_t>(options.max_frames)) {
     poses.resize(static_cast<std::size_t>(options.max_frames));
   }
-  // The image size from the first left image; the pipeline refuses any frame of another size.
-  image_io::GrayImage first;
-  if (!image_io::LoadGray(FramePath(dir, 0, 0), &first, error)) return false;
-  s.width = first.width;
-  s.height = first.height;
-  if (!(s.camera.cx >= 0.0 && s.camera.cx < s.width && s.camera.cy >= 0.0 &&
-        s.camera.cy < s.height)) {
+  if (!ImageSize(dir, &s.width, &s.height, error)) return false;
+  // The rectified pair, held to the same bounds as a EuRoC camera (no distortion left).
+  frontend::CameraCalibration k;
+  k.width = s.width;
+  k.height = s.height;
+  k.fx = s.camera.fx;
+  k.fy = s.camera.fy;
+  k.cx = s.camera.cx;
+  k.cy = s.camera.cy;
+  if (!CheckCalibration(k, dir + "/calib.txt", error)) return false;
+  if (s.camera.baseline_m > kMaxKittiBaselineM) {
     *error = dir + "/calib.txt" +
-             Format(": principal point (%g, %g) lies outside the %d x %d images", s.camera.cx,
-                    s.camera.cy, s.width, s.height);
+             Format(": baseline %g m is beyond %g m (a P1[0,3] in millimetres?)",
+                    s.camera.baseline_m, kMaxKittiBaselineM);
     return false;
   }
   for (std::size_t k = 0; k < poses.size(); ++k) {

@@ -6,6 +6,7 @@
 // frames. Frames are taken at 10 Hz (KITTI's rate; the excerpt has no times.txt).
 #pragma once
 
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -32,10 +33,25 @@ struct KittiResult {
 };
 
 // P0/P1 from calib.txt into the rectified rig: f, cx, cy from P0, baseline = -P1[0,3] / P1[0,0].
+// Refused, naming path:line: a line that is not 12 finite numbers, fewer than two matrices,
+// P0/P1 that are not a rectified pair, a baseline that is not positive.
 bool ReadKittiCalibration(const std::string& path, estimator::StereoCamera<double>* camera,
                           std::string* error);
+// Refused, naming path:line: a line that is not 12 finite numbers or whose 3x3 part is not a
+// rotation; fewer than 3 poses.
 bool ReadKittiPoses(const std::string& path, std::vector<PoseD>* poses, std::string* error);
+// The same from streams (the fuzz harness reads from memory); `path` names them in messages.
+bool ParseKittiCalibration(std::istream& in, const std::string& path,
+                           estimator::StereoCamera<double>* camera, std::string* error);
+bool ParseKittiPoses(std::istream& in, const std::string& path, std::vector<PoseD>* poses,
+                     std::string* error);
 
+// LoadKitti refuses a baseline above this (a car's rig is about half a metre): a calib.txt in
+// millimetres would otherwise pass.
+inline constexpr double kMaxKittiBaselineM = 10.0;
+
+// Reads DIR. Besides the files' own checks: the first left and right images must have the same
+// size, and calib.txt must meet CheckCalibration's bounds (euroc.hpp) over that size.
 bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult* result,
                std::string* error);
 

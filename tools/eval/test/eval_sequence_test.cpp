@@ -153,6 +153,96 @@ TEST(EvalReport, AFailedRunIsNeverCompared) {
             false);
 }
 
+// GIVEN image lists with hostile lines WHEN parsed THEN each is refused naming file:line, and a
+// name of a megabyte is quoted in at most 120 characters.
+TEST(EvalInputs, ImageListRefusesHostileLines) {
+  struct Case {
+    std::string text, expect;
+  };
+  const std::string long_name(1 << 20, 'a');
+  const Case cases[] = {
+      {"# t,name\n1,1.png\n1,1.png\n", "cam0.csv:3: timestamp 1 ns does not increase"},
+      {"1,a\tb.png\n", "cam0.csv:1: image name contains a control character"},
+      {"-5,x.png\n", "cam0.csv:1: expected: timestamp_ns,filename"},
+      {"99999999999999999999,x.png\n", "cam0.csv:1: expected: timestamp_ns,filename"},
+      {"# only a comment\n", "cam0.csv: no frames"},
+      {"1,../" + long_name + "\n", "cam0.csv:1: image name '../aaa"},
+  };
+  for (const Case& c : cases) {
+    std::istringstream in(c.text);
+    std::vector<ListedImage> frames;
+    std::string error;
+    EXPECT_FALSE(ParseImageList(in, "cam0.csv", &frames, &error)) << c.expect;
+    EXPECT_EQ(error.rfind(c.expect, 0), 0u) << error.substr(0, 200);
+    EXPECT_LT(error.size(), 300u);
+  }
+}
+
+// GIVEN KITTI calibrations and poses with broken lines WHEN parsed THEN each is refused naming
+// file:line and what is wrong.
+TEST(EvalInputs, KittiFilesRefuseBrokenLines) {
+  const std::string p0 = "P0: 700 0 600 0 0 700 180 0 0 0 1 0\n";
+  const std::string p1 = "P1: 700 0 600 -378 0 700 180 0 0 0 1 0\n";
+  estimator::StereoCamera<double> camera;
+  std::string error;
+  std::istringstream good(p0 + p1);
+  ASSERT_TRUE(ParseKittiCalibration(good, "calib.txt", &camera, &error)) << error;
+  EXPECT_DOUBLE_EQ(camera.baseline_m, 0.54);
+  struct Case {
+    std::string text, expect;
+  };
+  const Case calibrations[] = {
+      {p0, "calib.txt: expected two projection matrices P0 and P1, found 1"},
+      {p0 + "P1: 700 0 600 nan 0 700 180 0 0 0 1 0\n", "calib.txt:2: expected 12 finite numbers"},
+      {p0 + "P1: 700 0 600 378 0 700 180 0 0 0 1 0\n", "calib.txt:2: baseline -P1[0,3]/P1[0,0]"},
+      {p0 + "P1: 650 0 600 -378 0 700 180 0 0 0 1 0\n",
+       "calib.txt:2: P0 and P1 are not a rectified pair"},
+  };
+  for (const Case& c : calibrations) {
+    std::istringstream in(c.text);
+    EXPECT_FALSE(ParseKittiCalibration(in, "calib.txt", &camera, &error)) << c.expect;
+    EXPECT_EQ(error.rfind(c.expect, 0), 0u) << error;
+  }
+  const std::string identity = "1 0 0 0 0 1 0 0 0 0 1 0\n";
+  std::vector<PoseD> poses;
+  std::istringstream two(identity + identity);
+  EXPECT_FALSE(ParseKittiPoses(two, "poses.txt", &poses, &error));
+  EXPECT_EQ(error, "poses.txt: fewer than 3 poses");
+  std::istringstream scaled(identity + "2 0 0 0 0 1 0 0 0 0 1 0\n" + identity);
+  poses.clear();
+  EXPECT_FALSE(ParseKittiPoses(scaled, "poses.txt", &poses, &error));
+  EXPECT_EQ(error, "poses.txt:2: the 3x3 part is not a rotation");
+}
+
+// GIVEN the KITTI excerpt with a calibration whose focal length is implausible, or a baseline in
+// millimetres WHEN loaded THEN refused naming calib.txt (the images are linked, not copied).
+TEST(EvalInputs, BrokenKittiInputsAreRefused) {
+  struct Case {
+    std::string name, calib, expect;
+  };
+  const Case cases[] = {
+      {"kitti_focal",
+       "P0: 5 0 607.1928 0 0 5 185.2157 0 0 0 1 0\nP1: 5 0 607.1928 -2.5 0 5 "
+       "185.2157 0 0 0 1 0\n",
+       "/calib.txt: focal length fx 5 px over 1226 px gives a horizontal field of view"},
+      {"kitti_mm",
+       "P0: 718.856 0 607.1928 0 0 718.856 185.2157 0 0 0 1 0\nP1: 718.856" +
+           std::string(" 0 607.1928 -386144.8 0 718.856 185.2157 0 0 0 1 0\n"),
+       " m is beyond 10 m (a P1[0,3] in millimetres?)"},
+  };
+  for (const Case& c : cases) {
+    const std::string dir = TempDir(c.name);
+    for (const char* sub : {"image_0", "image_1"})
+      fs::create_directory_symlink(fs::absolute(fs::path(KittiDir()) / sub), fs::path(dir) / sub);
+    fs::copy_file(fs::path(KittiDir()) / "poses.txt", fs::path(dir) / "poses.txt");
+    std::ofstream(dir + "/calib.txt") << c.calib;
+    KittiResult result;
+    std::string error;
+    EXPECT_FALSE(LoadKitti(dir, KittiOptions{}, &result, &error)) << c.name;
+    EXPECT_NE(error.find(c.expect), std::string::npos) << c.name << ": " << error;
+  }
+}
+
 TEST(EvalInputs, RefusesNamesOutsideTheDataFolder) {
   std::string error;
   EXPECT_TRUE(CheckImageName("1403715273262142976.png", &error));
@@ -175,7 +265,20 @@ TEST(EvalInputs, BrokenEurocInputsAreRefusedWithTheFileAndLine) {
   };
   const std::vector<Case> cases = {
       {"cx", "mav0/cam0/sensor.yaml", "367.215", "-5000", "cam0/sensor.yaml: principal point"},
-      {"distortion", "mav0/cam1/sensor.yaml", "[-0.28368365", "[-80.0", "folds back"},
+      {"distortion", "mav0/cam1/sensor.yaml", "[-0.28368365", "[-3.0", "folds back"},
+      {"distortion_bound", "mav0/cam1/sensor.yaml", "[-0.28368365", "[-80.0",
+       "cam1/sensor.yaml: distortion coefficient k1 = -80 is beyond |k1| <= 5"},
+      {"tangential", "mav0/cam0/sensor.yaml", "0.00019359", "0.5",
+       "cam0/sensor.yaml: distortion coefficient p1 = 0.5 is beyond |p1| <= 0.1"},
+      {"focal", "mav0/cam0/sensor.yaml", "[458.654, 457.296", "[4.0, 4.0",
+       "cam0/sensor.yaml: focal length fx 4 px over 752 px gives a horizontal field of view of "
+       "179 deg, outside 1..170 deg"},
+      {"aspect", "mav0/cam0/sensor.yaml", "[458.654, 457.296", "[458.654, 200.0",
+       "cam0/sensor.yaml: focal lengths fx 458.654 and fy 200 px differ by more than a factor of "
+       "1.5"},
+      // The calibration of another camera: its images are not 640 x 480.
+      {"resolution", "mav0/cam1/sensor.yaml", "[752, 480]", "[640, 480]",
+       "1403715273262142976.png is 752 x 480 px but "},
       {"dotdot", "mav0/cam0/data.csv", "1403715273362142976.png", "../../cam1/data/x.png",
        "cam0/data.csv:4: image name '../../cam1/data/x.png' contains '..'"},
       // The right list's timestamps moved one line up: line 2 pairs with the next frame.
