@@ -21,18 +21,19 @@ namespace {
 using estimator::Pose;
 using estimator::Vec3;
 
+// "path:line: what", or "path: what" for the file as a whole (line 0).
 bool Fail(std::string* error, const std::string& path, int line, const std::string& what) {
   std::ostringstream os;
-  os << path << ":" << line << ": " << what;
+  os << path;
+  if (line > 0) os << ":" << line;
+  os << ": " << what;
   *error = os.str();
   return false;
 }
 
 // Fills the poses and `index` (file id -> position) and `lines` (position -> file line).
-bool LoadPoses(const std::string& path, KittiVoProblem* problem, std::map<std::int64_t, int>* index,
-               std::vector<int>* lines, std::string* error) {
-  std::ifstream in(path);
-  if (!in) return Fail(error, path, 0, "cannot open");
+bool ReadPoses(std::istream& in, const std::string& path, KittiVoProblem* problem,
+               std::map<std::int64_t, int>* index, std::vector<int>* lines, std::string* error) {
   std::string text;
   int line = 0;
   while (std::getline(in, text)) {
@@ -58,14 +59,14 @@ bool LoadPoses(const std::string& path, KittiVoProblem* problem, std::map<std::i
     problem->poses.push_back(
         Pose<double>{svd.matrixU() * svd.matrixV().transpose(), m.topRightCorner<3, 1>()});
   }
-  if (problem->poses.empty()) return Fail(error, path, line, "no poses");
+  if (problem->poses.empty())
+    return Fail(error, path, 0, "no poses in the file (" + std::to_string(line) + " lines)");
   return true;
 }
 
-bool LoadFactors(const std::string& path, const std::map<std::int64_t, int>& index,
-                 KittiVoProblem* problem, std::string* error) {
-  std::ifstream in(path);
-  if (!in) return Fail(error, path, 0, "cannot open");
+bool ReadFactors(std::istream& in, const std::string& path,
+                 const std::map<std::int64_t, int>& index, KittiVoProblem* problem,
+                 std::string* error) {
   std::map<std::pair<int, std::int64_t>, int> seen;  // (pose, landmark) -> first line
   std::string text;
   int line = 0;
@@ -98,7 +99,8 @@ bool LoadFactors(const std::string& path, const std::map<std::int64_t, int>& ind
     }
     problem->factors.push_back(f);
   }
-  if (problem->factors.empty()) return Fail(error, path, line, "no factors");
+  if (problem->factors.empty())
+    return Fail(error, path, 0, "no factors in the file (" + std::to_string(line) + " lines)");
   return true;
 }
 
@@ -128,6 +130,11 @@ bool LoadKittiVoCalibration(const std::string& path, estimator::StereoCamera<dou
                             std::string* error) {
   std::ifstream in(path);
   if (!in) return Fail(error, path, 0, "cannot open");
+  return ReadKittiVoCalibration(in, path, camera, error);
+}
+
+bool ReadKittiVoCalibration(std::istream& in, const std::string& path,
+                            estimator::StereoCamera<double>* camera, std::string* error) {
   double skew = 0.0;
   in >> camera->fx >> camera->fy >> skew >> camera->cx >> camera->cy >> camera->baseline_m;
   if (!in) return Fail(error, path, 1, "expected: fx fy skew u0 v0 baseline_m");
@@ -138,13 +145,27 @@ bool LoadKittiVoCalibration(const std::string& path, estimator::StereoCamera<dou
 
 bool LoadKittiVo(const std::string& calib_path, const std::string& poses_path,
                  const std::string& factors_path, KittiVoProblem* problem, std::string* error) {
+  std::ifstream calib(calib_path);
+  std::ifstream poses(poses_path);
+  std::ifstream factors(factors_path);
+  if (!calib) return Fail(error, calib_path, 0, "cannot open");
+  if (!poses) return Fail(error, poses_path, 0, "cannot open");
+  if (!factors) return Fail(error, factors_path, 0, "cannot open");
+  return ReadKittiVo({&calib, calib_path}, {&poses, poses_path}, {&factors, factors_path}, problem,
+                     error);
+}
+
+bool ReadKittiVo(const NamedStream& calib, const NamedStream& poses, const NamedStream& factors,
+                 KittiVoProblem* problem, std::string* error) {
   *problem = KittiVoProblem{};
-  problem->factors_path = factors_path;
+  problem->factors_path = factors.name;
+  const std::string& poses_path = poses.name;
+  const std::string& factors_path = factors.name;
   std::map<std::int64_t, int> index;
   std::vector<int> pose_lines;
-  if (!LoadKittiVoCalibration(calib_path, &problem->camera, error) ||
-      !LoadPoses(poses_path, problem, &index, &pose_lines, error) ||
-      !LoadFactors(factors_path, index, problem, error))
+  if (!ReadKittiVoCalibration(*calib.in, calib.name, &problem->camera, error) ||
+      !ReadPoses(*poses.in, poses_path, problem, &index, &pose_lines, error) ||
+      !ReadFactors(*factors.in, factors_path, index, problem, error))
     return false;
   std::vector<int> count(problem->poses.size(), 0);
   for (const KittiFactor& f : problem->factors) ++count[f.pose];

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <istream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,9 +43,19 @@ struct KittiVoProblem {
 bool LoadKittiVo(const std::string& calib_path, const std::string& poses_path,
                  const std::string& factors_path, KittiVoProblem* problem, std::string* error);
 
+// The same from streams (the fuzz harness reads from memory); `name` stands for the file.
+struct NamedStream {
+  std::istream* in = nullptr;
+  std::string name;
+};
+bool ReadKittiVo(const NamedStream& calib, const NamedStream& poses, const NamedStream& factors,
+                 KittiVoProblem* problem, std::string* error);
+
 // Reads only the calibration file (fx fy skew u0 v0 baseline_m).
 bool LoadKittiVoCalibration(const std::string& path, estimator::StereoCamera<double>* camera,
                             std::string* error);
+bool ReadKittiVoCalibration(std::istream& in, const std::string& path,
+                            estimator::StereoCamera<double>* camera, std::string* error);
 
 // Capacities of a filter instance (its template parameters K, N, M, P), or what a problem
 // needs from one.

@@ -115,11 +115,12 @@ TEST_F(LoaderTest, RefusesANonPositiveDisparity) {
   EXPECT_NE(error.find("is not positive (uL and uR swapped?)"), std::string::npos) << error;
 }
 
-// An empty factors file used to reach the solver and come back as "numerical failure".
+// An empty factors file used to reach the solver and come back as "numerical failure"; it is
+// refused naming the file as a whole (no line number).
 TEST_F(LoaderTest, RefusesAnEmptyFactorsFile) {
   WriteFactors({});
   KittiVoProblem problem;
-  EXPECT_EQ(Load(&problem), Path("factors.txt") + ":0: no factors");
+  EXPECT_EQ(Load(&problem), Path("factors.txt") + ": no factors in the file (0 lines)");
 }
 
 TEST_F(LoaderTest, RefusesAPoseWithoutFactors) {
