@@ -2,6 +2,7 @@
 
 #include <arv.h>
 
+#include <chrono>
 #include <condition_variable>
 #include <cstdarg>
 #include <cstdio>
@@ -53,6 +54,8 @@ struct AravisStereoSource::Camera {
   gulong control_lost_handler = 0;
   std::atomic<bool> control_lost{false};
   bool lost = false;  // declared lost by Next(): do not wait on control traffic to a dead camera
+  // Set by the helper thread once a lost camera's old connection is closed (see ~Camera).
+  std::shared_ptr<std::atomic<bool>> closed = std::make_shared<std::atomic<bool>>(false);
   SourceImageDesc desc;
   std::size_t payload = 0;
 
@@ -72,9 +75,10 @@ struct AravisStereoSource::Camera {
     if (lost || control_lost.load()) {
       // Closing a GigE stream and device talks GVCP to the camera, which a dead camera answers
       // only with seconds of timeouts and retries: a helper thread waits for that, not Stop().
-      std::thread([dead_stream = stream, dead_camera = camera] {
+      std::thread([dead_stream = stream, dead_camera = camera, done = closed] {
         if (dead_stream != nullptr) g_object_unref(dead_stream);
         g_object_unref(dead_camera);
+        done->store(true, std::memory_order_release);
       }).detach();
       return;
     }
@@ -277,6 +281,20 @@ core::Status AravisStereoSource::OpenCamera(int side, const char* id) {
 core::Status AravisStereoSource::Start() {
   if (!configured_) return Fail(core::Status::kNotConfigured, "aravis: not configured");
   Stop();
+  // The old connection to a lost camera is closed on a helper thread; when the camera answers
+  // again that close reaches it (stream channel and control released) and would cut off a new
+  // connection opened meanwhile. So a restart waits for it (bounded; GVCP retries end).
+  for (int side = 0; side < 2; ++side) {
+    if (closing_[side] == nullptr) continue;
+    for (int i = 0; i < 1000 && !closing_[side]->load(std::memory_order_acquire); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (!closing_[side]->load(std::memory_order_acquire)) {
+      return Fail(core::Status::kDeviceLost,
+                  "aravis %s: the lost connection is still closing (no GVCP answer)", Id(side));
+    }
+    closing_[side].reset();
+  }
   for (int side = 0; side < SideCount(); ++side) {
     const core::Status s = OpenCamera(side, side == 0 ? options_.left_id : options_.right_id);
     if (!core::IsOk(s)) {
@@ -567,6 +585,9 @@ void AravisStereoSource::Stop() {
       guint64 resent = 0, missing = 0;
       arv_gv_stream_get_statistics(ARV_GV_STREAM(cameras_[side]->stream), &resent, &missing);
       extra_.resent_packets += resent;
+    }
+    if (cameras_[side]->lost || cameras_[side]->control_lost.load()) {
+      closing_[side] = cameras_[side]->closed;
     }
     cameras_[side].reset();
   }

@@ -132,6 +132,9 @@ class AravisStereoSource final : public StereoSource {
   const char* Id(int side) const { return side == 0 ? options_.left_id : options_.right_id; }
 
   std::unique_ptr<Camera> cameras_[2];
+  // Set when a lost camera's old connection has been closed by its helper thread; Start() waits
+  // for it before reconnecting.
+  std::shared_ptr<std::atomic<bool>> closing_[2];
   AravisStereoOptions options_;
   bool configured_ = false;
   bool started_ = false;
