@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <vector>
 
@@ -23,9 +24,11 @@ using testing::SyntheticScene;
 using Filter = SlidingWindowFilter<StereoModel<double>, 5, 400, 200, 200>;
 
 TEST(Integrity, QuantilesMatchTables) {
-  EXPECT_NEAR(ChiSquare3Quantile(0.95), 7.8147, 1e-4);
-  EXPECT_NEAR(ChiSquare3Quantile(0.9999), 21.1075, 1e-3);
-  EXPECT_EQ(ChiSquare3Quantile(1.0), 0.0);
+  EXPECT_NEAR(ChiSquareQuantile(3, 0.95), 7.8147, 1e-4);
+  EXPECT_NEAR(ChiSquareQuantile(3, 0.9999), 21.1075, 1e-3);
+  EXPECT_NEAR(ChiSquareQuantile(6, 0.9999), 27.8563, 1e-3);
+  EXPECT_NEAR(ChiSquareQuantile(1, 0.99), 6.6349, 1e-4);
+  EXPECT_EQ(ChiSquareQuantile(3, 1.0), 0.0);
   EXPECT_NEAR(NormalUpperQuantile(0.0005), 3.2905, 1e-4);
 }
 
@@ -39,18 +42,24 @@ SceneOptions Descent() {
   return so;
 }
 
+const auto kExactMotion = [](int, Pose<double>*) {};
+
 // Runs the scene with the motion input the truth gives and covariances every frame (as the
-// flight pipeline does); `corrupt(frame, id, z)` may change a measurement before it is added.
-template <typename Corrupt>
+// flight pipeline does); `corrupt(frame, id, z)` may change a measurement before it is added,
+// `corrupt_motion(frame, u)` the motion input.
+template <typename Corrupt, typename CorruptMotion = decltype(kExactMotion)>
 std::vector<SwfSummary> RunGated(Filter* swf, const SyntheticScene& scene,
                                  const SwfOptions& options, const Corrupt& corrupt,
-                                 bool covariances = true) {
+                                 bool covariances = true,
+                                 const CorruptMotion& corrupt_motion = kExactMotion) {
   StereoModel<double> model;
   model.camera = scene.camera();
   EXPECT_EQ(swf->Configure(model, options), core::Status::kOk);
   Mat6<double> q_sqrt = Mat6<double>::Zero();
   // An IMU-grade motion input: 2 cm and 0.2 mrad per frame (0.8 px and 0.5 px at 60 m).
   q_sqrt.diagonal() << Vec3<double>::Constant(50.0), Vec3<double>::Constant(5000.0);
+  Mat6<double> cv_sqrt = Mat6<double>::Zero();
+  cv_sqrt.diagonal() << Vec3<double>::Constant(2.0), Vec3<double>::Constant(100.0);
   const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options().sigma_px;
   std::vector<SwfSummary> summaries;
   for (std::size_t j = 0; j < scene.frames().size(); ++j) {
@@ -58,8 +67,15 @@ std::vector<SwfSummary> RunGated(Filter* swf, const SyntheticScene& scene,
     if (j == 0) {
       EXPECT_EQ(swf->AddPose(f.truth), core::Status::kOk);
     } else {
-      const Pose<double> u = scene.frames()[j - 1].truth.Inverse() * f.truth;
+      Pose<double> u = scene.frames()[j - 1].truth.Inverse() * f.truth;
+      corrupt_motion(static_cast<int>(j), &u);
       EXPECT_EQ(swf->AddPoseWithMotion(u, q_sqrt), core::Status::kOk);
+      // The flight pipeline's fallback: constant velocity, 0.5 m and 10 mrad per frame.
+      if (j >= 2) {
+        const Pose<double> previous =
+            scene.frames()[j - 2].truth.Inverse() * scene.frames()[j - 1].truth;
+        EXPECT_EQ(swf->SetMotionFallback(previous, cv_sqrt), core::Status::kOk);
+      }
     }
     for (const testing::SceneObservation& o : f.obs) {
       Vec3<double> z = o.z;
@@ -112,6 +128,48 @@ TEST(Integrity, PredictionGateRefusesALookAlike) {
   EXPECT_GT((ungated->NewestPose().t - clean->NewestPose().t).norm(), 3.0 * gated_shift_m);
 }
 
+// A motion-input glitch of 1 m (50 sigma) in frame 10, against a frame full of tracks: the
+// motion gate fails, the images overrule the input (constant velocity takes its place), and the
+// estimate stays consistent with its covariance; fused, the glitch makes it overconfident. No
+// clean frame fails the gate.
+TEST(Integrity, MotionGateLetsTheImagesOverruleAGlitch) {
+  const SyntheticScene scene(Descent());
+  // The glitch enters frame 10; frame 10's estimate and covariance are read when frame 11's
+  // motion is made: the squared Mahalanobis distance of its position error.
+  const auto run = [&](const SwfOptions& options, bool with_glitch, double* nees) {
+    auto swf = std::make_unique<Filter>();
+    const auto motion = [&](int frame, Pose<double>* u) {
+      if (frame == 10 && with_glitch) u->t += Vec3<double>(1.0, 0.0, 0.0);
+      if (frame != 11) return;
+      const Vec3<double> e = swf->NewestPose().t - scene.frames()[10].truth.t;
+      *nees = e.dot(swf->NewestPoseCovariance().topLeftCorner<3, 3>().ldlt().solve(e));
+    };
+    return RunGated(swf.get(), scene, options, kClean, true, motion);
+  };
+  SwfOptions options = ModeOptions(SwfMode::kSlidingWindow);
+  options.motion_gate_min_inliers = 10;
+  double clean_nees = 0.0;
+  for (const SwfSummary& s : run(options, false, &clean_nees)) EXPECT_FALSE(s.motion_gate_failed);
+  double overruled_nees = 0.0;
+  const auto overruled = run(options, true, &overruled_nees);
+  EXPECT_TRUE(overruled[10].motion_gate_failed);
+  EXPECT_TRUE(overruled[10].motion_overruled);
+  EXPECT_GT(overruled[10].motion_chi2, 100.0);
+  // The same glitch with too few tracks to overrule it: reported, not overruled, and fused.
+  options.motion_gate_min_inliers = 100000;
+  double fused_nees = 0.0;
+  const auto fused = run(options, true, &fused_nees);
+  EXPECT_TRUE(fused[10].motion_gate_failed);
+  EXPECT_FALSE(fused[10].motion_overruled);
+  // Overruled, the estimate is as consistent with its covariance as the clean one (chi-square
+  // 3 dof, p = 0.999); fused, the glitch makes it overconfident.
+  EXPECT_LT(clean_nees, 16.27);
+  EXPECT_LT(overruled_nees, 16.27);
+  EXPECT_GT(fused_nees, 16.27);
+  std::printf("frame 10 position NEES: clean %.2f, glitch overruled %.2f, glitch fused %.2f\n",
+              clean_nees, overruled_nees, fused_nees);
+}
+
 // A landmark that moves (a dust plume, a shadow edge): consistent across frames, so no single
 // measurement looks wrong before fusion without covariances, but its residuals stay above the
 // gate after the solve. It is removed whole, and counted.
@@ -141,8 +199,11 @@ TEST(Integrity, ResidualGateRemovesAMovingLandmark) {
 }
 
 // Every measurement of frame 10 shifted 30 px: the data and the prediction disagree wholesale.
-// The gate stands down (keeps them, flags) rather than silently coasting on the prediction.
-TEST(Integrity, GateStandsDownWhenMostMeasurementsFail) {
+// A uniform shift is what a rotation of 30 px / f = 13 mrad looks like, over ten times the
+// 0.2 mrad the motion input allows. With the motion gate the images' fit overrules the input
+// (reported); without it the measurement gate stands down (keeps them, flags) rather than
+// silently coasting on the prediction.
+TEST(Integrity, WholesaleDisagreementIsReported) {
   const SyntheticScene scene(Descent());
   const auto shift = [](int frame, std::int64_t, Vec3<double>* z) {
     if (frame == 10) {
@@ -152,12 +213,20 @@ TEST(Integrity, GateStandsDownWhenMostMeasurementsFail) {
   };
   auto swf = std::make_unique<Filter>();
   const auto summaries = RunGated(swf.get(), scene, ModeOptions(SwfMode::kSlidingWindow), shift);
-  EXPECT_TRUE(summaries[10].gate_suspended);
+  EXPECT_TRUE(summaries[10].motion_gate_failed);
+  EXPECT_TRUE(summaries[10].motion_overruled);
   EXPECT_EQ(summaries[10].measurements_gated, 0);
-  EXPECT_NE(swf->FaultBits() & kFaultGateSuspended, 0u);
-  // A uniform shift is what a rotation of 30 px / f = 13 mrad looks like: the solve takes it as
-  // one (translation and rotation), over ten times the 0.2 mrad the motion input allows.
   EXPECT_GT(summaries[10].newest_pose_step_rad, 0.002);
+  SwfOptions no_motion_gate = ModeOptions(SwfMode::kSlidingWindow);
+  no_motion_gate.motion_gate_min_inliers = 100000;
+  auto plain = std::make_unique<Filter>();
+  const auto plain_summaries = RunGated(plain.get(), scene, no_motion_gate, shift);
+  EXPECT_TRUE(plain_summaries[10].motion_gate_failed);
+  EXPECT_FALSE(plain_summaries[10].motion_overruled);
+  EXPECT_TRUE(plain_summaries[10].gate_suspended);
+  EXPECT_EQ(plain_summaries[10].measurements_gated, 0);
+  EXPECT_NE(plain->FaultBits() & kFaultGateSuspended, 0u);
+  EXPECT_GT(plain_summaries[10].newest_pose_step_rad, 0.002);
 }
 
 TEST(Integrity, NewLandmarksNeedAGoodTriangulation) {

@@ -106,6 +106,7 @@ struct IntegrityEvidence {
   bool filter_reset = false;  // the filter lost its state this frame
   bool gate_suspended = false;
   bool has_motion_input = false;
+  bool motion_rejected = false;  // the motion input failed its gate (before or after the solve)
   int num_measurements = 0;
   int num_inliers = 0;
   // The newest frame (track checks): inliers among its measurements of landmarks seen before
@@ -183,33 +184,33 @@ class IntegrityMonitor {
     r.flags = CheckSolve(e) | CheckTracks(e) | CheckResiduals(e) | CheckGeometry(e);
     r.flags |= ProtectionLevels(e, &r.hpl_m, &r.vpl_m);
     if (e.motion_disagreement > options_.max_motion_disagreement) r.flags |= kFlagMotionDisagrees;
-    // An anomaly (the state or the data in doubt) keeps the output DEGRADED until
-    // recovery_frames clean frames have followed it.
-    constexpr std::uint32_t kAnomalies =
-        kFlagResidualsHigh | kFlagResidualJump | kFlagLargeStep | kFlagMeasurementsRejected |
-        kFlagTrackLoss | kFlagTooFewTracks | kFlagSolverFailed | kFlagMotionDisagrees;
-    frames_since_anomaly_ = (r.flags & kAnomalies) != 0 ? 0 : frames_since_anomaly_ + 1;
-    if (frames_since_restart_ < options_.recovery_frames ||
-        (frames_since_anomaly_ > 0 && frames_since_anomaly_ <= options_.recovery_frames)) {
-      r.flags |= kFlagRecovering;
-    }
-    if (!e.has_motion_input) r.flags |= kFlagNoMotionInput;
+    if (e.motion_rejected) r.flags |= kFlagMotionRejected;
     if (e.gate_suspended) r.flags |= kFlagGateSuspended;
     r.restart = (r.flags & (kFlagDiverged | kFlagImplausibleState)) != 0;
     constexpr std::uint32_t kInvalidating = kFlagSolverFailed | kFlagImplausibleState |
                                             kFlagDiverged | kFlagTooFewTracks | kFlagCovarianceBad;
-    // Flying on the process model alone is reported, not degrading: the covariance models it.
-    constexpr std::uint32_t kInformational = kFlagNoMotionInput;
-    r.status = (r.flags & kInvalidating) != 0     ? NavIntegrity::kInvalid
-               : (r.flags & ~kInformational) != 0 ? NavIntegrity::kDegraded
-                                                  : NavIntegrity::kValid;
-    if (r.status == NavIntegrity::kInvalid) {
-      r.hpl_m = 0.0;
-      r.vpl_m = 0.0;
+    Finish(e, kInvalidating, &r);
+    return r;
+  }
+
+  // A cycle without images (camera outage): the state was carried by the process model alone.
+  // Only its plausibility and covariance are checked; it is at best DEGRADED, and INVALID once
+  // its covariance leaves the envelope. The tracks of before the outage are not compared with
+  // the first frame after it.
+  IntegrityReport AssessCoast(const IntegrityEvidence& e) {
+    IntegrityReport r;
+    r.flags = kFlagCameraOutage | ProtectionLevels(e, &r.hpl_m, &r.vpl_m);
+    if (!e.position_world.allFinite() || !e.velocity_world.allFinite() ||
+        e.velocity_world.norm() > options_.max_speed_mps) {
+      r.flags |= kFlagImplausibleState;
     }
-    ++frames_since_restart_;
-    for (int b = 0; b < kNumIntegrityFlags; ++b) flag_counts_[b] += (r.flags >> b) & 1u;
-    ++status_counts_[static_cast<int>(r.status)];
+    if (e.motion_rejected) r.flags |= kFlagMotionRejected;
+    previous_tracked_ = -1;
+    high_residual_run_ = 0;
+    previous_sigma_ = 0.0;
+    constexpr std::uint32_t kInvalidating =
+        kFlagImplausibleState | kFlagCovarianceBad | kFlagCovarianceLarge;
+    Finish(e, kInvalidating, &r);
     return r;
   }
 
@@ -219,6 +220,34 @@ class IntegrityMonitor {
   const IntegrityOptions& Options() const { return options_; }
 
  private:
+  // Recovery, status and counts, common to every frame.
+  void Finish(const IntegrityEvidence& e, std::uint32_t invalidating, IntegrityReport* r) {
+    // An anomaly (the state or the data in doubt) keeps the output DEGRADED until
+    // recovery_frames clean frames have followed it.
+    constexpr std::uint32_t kAnomalies =
+        kFlagResidualsHigh | kFlagResidualJump | kFlagLargeStep | kFlagMeasurementsRejected |
+        kFlagTrackLoss | kFlagTooFewTracks | kFlagSolverFailed | kFlagMotionDisagrees |
+        kFlagMotionRejected | kFlagCameraOutage;
+    frames_since_anomaly_ = (r->flags & kAnomalies) != 0 ? 0 : frames_since_anomaly_ + 1;
+    if (frames_since_restart_ < options_.recovery_frames ||
+        (frames_since_anomaly_ > 0 && frames_since_anomaly_ <= options_.recovery_frames)) {
+      r->flags |= kFlagRecovering;
+    }
+    if (!e.has_motion_input) r->flags |= kFlagNoMotionInput;
+    // Flying on the process model alone is reported, not degrading: the covariance models it.
+    constexpr std::uint32_t kInformational = kFlagNoMotionInput;
+    r->status = (r->flags & invalidating) != 0      ? NavIntegrity::kInvalid
+                : (r->flags & ~kInformational) != 0 ? NavIntegrity::kDegraded
+                                                    : NavIntegrity::kValid;
+    if (r->status == NavIntegrity::kInvalid) {
+      r->hpl_m = 0.0;
+      r->vpl_m = 0.0;
+    }
+    ++frames_since_restart_;
+    for (int b = 0; b < kNumIntegrityFlags; ++b) flag_counts_[b] += (r->flags >> b) & 1u;
+    ++status_counts_[static_cast<int>(r->status)];
+  }
+
   std::uint32_t CheckSolve(const IntegrityEvidence& e) const {
     std::uint32_t f = 0;
     const bool solved =

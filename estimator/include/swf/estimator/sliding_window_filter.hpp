@@ -93,17 +93,26 @@ enum SwfFault : std::uint32_t {
                                         // measurements, is suspect; they were all kept
 };
 
-// Upper quantile of the chi-square distribution with 3 degrees of freedom: the x with
-// P(chi2_3 <= x) = probability. CDF(x) = erf(sqrt(x/2)) - sqrt(2x/pi) exp(-x/2); solved by
-// bisection (bounded, configuration time only). 0 for a probability outside (0, 1).
-inline double ChiSquare3Quantile(double probability) {
-  if (!(probability > 0.0 && probability < 1.0)) return 0.0;
-  const auto cdf = [](double x) {
-    return std::erf(std::sqrt(0.5 * x)) -
-           std::sqrt(2.0 * x / 3.14159265358979323846) * std::exp(-0.5 * x);
+// Upper quantile of the chi-square distribution with `dof` degrees of freedom: the x with
+// P(chi2_dof <= x) = probability. The CDF is the regularized lower incomplete gamma function
+// P(dof/2, x/2), summed as its power series; the quantile by bisection (bounded, configuration
+// time only). 0 for a probability outside (0, 1) or dof outside [1, 60].
+inline double ChiSquareQuantile(int dof, double probability) {
+  if (!(probability > 0.0 && probability < 1.0) || dof < 1 || dof > 60) return 0.0;
+  const double a = 0.5 * dof;
+  const auto cdf = [a](double x) {
+    const double z = 0.5 * x;
+    if (z <= 0.0) return 0.0;
+    double term = 1.0 / a;
+    double sum = term;
+    for (int n = 1; n < 1000 && term > 1e-17 * sum; ++n) {
+      term *= z / (a + n);
+      sum += term;
+    }
+    return std::exp(a * std::log(z) - z - std::lgamma(a)) * sum;
   };
   double lo = 0.0;
-  double hi = 200.0;  // CDF(200) = 1 - 1e-41
+  double hi = 400.0;  // CDF(400) = 1 - 1e-60 for dof <= 60
   for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
     const double mid = 0.5 * (lo + hi);
     (cdf(mid) < probability ? lo : hi) = mid;
@@ -144,6 +153,14 @@ struct SwfOptions {
   // A new landmark's stereo triangulation must give a 3x3 information that is positive
   // definite, and (when > 0) a largest 1-sigma world position error below this (metres).
   double max_init_sigma_m = 0.0;
+  // Motion gate (chi-square with 6 dof at gate_probability): before fusion, the newest pose
+  // fitted to its measurements of known landmarks alone is compared with the motion
+  // prediction. When they disagree and the fit has at least motion_gate_min_inliers inliers,
+  // the images overrule the motion input: the fit becomes the linearization point and the
+  // process factor's information is scaled by motion_gate_weight^2. With fewer inliers nobody
+  // can tell which is wrong: the failure is only reported.
+  int motion_gate_min_inliers = 25;
+  double motion_gate_weight = 1e-3;
 
   core::Status Validate() const {
     if (max_iterations < 1 || max_iterations > 100) return core::Status::kInvalidArgument;
@@ -158,6 +175,8 @@ struct SwfOptions {
       return core::Status::kInvalidArgument;
     if (max_gate_resolves < 0 || max_gate_resolves > 5) return core::Status::kInvalidArgument;
     if (!(max_init_sigma_m >= 0.0)) return core::Status::kInvalidArgument;
+    if (motion_gate_min_inliers < 0 || !(motion_gate_weight > 0.0 && motion_gate_weight <= 1.0))
+      return core::Status::kInvalidArgument;
     return core::Status::kOk;
   }
 };
@@ -195,6 +214,11 @@ struct SwfSummary {
   int landmarks_rejected = 0;     // removed after the solve with all their measurements
   int new_landmarks_refused = 0;  // failed the depth, disparity or triangulation check
   bool gate_suspended = false;    // a gate stood down (kFaultGateSuspended)
+  // The motion gate: the squared Mahalanobis distance between the motion prediction and the
+  // images' fit of the newest pose, whether it failed, and whether the images overruled it.
+  double motion_chi2 = 0.0;
+  bool motion_gate_failed = false;
+  bool motion_overruled = false;
 };
 
 // A landmark that left the estimator in the last Update (its final estimate).
@@ -233,7 +257,8 @@ class SlidingWindowFilter {
     model_ = model;
     options_ = options;
     window_ = options.window_size == 0 ? K : options.window_size;
-    gate_threshold_ = S(ChiSquare3Quantile(options.gate_probability));
+    gate_threshold_ = S(ChiSquareQuantile(3, options.gate_probability));
+    motion_gate_threshold_ = S(ChiSquareQuantile(6, options.gate_probability));
     configured_ = true;
     Reset();
     return core::Status::kOk;
@@ -257,6 +282,7 @@ class SlidingWindowFilter {
     pending_ = SwfSummary{};
     covariances_current_ = false;
     predicted_cov_valid_ = false;
+    has_motion_fallback_ = false;
     retired_.clear();
   }
 
@@ -287,6 +313,17 @@ class SlidingWindowFilter {
   core::Status AddPoseWithMotion(const MotionType& u, const Mat6<S>& process_sqrt_information) {
     if (num_poses_ == 0) return core::Status::kInvalidArgument;
     return PushPose(model_.Propagate(Newest().pose, u), &u, &process_sqrt_information);
+  }
+
+  // What the newest pose's process factor becomes if the images overrule its motion input in
+  // the motion gate (e.g. the caller's constant-velocity model); without one the input is kept
+  // with its information scaled by motion_gate_weight^2. Valid until the next Update().
+  core::Status SetMotionFallback(const MotionType& u, const Mat6<S>& process_sqrt_information) {
+    if (num_poses_ < 2 || !Newest().has_process) return core::Status::kInvalidArgument;
+    motion_fallback_ = u;
+    motion_fallback_sqrt_info_ = process_sqrt_information;
+    has_motion_fallback_ = true;
+    return core::Status::kOk;
   }
 
   // Constant-velocity fallback: repeats the last relative motion (none with a single pose).
@@ -354,7 +391,11 @@ class SlidingWindowFilter {
     if (!configured_) return core::Status::kNotConfigured;
     summary_ = SwfSummary{};
     retired_.clear();
+    const MotionGateResult motion_gate = GateNewestMotion();
     ApplyPredictionGate();
+    summary_.motion_chi2 = motion_gate.chi2;
+    summary_.motion_gate_failed = motion_gate.failed;
+    summary_.motion_overruled = motion_gate.overruled;
     if (num_poses_ > window_) {
       if (options_.mode == SwfMode::kVisualOdometry) {
         DeleteOldestPose();
@@ -896,6 +937,9 @@ class SlidingWindowFilter {
     summary_.num_measurements = total;
     summary_.measurement_chi2 = chi2;
     summary_.num_inliers = inliers;
+    summary_.tracked_measurements = 0;
+    summary_.tracked_inliers = 0;
+    summary_.new_landmarks = 0;
     if (num_poses_ == 0) return;
     for (const Observation& o : Newest().obs) {
       const bool tracked = landmarks_[o.landmark].obs_in_window > 1;
@@ -909,6 +953,114 @@ class SlidingWindowFilter {
       summary_.newest_pose_step_m = static_cast<double>(d.template head<3>().norm());
       summary_.newest_pose_step_rad = static_cast<double>(d.template tail<3>().norm());
     }
+  }
+
+  // The motion gate (SwfOptions::motion_gate_weight), before any measurement gate: the newest
+  // pose fitted to its measurements of landmarks seen before (robust Gauss-Newton on
+  // that pose alone, landmarks held) is compared with the motion prediction. When they
+  // disagree beyond the gate and the fit has the inliers to be believed, the fitted pose
+  // replaces the prediction as the linearization point, the process factor is down-weighted,
+  // and the prediction gate (made against the bad prediction) is cleared for this frame.
+  struct MotionGateResult {
+    double chi2 = 0.0;
+    bool failed = false;
+    bool overruled = false;
+  };
+
+  MotionGateResult GateNewestMotion() {
+    MotionGateResult result;
+    const bool had_fallback = has_motion_fallback_;
+    has_motion_fallback_ = false;
+    if (num_poses_ < 2 || !Newest().has_process || motion_gate_threshold_ <= S(0)) return result;
+    PoseSlot& p = Newest();
+    PoseType fitted = p.pose;
+    Mat6<S> information = Mat6<S>::Zero();
+    const int inliers = FitNewestPose(&fitted, &information);
+    if (inliers < 6) return result;  // too few to fix a pose: nothing to compare
+    Mat6<S> unused;
+    const Vec6<S> d = Model::Difference(p.pose, fitted, &unused);
+    // Covariance of the difference: the prediction's (with the motion noise) plus the fit's.
+    Mat6<S> covariance;
+    if (predicted_cov_valid_) {
+      covariance = predicted_pose_cov_;
+    } else {
+      const Mat6<S> w_inv = p.process_sqrt_info.inverse();
+      covariance = w_inv * w_inv.transpose();
+    }
+    const Eigen::LDLT<Mat6<S>> fit(information);
+    if (fit.info() != Eigen::Success) return result;
+    covariance += fit.solve(Mat6<S>::Identity());
+    const Eigen::LDLT<Mat6<S>> ldlt(covariance);
+    if (ldlt.info() != Eigen::Success) return result;
+    const S chi2 = d.dot(ldlt.solve(d));
+    result.chi2 = static_cast<double>(chi2);
+    result.failed = !(chi2 <= motion_gate_threshold_);
+    if (!result.failed || inliers < options_.motion_gate_min_inliers) return result;
+    result.overruled = true;
+    p.pose = fitted;  // newest_prediction_ stays: the step from it is evidence too
+    if (had_fallback) {
+      p.motion = motion_fallback_;
+      p.process_sqrt_info = motion_fallback_sqrt_info_;
+    } else {
+      p.process_sqrt_info *= S(options_.motion_gate_weight);
+    }
+    predicted_cov_valid_ = false;
+    for (Observation& o : p.obs) o.gate_failed = false;
+    return result;
+  }
+
+  // Robust Gauss-Newton on the newest pose alone against its measurements of landmarks seen
+  // before (their estimates held; a first sighting was placed from the very prediction under
+  // test). Returns the inliers (Huber weight 1) at the end and the pose's information.
+  int FitNewestPose(PoseType* pose, Mat6<S>* information) {
+    const PoseType prediction = *pose;
+    const S k = S(options_.huber_k);
+    int inliers = 0;
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      Mat6<S> h = Mat6<S>::Zero();
+      Vec6<S> g = Vec6<S>::Zero();
+      inliers = 0;
+      for (Observation& o : Newest().obs) {
+        const LandmarkSlot& l = landmarks_[o.landmark];
+        if (l.obs_in_window < 2 && l.prior_index < 0) continue;
+        Vec3<S> z_hat;
+        Mat36<S> jp;
+        Mat3<S> jl;
+        if (!model_.Predict(*pose, l.anchor, l.params, &z_hat, &jp, &jl)) continue;
+        const Mat3<S> whiten = FitWhitening(prediction, o, l);
+        const Vec3<S> r = whiten * (o.z - z_hat);
+        const Mat36<S> j = whiten * jp;
+        const S norm = r.norm();
+        const S w = norm <= k ? S(1) : k / norm;
+        inliers += norm <= k ? 1 : 0;
+        h += w * j.transpose() * j;
+        g += w * j.transpose() * r;
+      }
+      *information = h;
+      const Eigen::LDLT<Mat6<S>> ldlt(h);
+      if (ldlt.info() != Eigen::Success) return 0;
+      const Vec6<S> delta = ldlt.solve(g);
+      if (!delta.allFinite()) return 0;
+      *pose = Model::Retract(*pose, delta);
+      if (delta.norm() < S(1e-9)) break;
+    }
+    return inliers;
+  }
+
+  // (R + J_l P_l J_l^T)^(-1/2) at the prediction, when the landmark's marginal is known: a
+  // landmark seen from one earlier pose is far less certain than the pixel noise. Held fixed
+  // over the fit's iterations so that Gauss-Newton converges as on a fixed weighting.
+  Mat3<S> FitWhitening(const PoseType& prediction, const Observation& o,
+                       const LandmarkSlot& l) const {
+    Vec3<S> z_hat;
+    Mat36<S> jp;
+    Mat3<S> jl;
+    if (!l.covariance_valid || !model_.Predict(prediction, l.anchor, l.params, &z_hat, &jp, &jl))
+      return o.sqrt_info;
+    const Mat3<S> r_inv = (o.sqrt_info.transpose() * o.sqrt_info).inverse();
+    const Eigen::LLT<Mat3<S>> llt(r_inv + jl * l.covariance * jl.transpose());
+    if (llt.info() != Eigen::Success) return o.sqrt_info;
+    return llt.matrixL().solve(Mat3<S>::Identity());
   }
 
   // ---- linearization -----------------------------------------------------------------------
@@ -1545,6 +1697,10 @@ class SlidingWindowFilter {
   SwfSummary summary_{};
   SwfSummary pending_{};  // gate counts of the frame being added, moved to summary_ by Update
   S gate_threshold_ = S(0);
+  S motion_gate_threshold_ = S(0);
+  bool has_motion_fallback_ = false;
+  MotionType motion_fallback_{};
+  Mat6<S> motion_fallback_sqrt_info_ = Mat6<S>::Zero();
   bool covariances_current_ = false;  // ComputeCovariances() ran since the last Update()
   bool predicted_cov_valid_ = false;  // predicted_pose_cov_ holds the newest pose's prediction
   Mat6<S> predicted_pose_cov_ = Mat6<S>::Zero();
