@@ -20,7 +20,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   }
   if (options.swf.mode == estimator::SwfMode::kBatch) return Status::kInvalidArgument;
   if (!(options.still_translation_m >= 0.0) || !(options.still_rotation_rad >= 0.0) ||
-      !(options.max_process_inflation >= 1.0) ||
+      !(options.max_process_inflation >= 1.0) || !(options.max_turn_rate_radps > 0.0) ||
       monitor_.Configure(options.integrity) != Status::kOk) {
     return Status::kInvalidArgument;
   }
@@ -81,6 +81,9 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   frames_since_restart_ = -1;
   velocity_world_.setZero();
   last_dt_s_ = 0.0;
+  ClearCoast();
+  dr_reanchor_ = false;
+  motion_refused_ = false;
   configured_ = true;
   return Status::kOk;
 }
@@ -113,8 +116,9 @@ Status Pipeline::Track() {
   if (has_previous_pose_ && swf_->NumPoses() > 0) {
     prediction.has_pose = true;
     prediction.world_T_camera =
-        has_before_previous_ ? previous_pose_ * (before_previous_pose_.Inverse() * previous_pose_)
-                             : previous_pose_;
+        coast_frames_ > 0      ? coast_pose_ * last_motion_
+        : has_before_previous_ ? previous_pose_ * (before_previous_pose_.Inverse() * previous_pose_)
+                               : previous_pose_;
     std::size_t n = 0;
     swf_->ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int /*obs*/) {
       if (n < static_cast<std::size_t>(kMaxLandmarks)) {
@@ -129,8 +133,9 @@ Status Pipeline::Track() {
   return frontend_->ProcessFrame(current_, prediction, output_.get());
 }
 
-Status Pipeline::Estimate(const Pose<double>* motion) {
+Status Pipeline::Estimate(const Pose<double>* motion_input) {
   if (!configured_) return Status::kNotConfigured;
+  const Pose<double>* motion = AcceptMotion(motion_input);
   Status s;
   if (swf_->NumPoses() == 0 && !has_previous_pose_) {
     s = swf_->AddPose(options_.initial_world_T_camera);  // the very first frame
@@ -140,9 +145,18 @@ Status Pipeline::Estimate(const Pose<double>* motion) {
     s = RestartFromTrusted();
     DeadReckon(nullptr);
   } else {
+    // After a refused input or an outage the reckoning restarts from this frame's estimate.
+    const bool reckon = motion != nullptr && coast_frames_ == 0;
+    if (motion_refused_ || coast_frames_ > 0) dr_reanchor_ = true;
     s = AddPredictedPose(motion);
-    DeadReckon(motion);
+    if (reckon) {
+      DeadReckon(motion);
+    } else if (!dr_reanchor_) {
+      DeadReckon(nullptr);
+    }
   }
+  const bool after_outage = coast_frames_ > 0;
+  ClearCoast();
   if (s != Status::kOk) {
     last_status_ = s;
     return s;
@@ -158,7 +172,13 @@ Status Pipeline::Estimate(const Pose<double>* motion) {
     velocity_world_ = has_previous_pose_ && dt_s > 0.0
                           ? Vec3<double>((newest.t - previous_pose_.t) / dt_s)
                           : Vec3<double>::Zero();
-    if (dt_s > 0.0) last_dt_s_ = dt_s;
+    if (dt_s > 0.0 && !after_outage) last_dt_s_ = dt_s;
+    if (swf_->Summary().motion_overruled && motion != nullptr) {
+      // The images overruled the input: what the frame really moved is the solved motion.
+      last_motion_ = previous_pose_.Inverse() * newest;
+      ++integrity_.motion_overruled;
+      dr_reanchor_ = true;
+    }
     if (has_previous_pose_) {
       before_previous_pose_ = previous_pose_;
       has_before_previous_ = true;
@@ -166,6 +186,14 @@ Status Pipeline::Estimate(const Pose<double>* motion) {
     previous_pose_ = newest;
     has_previous_pose_ = true;
     covariance_valid_ = swf_->ComputeCovariances() == Status::kOk;
+    if (dr_reanchor_) {
+      dr_valid_ = covariance_valid_;
+      dr_pose_ = newest;
+      dr_variance_m2_ =
+          covariance_valid_ ? swf_->NewestPoseCovariance().topLeftCorner<3, 3>().trace() : 0.0;
+      dr_distance_m_ = 0.0;
+      dr_reanchor_ = false;
+    }
   }
   last_estimate_utime_ = utime_;
   AssessIntegrity(filter_reset, motion != nullptr);
@@ -177,15 +205,120 @@ Status Pipeline::Estimate(const Pose<double>* motion) {
 // (IMU), else the bounded constant-velocity model, with its sigma inflated by the frames since
 // the last VALID estimate.
 Status Pipeline::AddPredictedPose(const Pose<double>* motion) {
-  // Without a motion input, frames after the last VALID one repeat the trusted frame's motion.
-  last_motion_ = motion != nullptr           ? *motion
-                 : frames_since_trusted_ > 0 ? trusted_motion_
-                                             : BoundedConstantVelocity();
-  const double inflation = motion != nullptr
-                               ? 1.0
-                               : std::min(options_.max_process_inflation,
-                                          1.0 + static_cast<double>(frames_since_trusted_));
-  return swf_->AddPoseWithMotion(last_motion_, q_sqrt_ / inflation);
+  double inflation = 1.0;
+  last_motion_ = FrameMotion(motion, &inflation);
+  if (coast_frames_ == 0) {
+    const Status s = swf_->AddPoseWithMotion(last_motion_, q_sqrt_ / inflation);
+    if (s != Status::kOk || motion == nullptr) return s;
+    // Should the images overrule the input (the filter's motion gate), the frame is predicted
+    // as if there were none, with the widest constant-velocity sigma.
+    double unused = 1.0;
+    const Pose<double> fallback = FrameMotion(nullptr, &unused);
+    return swf_->SetMotionFallback(fallback, q_sqrt_ / options_.max_process_inflation);
+  }
+  // After an outage: the coasted motion and this frame's as one factor, with the variance of
+  // every cycle summed and the rotation noise acting on the distance flown.
+  const Pose<double> u = coast_motion_ * last_motion_;
+  const double sigma_t = inflation / q_sqrt_(0, 0);
+  const double sigma_r = inflation / q_sqrt_(3, 3);
+  const double variance_rad2 = coast_variance_rad2_ + sigma_r * sigma_r;
+  const double variance_m2 =
+      coast_variance_m2_ + sigma_t * sigma_t + variance_rad2 * u.t.squaredNorm();
+  estimator::Mat6<double> sqrt_information = estimator::Mat6<double>::Zero();
+  sqrt_information.diagonal() << Vec3<double>::Constant(1.0 / std::sqrt(variance_m2)),
+      Vec3<double>::Constant(1.0 / std::sqrt(variance_rad2));
+  return swf_->AddPoseWithMotion(u, sqrt_information);
+}
+
+// Without a motion input, frames after the last VALID one repeat the trusted frame's motion.
+Pose<double> Pipeline::FrameMotion(const Pose<double>* motion, double* inflation) const {
+  *inflation = motion != nullptr ? 1.0
+                                 : std::min(options_.max_process_inflation,
+                                            1.0 + static_cast<double>(frames_since_trusted_));
+  return motion != nullptr           ? *motion
+         : frames_since_trusted_ > 0 ? trusted_motion_
+                                     : BoundedConstantVelocity();
+}
+
+// The envelope of a relative motion over one frame period (twice the last measured period, for
+// jitter; one second before there is one): finite, a rotation matrix, no faster than the
+// vehicle can fly or turn. Outside it the input is a glitch: refused, counted, flagged.
+const Pose<double>* Pipeline::AcceptMotion(const Pose<double>* motion) {
+  motion_refused_ = false;
+  if (motion == nullptr) return nullptr;
+  const double period_s = 2.0 * (last_dt_s_ > 0.0 ? last_dt_s_ : 1.0);
+  const bool finite = motion->t.allFinite() && motion->R.allFinite();
+  const bool rotation =
+      finite && (motion->R.transpose() * motion->R - estimator::Mat3<double>::Identity())
+                        .cwiseAbs()
+                        .maxCoeff() < 1e-6;
+  const bool inside =
+      rotation && motion->t.norm() <= options_.integrity.max_speed_mps * period_s &&
+      estimator::LogSO3<double>(motion->R).norm() <= options_.max_turn_rate_radps * period_s;
+  if (inside) return motion;
+  motion_refused_ = true;
+  ++integrity_.motion_refused;
+  return nullptr;
+}
+
+// A cycle without images: the state carried by the process model alone (see pipeline.hpp).
+Status Pipeline::Coast(const Pose<double>* motion_input) {
+  if (!configured_) return Status::kNotConfigured;
+  if (!has_previous_pose_) return Status::kEmpty;
+  const Pose<double>* motion = AcceptMotion(motion_input);
+  double inflation = 1.0;
+  last_motion_ = FrameMotion(motion, &inflation);
+  const Pose<double> before = coast_frames_ > 0 ? coast_pose_ : previous_pose_;
+  ++coast_frames_;
+  coast_motion_ = coast_motion_ * last_motion_;
+  const double sigma_t = inflation / q_sqrt_(0, 0);
+  const double sigma_r = inflation / q_sqrt_(3, 3);
+  coast_variance_m2_ += sigma_t * sigma_t;
+  coast_variance_rad2_ += sigma_r * sigma_r;
+  coast_pose_ = previous_pose_ * coast_motion_;
+  // Covariance: the newest estimate's (or the trusted one grown per frame since), plus the
+  // process noise of the outage, plus every rotation uncertainty acting on the distance flown.
+  estimator::Mat6<double> base = trusted_covariance_;
+  if (covariance_valid_ && swf_->NumPoses() > 0) {
+    base = swf_->NewestPoseCovariance();
+  } else {
+    base.diagonal() += static_cast<double>(frames_since_trusted_) *
+                       q_sqrt_.diagonal().cwiseInverse().array().square().matrix();
+  }
+  const double rotation_rad2 =
+      base.bottomRightCorner<3, 3>().diagonal().maxCoeff() + coast_variance_rad2_;
+  coast_covariance_ = base;
+  coast_covariance_.topLeftCorner<3, 3>().diagonal().array() +=
+      coast_variance_m2_ + rotation_rad2 * coast_motion_.t.squaredNorm();
+  coast_covariance_.bottomRightCorner<3, 3>().diagonal().array() += coast_variance_rad2_;
+  if (last_dt_s_ > 0.0) {
+    utime_ += static_cast<std::int64_t>(last_dt_s_ * 1e6);
+    velocity_world_ = (coast_pose_.t - before.t) / last_dt_s_;
+  }
+  ++seq_;
+  estimator::IntegrityEvidence e;
+  e.has_motion_input = motion != nullptr;
+  e.motion_rejected = motion_refused_;
+  e.position_world = coast_pose_.t;
+  e.velocity_world = velocity_world_;
+  e.has_covariance = true;
+  e.covariance = coast_covariance_;
+  report_ = monitor_.AssessCoast(e);
+  CountReport();
+  ++integrity_.frames_coasted;
+  integrity_.longest_outage_frames =
+      std::max(integrity_.longest_outage_frames, static_cast<std::int32_t>(coast_frames_));
+  since_trusted_ = since_trusted_ * last_motion_;
+  ++frames_since_trusted_;
+  dr_reanchor_ = true;
+  return Status::kOk;
+}
+
+void Pipeline::ClearCoast() {
+  coast_frames_ = 0;
+  coast_motion_ = Pose<double>();
+  coast_variance_m2_ = 0.0;
+  coast_variance_rad2_ = 0.0;
 }
 
 Pose<double> Pipeline::BoundedConstantVelocity() const {
@@ -303,6 +436,7 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   e.filter_reset = filter_reset;
   e.gate_suspended = summary.gate_suspended;
   e.has_motion_input = has_motion;
+  e.motion_rejected = motion_refused_ || (has_motion && summary.motion_gate_failed);
   e.num_measurements = summary.num_measurements;
   e.num_inliers = summary.num_inliers;
   // A (re)started window has nothing tracked yet: its first frame counts what it measured.
@@ -330,35 +464,27 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   integrity_.landmarks_rejected += summary.landmarks_rejected;
   integrity_.new_landmarks_refused += summary.new_landmarks_refused;
   integrity_.gate_suspensions += summary.gate_suspended ? 1 : 0;
-  for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
-    integrity_.flag_counts[b] += (report_.flags >> b) & 1u;
-  if (frames_since_restart_ >= 0) ++frames_since_restart_;
-  switch (report_.status) {
-    case estimator::NavIntegrity::kValid:
-      ++integrity_.frames_valid;
-      trusted_pose_ = previous_pose_;
-      trusted_covariance_ = swf_->NewestPoseCovariance();
-      since_trusted_ = Pose<double>();
-      frames_since_trusted_ = 0;
-      // Smoothed per-frame motion of the VALID frames (time constant ~5 frames).
-      {
-        const double step_m = last_motion_.t.norm();
-        const double step_rad = estimator::LogSO3<double>(last_motion_.R).norm();
-        const bool first = smoothed_step_m_ >= 1e8;  // no VALID frame yet
-        smoothed_step_m_ = first ? step_m : smoothed_step_m_ + 0.2 * (step_m - smoothed_step_m_);
-        smoothed_step_rad_ =
-            first ? step_rad : smoothed_step_rad_ + 0.2 * (step_rad - smoothed_step_rad_);
-      }
-      trusted_motion_ = BoundedConstantVelocity();
-      if (frames_since_restart_ >= 0) {
-        integrity_.last_recovery_frames = static_cast<std::int32_t>(frames_since_restart_);
-        frames_since_restart_ = -1;
-      }
-      break;
-    case estimator::NavIntegrity::kDegraded: ++integrity_.frames_degraded; break;
-    case estimator::NavIntegrity::kInvalid: ++integrity_.frames_invalid; break;
-  }
-  if (report_.status != estimator::NavIntegrity::kValid) {
+  CountReport();
+  if (report_.status == estimator::NavIntegrity::kValid) {
+    trusted_pose_ = previous_pose_;
+    trusted_covariance_ = swf_->NewestPoseCovariance();
+    since_trusted_ = Pose<double>();
+    frames_since_trusted_ = 0;
+    // Smoothed per-frame motion of the VALID frames (time constant ~5 frames).
+    {
+      const double step_m = last_motion_.t.norm();
+      const double step_rad = estimator::LogSO3<double>(last_motion_.R).norm();
+      const bool first = smoothed_step_m_ >= 1e8;  // no VALID frame yet
+      smoothed_step_m_ = first ? step_m : smoothed_step_m_ + 0.2 * (step_m - smoothed_step_m_);
+      smoothed_step_rad_ =
+          first ? step_rad : smoothed_step_rad_ + 0.2 * (step_rad - smoothed_step_rad_);
+    }
+    trusted_motion_ = BoundedConstantVelocity();
+    if (frames_since_restart_ >= 0) {
+      integrity_.last_recovery_frames = static_cast<std::int32_t>(frames_since_restart_);
+      frames_since_restart_ = -1;
+    }
+  } else {
     // Carried forward by the motion input, or without one by the motion of the trusted frame:
     // not by a constant-velocity extrapolation of the very estimates that are in doubt.
     since_trusted_ = since_trusted_ * (has_motion ? last_motion_ : trusted_motion_);
@@ -367,10 +493,23 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   restart_pending_ = report_.restart || filter_reset;
 }
 
+// The report's status and flags into the counters (every estimated or coasted frame).
+void Pipeline::CountReport() {
+  for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
+    integrity_.flag_counts[b] += (report_.flags >> b) & 1u;
+  if (frames_since_restart_ >= 0) ++frames_since_restart_;
+  switch (report_.status) {
+    case estimator::NavIntegrity::kValid: ++integrity_.frames_valid; break;
+    case estimator::NavIntegrity::kDegraded: ++integrity_.frames_degraded; break;
+    case estimator::NavIntegrity::kInvalid: ++integrity_.frames_invalid; break;
+  }
+}
+
 void Pipeline::MakeNav(NavOutput* nav) {
   nav->utime = utime_;
   nav->frame_seq = seq_;
-  const Pose<double>& pose = previous_pose_;
+  const bool coasting = coast_frames_ > 0;
+  const Pose<double>& pose = coasting ? coast_pose_ : previous_pose_;
   const Eigen::Quaterniond q(pose.R);
   for (int i = 0; i < 3; ++i) nav->position_world_m[i] = pose.t[i];
   nav->orientation_world_q[0] = q.w();
@@ -379,8 +518,8 @@ void Pipeline::MakeNav(NavOutput* nav) {
   nav->orientation_world_q[3] = q.z();
   for (int i = 0; i < 3; ++i) nav->velocity_world_mps[i] = velocity_world_[i];
   // The newest pose's marginal covariance (computed by Estimate for the integrity checks).
-  if (covariance_valid_) {
-    const estimator::Mat6<double>& c = swf_->NewestPoseCovariance();
+  if (coasting || covariance_valid_) {
+    const estimator::Mat6<double>& c = coasting ? coast_covariance_ : swf_->NewestPoseCovariance();
     for (int r = 0; r < 6; ++r)
       for (int k = 0; k < 6; ++k) nav->covariance[6 * r + k] = c(r, k);
   } else {

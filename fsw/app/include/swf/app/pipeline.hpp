@@ -62,6 +62,10 @@ struct PipelineOptions {
   double still_translation_m = 0.005;
   double still_rotation_rad = 0.001;
   double max_process_inflation = 3.0;
+  // Motion-input envelope: a relative motion faster than integrity.max_speed_mps or turning
+  // faster than this is a glitch, refused before it reaches the filter (the filter's motion
+  // gate, SwfOptions::gate_probability, catches the subtler ones against the images).
+  double max_turn_rate_radps = 3.0;
   estimator::Pose<double> initial_world_T_camera;
   estimator::IntegrityOptions integrity;
 };
@@ -78,6 +82,10 @@ struct IntegrityCounters {
   std::int64_t landmarks_rejected = 0;
   std::int64_t new_landmarks_refused = 0;
   std::int64_t gate_suspensions = 0;
+  std::int64_t motion_refused = 0;    // motion inputs outside the envelope (not fused)
+  std::int64_t motion_overruled = 0;  // motion inputs the images overruled in the filter
+  std::int64_t frames_coasted = 0;    // cycles without a stereo pair (camera outage)
+  std::int32_t longest_outage_frames = 0;
   std::int64_t flag_counts[estimator::kNumIntegrityFlags] = {};
 };
 
@@ -148,7 +156,13 @@ class Pipeline {
   core::Status Track();
   // motion: camera_prev_T_camera from the navigation system (nullptr: constant velocity).
   core::Status Estimate(const estimator::Pose<double>* motion);
-  // Fills the navigation output of the frame just estimated.
+  // A cycle without a stereo pair (camera stall or loss): the estimate is carried forward by
+  // the motion input (nullptr: the bounded constant-velocity model) with its covariance grown
+  // per cycle, assessed (CAMERA_OUTAGE: DEGRADED, INVALID once the covariance leaves the
+  // envelope) and ready for MakeNav. The next Estimate() fuses the whole outage's motion as one
+  // process factor. kEmpty before the first estimate (nothing to carry).
+  core::Status Coast(const estimator::Pose<double>* motion);
+  // Fills the navigation output of the frame just estimated (or coasted).
   void MakeNav(NavOutput* nav);
   // Computes covariances and fills the landmark map (hazard-group rate: O(n^3)).
   core::Status MakeMap(MapOutput* map);
@@ -200,6 +214,24 @@ class Pipeline {
 
   // Integrity: the monitor, the last VALID state, and what happened since.
   core::Status AddPredictedPose(const estimator::Pose<double>* motion);
+  // The motion input if it is inside the envelope, else nullptr (refused and counted).
+  const estimator::Pose<double>* AcceptMotion(const estimator::Pose<double>* motion);
+  // The motion of one frame: the accepted input, or the bounded constant-velocity model with
+  // the process sigma's inflation factor.
+  estimator::Pose<double> FrameMotion(const estimator::Pose<double>* motion,
+                                      double* inflation) const;
+  void CountReport();
+  void ClearCoast();
+  bool motion_refused_ = false;  // this frame's motion input was refused
+  // Camera outage: cycles since the filter's newest pose, their composed motion and the
+  // process variance it accumulated (per axis: translation, rotation), and the coasted state.
+  std::int64_t coast_frames_ = 0;
+  estimator::Pose<double> coast_motion_;
+  double coast_variance_m2_ = 0.0;
+  double coast_variance_rad2_ = 0.0;
+  estimator::Pose<double> coast_pose_;
+  estimator::Mat6<double> coast_covariance_ = estimator::Mat6<double>::Zero();
+  bool dr_reanchor_ = false;  // restart the dead reckoning at the next estimate
   core::Status RestartFromTrusted();
   estimator::Pose<double> BoundedConstantVelocity() const;
   void AddMeasurements();
