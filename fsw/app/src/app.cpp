@@ -191,12 +191,15 @@ void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const EvaluationRe
       "\"frames_invalid\": %lld, \"restarts\": %lld, \"last_recovery_frames\": %d, "
       "\"measurements_gated\": %lld, \"measurements_rejected\": %lld, "
       "\"landmarks_rejected\": %lld, \"new_landmarks_refused\": %lld, "
-      "\"gate_suspensions\": %lld",
+      "\"gate_suspensions\": %lld, \"motion_refused\": %lld, \"motion_overruled\": %lld, "
+      "\"frames_coasted\": %lld, \"longest_outage_frames\": %d",
       static_cast<long long>(c.frames_valid), static_cast<long long>(c.frames_degraded),
       static_cast<long long>(c.frames_invalid), static_cast<long long>(c.restarts),
       c.last_recovery_frames, static_cast<long long>(c.measurements_gated),
       static_cast<long long>(c.measurements_rejected), static_cast<long long>(c.landmarks_rejected),
-      static_cast<long long>(c.new_landmarks_refused), static_cast<long long>(c.gate_suspensions));
+      static_cast<long long>(c.new_landmarks_refused), static_cast<long long>(c.gate_suspensions),
+      static_cast<long long>(c.motion_refused), static_cast<long long>(c.motion_overruled),
+      static_cast<long long>(c.frames_coasted), c.longest_outage_frames);
   std::fprintf(f, ", \"flag_counts\": [");
   for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
     std::fprintf(f, "%s%lld", b > 0 ? ", " : "", static_cast<long long>(c.flag_counts[b]));
