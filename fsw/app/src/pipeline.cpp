@@ -81,6 +81,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   frames_since_restart_ = -1;
   velocity_world_.setZero();
   last_dt_s_ = 0.0;
+  distance_m_ = 0.0;
   ClearCoast();
   dr_reanchor_ = false;
   motion_refused_ = false;
@@ -173,6 +174,7 @@ Status Pipeline::Estimate(const Pose<double>* motion_input) {
                           ? Vec3<double>((newest.t - previous_pose_.t) / dt_s)
                           : Vec3<double>::Zero();
     if (dt_s > 0.0 && !after_outage) last_dt_s_ = dt_s;
+    if (has_previous_pose_) distance_m_ += (newest.t - previous_pose_.t).norm();
     if (swf_->Summary().motion_overruled && motion != nullptr) {
       // The images overruled the input: what the frame really moved is the solved motion.
       last_motion_ = previous_pose_.Inverse() * newest;
@@ -303,6 +305,7 @@ Status Pipeline::Coast(const Pose<double>* motion_input) {
   e.velocity_world = velocity_world_;
   e.has_covariance = true;
   e.covariance = coast_covariance_;
+  e.distance_m = distance_m_ + coast_motion_.t.norm();
   report_ = monitor_.AssessCoast(e);
   CountReport();
   ++integrity_.frames_coasted;
@@ -453,6 +456,7 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   e.has_covariance = covariance_valid_;
   if (covariance_valid_) e.covariance = swf_->NewestPoseCovariance();
   e.image_spread_px = image_spread_px_;
+  e.distance_m = distance_m_;
   if (num_disparities_ > 0) {
     float* mid = disparities_.get() + num_disparities_ / 2;
     std::nth_element(disparities_.get(), mid, disparities_.get() + num_disparities_);

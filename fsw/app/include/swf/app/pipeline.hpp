@@ -261,6 +261,7 @@ class Pipeline {
   double dr_variance_m2_ = 0.0;
   double dr_distance_m_ = 0.0;
   double last_dt_s_ = 0.0;
+  double distance_m_ = 0.0;  // flown since the start (the protection levels' drift bound)
   // Evidence of the newest frame's measurements (image spread, disparities).
   std::unique_ptr<float[]> disparities_;
   int num_disparities_ = 0;
