@@ -61,5 +61,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Expect(health.integrity_flag_counts.size() ==
            static_cast<std::size_t>(health.num_integrity_flags));
   }
+  swf_msgs::imu_t imu;
+  if (CheckedDecode(data, size, &imu).Ok()) {
+    Expect((imu.flags & ~swf::messages::kImuKnownFlags) == 0);
+    ExpectSameBytes(imu, data, size);
+  }
   return 0;
 }

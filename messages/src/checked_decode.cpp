@@ -225,4 +225,13 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::health_t
   return Decode(data, size, msg, CheckHealthShape);
 }
 
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::imu_t* msg) {
+  // Fixed size: nothing to allocate, the generated decoder checks every read.
+  DecodeError e = Decode(data, size, msg, [](WireReader*) { return DecodeError{}; });
+  if (!e.Ok()) return e;
+  if ((msg->flags & ~kImuKnownFlags) != 0)
+    return Error(DecodeResult::kBadValue, "flags", msg->flags);
+  return e;
+}
+
 }  // namespace swf::messages

@@ -6,6 +6,7 @@
 #include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
+#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
@@ -148,6 +149,7 @@ constexpr std::size_t kStereoNumBytes = kStereoWidth + 8;
 constexpr std::size_t kNumLandmarks = 8 + 24;
 constexpr std::size_t kHazardNumCells = 8 + 72 + 8;
 constexpr std::size_t kHealthNumFlags = 8 + 153;
+constexpr std::size_t kImuFlags = 8 + 64;  // utime, seq (2 x 8), rate, force (6 x 8)
 
 TEST(CheckedDecode, StereoFrameLengthsAreCheckedBeforeAnyAllocation) {
   const std::vector<std::uint8_t> bytes = Encode(SmallFrame());
@@ -279,6 +281,36 @@ TEST(CheckedDecode, NavStateAndForeignBytes) {
   EXPECT_EQ(Decode<swf_msgs::health_t>(bytes).result, DecodeResult::kWrongType);
   const std::vector<std::uint8_t> garbage(100, 0xff);
   EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(garbage).result, DecodeResult::kWrongType);
+}
+
+TEST(CheckedDecode, ImuRoundTripsAndUnknownFlagsAreRefused) {
+  swf_msgs::imu_t imu{};
+  imu.utime = 1403715273262142;
+  imu.seq = -3;  // any counter value: the stream checker judges sequence, not the decoder
+  imu.angular_rate_radps[2] = 0.25;
+  imu.specific_force_mps2[0] = -9.81;
+  imu.flags = std::int32_t{swf_msgs::imu_t::FLAG_VALID} |
+              std::int32_t{swf_msgs::imu_t::FLAG_ACCEL_SATURATED};
+  const std::vector<std::uint8_t> bytes = Encode(imu);
+  EXPECT_EQ(bytes.size(), kImuFlags + 4);  // the offsets above match the schema
+  swf_msgs::imu_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.utime, imu.utime);
+  EXPECT_EQ(out.seq, -3);
+  EXPECT_EQ(out.angular_rate_radps[2], 0.25);
+  EXPECT_EQ(out.specific_force_mps2[0], -9.81);
+  EXPECT_EQ(out.flags, imu.flags);
+  // GIVEN a bit the schema does not define WHEN decoded THEN refused, naming the field.
+  DecodeError e = Decode<swf_msgs::imu_t>(WithInt32(bytes, kImuFlags, 8));
+  EXPECT_EQ(e.result, DecodeResult::kBadValue);
+  EXPECT_STREQ(e.field, "flags");
+  EXPECT_EQ(e.value, 8);
+  EXPECT_EQ(Decode<swf_msgs::imu_t>(WithInt32(bytes, kImuFlags, -1)).result,
+            DecodeResult::kBadValue);
+  EXPECT_TRUE(Decode<swf_msgs::imu_t>(WithInt32(bytes, kImuFlags, 0)).Ok());  // invalid, known
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::imu_t>(bytes);
+  EXPECT_EQ(Decode<swf_msgs::imu_t>(Encode(SmallFrame())).result, DecodeResult::kWrongType);
+  EXPECT_EQ(Decode<swf_msgs::nav_state_t>(bytes).result, DecodeResult::kWrongType);
 }
 
 }  // namespace

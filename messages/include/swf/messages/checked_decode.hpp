@@ -16,6 +16,7 @@
 
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
+#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
@@ -33,6 +34,10 @@ inline constexpr std::int32_t kMaxHazardCells = kMaxHazardSideCells * kMaxHazard
 inline constexpr std::int32_t kMaxIntegrityFlags = 32;  // one per bit of an int32
 inline constexpr std::int32_t kMaxStages = 32;
 inline constexpr std::int32_t kMaxStageNameBytes = 64;  // with the terminating NUL
+// imu_t.flags: only the schema's bits (FLAG_VALID | FLAG_GYRO_SATURATED | FLAG_ACCEL_SATURATED).
+inline constexpr std::int32_t kImuKnownFlags =
+    std::int32_t{swf_msgs::imu_t::FLAG_VALID} | std::int32_t{swf_msgs::imu_t::FLAG_GYRO_SATURATED} |
+    std::int32_t{swf_msgs::imu_t::FLAG_ACCEL_SATURATED};
 // The longest encoded message of any type (a stereo frame of two kMaxImageBytes images and its
 // fixed fields): a bus message or log record longer than this is refused before it is read.
 inline constexpr std::int64_t kMaxEncodedBytes = 2 * std::int64_t{kMaxImageBytes} + 4096;
@@ -66,5 +71,9 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::nav_stat
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::landmark_map_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_map_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::health_t* msg);
+// Fixed size; refuses flags outside kImuKnownFlags (kBadValue, "flags"). Times, sequence numbers
+// and non-finite values are the stream checker's to judge (estimator/imu_stream.hpp), not the
+// decoder's: they are counted there.
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::imu_t* msg);
 
 }  // namespace swf::messages
