@@ -56,6 +56,9 @@ struct AravisStereoSource::Camera {
   bool lost = false;  // declared lost by Next(): do not wait on control traffic to a dead camera
   // Set by the helper thread once a lost camera's old connection is closed (see ~Camera).
   std::shared_ptr<std::atomic<bool>> closed = std::make_shared<std::atomic<bool>>(false);
+  // Set by this camera's trigger worker once it has dropped its reference (Stop() hands it
+  // over): until then the worker can still be inside a trigger to the lost camera.
+  std::shared_ptr<std::atomic<bool>> trigger_released;
   SourceImageDesc desc;
   std::size_t payload = 0;
 
@@ -75,7 +78,17 @@ struct AravisStereoSource::Camera {
     if (lost || control_lost.load()) {
       // Closing a GigE stream and device talks GVCP to the camera, which a dead camera answers
       // only with seconds of timeouts and retries: a helper thread waits for that, not Stop().
-      std::thread([dead_stream = stream, dead_camera = camera, done = closed] {
+      // The connection closes with the device's last reference. The trigger worker may hold
+      // one, blocked in a trigger to the stalled camera until it answers again; were it the
+      // last, the close would reach the camera after a restart had reconnected and cut off the
+      // new stream (seen under load). So the helper drops its references after the worker's
+      // (bounded by Aravis's GVCP timeouts and retries; 60 s is only a backstop).
+      std::thread([dead_stream = stream, dead_camera = camera, done = closed,
+                   worker = trigger_released] {
+        for (int i = 0; i < 6000 && worker != nullptr && !worker->load(std::memory_order_acquire);
+             ++i) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
         if (dead_stream != nullptr) g_object_unref(dead_stream);
         g_object_unref(dead_camera);
         done->store(true, std::memory_order_release);
@@ -106,6 +119,8 @@ struct AravisStereoSource::TriggerWorker {
   bool request = false;
   bool quit = false;
   ArvCamera* camera = nullptr;
+  // True once Run() has dropped its camera reference (read by the lost camera's closer).
+  std::shared_ptr<std::atomic<bool>> released = std::make_shared<std::atomic<bool>>(false);
 
   static void Run(const std::shared_ptr<TriggerWorker>& self) {
     for (;;) {
@@ -120,6 +135,7 @@ struct AravisStereoSource::TriggerWorker {
       g_clear_error(&error);  // a lost trigger shows up as a retry, a timeout or a lost camera
     }
     g_object_unref(self->camera);
+    self->released->store(true, std::memory_order_release);
   }
 
   void Request() {
@@ -560,8 +576,10 @@ void AravisStereoSource::Release(const StereoPair& pair) {
 }
 
 void AravisStereoSource::Stop() {
-  for (std::shared_ptr<TriggerWorker>& worker : trigger_) {
+  for (int side = 0; side < 2; ++side) {
+    std::shared_ptr<TriggerWorker>& worker = trigger_[side];
     if (worker == nullptr) continue;
+    if (cameras_[side] != nullptr) cameras_[side]->trigger_released = worker->released;
     worker->Quit();
     worker.reset();
   }
