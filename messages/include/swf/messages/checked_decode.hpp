@@ -35,9 +35,9 @@ inline constexpr std::int32_t kMaxIntegrityFlags = 32;  // one per bit of an int
 inline constexpr std::int32_t kMaxStages = 32;
 inline constexpr std::int32_t kMaxStageNameBytes = 64;  // with the terminating NUL
 // imu_t.flags: only the schema's bits (FLAG_VALID | FLAG_GYRO_SATURATED | FLAG_ACCEL_SATURATED).
-inline constexpr std::int32_t kImuKnownFlags =
-    std::int32_t{swf_msgs::imu_t::FLAG_VALID} | std::int32_t{swf_msgs::imu_t::FLAG_GYRO_SATURATED} |
-    std::int32_t{swf_msgs::imu_t::FLAG_ACCEL_SATURATED};
+inline constexpr std::int32_t kImuKnownFlags = std::int32_t{swf_msgs::imu_t::FLAG_VALID} |
+                                               std::int32_t{swf_msgs::imu_t::FLAG_GYRO_SATURATED} |
+                                               std::int32_t{swf_msgs::imu_t::FLAG_ACCEL_SATURATED};
 // The longest encoded message of any type (a stereo frame of two kMaxImageBytes images and its
 // fixed fields): a bus message or log record longer than this is refused before it is read.
 inline constexpr std::int64_t kMaxEncodedBytes = 2 * std::int64_t{kMaxImageBytes} + 4096;
