@@ -168,6 +168,18 @@ TEST(Integrity, MotionGateLetsTheImagesOverruleAGlitch) {
   EXPECT_GT(fused_nees, 16.27);
   std::printf("frame 10 position NEES: clean %.2f, glitch overruled %.2f, glitch fused %.2f\n",
               clean_nees, overruled_nees, fused_nees);
+  // The overrule needs the distance beyond motion_overrule_factor gates: a failure closer than
+  // that is reported and the input kept (the visual fit may be the biased one).
+  options.motion_gate_min_inliers = 10;
+  const double gate = ChiSquareQuantile(6, options.gate_probability);
+  options.motion_overrule_factor = 2.0 * overruled[10].motion_chi2 / gate;
+  ASSERT_EQ(options.Validate(), core::Status::kOk);
+  double kept_nees = 0.0;
+  const auto kept = run(options, true, &kept_nees);
+  EXPECT_TRUE(kept[10].motion_gate_failed);
+  EXPECT_FALSE(kept[10].motion_overruled);
+  options.motion_overrule_factor = 0.5;  // inside the gate itself: meaningless
+  EXPECT_EQ(options.Validate(), core::Status::kInvalidArgument);
 }
 
 // A landmark that moves (a dust plume, a shadow edge): consistent across frames, so no single

@@ -155,11 +155,16 @@ struct SwfOptions {
   double max_init_sigma_m = 0.0;
   // Motion gate (chi-square with 6 dof at gate_probability): before fusion, the newest pose
   // fitted to its measurements of known landmarks alone is compared with the motion
-  // prediction. When they disagree and the fit has at least motion_gate_min_inliers inliers,
-  // the images overrule the motion input: the fit becomes the linearization point and the
-  // process factor's information is scaled by motion_gate_weight^2. With fewer inliers nobody
-  // can tell which is wrong: the failure is only reported.
+  // prediction. When they disagree, the fit has at least motion_gate_min_inliers inliers
+  // and the distance exceeds motion_overrule_factor times the gate, the images overrule the
+  // motion input: the fit becomes the linearization point and the caller's fallback (else the
+  // input with its information scaled by motion_gate_weight^2) replaces the process factor.
+  // Otherwise nobody can tell which is wrong: the failure is only reported. The factor keeps a
+  // slowly biased visual solution (landmarks whose marginals are too confident) from overruling
+  // a correct input while a gross glitch is still overruled (docs/integrity.md, "Motion input
+  // gating").
   int motion_gate_min_inliers = 25;
+  double motion_overrule_factor = 4.0;
   double motion_gate_weight = 1e-3;
 
   core::Status Validate() const {
@@ -175,8 +180,10 @@ struct SwfOptions {
       return core::Status::kInvalidArgument;
     if (max_gate_resolves < 0 || max_gate_resolves > 5) return core::Status::kInvalidArgument;
     if (!(max_init_sigma_m >= 0.0)) return core::Status::kInvalidArgument;
-    if (motion_gate_min_inliers < 0 || !(motion_gate_weight > 0.0 && motion_gate_weight <= 1.0))
+    if (motion_gate_min_inliers < 0 || !(motion_gate_weight > 0.0 && motion_gate_weight <= 1.0) ||
+        !(motion_overrule_factor >= 1.0)) {
       return core::Status::kInvalidArgument;
+    }
     return core::Status::kOk;
   }
 };
@@ -995,7 +1002,10 @@ class SlidingWindowFilter {
     const S chi2 = d.dot(ldlt.solve(d));
     result.chi2 = static_cast<double>(chi2);
     result.failed = !(chi2 <= motion_gate_threshold_);
-    if (!result.failed || inliers < options_.motion_gate_min_inliers) return result;
+    if (!result.failed || inliers < options_.motion_gate_min_inliers ||
+        !(chi2 > S(options_.motion_overrule_factor) * motion_gate_threshold_)) {
+      return result;
+    }
     result.overruled = true;
     p.pose = fitted;  // newest_prediction_ stays: the step from it is evidence too
     if (had_fallback) {
