@@ -193,17 +193,49 @@ TEST(DenseCholesky, RefusesIndefiniteAndNonFinite) {
   EXPECT_EQ(chol->Factorize(), core::Status::kNumericalFailure);
 }
 
+// Diagonal blocks of A^-1 from columns of L^-1 (what ComputeCovariances uses for the prior
+// landmarks' marginals), against the inverse itself, for blocks inside, across and at the end of
+// the 8-row panels.
+TEST(DenseCholesky, DiagonalBlocksOfTheInverseFromFactorInverseColumns) {
+  auto chol = std::make_unique<DenseCholesky<double, 300>>();
+  for (int n : {3, 9, 61, 137, 300}) {
+    const Eigen::MatrixXd a = RandomSpd(n, static_cast<std::uint64_t>(n) + 29);
+    chol->Reset(n);
+    chol->AddSymmetric(0, a.data(), n, n);
+    ASSERT_EQ(chol->Factorize(), core::Status::kOk) << n;
+    const Eigen::MatrixXd inverse = a.inverse();
+    const Eigen::MatrixXd l_inverse = Eigen::MatrixXd(a.llt().matrixL())
+                                          .triangularView<Eigen::Lower>()
+                                          .solve(Eigen::MatrixXd::Identity(n, n));
+    for (int c0 : {0, 6, n / 2 - 1, n - 3}) {
+      if (c0 < 0 || c0 + 3 > n) continue;
+      Eigen::MatrixXd x(n, 3);
+      for (int k = 0; k < 3; ++k) chol->FactorInverseColumn(c0 + k, x.col(k).data());
+      EXPECT_LT((x - l_inverse.middleCols(c0, 3)).cwiseAbs().maxCoeff(), 1e-12) << n << " " << c0;
+      if (c0 > 0) {
+        EXPECT_EQ(x.topRows(c0).cwiseAbs().maxCoeff(), 0.0);  // zero above row c0
+      }
+      const Eigen::Matrix3d block = x.transpose() * x;
+      EXPECT_LT((block - inverse.block(c0, c0, 3, 3)).cwiseAbs().maxCoeff(),
+                1e-12 * inverse.block(c0, c0, 3, 3).cwiseAbs().maxCoeff())
+          << n << " " << c0;
+    }
+  }
+}
+
 TEST(DenseCholesky, FactorAndSolveNeverAllocate) {
   auto chol = std::make_unique<DenseCholesky<double, 300>>();
   const Eigen::MatrixXd a = RandomSpd(290, 7);
   Eigen::VectorXd b = Eigen::VectorXd::Ones(290);
   Eigen::VectorXd column(290);
+  Eigen::VectorXd factor_column(290);
   swf::testing::AllocationScope scope;
   chol->Reset(290);
   chol->AddSymmetric(0, a.data(), 290, 290);
   ASSERT_EQ(chol->Factorize(), core::Status::kOk);
   chol->SolveInPlace(b.data());
   chol->InverseColumn(3, column.data());
+  chol->FactorInverseColumn(3, factor_column.data());
   EXPECT_EQ(scope.Count(), 0u);
   EXPECT_LT((a * column - Eigen::VectorXd::Unit(290, 3)).norm(), 1e-12);
 }

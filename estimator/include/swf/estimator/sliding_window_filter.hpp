@@ -460,11 +460,19 @@ class SlidingWindowFilter {
           pose_cov_[k * kMaxPosesDim + m] = pose_cov_[m * kMaxPosesDim + k] = S(0);
     }
     for (int i = 0; i < N; ++i) landmarks_[i].covariance_valid = false;
-    for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
+    // A prior landmark's marginal is the diagonal block of L^-T L^-1 over its three columns c:
+    // sums over rows >= c of the forward columns of L^-1 (a sixth of the InverseColumn flops).
+    const int n = dense_.size();
+    for (int q = 0; q < nq; ++q) {
       LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
+      const int c0 = np6 + 3 * q;
+      for (int k = 0; k < 3; ++k) dense_.FactorInverseColumn(c0 + k, factor_columns_[k]);
       for (int k = 0; k < 3; ++k) {
-        dense_.InverseColumn(np6 + 3 * q + k, column_);
-        for (int r = 0; r < 3; ++r) l.covariance(r, k) = column_[np6 + 3 * q + r];
+        for (int r = k; r < 3; ++r) {
+          S sum = S(0);
+          for (int i = c0 + r; i < n; ++i) sum += factor_columns_[k][i] * factor_columns_[r][i];
+          l.covariance(r, k) = l.covariance(k, r) = sum;
+        }
       }
       l.covariance_valid = l.covariance.allFinite();
     }
@@ -1699,6 +1707,7 @@ class SlidingWindowFilter {
   PoseType pose_backup_[kMaxPoses];
   S pose_cov_[kMaxPosesDim * kMaxPosesDim] = {};
   S column_[kMaxDense] = {};
+  S factor_columns_[3][kMaxDense] = {};  // three columns of L^-1 (ComputeCovariances)
   Mat6<S> newest_pose_cov_ = Mat6<S>::Zero();
 
   S tau_ = S(1e30);
