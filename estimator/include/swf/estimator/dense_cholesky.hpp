@@ -200,23 +200,7 @@ class DenseCholesky {
     S* y = work_;
     for (int i = 0; i < n_; ++i) y[i] = b[i];
     for (int i = n_; i < np_; ++i) y[i] = S(0);
-    // Forward, L y = b, panel by panel: y_I -= L(I, 0..8I) y_0..8I, then the diagonal tile.
-    for (int ib = 0; ib < nb_; ++ib) {
-      const S* panel = a_ + PanelOffset(ib);
-      const int r0 = ib * kBlock;
-      S t[kBlock];
-      for (int r = 0; r < kBlock; ++r) t[r] = y[r0 + r];
-      for (int p = 0; p < r0; ++p) {
-        const S yp = y[p];
-        for (int r = 0; r < kBlock; ++r) t[r] -= panel[p * kBlock + r] * yp;
-      }
-      const S* diag = panel + r0 * kBlock;
-      for (int c = 0; c < kBlock; ++c) {
-        const S v = t[c] * inv_diag_[r0 + c];
-        y[r0 + c] = v;
-        for (int r = c + 1; r < kBlock; ++r) t[r] -= diag[c * kBlock + r] * v;
-      }
-    }
+    ForwardSubstitute(0, y);
     // Backward, L^T x = y: x_I from the transposed diagonal tile, then y_0..8I -= L_I^T x_I.
     for (int ib = nb_ - 1; ib >= 0; --ib) {
       const S* panel = a_ + PanelOffset(ib);
@@ -254,26 +238,9 @@ class DenseCholesky {
     SWF_ASSERT(factorized_ && c >= 0 && c < n_);
     S* y = work_;
     const int ib0 = c / kBlock;
-    const int p0 = ib0 * kBlock;
-    for (int i = p0; i < np_; ++i) y[i] = S(0);
+    for (int i = ib0 * kBlock; i < np_; ++i) y[i] = S(0);
     y[c] = S(1);
-    // The forward half of SolveInPlace, from the panel that holds row c (y is zero above it).
-    for (int ib = ib0; ib < nb_; ++ib) {
-      const S* panel = a_ + PanelOffset(ib);
-      const int r0 = ib * kBlock;
-      S t[kBlock];
-      for (int r = 0; r < kBlock; ++r) t[r] = y[r0 + r];
-      for (int p = p0; p < r0; ++p) {
-        const S yp = y[p];
-        for (int r = 0; r < kBlock; ++r) t[r] -= panel[p * kBlock + r] * yp;
-      }
-      const S* diag = panel + r0 * kBlock;
-      for (int k = 0; k < kBlock; ++k) {
-        const S v = t[k] * inv_diag_[r0 + k];
-        y[r0 + k] = v;
-        for (int r = k + 1; r < kBlock; ++r) t[r] -= diag[k * kBlock + r] * v;
-      }
-    }
+    ForwardSubstitute(ib0, y);  // y is zero above panel ib0: start there
     for (int i = 0; i < c; ++i) out[i] = S(0);
     for (int i = c; i < n_; ++i) out[i] = y[i];
   }
@@ -284,6 +251,28 @@ class DenseCholesky {
   using V = dense_detail::PairT<S>;
 
   static constexpr int PanelOffset(int ib) { return kBlock * kBlock * ib * (ib + 1) / 2; }
+
+  // Forward substitution L y = b in place over panels ib0.. (y must be zero above row 8 ib0),
+  // panel by panel: y_I -= L(I, 8 ib0..8I) y_8ib0..8I, then the diagonal tile.
+  void ForwardSubstitute(int ib0, S* y) const {
+    const int p0 = ib0 * kBlock;
+    for (int ib = ib0; ib < nb_; ++ib) {
+      const S* panel = a_ + PanelOffset(ib);
+      const int r0 = ib * kBlock;
+      S t[kBlock];
+      for (int r = 0; r < kBlock; ++r) t[r] = y[r0 + r];
+      for (int p = p0; p < r0; ++p) {
+        const S yp = y[p];
+        for (int r = 0; r < kBlock; ++r) t[r] -= panel[p * kBlock + r] * yp;
+      }
+      const S* diag = panel + r0 * kBlock;
+      for (int c = 0; c < kBlock; ++c) {
+        const S v = t[c] * inv_diag_[r0 + c];
+        y[r0 + c] = v;
+        for (int r = c + 1; r < kBlock; ++r) t[r] -= diag[c * kBlock + r] * v;
+      }
+    }
+  }
   // Unsigned arithmetic: callers guarantee 0 <= j <= i < np_ (and i / 8 becomes a shift).
   static unsigned Index(int i, int j) {
     const auto ui = static_cast<unsigned>(i);
