@@ -206,8 +206,8 @@ core::Status AravisStereoSource::OpenCamera(int side, const char* id) {
   // A camera whose previous controller vanished (a lost connection, a crashed process) can still
   // be acquiring. Such a camera may latch its stream destination the moment we take control, i.e.
   // the old controller's port, before our stream channel is set up, and keep streaming there
-  // (Aravis's fake camera does: the reconnect after a stall then got no frame, 1 in 49 loaded
-  // runs). Stopping first makes the destination be read again at our AcquisitionStart.
+  // (Aravis's fake camera does: the reconnect after a stall then got no frame, 2 in 50 loaded
+  // soak runs). Stopping first makes the destination be read again at our AcquisitionStart.
   arv_camera_stop_acquisition(cam->camera, &error);
   if (!core::IsOk(s = check("AcquisitionStop"))) return s;
   arv_camera_set_acquisition_mode(cam->camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
