@@ -1,7 +1,8 @@
 // Exactness of the Sliding Window Filter on a linear-Gaussian problem, where marginalization
 // loses nothing: SWF(K) must equal an independent dense batch solution (estimates and marginal
 // covariances) for every K and every order of marginalizations, and SWF(K=1) must equal a
-// Kalman filter written independently here.
+// Kalman filter written independently here; both for 6-dof pose states and for 15-dimensional
+// states (pose, velocity, IMU biases) of which the measurements see only the pose.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -14,18 +15,24 @@
 namespace swf::estimator {
 namespace {
 
-// z = A_l l + A_p p  (3),   p_j+1 = F p_j + u  (6). Additive updates: the model is exactly linear.
+// z = A_l l + A_p p_1:6  (3),   p_j+1 = F p_j + u  (D). Additive updates: the model is exactly
+// linear. D = 6 is a pose; D = 15 stands for a pose with velocity and IMU biases: the
+// measurement sees the first six coordinates only, and F couples all of them.
+template <int D>
 struct LinearModel {
   using Scalar = double;
-  using PoseType = Vec6<double>;
-  using MotionType = Vec6<double>;
+  using PoseType = Eigen::Matrix<double, D, 1>;
+  using MotionType = PoseType;
+  using StateMat = Eigen::Matrix<double, D, D>;
+  static constexpr int kStateDim = D;
   Mat36<double> a_pose;
   Mat3<double> a_landmark;
-  Mat6<double> f;
+  StateMat f;
+  double extra_sigma = 0.3;  // prior sigma of the first state's coordinates beyond the pose
 
   bool Predict(const PoseType& p, const Vec3<double>& l, Vec3<double>* z, Mat36<double>* j_pose,
                Mat3<double>* j_landmark) const {
-    *z = a_landmark * l + a_pose * p;
+    *z = a_landmark * l + a_pose * p.template head<6>();
     if (j_pose != nullptr) {
       *j_pose = a_pose;
       *j_landmark = a_landmark;
@@ -33,7 +40,7 @@ struct LinearModel {
     return true;
   }
   bool InitLandmark(const PoseType& p, const Vec3<double>& z, Vec3<double>* l) const {
-    *l = a_landmark.inverse() * (z - a_pose * p);
+    *l = a_landmark.inverse() * (z - a_pose * p.template head<6>());
     return true;
   }
   // The filter's anchored landmark surface; a linear landmark needs no anchor.
@@ -52,16 +59,19 @@ struct LinearModel {
     if (jacobian != nullptr) jacobian->setIdentity();
     return true;
   }
+  Eigen::Matrix<double, D - 6, 1> FirstStateSigmas() const {
+    return Eigen::Matrix<double, D - 6, 1>::Constant(extra_sigma);
+  }
   PoseType Propagate(const PoseType& p, const MotionType& u) const { return f * p + u; }
   MotionType RelativeMotion(const PoseType& a, const PoseType& b) const { return b - f * a; }
-  Vec6<double> ProcessResidual(const PoseType& prev, const PoseType& next, const MotionType& u,
-                               Mat6<double>* j_prev, Mat6<double>* j_next) const {
+  PoseType ProcessResidual(const PoseType& prev, const PoseType& next, const MotionType& u,
+                           StateMat* j_prev, StateMat* j_next) const {
     *j_prev = -f;
-    *j_next = Mat6<double>::Identity();
+    *j_next = StateMat::Identity();
     return next - (f * prev + u);
   }
-  static PoseType Retract(const PoseType& p, const Vec6<double>& d) { return p + d; }
-  static Vec6<double> Difference(const PoseType& base, const PoseType& p, Mat6<double>* j) {
+  static PoseType Retract(const PoseType& p, const PoseType& d) { return p + d; }
+  static PoseType Difference(const PoseType& base, const PoseType& p, StateMat* j) {
     j->setIdentity();
     return p - base;
   }
@@ -73,37 +83,54 @@ struct Obs {
   Vec3<double> z;
 };
 
+template <int D>
 struct Problem {
-  LinearModel model;
+  using State = Eigen::Matrix<double, D, 1>;
+  LinearModel<D> model;
   int frames = 0;
   int landmarks = 0;
-  std::vector<Vec6<double>> u;  // u[j] drives frame j (j >= 1)
-  std::vector<Obs> obs;         // sorted by frame
-  Vec6<double> first_pose;
+  std::vector<State> u;  // u[j] drives frame j (j >= 1)
+  std::vector<Obs> obs;  // sorted by frame
+  State first_pose;
   double sigma_z = 0.5;
   double sigma_q = 0.05;
   SwfOptions options;
+
+  // Information of the first state's prior, as the filter builds it (options and model).
+  Eigen::Matrix<double, D, 1> FirstStateInformation() const {
+    Eigen::Matrix<double, D, 1> pi =
+        Eigen::Matrix<double, D, 1>::Constant(1 / (model.extra_sigma * model.extra_sigma));
+    pi.template head<3>().setConstant(1 /
+                                      (options.first_pose_sigma_m * options.first_pose_sigma_m));
+    pi.template segment<3>(3).setConstant(
+        1 / (options.first_pose_sigma_rad * options.first_pose_sigma_rad));
+    return pi;
+  }
 };
 
-Problem MakeProblem(std::uint64_t seed, int frames, int landmarks, int min_track, int max_track) {
+template <int D>
+Problem<D> MakeProblem(std::uint64_t seed, int frames, int landmarks, int min_track,
+                       int max_track) {
+  using State = Eigen::Matrix<double, D, 1>;
+  using StateMat = Eigen::Matrix<double, D, D>;
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);
   std::uniform_int_distribution<int> start(0, frames - 1);
   std::uniform_int_distribution<int> length(min_track, max_track);
-  Problem pr;
+  Problem<D> pr;
   pr.frames = frames;
   pr.landmarks = landmarks;
   pr.model.a_landmark = Mat3<double>::Identity() + 0.2 * Mat3<double>::Random();
-  pr.model.a_pose.leftCols<3>() = -Mat3<double>::Identity();
-  pr.model.a_pose.rightCols<3>() = Mat3<double>::Random();
-  pr.model.f = Mat6<double>::Identity() + 0.05 * Mat6<double>::Random();
-  std::vector<Vec6<double>> truth(frames);
-  truth[0] = Vec6<double>::Random();
-  pr.u.assign(frames, Vec6<double>::Zero());
+  pr.model.a_pose.template leftCols<3>() = -Mat3<double>::Identity();
+  pr.model.a_pose.template rightCols<3>() = Mat3<double>::Random();
+  pr.model.f = StateMat::Identity() + 0.05 * StateMat::Random();
+  std::vector<State> truth(frames);
+  truth[0] = State::Random();
+  pr.u.assign(frames, State::Zero());
   for (int j = 1; j < frames; ++j) {
-    pr.u[j] = 0.3 * Vec6<double>::Random();
-    Vec6<double> w;
-    for (int k = 0; k < 6; ++k) w[k] = pr.sigma_q * g(rng);
+    pr.u[j] = 0.3 * State::Random();
+    State w;
+    for (int k = 0; k < D; ++k) w[k] = pr.sigma_q * g(rng);
     truth[j] = pr.model.f * truth[j - 1] + pr.u[j] + w;
   }
   std::vector<Vec3<double>> points(landmarks);
@@ -124,7 +151,7 @@ Problem MakeProblem(std::uint64_t seed, int frames, int landmarks, int min_track
       pr.obs.push_back({j, i, z});
     }
   }
-  pr.first_pose = truth[0] + 0.01 * Vec6<double>::Random();
+  pr.first_pose = truth[0] + 0.01 * State::Random();
   pr.options.robust = false;
   pr.options.max_iterations = 5;
   pr.options.first_pose_sigma_m = 0.1;
@@ -133,29 +160,30 @@ Problem MakeProblem(std::uint64_t seed, int frames, int landmarks, int min_track
 }
 
 // Independent dense batch: every pose and landmark, every factor, one linear solve.
+template <int D>
 struct Batch {
   Eigen::VectorXd x;
   Eigen::MatrixXd cov;
-  int PoseIndex(int j) const { return 6 * j; }
-  int LandmarkIndex(int i) const { return 6 * frames + 3 * i; }
+  int PoseIndex(int j) const { return D * j; }
+  int LandmarkIndex(int i) const { return D * frames + 3 * i; }
   int frames = 0;
 };
 
-Batch SolveBatch(const Problem& pr, int last_frame) {
+template <int D>
+Batch<D> SolveBatch(const Problem<D>& pr, int last_frame) {
   const int nf = last_frame + 1;
-  const int n = 6 * nf + 3 * pr.landmarks;
+  const int n = D * nf + 3 * pr.landmarks;
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
-  // Prior on pose 0 around the initial estimate; information as SwfOptions builds it.
-  Vec6<double> pi;
-  pi << Vec3<double>::Constant(1 / (0.1 * 0.1)), Vec3<double>::Constant(1 / (0.2 * 0.2));
-  h.block<6, 6>(0, 0) += pi.asDiagonal();
-  b.segment<6>(0) += pi.asDiagonal() * pr.first_pose;
+  // Prior on pose 0 around the initial estimate; information as the filter builds it.
+  const Eigen::Matrix<double, D, 1> pi = pr.FirstStateInformation();
+  h.block<D, D>(0, 0) += pi.asDiagonal();
+  b.segment<D>(0) += pi.asDiagonal() * pr.first_pose;
   const double qi = 1 / (pr.sigma_q * pr.sigma_q);
   for (int j = 1; j < nf; ++j) {  // p_j - F p_j-1 = u_j
-    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(6, n);
-    jac.block<6, 6>(0, 6 * j) = Mat6<double>::Identity();
-    jac.block<6, 6>(0, 6 * (j - 1)) = -pr.model.f;
+    Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(D, n);
+    jac.block<D, D>(0, D * j).setIdentity();
+    jac.block<D, D>(0, D * (j - 1)) = -pr.model.f;
     h += qi * jac.transpose() * jac;
     b += qi * jac.transpose() * pr.u[j];
   }
@@ -165,14 +193,14 @@ Batch SolveBatch(const Problem& pr, int last_frame) {
     if (o.frame > last_frame) continue;
     seen[o.landmark] = true;
     Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, n);
-    jac.block<3, 6>(0, 6 * o.frame) = pr.model.a_pose;
-    jac.block<3, 3>(0, 6 * nf + 3 * o.landmark) = pr.model.a_landmark;
+    jac.block<3, 6>(0, D * o.frame) = pr.model.a_pose;
+    jac.block<3, 3>(0, D * nf + 3 * o.landmark) = pr.model.a_landmark;
     h += ri * jac.transpose() * jac;
     b += ri * jac.transpose() * o.z;
   }
   for (int i = 0; i < pr.landmarks; ++i)  // unseen landmarks: decoupled placeholders
-    if (!seen[i]) h.block<3, 3>(6 * nf + 3 * i, 6 * nf + 3 * i) = Mat3<double>::Identity();
-  Batch out;
+    if (!seen[i]) h.block<3, 3>(D * nf + 3 * i, D * nf + 3 * i) = Mat3<double>::Identity();
+  Batch<D> out;
   out.frames = nf;
   out.cov = h.inverse();
   out.x = out.cov * b;
@@ -180,14 +208,15 @@ Batch SolveBatch(const Problem& pr, int last_frame) {
 }
 
 // Runs the SWF over the first `last_frame + 1` frames and compares with the batch solution.
-template <int K>
-void ExpectEqualsBatch(const Problem& pr, SwfMode mode, int last_frame) {
-  using Filter = SlidingWindowFilter<LinearModel, K, 64, 64, 64>;
+template <int K, int D>
+void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int last_frame) {
+  using Filter = SlidingWindowFilter<LinearModel<D>, K, 64, 64, 64>;
+  using StateMat = Eigen::Matrix<double, D, D>;
   auto swf = std::make_unique<Filter>();
   SwfOptions options = pr.options;
   options.mode = mode;
   ASSERT_EQ(swf->Configure(pr.model, options), core::Status::kOk);
-  const Mat6<double> q_sqrt = Mat6<double>::Identity() / pr.sigma_q;
+  const StateMat q_sqrt = StateMat::Identity() / pr.sigma_q;
   const Mat3<double> r_sqrt = Mat3<double>::Identity() / pr.sigma_z;
   std::size_t next = 0;
   for (int j = 0; j <= last_frame; ++j) {
@@ -202,26 +231,30 @@ void ExpectEqualsBatch(const Problem& pr, SwfMode mode, int last_frame) {
     ASSERT_EQ(swf->Update(), core::Status::kOk) << "frame " << j;
   }
   ASSERT_EQ(swf->ComputeCovariances(), core::Status::kOk);
-  const Batch batch = SolveBatch(pr, last_frame);
+  const Batch<D> batch = SolveBatch(pr, last_frame);
   const int np = swf->NumPoses();
   ASSERT_EQ(np, mode == SwfMode::kBatch ? last_frame + 1 : std::min(K, last_frame + 1));
   for (int j = 0; j < np; ++j) {
     const int frame = last_frame + 1 - np + j;
-    const Vec6<double> expected = batch.x.segment<6>(batch.PoseIndex(frame));
+    const Eigen::Matrix<double, D, 1> expected =
+        batch.x.template segment<D>(batch.PoseIndex(frame));
     EXPECT_LT((swf->PoseAt(j) - expected).cwiseAbs().maxCoeff(), 1e-9) << "pose " << frame;
-    const Mat6<double> expected_cov =
-        batch.cov.block<6, 6>(batch.PoseIndex(frame), batch.PoseIndex(frame));
-    EXPECT_LT((swf->PoseCovariance(j) - expected_cov).cwiseAbs().maxCoeff(), 1e-9)
-        << "pose covariance " << frame;
+    const StateMat expected_cov =
+        batch.cov.template block<D, D>(batch.PoseIndex(frame), batch.PoseIndex(frame));
+    EXPECT_LT((swf->StateCovariance(j) - expected_cov).cwiseAbs().maxCoeff(), 1e-9)
+        << "state covariance " << frame;
+    const Mat6<double> pose_block = swf->StateCovariance(j).template topLeftCorner<6, 6>();
+    EXPECT_EQ(swf->PoseCovariance(j), pose_block);
   }
   int compared = 0;
   int compared_prior = 0;
   swf->ForEachLandmark([&](std::int64_t id, const Vec3<double>& position, int) {
     const int index = batch.LandmarkIndex(static_cast<int>(id));
-    EXPECT_LT((position - batch.x.segment<3>(index)).cwiseAbs().maxCoeff(), 1e-9) << id;
+    EXPECT_LT((position - batch.x.template segment<3>(index)).cwiseAbs().maxCoeff(), 1e-9) << id;
     Mat3<double> cov;
     ASSERT_TRUE(swf->GetLandmarkCovariance(id, &cov));
-    EXPECT_LT((cov - batch.cov.block<3, 3>(index, index)).cwiseAbs().maxCoeff(), 1e-9) << id;
+    EXPECT_LT((cov - batch.cov.template block<3, 3>(index, index)).cwiseAbs().maxCoeff(), 1e-9)
+        << id;
     ++compared;
   });
   compared_prior = swf->NumPriorLandmarks();
@@ -232,14 +265,21 @@ void ExpectEqualsBatch(const Problem& pr, SwfMode mode, int last_frame) {
   }
 }
 
-TEST(SwfLinear, BatchModeEqualsIndependentBatch) {
-  const Problem pr = MakeProblem(1, 12, 30, 2, 6);
+// D = 6: poses; D = 15: states with velocity and IMU biases beyond the pose (same algebra).
+template <int D>
+void BatchModeEqualsIndependentBatch() {
+  const Problem<D> pr = MakeProblem<D>(1, 12, 30, 2, 6);
   ExpectEqualsBatch<16>(pr, SwfMode::kBatch, 11);
 }
+TEST(SwfLinear, BatchModeEqualsIndependentBatch) { BatchModeEqualsIndependentBatch<6>(); }
+TEST(SwfLinear, BatchModeEqualsIndependentBatchExtendedState) {
+  BatchModeEqualsIndependentBatch<15>();
+}
 
-TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSize) {
+template <int D>
+void SlidingWindowEqualsBatchForEveryWindowSize() {
   for (std::uint64_t seed : {2u, 3u, 4u}) {
-    const Problem pr = MakeProblem(seed, 14, 40, 1, 8);
+    const Problem<D> pr = MakeProblem<D>(seed, 14, 40, 1, 8);
     ExpectEqualsBatch<1>(pr, SwfMode::kSlidingWindow, 13);
     ExpectEqualsBatch<2>(pr, SwfMode::kSlidingWindow, 13);
     ExpectEqualsBatch<3>(pr, SwfMode::kSlidingWindow, 13);
@@ -249,23 +289,36 @@ TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSize) {
     ExpectEqualsBatch<4>(pr, SwfMode::kSlidingWindow, 9);
   }
 }
+TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSize) {
+  SlidingWindowEqualsBatchForEveryWindowSize<6>();
+}
+TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSizeExtendedState) {
+  SlidingWindowEqualsBatchForEveryWindowSize<15>();
+}
 
-TEST(SwfLinear, LongTracksFillThePriorAndStillMatch) {
-  const Problem pr = MakeProblem(5, 10, 20, 8, 10);  // landmarks live across many windows
+template <int D>
+void LongTracksFillThePriorAndStillMatch() {
+  const Problem<D> pr = MakeProblem<D>(5, 10, 20, 8, 10);  // landmarks live across many windows
   ExpectEqualsBatch<2>(pr, SwfMode::kSlidingWindow, 9);
   ExpectEqualsBatch<3>(pr, SwfMode::kSlidingWindow, 9);
 }
+TEST(SwfLinear, LongTracksFillThePriorAndStillMatch) { LongTracksFillThePriorAndStillMatch<6>(); }
+TEST(SwfLinear, LongTracksFillThePriorAndStillMatchExtendedState) {
+  LongTracksFillThePriorAndStillMatch<15>();
+}
 
 // K = 1 against a Kalman filter over [pose ; landmarks], written here in covariance form.
-TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) {
-  Problem pr = MakeProblem(7, 8, 10, 8, 8);
+template <int D>
+void WindowOfOneEqualsKalmanFilter() {
+  using StateMat = Eigen::Matrix<double, D, D>;
+  Problem<D> pr = MakeProblem<D>(7, 8, 10, 8, 8);
   // Every landmark observed in every frame so the filter state is fixed from frame 0.
   std::vector<Obs> all;
   std::mt19937_64 rng(11);
   std::normal_distribution<double> g(0.0, pr.sigma_z);
   std::vector<Vec3<double>> points(pr.landmarks);
   for (auto& p : points) p = 4.0 * Vec3<double>::Random();
-  Vec6<double> pose = pr.first_pose;
+  typename Problem<D>::State pose = pr.first_pose;
   for (int j = 0; j < pr.frames; ++j) {
     if (j > 0) pose = pr.model.f * pose + pr.u[j];
     for (int i = 0; i < pr.landmarks; ++i) {
@@ -278,21 +331,20 @@ TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) {
   }
   pr.obs = all;
 
-  const int n = 6 + 3 * pr.landmarks;
+  const int n = D + 3 * pr.landmarks;
   const double ri = 1 / (pr.sigma_z * pr.sigma_z);
   auto measurement_jacobian = [&](int i) {
     Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(3, n);
     jac.block<3, 6>(0, 0) = pr.model.a_pose;
-    jac.block<3, 3>(0, 6 + 3 * i) = pr.model.a_landmark;
+    jac.block<3, 3>(0, D + 3 * i) = pr.model.a_landmark;
     return jac;
   };
   // Frame 0 in information form (landmarks have no prior), then covariance form.
   Eigen::MatrixXd info = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
-  Vec6<double> pi;
-  pi << Vec3<double>::Constant(1 / (0.1 * 0.1)), Vec3<double>::Constant(1 / (0.2 * 0.2));
-  info.block<6, 6>(0, 0) += pi.asDiagonal();
-  rhs.head<6>() += pi.asDiagonal() * pr.first_pose;
+  const Eigen::Matrix<double, D, 1> pi = pr.FirstStateInformation();
+  info.block<D, D>(0, 0) += pi.asDiagonal();
+  rhs.head<D>() += pi.asDiagonal() * pr.first_pose;
   for (const Obs& o : pr.obs) {
     if (o.frame != 0) continue;
     const Eigen::MatrixXd jac = measurement_jacobian(o.landmark);
@@ -302,9 +354,9 @@ TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) {
   Eigen::MatrixXd cov = info.inverse();
   Eigen::VectorXd x = cov * rhs;
 
-  auto swf = std::make_unique<SlidingWindowFilter<LinearModel, 1, 16, 16, 16>>();
+  auto swf = std::make_unique<SlidingWindowFilter<LinearModel<D>, 1, 16, 16, 16>>();
   ASSERT_EQ(swf->Configure(pr.model, pr.options), core::Status::kOk);
-  const Mat6<double> q_sqrt = Mat6<double>::Identity() / pr.sigma_q;
+  const StateMat q_sqrt = StateMat::Identity() / pr.sigma_q;
   const Mat3<double> r_sqrt = Mat3<double>::Identity() / pr.sigma_z;
   for (int j = 0; j < pr.frames; ++j) {
     if (j == 0) {
@@ -313,10 +365,10 @@ TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) {
       ASSERT_EQ(swf->AddPoseWithMotion(pr.u[j], q_sqrt), core::Status::kOk);
       // Kalman predict.
       Eigen::MatrixXd f = Eigen::MatrixXd::Identity(n, n);
-      f.block<6, 6>(0, 0) = pr.model.f;
-      x.head<6>() = pr.model.f * x.head<6>() + pr.u[j];
+      f.block<D, D>(0, 0) = pr.model.f;
+      x.head<D>() = pr.model.f * x.head<D>() + pr.u[j];
       cov = f * cov * f.transpose();
-      cov.block<6, 6>(0, 0) += pr.sigma_q * pr.sigma_q * Mat6<double>::Identity();
+      cov.block<D, D>(0, 0) += pr.sigma_q * pr.sigma_q * StateMat::Identity();
       // Kalman update, one measurement at a time (equivalent for independent noise).
       for (const Obs& o : pr.obs) {
         if (o.frame != j) continue;
@@ -335,18 +387,21 @@ TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) {
     }
     ASSERT_EQ(swf->Update(), core::Status::kOk);
     ASSERT_EQ(swf->ComputeCovariances(), core::Status::kOk);
-    EXPECT_LT((swf->NewestPose() - x.head<6>()).cwiseAbs().maxCoeff(), 1e-9) << "frame " << j;
+    EXPECT_LT((swf->NewestPose() - x.head<D>()).cwiseAbs().maxCoeff(), 1e-9) << "frame " << j;
+    EXPECT_LT((swf->NewestStateCovariance() - cov.block<D, D>(0, 0)).cwiseAbs().maxCoeff(), 1e-9);
     EXPECT_LT((swf->NewestPoseCovariance() - cov.block<6, 6>(0, 0)).cwiseAbs().maxCoeff(), 1e-9);
     for (int i = 0; i < pr.landmarks; ++i) {
       Vec3<double> l;
       Mat3<double> lc;
       ASSERT_TRUE(swf->GetLandmark(i, &l));
       ASSERT_TRUE(swf->GetLandmarkCovariance(i, &lc));
-      EXPECT_LT((l - x.segment<3>(6 + 3 * i)).cwiseAbs().maxCoeff(), 1e-9);
-      EXPECT_LT((lc - cov.block<3, 3>(6 + 3 * i, 6 + 3 * i)).cwiseAbs().maxCoeff(), 1e-9);
+      EXPECT_LT((l - x.segment<3>(D + 3 * i)).cwiseAbs().maxCoeff(), 1e-9);
+      EXPECT_LT((lc - cov.block<3, 3>(D + 3 * i, D + 3 * i)).cwiseAbs().maxCoeff(), 1e-9);
     }
   }
 }
+TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) { WindowOfOneEqualsKalmanFilter<6>(); }
+TEST(SwfLinear, WindowOfOneEqualsKalmanFilterExtendedState) { WindowOfOneEqualsKalmanFilter<15>(); }
 
 }  // namespace
 }  // namespace swf::estimator

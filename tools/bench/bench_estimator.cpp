@@ -3,6 +3,8 @@
 //     frame and tracks of ~10 frames (paper Fig. 14a): sliding windows flat, batch growing.
 //   Fig13Update/K=10: full update (robust Gauss-Newton + marginalization) with 150 landmarks
 //     tracked through the whole descent, at steady state (every landmark in the prior).
+//   Fig13Update_Inertial, Fig14a_InertialSwf10: the same loads with 15-dimensional
+//     stereo-inertial states (preintegrated IMU process model) on an analytic IMU scene.
 //   Cholesky/<impl>/<n>: the reduced system's dense factorization alone (fill + factor of an SPD
 //     n x n matrix): DenseCholesky (flight) and Eigen::LLT<MatrixXd> (reference, heap-allocating,
 //     benchmark only), with GFlop/s = (n^3 / 3) / CPU time. n = 510 is Fig13Update's dense_dim.
@@ -30,24 +32,36 @@
 #include <random>
 #include <string>
 
+#include "../../estimator/test/inertial_scene.hpp"
 #include "../../estimator/test/synthetic_scene.hpp"
 #include "kitti_vo.hpp"
 #include "kitti_vo_ceres.hpp"
 #include "kitti_vo_synth.hpp"
 #include "swf/estimator/dense_cholesky.hpp"
+#include "swf/estimator/inertial_model.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
 
 namespace {
 
+using swf::estimator::ImuBiases;
+using swf::estimator::ImuPreintegration;
+using swf::estimator::InertialStereoModel;
+using swf::estimator::Mat15;
 using swf::estimator::Mat3;
 using swf::estimator::Mat6;
+using swf::estimator::NavState;
 using swf::estimator::Pose;
 using swf::estimator::SlidingWindowFilter;
 using swf::estimator::StereoModel;
 using swf::estimator::SwfMode;
 using swf::estimator::SwfOptions;
+using swf::estimator::Vec15;
 using swf::estimator::Vec3;
+using swf::estimator::testing::InertialScene;
+using swf::estimator::testing::InertialSceneOptions;
+using swf::estimator::testing::MakeInertialScene;
+using swf::estimator::testing::PreintegrateFrame;
 using swf::estimator::testing::SceneOptions;
 using swf::estimator::testing::SyntheticScene;
 
@@ -238,6 +252,122 @@ void BM_Fig13Covariances_K10(benchmark::State& state) {
   state.counters["dense_dim"] = swf->Summary().dense_dimension;
 }
 BENCHMARK(BM_Fig13Covariances_K10)->Unit(benchmark::kMillisecond)->Repetitions(5);
+
+// ---- stereo-inertial: 15-dimensional states (pose, velocity, IMU biases) -------------------
+// The same loads on the analytic IMU scene (estimator/test/inertial_scene.hpp): Fig. 13's
+// descent (150 landmarks in a 2 m disc from 100 m, 1.5 m per frame) and Fig. 14a's sideways
+// pass (50 m up, 2.2 m per frame, 0.055 landmarks per square metre). Preintegration is untimed
+// (bench_imu times it); the update is what the stereo-only rows above time.
+
+const InertialScene& Fig13InertialScene() {
+  static const InertialScene kScene = [] {
+    InertialSceneOptions o;
+    o.frames = 40;
+    o.p0 = Vec3<double>(0.0, 0.0, 100.0);
+    o.v0 = Vec3<double>(0.0, 0.0, -15.0);
+    o.accel_world.setZero();
+    o.disc_landmarks = 150;
+    o.disc_radius_m = 2.0;
+    return MakeInertialScene(o);
+  }();
+  return kScene;
+}
+
+const InertialScene& Fig14InertialScene() {
+  static const InertialScene kScene = [] {
+    InertialSceneOptions o;
+    o.frames = 160;
+    o.p0 = Vec3<double>(0.0, 0.0, 50.0);
+    o.v0 = Vec3<double>(22.0, 0.0, 0.0);
+    o.accel_world.setZero();
+    o.strip_density_per_m2 = 0.055;
+    o.seed = 3;
+    return MakeInertialScene(o);
+  }();
+  return kScene;
+}
+
+template <typename Filter>
+void ConfigureInertial(Filter* swf, const InertialScene& scene, SwfMode mode) {
+  SwfOptions options;
+  options.mode = mode;
+  if (swf->Configure(scene.model, options) != swf::core::Status::kOk) std::abort();
+}
+
+template <typename Filter>
+void AddInertialFrame(Filter* swf, const InertialScene& scene, std::size_t j) {
+  if (j == 0) {
+    NavState<double> start = scene.truth[0];
+    start.biases = ImuBiases<double>{};
+    Vec15<double> sigma;
+    sigma << Vec3<double>::Constant(1e-3), Vec3<double>::Constant(1e-5),
+        Vec3<double>::Constant(0.05), Vec3<double>::Constant(0.01), Vec3<double>::Constant(0.1);
+    (void)swf->AddFirstPose(start, Mat15<double>(sigma.cwiseAbs2().asDiagonal()));
+  } else {
+    ImuPreintegration<double> pim;
+    Mat15<double> q_sqrt;
+    if (!PreintegrateFrame(scene, j, swf->NewestPose().biases, &pim, &q_sqrt)) std::abort();
+    (void)swf->AddPoseWithMotion(pim, q_sqrt);
+  }
+  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options.sigma_px;
+  for (const auto& [id, z] : scene.obs[j]) (void)swf->AddObservation(id, z, r_sqrt);
+}
+
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_Fig13Update_Inertial_K10(benchmark::State& state) {
+  using Filter = SlidingWindowFilter<InertialStereoModel<double>, 10, 160, 160, 160>;
+  const InertialScene& scene = Fig13InertialScene();
+  auto swf = std::make_unique<Filter>();
+  constexpr std::size_t kFrame = 30;
+  for (auto _ : state) {
+    state.PauseTiming();
+    ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow);
+    for (std::size_t j = 0; j < kFrame; ++j) {
+      AddInertialFrame(swf.get(), scene, j);
+      (void)swf->Update();
+    }
+    AddInertialFrame(swf.get(), scene, kFrame);
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(swf->Update());
+  }
+  state.counters["dense_dim"] = swf->Summary().dense_dimension;
+  state.counters["iterations"] = swf->Summary().iterations;
+  state.counters["prior_landmarks"] = swf->NumPriorLandmarks();
+}
+BENCHMARK(BM_Fig13Update_Inertial_K10)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(5)
+    ->Repetitions(5);
+
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_Fig14a_InertialSwf10(benchmark::State& state) {
+  using Filter = SlidingWindowFilter<InertialStereoModel<double>, 10, 600, 64, 128>;
+  const InertialScene& scene = Fig14InertialScene();
+  const auto frame = static_cast<std::size_t>(state.range(0));
+  auto swf = std::make_unique<Filter>();
+  for (auto _ : state) {
+    state.PauseTiming();
+    ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow);
+    for (std::size_t j = 0; j < frame; ++j) {
+      AddInertialFrame(swf.get(), scene, j);
+      (void)swf->Update();
+    }
+    AddInertialFrame(swf.get(), scene, frame);
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(swf->Update());
+  }
+  state.counters["measurements"] = swf->Summary().num_measurements;
+  state.counters["state_dim"] = swf->Summary().state_dimension;
+  state.counters["iterations"] = swf->Summary().iterations;
+}
+BENCHMARK(BM_Fig14a_InertialSwf10)
+    ->Arg(25)
+    ->Arg(50)
+    ->Arg(100)
+    ->Arg(150)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(10)
+    ->Repetitions(5);
 
 // ---- the dense factorization alone ----------------------------------------------------------
 

@@ -14,11 +14,16 @@
 // Structure used by the solver (Figs. 4-8): the prior always spans {oldest window pose} and a
 // set of "prior landmarks" Lp; every other ("free") landmark couples only to the poses that
 // observe it, so its 3x3 block is eliminated first (Schur complement of the map onto the path):
-//     S = Lambda_DD - sum_i Lambda_Di Lambda_ii^-1 Lambda_iD,   s = g_D - sum_i Lambda_Di
+//     S = Lambda_RR - sum_i Lambda_Ri Lambda_ii^-1 Lambda_iR,   s = g_R - sum_i Lambda_Ri
 //     Lambda_ii^-1 g_i
-// where D = [window poses ; prior landmarks]. S is dense (the pose block is block-tridiagonal
+// where R = [window poses ; prior landmarks]. S is dense (the pose block is block-tridiagonal
 // plus fill-in from free landmarks and the prior) and is solved by DenseCholesky. Free landmark
-// updates follow by back-substitution: dx_i = Lambda_ii^-1 (g_i - Lambda_iD dx_D).
+// updates follow by back-substitution: dx_i = Lambda_ii^-1 (g_i - Lambda_iR dx_R).
+//
+// Pose states: each window "pose" is a state of Model::kStateDim coordinates whose first
+// six are the pose [rho; phi] (the only part measurements see) and the rest whatever the
+// process model carries per frame (with an IMU: velocity and the two biases). The measurement
+// blocks are 6-wide inside the state blocks; the process factor and the prior are state-wide.
 //
 // Robust Gauss-Newton (section 3.1.3): measurements are whitened (r = W (z - h), W^T W = R^-1)
 // and weighted by Huber's kernel, w = min(1, tau / |r|), with tau = huber_k * sigma_hat, where
@@ -201,7 +206,7 @@ struct SwfSummary {
   int landmarks_marginalized = 0;  // in the last Update (retired landmarks)
   int landmarks_unplaced = 0;      // of those, retired without a position (inverse depth <= 0)
   int dense_dimension = 0;         // size of the reduced system S
-  int state_dimension = 0;         // 6 * poses + 3 * active landmarks
+  int state_dimension = 0;         // Model::kStateDim * poses + 3 * active landmarks
   // Evidence for the health monitor (integrity.hpp), at the end of the last solve.
   double inlier_sigma = 1.0;      // robust scale of the whitened residuals (>= 1, uncapped)
   double measurement_chi2 = 0.0;  // sum of squared whitened residuals (no robust kernel)
@@ -246,11 +251,17 @@ class SlidingWindowFilter {
   using PoseType = typename Model::PoseType;
   using MotionType = typename Model::MotionType;
   using LandmarkAnchor = typename Model::LandmarkAnchor;
+  // Dimension of a pose state's update vector: [rho; phi] (the pose, which the measurements
+  // see) and then whatever else the model keeps per pose (velocity, IMU biases).
+  static constexpr int kStateDim = Model::kStateDim;
+  static_assert(kStateDim >= 6 && kStateDim % 3 == 0, "state = the 6-dof pose, then 3-vectors");
+  using StateVec = Eigen::Matrix<S, kStateDim, 1>;
+  using StateMat = Eigen::Matrix<S, kStateDim, kStateDim>;
 
   static constexpr int kMaxPoses = K + 1;  // one extra while a new pose awaits marginalization
-  static constexpr int kMaxDense = 6 * K + 3 * P;
-  static constexpr int kMaxPriorDim = 6 + 3 * P;
-  static constexpr int kMaxLocalDim = 12 + 3 * P;
+  static constexpr int kMaxDense = kStateDim * K + 3 * P;
+  static constexpr int kMaxPriorDim = kStateDim + 3 * P;
+  static constexpr int kMaxLocalDim = 2 * kStateDim + 3 * P;
   static constexpr int kMaxObservations = kMaxPoses * M;
 
   SlidingWindowFilter() = default;
@@ -302,22 +313,22 @@ class SlidingWindowFilter {
   // first_pose_sigma_*: a restart from the last trusted state keeps its uncertainty, so the
   // covariances (and protection levels) after it still cover the error made before it. A
   // fixed first pose (fix_first_pose, VO) stays fixed.
-  core::Status AddFirstPose(const PoseType& estimate, const Mat6<S>& covariance) {
+  core::Status AddFirstPose(const PoseType& estimate, const StateMat& covariance) {
     if (num_poses_ != 0) return core::Status::kInvalidArgument;
-    const Eigen::LLT<Mat6<S>> llt(covariance);
+    const Eigen::LLT<StateMat> llt(covariance);
     if (!covariance.allFinite() || llt.info() != Eigen::Success)
       return core::Status::kInvalidArgument;
     const core::Status status = PushPose(estimate, nullptr, nullptr);
     if (status != core::Status::kOk || Slot(0).fixed) return status;
-    const Mat6<S> information = llt.solve(Mat6<S>::Identity());
-    for (int c = 0; c < 6; ++c)
-      for (int r = 0; r < 6; ++r) prior_[c * kMaxPriorDim + r] = information(r, c);
+    const StateMat information = llt.solve(StateMat::Identity());
+    for (int c = 0; c < kStateDim; ++c)
+      for (int r = 0; r < kStateDim; ++r) prior_[c * kMaxPriorDim + r] = information(r, c);
     return core::Status::kOk;
   }
 
   // Adds a pose predicted by the process model from a relative-motion input u with
   // information W^T W = Q^-1 (process_sqrt_information = W).
-  core::Status AddPoseWithMotion(const MotionType& u, const Mat6<S>& process_sqrt_information) {
+  core::Status AddPoseWithMotion(const MotionType& u, const StateMat& process_sqrt_information) {
     if (num_poses_ == 0) return core::Status::kInvalidArgument;
     return PushPose(model_.Propagate(Newest().pose, u), &u, &process_sqrt_information);
   }
@@ -325,7 +336,7 @@ class SlidingWindowFilter {
   // What the newest pose's process factor becomes if the images overrule its motion input in
   // the motion gate (e.g. the caller's constant-velocity model); without one the input is kept
   // with its information scaled by motion_gate_weight^2. Valid until the next Update().
-  core::Status SetMotionFallback(const MotionType& u, const Mat6<S>& process_sqrt_information) {
+  core::Status SetMotionFallback(const MotionType& u, const StateMat& process_sqrt_information) {
     if (num_poses_ < 2 || !Newest().has_process) return core::Status::kInvalidArgument;
     motion_fallback_ = u;
     motion_fallback_sqrt_info_ = process_sqrt_information;
@@ -334,7 +345,7 @@ class SlidingWindowFilter {
   }
 
   // Constant-velocity fallback: repeats the last relative motion (none with a single pose).
-  core::Status AddPoseConstantVelocity(const Mat6<S>& process_sqrt_information) {
+  core::Status AddPoseConstantVelocity(const StateMat& process_sqrt_information) {
     if (num_poses_ == 0) return core::Status::kInvalidArgument;
     const PoseType& last = Newest().pose;
     const MotionType u = num_poses_ >= 2 ? model_.RelativeMotion(Slot(num_poses_ - 2).pose, last)
@@ -441,22 +452,23 @@ class SlidingWindowFilter {
     EvaluateMeasurements(true);
     const core::Status status = BuildAndFactor();
     if (status != core::Status::kOk) return status;
-    const int np6 = 6 * num_poses_;
+    const int npd = kStateDim * num_poses_;
     // Pose block of S^-1 (needed for free landmarks) and the prior landmarks' diagonal blocks.
     const int nq = static_cast<int>(prior_landmarks_.size());
-    for (int c = 0; c < np6; ++c) {
+    for (int c = 0; c < npd; ++c) {
       dense_.InverseColumn(c, column_);
-      for (int r = 0; r < np6; ++r) pose_cov_[c * kMaxPosesDim + r] = column_[r];
-      if (c < np6 - 6) continue;
+      for (int r = 0; r < npd; ++r) pose_cov_[c * kMaxPosesDim + r] = column_[r];
+      if (c < npd - kStateDim) continue;
       for (int q = 0; q < nq; ++q)  // Cov(newest pose, prior landmark q)
         for (int r = 0; r < 3; ++r)
-          landmarks_[prior_landmarks_[q]].cross_newest(c - (np6 - 6), r) = column_[np6 + 3 * q + r];
+          landmarks_[prior_landmarks_[q]].cross_newest(c - (npd - kStateDim), r) =
+              column_[npd + 3 * q + r];
     }
     // A fixed pose is known exactly; its identity rows in S only stand in for "no update".
     for (int j = 0; j < num_poses_; ++j) {
       if (!Slot(j).fixed) continue;
-      for (int k = 6 * j; k < 6 * j + 6; ++k)
-        for (int m = 0; m < np6; ++m)
+      for (int k = kStateDim * j; k < kStateDim * j + kStateDim; ++k)
+        for (int m = 0; m < npd; ++m)
           pose_cov_[k * kMaxPosesDim + m] = pose_cov_[m * kMaxPosesDim + k] = S(0);
     }
     for (int i = 0; i < N; ++i) landmarks_[i].covariance_valid = false;
@@ -465,7 +477,7 @@ class SlidingWindowFilter {
     const int n = dense_.size();
     for (int q = 0; q < nq; ++q) {
       LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
-      const int c0 = np6 + 3 * q;
+      const int c0 = npd + 3 * q;
       for (int k = 0; k < 3; ++k) dense_.FactorInverseColumn(c0 + k, factor_columns_[k]);
       for (int k = 0; k < 3; ++k) {
         for (int r = k; r < 3; ++r) {
@@ -480,18 +492,20 @@ class SlidingWindowFilter {
       LandmarkSlot& l = landmarks_[i];
       if (!l.used || l.prior_index >= 0 || !l.invertible) continue;
       Mat3<S> cross = Mat3<S>::Zero();  // sum_a sum_b W_a^T Sigma(ja, jb) W_b
-      // dl = h^-1 (b - sum_a W_a^T dp_a): Cov(newest, l) = -sum_a Sigma(newest, ja) W_a h^-1.
+      // dl = h^-1 (b - sum_a W_a^T dp_a): Cov(newest, l) = -sum_a Sigma(newest, ja) W_a h^-1
+      // (W_a couples the landmark to the pose part of state ja only: its first 6 columns).
       l.cross_newest.setZero();
       for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
         const Observation& oa = ObsAt(adj_[a]);
-        const Eigen::Map<const Mat6<S>, Eigen::Unaligned, Eigen::OuterStride<>> newest_a(
-            pose_cov_ + (6 * adj_[a].pose) * kMaxPosesDim + np6 - 6,
-            Eigen::OuterStride<>(kMaxPosesDim));
+        const Eigen::Map<const Eigen::Matrix<S, kStateDim, 6>, Eigen::Unaligned,
+                         Eigen::OuterStride<>>
+            newest_a(pose_cov_ + (kStateDim * adj_[a].pose) * kMaxPosesDim + npd - kStateDim,
+                     Eigen::OuterStride<>(kMaxPosesDim));
         l.cross_newest -= newest_a * oa.w_pl * l.h_inv;
         for (int b = lm_begin_[i]; b < lm_begin_[i + 1]; ++b) {
           const Observation& ob = ObsAt(adj_[b]);
           const Eigen::Map<const Mat6<S>, Eigen::Unaligned, Eigen::OuterStride<>> sigma(
-              pose_cov_ + (6 * adj_[b].pose) * kMaxPosesDim + 6 * adj_[a].pose,
+              pose_cov_ + (kStateDim * adj_[b].pose) * kMaxPosesDim + kStateDim * adj_[a].pose,
               Eigen::OuterStride<>(kMaxPosesDim));
           cross += oa.w_pl.transpose() * sigma * ob.w_pl;
         }
@@ -499,11 +513,9 @@ class SlidingWindowFilter {
       l.covariance = l.h_inv + l.h_inv * cross * l.h_inv;
       l.covariance_valid = l.covariance.allFinite();
     }
-    newest_pose_cov_.setZero();
-    for (int c = 0; c < 6; ++c)
-      for (int r = 0; r < 6; ++r)
-        newest_pose_cov_(r, c) = pose_cov_[(np6 - 6 + c) * kMaxPosesDim + np6 - 6 + r];
-    covariances_current_ = newest_pose_cov_.allFinite();
+    newest_state_cov_ = StateCovariance(num_poses_ - 1);
+    newest_pose_cov_ = newest_state_cov_.template topLeftCorner<6, 6>();
+    covariances_current_ = newest_state_cov_.allFinite();
     return core::Status::kOk;
   }
 
@@ -535,14 +547,18 @@ class SlidingWindowFilter {
     *covariance = j * l.covariance * j.transpose();
     return true;
   }
-  // Covariance of pose j's update vector, after ComputeCovariances().
-  Mat6<S> PoseCovariance(int j) const {
-    Mat6<S> c;
-    for (int k = 0; k < 6; ++k)
-      for (int r = 0; r < 6; ++r) c(r, k) = pose_cov_[(6 * j + k) * kMaxPosesDim + 6 * j + r];
+  // Covariance of state j's whole update vector and of its pose part ([rho; phi]), after
+  // ComputeCovariances().
+  StateMat StateCovariance(int j) const {
+    StateMat c;
+    for (int k = 0; k < kStateDim; ++k)
+      for (int r = 0; r < kStateDim; ++r)
+        c(r, k) = pose_cov_[(kStateDim * j + k) * kMaxPosesDim + kStateDim * j + r];
     return c;
   }
+  Mat6<S> PoseCovariance(int j) const { return StateCovariance(j).template topLeftCorner<6, 6>(); }
   const Mat6<S>& NewestPoseCovariance() const { return newest_pose_cov_; }
+  const StateMat& NewestStateCovariance() const { return newest_state_cov_; }
 
   // Calls f(id, world position, observations in window) for every active landmark the model
   // can place, in slot order.
@@ -574,7 +590,7 @@ class SlidingWindowFilter {
   }
 
  private:
-  static constexpr int kMaxPosesDim = 6 * kMaxPoses;
+  static constexpr int kMaxPosesDim = kStateDim * kMaxPoses;
 
   struct Observation {
     std::int32_t landmark = -1;
@@ -582,7 +598,7 @@ class SlidingWindowFilter {
     Mat3<S> sqrt_info = Mat3<S>::Identity();
     // Linearization workspace (whitened residual and Jacobians, Huber weight, coupling block).
     Vec3<S> r = Vec3<S>::Zero();
-    Mat36<S> jp = Mat36<S>::Zero();
+    Mat36<S> jp = Mat36<S>::Zero();  // with respect to the pose part of the state
     Mat3<S> jl = Mat3<S>::Zero();
     Eigen::Matrix<S, 6, 3> w_pl = Eigen::Matrix<S, 6, 3>::Zero();
     S weight = S(1);
@@ -593,7 +609,7 @@ class SlidingWindowFilter {
   struct PoseSlot {
     PoseType pose{};
     MotionType motion{};  // process input from the previous pose, if has_process
-    Mat6<S> process_sqrt_info = Mat6<S>::Zero();
+    StateMat process_sqrt_info = StateMat::Zero();
     bool has_process = false;
     bool fixed = false;
     core::StaticVector<Observation, M> obs;
@@ -616,8 +632,9 @@ class SlidingWindowFilter {
     bool invertible = false;
     Vec3<S> backup = Vec3<S>::Zero();
     Mat3<S> covariance = Mat3<S>::Zero();
-    Eigen::Matrix<S, 6, 3> cross_newest = Eigen::Matrix<S, 6, 3>::Zero();  // Cov(newest pose, l)
-    bool covariance_valid = false;  // both are from the last ComputeCovariances()
+    Eigen::Matrix<S, kStateDim, 3> cross_newest =
+        Eigen::Matrix<S, kStateDim, 3>::Zero();  // Cov(newest state, l)
+    bool covariance_valid = false;               // both are from the last ComputeCovariances()
   };
 
   struct AdjEntry {
@@ -702,7 +719,7 @@ class SlidingWindowFilter {
   PoseSlot& Newest() { return Slot(num_poses_ - 1); }
   Observation& ObsAt(const AdjEntry& e) { return Slot(e.pose).obs[e.obs]; }
 
-  core::Status PushPose(const PoseType& estimate, const MotionType* u, const Mat6<S>* sqrt_info) {
+  core::Status PushPose(const PoseType& estimate, const MotionType* u, const StateMat* sqrt_info) {
     if (!configured_) return core::Status::kNotConfigured;
     const int limit = options_.mode == SwfMode::kBatch ? window_ : window_ + 1;
     if (num_poses_ >= limit) return core::Status::kFull;
@@ -727,12 +744,11 @@ class SlidingWindowFilter {
     return core::Status::kOk;
   }
 
-  // The prior over the very first pose: fixed (gauge) or a Gaussian around its estimate.
+  // The prior over the very first pose: fixed (gauge) or a Gaussian around its estimate (the
+  // model gives the sigmas of the state beyond the pose).
   void InitializePrior() {
     prior_landmarks_.clear();
-    prior_dim_ = 6;
-    for (int i = 0; i < 36; ++i) prior_[(i / 6) * kMaxPriorDim + i % 6] = S(0);
-    for (int i = 0; i < 6; ++i) prior_g_[i] = S(0);
+    ClearPosePrior();
     prior_pose_lin_ = Slot(0).pose;
     const bool fixed = options_.fix_first_pose || options_.mode == SwfMode::kVisualOdometry;
     Slot(0).fixed = fixed;
@@ -743,12 +759,24 @@ class SlidingWindowFilter {
         prior_[(i + 3) * kMaxPriorDim + i + 3] =
             S(1.0 / (options_.first_pose_sigma_rad * options_.first_pose_sigma_rad));
       }
+      if constexpr (kStateDim > 6) {
+        const Eigen::Matrix<S, kStateDim - 6, 1> sigma = model_.FirstStateSigmas();
+        for (int i = 6; i < kStateDim; ++i)
+          prior_[i * kMaxPriorDim + i] = S(1) / (sigma[i - 6] * sigma[i - 6]);
+      }
     }
+  }
+
+  void ClearPosePrior() {
+    prior_dim_ = kStateDim;
+    for (int c = 0; c < kStateDim; ++c)
+      for (int r = 0; r < kStateDim; ++r) prior_[c * kMaxPriorDim + r] = S(0);
+    for (int i = 0; i < kStateDim; ++i) prior_g_[i] = S(0);
   }
 
   bool StateIsFinite() const {
     for (int j = 0; j < num_poses_; ++j) {
-      const Vec6<S> d = Model::Difference(prior_pose_lin_, Slot(j).pose, &scratch_jacobian_);
+      const StateVec d = Model::Difference(prior_pose_lin_, Slot(j).pose, &scratch_jacobian_);
       if (!d.allFinite()) return false;
     }
     for (int i = 0; i < N; ++i)
@@ -769,17 +797,17 @@ class SlidingWindowFilter {
   // A d_prev + B d_next = w, so d_next = Phi d_prev + B^-1 w with Phi = -B^-1 A and
   // P_next = B^-1 (A P_prev A^T + Q) B^-T. Phi carries prev's correlation with the landmarks.
   bool PredictPoseCovariance(const PoseType& prev, const PoseType& next, const MotionType& u,
-                             const Mat6<S>& sqrt_info, Mat6<S>* covariance,
-                             Mat6<S>* transition) const {
-    Mat6<S> a;
-    Mat6<S> b;
+                             const StateMat& sqrt_info, StateMat* covariance,
+                             StateMat* transition) const {
+    StateMat a;
+    StateMat b;
     (void)model_.ProcessResidual(prev, next, u, &a, &b);
-    const Eigen::FullPivLU<Mat6<S>> w(sqrt_info);
-    const Eigen::FullPivLU<Mat6<S>> lu(b);
+    const Eigen::FullPivLU<StateMat> w(sqrt_info);
+    const Eigen::FullPivLU<StateMat> lu(b);
     if (!w.isInvertible() || !lu.isInvertible()) return false;
-    const Mat6<S> w_inv = w.inverse();
-    const Mat6<S> b_inv = lu.inverse();
-    *covariance = b_inv * (a * newest_pose_cov_ * a.transpose() + w_inv * w_inv.transpose()) *
+    const StateMat w_inv = w.inverse();
+    const StateMat b_inv = lu.inverse();
+    *covariance = b_inv * (a * newest_state_cov_ * a.transpose() + w_inv * w_inv.transpose()) *
                   b_inv.transpose();
     *transition = -b_inv * a;
     return covariance->allFinite();
@@ -806,9 +834,11 @@ class SlidingWindowFilter {
     const Eigen::FullPivLU<Mat3<S>> w(sqrt_info);
     if (!w.isInvertible()) return true;
     const Mat3<S> w_inv = w.inverse();
-    const Mat3<S> coupling = jp * prediction_transition_ * l.cross_newest * jl.transpose();
+    const Mat3<S> coupling =
+        jp * prediction_transition_.template topRows<6>() * l.cross_newest * jl.transpose();
     const Mat3<S> innovation_cov =
-        w_inv * w_inv.transpose() + jp * predicted_pose_cov_ * jp.transpose() +
+        w_inv * w_inv.transpose() +
+        jp * predicted_pose_cov_.template topLeftCorner<6, 6>() * jp.transpose() +
         jl * l.covariance * jl.transpose() + coupling + coupling.transpose();
     const Eigen::LDLT<Mat3<S>> ldlt(innovation_cov);
     ++pending_.gate_checked;
@@ -963,10 +993,10 @@ class SlidingWindowFilter {
       summary_.new_landmarks += tracked ? 0 : 1;
     }
     if (num_poses_ > 0) {
-      Mat6<S> unused;
-      const Vec6<S> d = Model::Difference(newest_prediction_, Newest().pose, &unused);
+      StateMat unused;
+      const StateVec d = Model::Difference(newest_prediction_, Newest().pose, &unused);
       summary_.newest_pose_step_m = static_cast<double>(d.template head<3>().norm());
-      summary_.newest_pose_step_rad = static_cast<double>(d.template tail<3>().norm());
+      summary_.newest_pose_step_rad = static_cast<double>(d.template segment<3>(3).norm());
     }
   }
 
@@ -992,15 +1022,16 @@ class SlidingWindowFilter {
     Mat6<S> information = Mat6<S>::Zero();
     const int inliers = FitNewestPose(&fitted, &information);
     if (inliers < 6) return result;  // too few to fix a pose: nothing to compare
-    Mat6<S> unused;
-    const Vec6<S> d = Model::Difference(p.pose, fitted, &unused);
-    // Covariance of the difference: the prediction's (with the motion noise) plus the fit's.
+    StateMat unused;
+    const Vec6<S> d = Model::Difference(p.pose, fitted, &unused).template head<6>();
+    // Covariance of the difference: the prediction's (with the motion noise) plus the fit's,
+    // both of the pose part (what the images determine).
     Mat6<S> covariance;
     if (predicted_cov_valid_) {
-      covariance = predicted_pose_cov_;
+      covariance = predicted_pose_cov_.template topLeftCorner<6, 6>();
     } else {
-      const Mat6<S> w_inv = p.process_sqrt_info.inverse();
-      covariance = w_inv * w_inv.transpose();
+      const StateMat w_inv = p.process_sqrt_info.inverse();
+      covariance = (w_inv * w_inv.transpose()).template topLeftCorner<6, 6>();
     }
     const Eigen::LDLT<Mat6<S>> fit(information);
     if (fit.info() != Eigen::Success) return result;
@@ -1057,7 +1088,8 @@ class SlidingWindowFilter {
       *information = h;
       const Eigen::LDLT<Mat6<S>> ldlt(h);
       if (ldlt.info() != Eigen::Success) return 0;
-      const Vec6<S> delta = ldlt.solve(g);
+      StateVec delta = StateVec::Zero();
+      delta.template head<6>() = ldlt.solve(g);
       if (!delta.allFinite()) return 0;
       *pose = Model::Retract(*pose, delta);
       if (delta.norm() < S(1e-9)) break;
@@ -1167,9 +1199,9 @@ class SlidingWindowFilter {
     for (int j = 1; j < num_poses_; ++j) {
       const PoseSlot& p = Slot(j);
       if (!p.has_process) continue;
-      Mat6<S> a;
-      Mat6<S> b;
-      const Vec6<S> r =
+      StateMat a;
+      StateMat b;
+      const StateVec r =
           p.process_sqrt_info * model_.ProcessResidual(Slot(j - 1).pose, p.pose, p.motion, &a, &b);
       cost += S(0.5) * r.squaredNorm();
     }
@@ -1195,11 +1227,11 @@ class SlidingWindowFilter {
 
   // Delta = x (-) x_bar for the prior's variables and the pose block's Jacobian.
   void PriorDelta() {
-    const Vec6<S> d = Model::Difference(prior_pose_lin_, Slot(0).pose, &prior_pose_jacobian_);
-    for (int i = 0; i < 6; ++i) prior_delta_[i] = d[i];
+    const StateVec d = Model::Difference(prior_pose_lin_, Slot(0).pose, &prior_pose_jacobian_);
+    for (int i = 0; i < kStateDim; ++i) prior_delta_[i] = d[i];
     for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
       const Vec3<S> dl = landmarks_[prior_landmarks_[q]].params - prior_landmark_lin_[q];
-      for (int k = 0; k < 3; ++k) prior_delta_[6 + 3 * q + k] = dl[k];
+      for (int k = 0; k < 3; ++k) prior_delta_[kStateDim + 3 * q + k] = dl[k];
     }
   }
 
@@ -1208,7 +1240,7 @@ class SlidingWindowFilter {
   core::Status BuildAndFactor() {
     const int np = num_poses_;
     const int nq = static_cast<int>(prior_landmarks_.size());
-    const int lm0 = 6 * np;
+    const int lm0 = kStateDim * np;
     const int n = lm0 + 3 * nq;
     dense_.Reset(n);
     for (int i = 0; i < n; ++i) rhs_[i] = S(0);
@@ -1223,12 +1255,13 @@ class SlidingWindowFilter {
         if (!o.valid) continue;
         const S w = o.weight;
         LandmarkSlot& l = landmarks_[o.landmark];
-        dense_.AddBlock(6 * j, 6 * j, w * o.jp.transpose() * o.jp);
-        Blk<6, 1>(rhs_, kMaxDense, 6 * j, 0) += w * o.jp.transpose() * o.r;
+        dense_.AddBlock(kStateDim * j, kStateDim * j, w * o.jp.transpose() * o.jp);
+        Blk<6, 1>(rhs_, kMaxDense, kStateDim * j, 0) += w * o.jp.transpose() * o.r;
         l.h += w * o.jl.transpose() * o.jl;
         l.b += w * o.jl.transpose() * o.r;
         o.w_pl = w * o.jp.transpose() * o.jl;
-        if (l.prior_index >= 0) dense_.AddBlock(lm0 + 3 * l.prior_index, 6 * j, o.w_pl.transpose());
+        if (l.prior_index >= 0)
+          dense_.AddBlock(lm0 + 3 * l.prior_index, kStateDim * j, o.w_pl.transpose());
         ++l.lm_count;
       }
     }
@@ -1252,17 +1285,17 @@ class SlidingWindowFilter {
     for (int j = 1; j < np; ++j) {
       const PoseSlot& p = Slot(j);
       if (!p.has_process) continue;
-      Mat6<S> a;
-      Mat6<S> b;
-      const Vec6<S> e = model_.ProcessResidual(Slot(j - 1).pose, p.pose, p.motion, &a, &b);
-      const Vec6<S> r = p.process_sqrt_info * e;
+      StateMat a;
+      StateMat b;
+      const StateVec e = model_.ProcessResidual(Slot(j - 1).pose, p.pose, p.motion, &a, &b);
+      const StateVec r = p.process_sqrt_info * e;
       a = p.process_sqrt_info * a;
       b = p.process_sqrt_info * b;
-      dense_.AddBlock(6 * (j - 1), 6 * (j - 1), a.transpose() * a);
-      dense_.AddBlock(6 * j, 6 * j, b.transpose() * b);
-      dense_.AddBlock(6 * j, 6 * (j - 1), b.transpose() * a);
-      Blk<6, 1>(rhs_, kMaxDense, 6 * (j - 1), 0) -= a.transpose() * r;
-      Blk<6, 1>(rhs_, kMaxDense, 6 * j, 0) -= b.transpose() * r;
+      dense_.AddBlock(kStateDim * (j - 1), kStateDim * (j - 1), a.transpose() * a);
+      dense_.AddBlock(kStateDim * j, kStateDim * j, b.transpose() * b);
+      dense_.AddBlock(kStateDim * j, kStateDim * (j - 1), b.transpose() * a);
+      Blk<kStateDim, 1>(rhs_, kMaxDense, kStateDim * (j - 1), 0) -= a.transpose() * r;
+      Blk<kStateDim, 1>(rhs_, kMaxDense, kStateDim * j, 0) -= b.transpose() * r;
     }
     // Prior (L^T Pi L): pose block -> pose 0, landmark q -> lm0 + 3q.
     AddPrior(lm0);
@@ -1287,18 +1320,19 @@ class SlidingWindowFilter {
       for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
         const Observation& oa = ObsAt(adj_[a]);
         const Eigen::Matrix<S, 6, 3> x = oa.w_pl * l.h_inv;
-        Blk<6, 1>(rhs_, kMaxDense, 6 * adj_[a].pose, 0) -= x * l.b;
+        Blk<6, 1>(rhs_, kMaxDense, kStateDim * adj_[a].pose, 0) -= x * l.b;
         for (int b = lm_begin_[i]; b < lm_begin_[i + 1]; ++b) {
           if (adj_[a].pose < adj_[b].pose) continue;
           const Observation& ob = ObsAt(adj_[b]);
-          dense_.AddBlock(6 * adj_[a].pose, 6 * adj_[b].pose, -(x * ob.w_pl.transpose()));
+          dense_.AddBlock(kStateDim * adj_[a].pose, kStateDim * adj_[b].pose,
+                          -(x * ob.w_pl.transpose()));
         }
       }
     }
     // Fixed poses: identity rows, zero right-hand side (conditioning on their value).
     for (int j = 0; j < np; ++j) {
       if (!Slot(j).fixed) continue;
-      for (int k = 6 * j; k < 6 * j + 6; ++k) {
+      for (int k = kStateDim * j; k < kStateDim * j + kStateDim; ++k) {
         for (int c = 0; c <= k; ++c) dense_.At(k, c) = S(0);
         for (int r = k; r < n; ++r) dense_.At(r, k) = S(0);
         dense_.At(k, k) = S(1);
@@ -1314,18 +1348,20 @@ class SlidingWindowFilter {
   void AddPrior(int lm0) {
     const int nq = static_cast<int>(prior_landmarks_.size());
     PriorGradient();
-    const Mat6<S>& jp = prior_pose_jacobian_;
-    const Mat6<S> pi_pp = Blk<6, 6>(prior_, kMaxPriorDim, 0, 0);
+    const StateMat& jp = prior_pose_jacobian_;
+    const StateMat pi_pp = Blk<kStateDim, kStateDim>(prior_, kMaxPriorDim, 0, 0);
     dense_.AddBlock(0, 0, jp.transpose() * pi_pp * jp);
-    Blk<6, 1>(rhs_, kMaxDense, 0, 0) -= jp.transpose() * Blk<6, 1>(prior_grad_, kMaxPriorDim, 0, 0);
+    Blk<kStateDim, 1>(rhs_, kMaxDense, 0, 0) -=
+        jp.transpose() * Blk<kStateDim, 1>(prior_grad_, kMaxPriorDim, 0, 0);
     for (int q = 0; q < nq; ++q) {
-      const Eigen::Matrix<S, 3, 6> pi_qp = Blk<3, 6>(prior_, kMaxPriorDim, 6 + 3 * q, 0);
+      const Eigen::Matrix<S, 3, kStateDim> pi_qp =
+          Blk<3, kStateDim>(prior_, kMaxPriorDim, kStateDim + 3 * q, 0);
       dense_.AddBlock(lm0 + 3 * q, 0, pi_qp * jp);
       Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * q, 0) -=
-          Blk<3, 1>(prior_grad_, kMaxPriorDim, 6 + 3 * q, 0);
+          Blk<3, 1>(prior_grad_, kMaxPriorDim, kStateDim + 3 * q, 0);
     }
     // Landmark-landmark block of Pi, copied as a whole (it is dense: Fig. 8).
-    dense_.AddSymmetric(lm0, prior_ + 6 * kMaxPriorDim + 6, kMaxPriorDim, 3 * nq);
+    dense_.AddSymmetric(lm0, prior_ + kStateDim * kMaxPriorDim + kStateDim, kMaxPriorDim, 3 * nq);
   }
 
   // ---- solving -----------------------------------------------------------------------------
@@ -1334,7 +1370,7 @@ class SlidingWindowFilter {
     int total = 0;
     for (int j = 0; j < num_poses_; ++j) total += static_cast<int>(Slot(j).obs.size());
     summary_.num_measurements = total;
-    summary_.state_dimension = 6 * num_poses_ + 3 * num_landmarks_;
+    summary_.state_dimension = kStateDim * num_poses_ + 3 * num_landmarks_;
     if (num_poses_ == 0) return core::Status::kOk;
     core::Status status = core::Status::kOk;
     bool converged = false;
@@ -1347,7 +1383,7 @@ class SlidingWindowFilter {
       status = BuildAndFactor();
       if (status != core::Status::kOk) break;
       dense_.SolveInPlace(rhs_);
-      const int lm0 = 6 * num_poses_;
+      const int lm0 = kStateDim * num_poses_;
       S max_step = S(0);
       bool finite = true;
       for (int i = 0; i < dense_.size(); ++i) {
@@ -1365,7 +1401,8 @@ class SlidingWindowFilter {
         if (!l.invertible) continue;
         Vec3<S> g = l.b;
         for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a)
-          g -= ObsAt(adj_[a]).w_pl.transpose() * Blk<6, 1>(rhs_, kMaxDense, 6 * adj_[a].pose, 0);
+          g -= ObsAt(adj_[a]).w_pl.transpose() *
+               Blk<6, 1>(rhs_, kMaxDense, kStateDim * adj_[a].pose, 0);
         l.delta = l.h_inv * g;
         max_step = std::max(max_step, l.delta.cwiseAbs().maxCoeff());
         finite = finite && l.delta.allFinite();
@@ -1427,7 +1464,7 @@ class SlidingWindowFilter {
   void ApplyStep(S alpha) {
     for (int j = 0; j < num_poses_; ++j) {
       if (Slot(j).fixed) continue;
-      const Vec6<S> d = alpha * Vec6<S>(Blk<6, 1>(rhs_, kMaxDense, 6 * j, 0));
+      const StateVec d = alpha * StateVec(Blk<kStateDim, 1>(rhs_, kMaxDense, kStateDim * j, 0));
       Slot(j).pose = Model::Retract(pose_backup_[j], d);
     }
     for (int i = 0; i < N; ++i) {
@@ -1463,12 +1500,12 @@ class SlidingWindowFilter {
       GrowPrior();
     }
     const int nq = static_cast<int>(prior_landmarks_.size());
-    const int dim = 12 + 3 * nq;  // [p0 | p1 | landmarks]
+    const int dim = 2 * kStateDim + 3 * nq;  // [p0 | p1 | landmarks]
     for (int c = 0; c < dim; ++c)
       for (int r = 0; r < dim; ++r) local_[c * kMaxLocalDim + r] = S(0);
     for (int r = 0; r < dim; ++r) local_b_[r] = S(0);
     auto local_index = [](int prior_index) {
-      return prior_index < 6 ? prior_index : prior_index + 6;
+      return prior_index < kStateDim ? prior_index : prior_index + kStateDim;
     };
     // Prior at the current estimate: Hessian J^T Pi J, right-hand side -J^T (Pi Delta - g).
     PriorGradient();
@@ -1477,37 +1514,39 @@ class SlidingWindowFilter {
       for (int r = 0; r < prior_dim_; ++r)
         local_[local_index(c) * kMaxLocalDim + local_index(r)] = prior_[c * kMaxPriorDim + r];
     {
-      const Mat6<S>& jp = prior_pose_jacobian_;
-      Blk<6, 6>(local_, kMaxLocalDim, 0, 0) =
-          jp.transpose() * Blk<6, 6>(prior_, kMaxPriorDim, 0, 0) * jp;
+      const StateMat& jp = prior_pose_jacobian_;
+      Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, 0) =
+          jp.transpose() * Blk<kStateDim, kStateDim>(prior_, kMaxPriorDim, 0, 0) * jp;
       for (int q = 0; q < nq; ++q) {
-        const Eigen::Matrix<S, 3, 6> pi_qp = Blk<3, 6>(prior_, kMaxPriorDim, 6 + 3 * q, 0);
-        Blk<3, 6>(local_, kMaxLocalDim, 12 + 3 * q, 0) = pi_qp * jp;
-        Blk<6, 3>(local_, kMaxLocalDim, 0, 12 + 3 * q) = (pi_qp * jp).transpose();
+        const Eigen::Matrix<S, 3, kStateDim> pi_qp =
+            Blk<3, kStateDim>(prior_, kMaxPriorDim, kStateDim + 3 * q, 0);
+        Blk<3, kStateDim>(local_, kMaxLocalDim, 2 * kStateDim + 3 * q, 0) = pi_qp * jp;
+        Blk<kStateDim, 3>(local_, kMaxLocalDim, 0, 2 * kStateDim + 3 * q) =
+            (pi_qp * jp).transpose();
       }
-      Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0) =
-          -(jp.transpose() * Blk<6, 1>(prior_grad_, kMaxPriorDim, 0, 0));
-      for (int r = 6; r < prior_dim_; ++r) local_b_[r + 6] = -prior_grad_[r];
+      Blk<kStateDim, 1>(local_b_, kMaxLocalDim, 0, 0) =
+          -(jp.transpose() * Blk<kStateDim, 1>(prior_grad_, kMaxPriorDim, 0, 0));
+      for (int r = kStateDim; r < prior_dim_; ++r) local_b_[r + kStateDim] = -prior_grad_[r];
     }
     // Process factor between p0 and p1.
     if (p1.has_process) {
-      Mat6<S> a;
-      Mat6<S> b;
-      const Vec6<S> e = model_.ProcessResidual(p0.pose, p1.pose, p1.motion, &a, &b);
-      const Vec6<S> r = p1.process_sqrt_info * e;
+      StateMat a;
+      StateMat b;
+      const StateVec e = model_.ProcessResidual(p0.pose, p1.pose, p1.motion, &a, &b);
+      const StateVec r = p1.process_sqrt_info * e;
       a = p1.process_sqrt_info * a;
       b = p1.process_sqrt_info * b;
-      Blk<6, 6>(local_, kMaxLocalDim, 0, 0) += a.transpose() * a;
-      Blk<6, 6>(local_, kMaxLocalDim, 6, 6) += b.transpose() * b;
-      Blk<6, 6>(local_, kMaxLocalDim, 6, 0) += b.transpose() * a;
-      Blk<6, 6>(local_, kMaxLocalDim, 0, 6) += a.transpose() * b;
-      Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0) -= a.transpose() * r;
-      Blk<6, 1>(local_b_, kMaxLocalDim, 6, 0) -= b.transpose() * r;
+      Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, 0) += a.transpose() * a;
+      Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, kStateDim) += b.transpose() * b;
+      Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, 0) += b.transpose() * a;
+      Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, kStateDim) += a.transpose() * b;
+      Blk<kStateDim, 1>(local_b_, kMaxLocalDim, 0, 0) -= a.transpose() * r;
+      Blk<kStateDim, 1>(local_b_, kMaxLocalDim, kStateDim, 0) -= b.transpose() * r;
     }
     // p0's measurements, with the weights of the last solve.
     for (const Observation& o : p0.obs) {
       if (!o.valid) continue;
-      const int k = 12 + 3 * landmarks_[o.landmark].prior_index;
+      const int k = 2 * kStateDim + 3 * landmarks_[o.landmark].prior_index;
       const S norm = o.r.norm();
       const S w = norm <= tau_ ? S(1) : tau_ / norm;
       Blk<6, 6>(local_, kMaxLocalDim, 0, 0) += w * o.jp.transpose() * o.jp;
@@ -1523,11 +1562,11 @@ class SlidingWindowFilter {
       if (!EliminateFirstPose(dim, diagonal_only)) fault_bits_ |= kFaultNotPositiveDefinite;
     }
     // The new prior is the [p1 | landmarks] part, linearized at the current estimate.
-    prior_dim_ = dim - 6;
+    prior_dim_ = dim - kStateDim;
     for (int c = 0; c < prior_dim_; ++c)
       for (int r = 0; r < prior_dim_; ++r)
-        prior_[c * kMaxPriorDim + r] = local_[(c + 6) * kMaxLocalDim + r + 6];
-    for (int r = 0; r < prior_dim_; ++r) prior_g_[r] = local_b_[r + 6];
+        prior_[c * kMaxPriorDim + r] = local_[(c + kStateDim) * kMaxLocalDim + r + kStateDim];
+    for (int r = 0; r < prior_dim_; ++r) prior_g_[r] = local_b_[r + kStateDim];
     prior_pose_lin_ = p1.pose;
     for (int q = 0; q < nq; ++q) prior_landmark_lin_[q] = landmarks_[prior_landmarks_[q]].params;
     // Drop p0.
@@ -1550,29 +1589,32 @@ class SlidingWindowFilter {
     prior_dim_ = d + 3;
   }
 
-  // Schur complement of the first 6 variables of the local system onto the rest (eq. 9).
+  // Schur complement of the first kStateDim variables (p0) of the local system onto the rest
+  // (eq. 9).
   bool EliminateFirstPose(int dim, bool diagonal_only) {
-    const Mat6<S> aa = Blk<6, 6>(local_, kMaxLocalDim, 0, 0);
-    const Eigen::LLT<Mat6<S>> llt(aa);
+    const StateMat aa = Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, 0);
+    const Eigen::LLT<StateMat> llt(aa);
     if (llt.info() != Eigen::Success) return false;
-    const Mat6<S> t = llt.solve(Mat6<S>::Identity());
-    const Vec6<S> ba = Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0);
-    const int chunks = (dim - 6) / 3;
+    const StateMat t = llt.solve(StateMat::Identity());
+    const StateVec ba = Blk<kStateDim, 1>(local_b_, kMaxLocalDim, 0, 0);
+    const int chunks = (dim - kStateDim) / 3;
     // X_r = Lambda_ra Lambda_aa^-1 for each 3-row chunk r of the remaining variables.
     for (int r = 0; r < chunks; ++r) {
-      const int row = 6 + 3 * r;
-      Eigen::Matrix<S, 3, 6> x = Blk<3, 6>(local_, kMaxLocalDim, row, 0) * t;
-      Blk<3, 6>(x_, 3 * P + 6, 3 * r, 0) = x;
+      const int row = kStateDim + 3 * r;
+      Eigen::Matrix<S, 3, kStateDim> x = Blk<3, kStateDim>(local_, kMaxLocalDim, row, 0) * t;
+      Blk<3, kStateDim>(x_, kXRows, 3 * r, 0) = x;
       Blk<3, 1>(local_b_, kMaxLocalDim, row, 0) -= x * ba;
     }
-    // Chunks 0 and 1 are p1 (one variable), chunk k >= 2 is landmark k - 2.
-    auto variable = [](int chunk) { return chunk < 2 ? 0 : chunk - 1; };
+    // Chunks 0 .. kStateDim/3 - 1 are p1 (one variable), chunk k >= kStateDim/3 is landmark k -
+    // kStateDim/3.
+    auto variable = [](int chunk) { return chunk < kStateDim / 3 ? 0 : chunk - kStateDim / 3 + 1; };
     for (int c = 0; c < chunks; ++c) {
-      const Eigen::Matrix<S, 6, 3> a_c = Blk<6, 3>(local_, kMaxLocalDim, 0, 6 + 3 * c);
+      const Eigen::Matrix<S, kStateDim, 3> a_c =
+          Blk<kStateDim, 3>(local_, kMaxLocalDim, 0, kStateDim + 3 * c);
       for (int r = 0; r < chunks; ++r) {
         if (diagonal_only && variable(r) != variable(c)) continue;
-        Blk<3, 3>(local_, kMaxLocalDim, 6 + 3 * r, 6 + 3 * c) -=
-            Eigen::Matrix<S, 3, 6>(Blk<3, 6>(x_, 3 * P + 6, 3 * r, 0)) * a_c;
+        Blk<3, 3>(local_, kMaxLocalDim, kStateDim + 3 * r, kStateDim + 3 * c) -=
+            Eigen::Matrix<S, 3, kStateDim>(Blk<3, kStateDim>(x_, kXRows, 3 * r, 0)) * a_c;
       }
     }
     return true;
@@ -1587,9 +1629,7 @@ class SlidingWindowFilter {
     --num_poses_;
     Slot(0).has_process = false;
     Slot(0).fixed = true;
-    prior_dim_ = 6;
-    for (int i = 0; i < 36; ++i) prior_[(i / 6) * kMaxPriorDim + i % 6] = S(0);
-    for (int i = 0; i < 6; ++i) prior_g_[i] = S(0);
+    ClearPosePrior();
     prior_pose_lin_ = Slot(0).pose;
   }
 
@@ -1620,7 +1660,7 @@ class SlidingWindowFilter {
 
   // Schur complement of prior landmark q onto the rest of the prior, then removal of its rows.
   bool EliminatePriorLandmark(int q) {
-    const int o = 6 + 3 * q;
+    const int o = kStateDim + 3 * q;
     const int d = prior_dim_;
     const Mat3<S> aa = Blk<3, 3>(prior_, kMaxPriorDim, o, o);
     const Eigen::LLT<Mat3<S>> llt(aa);
@@ -1631,7 +1671,7 @@ class SlidingWindowFilter {
       for (int r = 0; r < d / 3; ++r) {
         if (3 * r == o) continue;
         const Mat3<S> x = Blk<3, 3>(prior_, kMaxPriorDim, 3 * r, o) * t;
-        Blk<3, 3>(x_, 3 * P + 6, 3 * r, 0) = x;
+        Blk<3, 3>(x_, kXRows, 3 * r, 0) = x;
         Blk<3, 1>(prior_g_, kMaxPriorDim, 3 * r, 0) -= x * go;
       }
       for (int c = 0; c < d / 3; ++c) {
@@ -1640,7 +1680,7 @@ class SlidingWindowFilter {
         for (int r = 0; r < d / 3; ++r) {
           if (3 * r == o) continue;
           Blk<3, 3>(prior_, kMaxPriorDim, 3 * r, 3 * c) -=
-              Mat3<S>(Blk<3, 3>(x_, 3 * P + 6, 3 * r, 0)) * a_c;
+              Mat3<S>(Blk<3, 3>(x_, kXRows, 3 * r, 0)) * a_c;
         }
       }
     }
@@ -1687,10 +1727,10 @@ class SlidingWindowFilter {
   S prior_g_[kMaxPriorDim] = {};
   S prior_delta_[kMaxPriorDim] = {};
   S prior_grad_[kMaxPriorDim] = {};
-  int prior_dim_ = 6;
+  int prior_dim_ = kStateDim;
   PoseType prior_pose_lin_{};
-  Mat6<S> prior_pose_jacobian_ = Mat6<S>::Identity();
-  mutable Mat6<S> scratch_jacobian_ = Mat6<S>::Identity();
+  StateMat prior_pose_jacobian_ = StateMat::Identity();
+  mutable StateMat scratch_jacobian_ = StateMat::Identity();
   core::StaticVector<int, P> prior_landmarks_;
   Vec3<S> prior_landmark_lin_[P];
   Vec3<S> first_estimate_[P];  // where each prior landmark's Jacobians are evaluated
@@ -1700,7 +1740,8 @@ class SlidingWindowFilter {
   S rhs_[kMaxDense] = {};
   S local_[kMaxLocalDim * kMaxLocalDim] = {};
   S local_b_[kMaxLocalDim] = {};
-  S x_[(3 * P + 6) * 6] = {};
+  static constexpr int kXRows = 3 * P + kStateDim;  // rows of x_: the local system less one pose
+  S x_[kXRows * kStateDim] = {};
   S norms_[kMaxObservations] = {};
   int lm_begin_[N + 1] = {};
   AdjEntry adj_[kMaxObservations] = {};
@@ -1708,7 +1749,8 @@ class SlidingWindowFilter {
   S pose_cov_[kMaxPosesDim * kMaxPosesDim] = {};
   S column_[kMaxDense] = {};
   S factor_columns_[3][kMaxDense] = {};  // three columns of L^-1 (ComputeCovariances)
-  Mat6<S> newest_pose_cov_ = Mat6<S>::Zero();
+  StateMat newest_state_cov_ = StateMat::Zero();
+  Mat6<S> newest_pose_cov_ = Mat6<S>::Zero();  // its pose part
 
   S tau_ = S(1e30);
   S residual_scale_ = S(1);  // median-based scale of the last weighting, uncapped
@@ -1719,11 +1761,11 @@ class SlidingWindowFilter {
   S motion_gate_threshold_ = S(0);
   bool has_motion_fallback_ = false;
   MotionType motion_fallback_{};
-  Mat6<S> motion_fallback_sqrt_info_ = Mat6<S>::Zero();
+  StateMat motion_fallback_sqrt_info_ = StateMat::Zero();
   bool covariances_current_ = false;  // ComputeCovariances() ran since the last Update()
   bool predicted_cov_valid_ = false;  // predicted_pose_cov_ holds the newest pose's prediction
-  Mat6<S> predicted_pose_cov_ = Mat6<S>::Zero();
-  Mat6<S> prediction_transition_ = Mat6<S>::Zero();  // Phi: d_newest = Phi d_prev + noise
+  StateMat predicted_pose_cov_ = StateMat::Zero();
+  StateMat prediction_transition_ = StateMat::Zero();  // Phi: d_newest = Phi d_prev + noise
   PoseType newest_prediction_{};
   core::StaticVector<RetiredLandmark<S>, N> retired_;
 };

@@ -51,7 +51,8 @@ template <typename S>
 struct StereoModel {
   using Scalar = S;
   using PoseType = Pose<S>;
-  using MotionType = Pose<S>;  // camera_j_T_camera_j+1
+  using MotionType = Pose<S>;          // camera_j_T_camera_j+1
+  static constexpr int kStateDim = 6;  // a pose state is the pose alone
 
   StereoCamera<S> camera;
   // Points closer than this (metres, along the optical axis) are not projected: the measurement
