@@ -103,16 +103,8 @@ inline InertialScene MakeInertialScene(const InertialSceneOptions& o) {
       s.landmarks.emplace_back(o.p0.x() - 60.0 + 0.5 * (unit(rng) + 1.0) * length,
                                o.p0.y() + 30.0 * unit(rng), o.relief_m * unit(rng));
   } else {
-    for (int i = 0; i < o.disc_landmarks; ++i) {
-      double x = 0.0;
-      double y = 0.0;
-      do {
-        x = unit(rng);
-        y = unit(rng);
-      } while (x * x + y * y > 1.0);
-      s.landmarks.emplace_back(o.p0.x() + o.disc_radius_m * x, o.p0.y() + o.disc_radius_m * y,
-                               o.relief_m * unit(rng));
-    }
+    for (int i = 0; i < o.disc_landmarks; ++i)
+      s.landmarks.push_back(LandmarkInDisc(&rng, o.p0.x(), o.p0.y(), o.disc_radius_m, o.relief_m));
   }
   for (int j = 0; j < o.frames; ++j) {
     s.frame_us.push_back(j * frame_step_us);

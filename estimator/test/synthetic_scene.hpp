@@ -45,6 +45,20 @@ inline StereoCamera<double> EdlRig() {
   return StereoCamera<double>{fx, fx, 512.0, 384.0, 1.0};
 }
 
+// A landmark uniform in the disc of `radius` about (cx, cy) (rejection sampling), its height
+// uniform in +-relief.
+inline Vec3<double> LandmarkInDisc(std::mt19937_64* rng, double cx, double cy, double radius,
+                                   double relief) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  double x = 0.0;
+  double y = 0.0;
+  do {
+    x = unit(*rng);
+    y = unit(*rng);
+  } while (x * x + y * y > 1.0);
+  return Vec3<double>(cx + radius * x, cy + radius * y, relief * unit(*rng));
+}
+
 class SyntheticScene {
  public:
   explicit SyntheticScene(const SceneOptions& options) : options_(options), camera_(EdlRig()) {
@@ -65,16 +79,9 @@ class SyntheticScene {
                                 options.relief_m * unit(rng));
       }
     } else {
-      for (int i = 0; i < options.num_landmarks; ++i) {
-        double x = 0.0;
-        double y = 0.0;
-        do {
-          x = unit(rng);
-          y = unit(rng);
-        } while (x * x + y * y > 1.0);
-        landmarks_.emplace_back(options.landmark_radius_m * x, options.landmark_radius_m * y,
-                                options.relief_m * unit(rng));
-      }
+      for (int i = 0; i < options.num_landmarks; ++i)
+        landmarks_.push_back(
+            LandmarkInDisc(&rng, 0.0, 0.0, options.landmark_radius_m, options.relief_m));
     }
     frames_.resize(options.frames);
     for (int j = 0; j < options.frames; ++j) {

@@ -117,25 +117,34 @@ void Configure(Filter* swf, const SyntheticScene& scene, SwfMode mode) {
   if (swf->Configure(model, options) != swf::core::Status::kOk) std::abort();
 }
 
+// Times the update of `frame`: configure(), then frames 0 .. frame - 1 added (add_frame(j))
+// and updated untimed, then `frame` added and its update timed. Batch solves once per frame in
+// Fig. 14a as well, but the untimed replay only needs the state, so it skips those solves.
+template <typename Filter, typename ConfigureFn, typename AddFrameFn>
+void TimeUpdateAt(benchmark::State& state, Filter* swf, std::size_t frame, SwfMode mode,
+                  ConfigureFn configure, AddFrameFn add_frame) {
+  for (auto _ : state) {
+    state.PauseTiming();
+    configure();
+    for (std::size_t j = 0; j < frame; ++j) {
+      add_frame(j);
+      if (mode != SwfMode::kBatch) (void)swf->Update();
+    }
+    add_frame(frame);
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(swf->Update());
+  }
+}
+
 // Times the update at frame state.range(0); earlier frames are replayed untimed.
 template <typename Filter>
 void Fig14a(benchmark::State& state, SwfMode mode) {
   const SyntheticScene& scene = Fig14Scene();
   const auto frame = static_cast<std::size_t>(state.range(0));
   auto swf = std::make_unique<Filter>();
-  for (auto _ : state) {
-    state.PauseTiming();
-    Configure(swf.get(), scene, mode);
-    for (std::size_t j = 0; j < frame; ++j) {
-      AddFrame(swf.get(), scene, j);
-      // Batch solves once per frame in Fig. 14a as well; the untimed replay only needs the
-      // state, so batch skips its earlier solves.
-      if (mode != SwfMode::kBatch) (void)swf->Update();
-    }
-    AddFrame(swf.get(), scene, frame);
-    state.ResumeTiming();
-    benchmark::DoNotOptimize(swf->Update());
-  }
+  TimeUpdateAt(
+      state, swf.get(), frame, mode, [&] { Configure(swf.get(), scene, mode); },
+      [&](std::size_t j) { AddFrame(swf.get(), scene, j); });
   state.counters["measurements"] = swf->Summary().num_measurements;
   state.counters["state_dim"] = swf->Summary().state_dimension;
   state.counters["iterations"] = swf->Summary().iterations;
@@ -175,26 +184,23 @@ BENCHMARK(BM_Fig14a_Batch)
     ->Iterations(3)
     ->Repetitions(3);
 
+template <typename Filter>
+void Fig13Counters(benchmark::State& state, const Filter& swf) {
+  state.counters["dense_dim"] = swf.Summary().dense_dimension;
+  state.counters["iterations"] = swf.Summary().iterations;
+  state.counters["prior_landmarks"] = swf.NumPriorLandmarks();
+}
+
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Fig13Update_K10(benchmark::State& state) {
   using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
   const SyntheticScene& scene = Fig13Scene();
   auto swf = std::make_unique<Filter>();
-  constexpr std::size_t kFrame = 30;
-  for (auto _ : state) {
-    state.PauseTiming();
-    Configure(swf.get(), scene, SwfMode::kSlidingWindow);
-    for (std::size_t j = 0; j < kFrame; ++j) {
-      AddFrame(swf.get(), scene, j);
-      (void)swf->Update();
-    }
-    AddFrame(swf.get(), scene, kFrame);
-    state.ResumeTiming();
-    benchmark::DoNotOptimize(swf->Update());
-  }
-  state.counters["dense_dim"] = swf->Summary().dense_dimension;
-  state.counters["iterations"] = swf->Summary().iterations;
-  state.counters["prior_landmarks"] = swf->NumPriorLandmarks();
+  TimeUpdateAt(
+      state, swf.get(), 30, SwfMode::kSlidingWindow,
+      [&] { Configure(swf.get(), scene, SwfMode::kSlidingWindow); },
+      [&](std::size_t j) { AddFrame(swf.get(), scene, j); });
+  Fig13Counters(state, *swf);
 }
 BENCHMARK(BM_Fig13Update_K10)->Unit(benchmark::kMillisecond)->Iterations(5)->Repetitions(5);
 
@@ -318,21 +324,11 @@ void BM_Fig13Update_Inertial_K10(benchmark::State& state) {
   using Filter = SlidingWindowFilter<InertialStereoModel<double>, 10, 160, 160, 160>;
   const InertialScene& scene = Fig13InertialScene();
   auto swf = std::make_unique<Filter>();
-  constexpr std::size_t kFrame = 30;
-  for (auto _ : state) {
-    state.PauseTiming();
-    ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow);
-    for (std::size_t j = 0; j < kFrame; ++j) {
-      AddInertialFrame(swf.get(), scene, j);
-      (void)swf->Update();
-    }
-    AddInertialFrame(swf.get(), scene, kFrame);
-    state.ResumeTiming();
-    benchmark::DoNotOptimize(swf->Update());
-  }
-  state.counters["dense_dim"] = swf->Summary().dense_dimension;
-  state.counters["iterations"] = swf->Summary().iterations;
-  state.counters["prior_landmarks"] = swf->NumPriorLandmarks();
+  TimeUpdateAt(
+      state, swf.get(), 30, SwfMode::kSlidingWindow,
+      [&] { ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow); },
+      [&](std::size_t j) { AddInertialFrame(swf.get(), scene, j); });
+  Fig13Counters(state, *swf);
 }
 BENCHMARK(BM_Fig13Update_Inertial_K10)
     ->Unit(benchmark::kMillisecond)
@@ -345,17 +341,10 @@ void BM_Fig14a_InertialSwf10(benchmark::State& state) {
   const InertialScene& scene = Fig14InertialScene();
   const auto frame = static_cast<std::size_t>(state.range(0));
   auto swf = std::make_unique<Filter>();
-  for (auto _ : state) {
-    state.PauseTiming();
-    ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow);
-    for (std::size_t j = 0; j < frame; ++j) {
-      AddInertialFrame(swf.get(), scene, j);
-      (void)swf->Update();
-    }
-    AddInertialFrame(swf.get(), scene, frame);
-    state.ResumeTiming();
-    benchmark::DoNotOptimize(swf->Update());
-  }
+  TimeUpdateAt(
+      state, swf.get(), frame, SwfMode::kSlidingWindow,
+      [&] { ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow); },
+      [&](std::size_t j) { AddInertialFrame(swf.get(), scene, j); });
   state.counters["measurements"] = swf->Summary().num_measurements;
   state.counters["state_dim"] = swf->Summary().state_dimension;
   state.counters["iterations"] = swf->Summary().iterations;
