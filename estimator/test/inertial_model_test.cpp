@@ -1,106 +1,31 @@
-// Stereo-inertial estimation: InertialStereoModel's residuals and Jacobians, and the Sliding
-// Window Filter with it on a descent whose IMU samples are the exact derivatives of the
-// trajectory plus white noise and constant biases (no simulator: the estimator's own tests).
+// Stereo-inertial estimation, the model and the filter's flight properties: InertialStereoModel's
+// residuals and Jacobians against central differences, and the filter with it allocating
+// nothing and repeating bit for bit (estimator_inertial_scenario_test has the accuracy runs).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
-#include <memory>
+#include <cstdio>
 #include <random>
-#include <vector>
 
-#include "inertial_scene.hpp"
-#include "swf/estimator/inertial_model.hpp"
-#include "swf/estimator/sliding_window_filter.hpp"
-#include "swf/testing/allocation_counter.hpp"
+#include "inertial_runner.hpp"
 
 namespace swf::estimator {
 namespace {
 
 using Model = InertialStereoModel<double>;
-using State = NavState<double>;
-using Pim = ImuPreintegration<double>;
-using testing::EdlRig;
+using testing::DescentScene;
+using testing::ErrorOf;
 using testing::InertialScene;
 using testing::InertialSceneOptions;
 using testing::MakeInertialScene;
+using testing::Pim;
+using testing::RunFilter;
+using testing::RunResult;
+using testing::State;
+using testing::StateError;
 
-InertialScene Scene(std::uint64_t seed, int frames) {
-  InertialSceneOptions o;
-  o.seed = seed;
-  o.frames = frames;
-  return MakeInertialScene(o);
-}
-
-// Position error (m) and the biases' errors of a state against the truth.
-struct StateError {
-  double position_m = 0.0;
-  double gyro_bias = 0.0;
-  double accel_bias = 0.0;
-};
-StateError ErrorOf(const State& estimate, const State& truth) {
-  return {(estimate.world_T_imu.t - truth.world_T_imu.t).norm(),
-          (estimate.biases.gyro_radps - truth.biases.gyro_radps).norm(),
-          (estimate.biases.accel_mps2 - truth.biases.accel_mps2).norm()};
-}
-
-struct RunResult {
-  std::vector<State> newest;              // the newest state after each frame
-  std::vector<Mat15<double>> covariance;  // its covariance, when computed
-  double landmark_rms_m = 0.0;
-  int failed_updates = 0;
-  std::uint64_t allocations = 0;
-};
-
-template <int K, int P>
-RunResult RunFilter(const InertialScene& s, SwfMode mode, int covariance_every) {
-  using Filter = SlidingWindowFilter<Model, K, 200, 200, P>;
-  auto swf = std::make_unique<Filter>();
-  SwfOptions options;
-  options.mode = mode;
-  EXPECT_EQ(swf->Configure(s.model, options), core::Status::kOk);
-  // Start: the true pose and velocity known to a few cm, biases unknown (zero) with the
-  // datasheet's turn-on sigmas.
-  State start = s.truth[0];
-  start.biases = ImuBiases<double>{};
-  Vec15<double> sigma;
-  sigma << Vec3<double>::Constant(0.05), Vec3<double>::Constant(0.002),
-      Vec3<double>::Constant(0.05), Vec3<double>::Constant(0.01), Vec3<double>::Constant(0.1);
-  EXPECT_EQ(swf->AddFirstPose(start, Mat15<double>(sigma.cwiseAbs2().asDiagonal())),
-            core::Status::kOk);
-  const Mat3<double> r_sqrt = Mat3<double>::Identity() / s.options.sigma_px;
-  RunResult result;
-  result.newest.reserve(s.truth.size());
-  result.covariance.reserve(s.truth.size());
-  Pim pim;
-  Mat15<double> q_sqrt;
-  swf::testing::AllocationScope scope;
-  for (std::size_t j = 0; j < s.truth.size(); ++j) {
-    if (j > 0) {
-      // Integrated at the current bias estimate, so the first-order correction stays small.
-      EXPECT_TRUE(testing::PreintegrateFrame(s, j, swf->NewestPose().biases, &pim, &q_sqrt));
-      EXPECT_EQ(swf->AddPoseWithMotion(pim, q_sqrt), core::Status::kOk);
-    }
-    for (const auto& [id, z] : s.obs[j]) (void)swf->AddObservation(id, z, r_sqrt);
-    const core::Status status = swf->Update();
-    result.failed_updates +=
-        status == core::Status::kOk || status == core::Status::kNotConverged ? 0 : 1;
-    result.newest.push_back(swf->NewestPose());
-    // Every covariance_every frames and at the last (0: never).
-    const bool last = j + 1 == s.truth.size();
-    if (covariance_every > 0 && (last || j % covariance_every == 0) &&
-        swf->ComputeCovariances() == core::Status::kOk)
-      result.covariance.push_back(swf->NewestStateCovariance());
-  }
-  result.allocations = scope.Count();
-  double sum = 0.0;
-  int n = 0;
-  swf->ForEachLandmark([&](std::int64_t id, const Vec3<double>& position, int) {
-    sum += (position - s.landmarks[static_cast<std::size_t>(id)]).squaredNorm();
-    ++n;
-  });
-  result.landmark_rms_m = n > 0 ? std::sqrt(sum / n) : 1e9;
-  return result;
-}
+using testing::EdlRig;
 
 // ---- the model's derivatives --------------------------------------------------------------
 
@@ -223,116 +148,8 @@ TEST(InertialModel, MeasurementJacobianIsThroughTheLeverArm) {
 
 // ---- the filter with the IMU ----------------------------------------------------------------
 
-TEST(InertialSwf, BiasesConvergeAndTheWindowStaysNearBatch) {
-  constexpr int kFrames = 40;
-  const InertialScene scene = Scene(1, kFrames);
-  const RunResult swf = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 0);
-  const RunResult batch = RunFilter<kFrames, 1>(scene, SwfMode::kBatch, 0);
-  EXPECT_EQ(swf.failed_updates, 0);
-  EXPECT_EQ(batch.failed_updates, 0);
-  // Time to a stated accuracy, and staying there: gyro bias within 1.1 mrad/s and accel bias
-  // within 0.035 m/s^2 (a fifth and a half of their initial errors, 5.4 mrad/s and 0.071 m/s^2).
-  // What 4 s of this descent can tell: batch over the same data is no better (asserted below).
-  auto settle_frame = [&](auto within) {
-    int frame = -1;
-    for (int j = kFrames - 1; j >= 0 && within(ErrorOf(swf.newest[j], scene.truth[j])); --j)
-      frame = j;
-    return frame;
-  };
-  const int gyro_frame = settle_frame([](const StateError& e) { return e.gyro_bias < 1.1e-3; });
-  const int accel_frame = settle_frame([](const StateError& e) { return e.accel_bias < 0.035; });
-  std::printf(
-      "gyro bias within 1.1 mrad/s from %.1f s, accel bias within 0.035 m/s^2 from %.1f s\n",
-      0.1 * gyro_frame, 0.1 * accel_frame);
-  EXPECT_GE(gyro_frame, 0);
-  EXPECT_LE(gyro_frame, 20);
-  EXPECT_GE(accel_frame, 0);
-  EXPECT_LE(accel_frame, 25);
-  const StateError last = ErrorOf(swf.newest.back(), scene.truth.back());
-  const StateError last_batch = ErrorOf(batch.newest.back(), scene.truth.back());
-  // IMU-only dead reckoning from the same start (biases unknown: zero), for scale.
-  State reckoned = scene.truth[0];
-  reckoned.biases = ImuBiases<double>{};
-  for (std::size_t j = 1; j < scene.truth.size(); ++j) {
-    Pim pim;
-    Mat15<double> unused;
-    ASSERT_TRUE(testing::PreintegrateFrame(scene, j, reckoned.biases, &pim, &unused));
-    reckoned = scene.model.Propagate(reckoned, pim);
-  }
-  const double reckoned_m = (reckoned.world_T_imu.t - scene.truth.back().world_T_imu.t).norm();
-  std::printf(
-      "final position error SWF(5) %.3f m, batch %.3f m, IMU alone %.3f m; landmark "
-      "RMS %.3f / %.3f m\n",
-      last.position_m, last_batch.position_m, reckoned_m, swf.landmark_rms_m, batch.landmark_rms_m);
-  EXPECT_LT(last.position_m, 0.5 * reckoned_m);
-  std::printf("final bias errors SWF(5) %.2f mrad/s %.3f m/s^2, batch %.2f mrad/s %.3f m/s^2\n",
-              1e3 * last.gyro_bias, last.accel_bias, 1e3 * last_batch.gyro_bias,
-              last_batch.accel_bias);
-  EXPECT_LT(swf.landmark_rms_m, 1.3 * batch.landmark_rms_m);
-  EXPECT_LT(last.position_m, 1.5 * last_batch.position_m + 0.02);
-  EXPECT_LT(last.gyro_bias, 1.5 * last_batch.gyro_bias + 1e-4);
-  EXPECT_LT(last.accel_bias, 1.5 * last_batch.accel_bias + 0.005);
-}
-
-TEST(InertialSwf, NeesOfTheWholeStateIsConsistent) {
-  // Over independent scenes, the newest state's 15-dimensional error against its covariance.
-  double nees_sum = 0.0;
-  int n = 0;
-  for (std::uint64_t seed = 11; seed < 21; ++seed) {
-    const InertialScene scene = Scene(seed, 25);
-    const RunResult r = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 1000);
-    ASSERT_EQ(r.covariance.size(), 2u);  // the first frame's and the last's
-    Mat15<double> unused;
-    const Vec15<double> e = Model::Difference(scene.truth.back(), r.newest.back(), &unused);
-    nees_sum += e.dot(r.covariance.back().ldlt().solve(e));
-    ++n;
-  }
-  const double nees = nees_sum / n;
-  std::printf("mean NEES of the 15-dimensional state over %d runs: %.2f (expected 15)\n", n, nees);
-  EXPECT_GT(nees, 15.0 / 3);
-  EXPECT_LT(nees, 15.0 * 3);
-}
-
-TEST(InertialSwf, CameraBlindForTwoSecondsTheImuCarriesTheEstimate) {
-  // Frames 20-39 (2 s) without a single measurement (black images): the process factor alone
-  // carries the state, its covariance grows, and the filter tracks again from frame 40.
-  InertialSceneOptions o;
-  o.seed = 4;
-  o.frames = 60;
-  InertialScene scene = MakeInertialScene(o);
-  constexpr int kBlindFrom = 20;
-  constexpr int kBlindTo = 39;
-  for (int j = kBlindFrom; j <= kBlindTo; ++j) scene.obs[static_cast<std::size_t>(j)].clear();
-  const RunResult r = RunFilter<5, 300>(scene, SwfMode::kSlidingWindow, 1);
-  ASSERT_EQ(r.failed_updates, 0);
-  ASSERT_EQ(r.covariance.size(), scene.truth.size());
-  auto error_m = [&](int j) {
-    return ErrorOf(r.newest[static_cast<std::size_t>(j)], scene.truth[static_cast<std::size_t>(j)])
-        .position_m;
-  };
-  auto sigma_m = [&](int j) {  // largest 1-sigma position axis of the filter's own covariance
-    const Mat3<double> c = r.covariance[static_cast<std::size_t>(j)].topLeftCorner<3, 3>();
-    return std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3<double>>(c).eigenvalues()(2));
-  };
-  double worst_ratio = 0.0;
-  for (int j = kBlindFrom; j <= kBlindTo; ++j)
-    worst_ratio = std::max(worst_ratio, error_m(j) / sigma_m(j));
-  std::printf(
-      "blind 2 s: position error %.3f m -> %.3f m (1-sigma %.3f -> %.3f m, worst error / "
-      "sigma %.2f); 2 s after the camera returns %.3f m (1-sigma %.3f m)\n",
-      error_m(kBlindFrom - 1), error_m(kBlindTo), sigma_m(kBlindFrom - 1), sigma_m(kBlindTo),
-      worst_ratio, error_m(59), sigma_m(59));
-  // The stated bound: the error stays within 3 sigma of the filter's own covariance all along
-  // the outage, and that covariance grows (the filter says it is less sure).
-  EXPECT_LT(worst_ratio, 3.0);
-  EXPECT_GT(sigma_m(kBlindTo), 1.5 * sigma_m(kBlindFrom - 1));
-  // Re-acquired: measurements are fused again and the uncertainty shrinks from the outage's.
-  EXPECT_LT(sigma_m(59), sigma_m(kBlindTo));
-  EXPECT_LT(error_m(59), 3.0 * sigma_m(59));
-}
-
 TEST(InertialSwf, AllocatesNothingAndRepeatsBitForBit) {
-  const InertialScene scene = Scene(2, 30);
+  const InertialScene scene = DescentScene(2, 20);
   const RunResult a = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 7);
   const RunResult b = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 7);
   EXPECT_EQ(a.allocations, 0u);
