@@ -207,16 +207,18 @@ core::Status ImuModel::Configure(const ImuModelOptions& options, const Trajector
   return core::Status::kOk;
 }
 
-estimator::ImuNoise<double> ImuModel::NoiseModel() const {
+estimator::ImuNoise<double> ImuModel::NoiseModel() const { return NoiseModelOf(options_); }
+
+estimator::ImuNoise<double> NoiseModelOf(const ImuModelOptions& options) {
   const auto walk = [](const ImuTriadErrors& e) {
     const double markov = e.bias_instability * std::sqrt(2.0 / e.bias_correlation_s);
     return std::sqrt(e.bias_random_walk * e.bias_random_walk + markov * markov);
   };
   estimator::ImuNoise<double> n;
-  n.gyro_noise_density = options_.gyro.noise_density;
-  n.accel_noise_density = options_.accel.noise_density;
-  n.gyro_random_walk = walk(options_.gyro);
-  n.accel_random_walk = walk(options_.accel);
+  n.gyro_noise_density = options.gyro.noise_density;
+  n.accel_noise_density = options.accel.noise_density;
+  n.gyro_random_walk = walk(options.gyro);
+  n.accel_random_walk = walk(options.accel);
   return n;
 }
 

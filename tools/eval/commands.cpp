@@ -31,6 +31,7 @@ struct Evaluation {
 };
 
 std::string Key(const RunRecord& r) {
+  if (r.options.imu) return "swf_imu";
   return r.options.mode == estimator::SwfMode::kSlidingWindow ? "swf" : "vo";
 }
 
@@ -159,10 +160,15 @@ std::string Markdown(const Evaluation& e) {
                    "_error.png)\n\n" + e.description + "\n\n" + RunsTable(runs) + "\n";
   const std::string failures = FailureSentences(runs);
   if (!failures.empty()) md += "**Not every run is scored.** " + failures + "\n\n";
-  if (runs.size() == 2) {
+  // SWF against VO; the stereo-inertial run (when the dataset has an IMU) against SWF.
+  if (runs.size() >= 2) {
     md += CompareSentence(runs[0], runs[0].errors.ate_rmse_m, runs[1], runs[1].errors.ate_rmse_m,
-                          "ATE") +
-          "\n\n";
+                          "ATE");
+    if (runs.size() == 3) {
+      md += " " + CompareSentence(runs[2], runs[2].errors.ate_rmse_m, runs[0],
+                                  runs[0].errors.ate_rmse_m, "ATE");
+    }
+    md += "\n\n";
   }
   md +=
       "Integrity (error without fit, split along the vertical, against the navigation "
@@ -366,6 +372,28 @@ std::string GrowthSentence(const RunRecord& r) {
   return s + ".";
 }
 
+// What the stereo-inertial run used and what it estimated of the IMU.
+std::string ImuSentence(const RunRecord& run, const StereoSequence& s) {
+  const estimator::ImuNoise<double>& n = s.imu_noise;
+  return Format(
+      "%s: the stereo-inertial estimator, in place of the constant-velocity model: the recorded "
+      "IMU (`imu0`, %lld samples used, %lld dropped by the stream checks, %lld frame intervals "
+      "bridged over a gap) preintegrated between exposures with the noise of `sensor.yaml` "
+      "(gyroscope %.4g rad/s/sqrt(Hz), random walk %.4g rad/s^2/sqrt(Hz); accelerometer %.4g "
+      "m/s^2/sqrt(Hz), random walk %.4g m/s^3/sqrt(Hz)); start: gravity's direction and the "
+      "IMU's velocity from the ground truth (what the state guidance would hand over), biases "
+      "zero with prior sigmas %.3g rad/s and %.3g m/s^2 (no static calibration before the first "
+      "frame). Biases estimated at the last frame: gyroscope (%.4f, %.4f, %.4f) rad/s, "
+      "accelerometer (%.3f, %.3f, %.3f) m/s^2.",
+      run.options.name.c_str(), static_cast<long long>(run.imu_samples_accepted),
+      static_cast<long long>(run.imu_samples_dropped),
+      static_cast<long long>(run.imu_intervals_bridged), n.gyro_noise_density, n.gyro_random_walk,
+      n.accel_noise_density, n.accel_random_walk, run.options.gyro_bias_sigma_radps,
+      run.options.accel_bias_sigma_mps2, run.gyro_bias_radps.x(), run.gyro_bias_radps.y(),
+      run.gyro_bias_radps.z(), run.accel_bias_mps2.x(), run.accel_bias_mps2.y(),
+      run.accel_bias_mps2.z());
+}
+
 std::string EurocNotes(const EurocOptions& o, const EurocResult& r) {
   std::string notes = Format(
       "The ground truth's path over the %d recorded frames is %.3f m long and never more than "
@@ -390,6 +418,14 @@ std::string EurocNotes(const EurocOptions& o, const EurocResult& r) {
       notes += '\n';
       notes += LargestError(run);
     }
+  }
+  for (const RunRecord& run : r.runs) {
+    if (run.has_biases) notes += "\n\n" + ImuSentence(run, r.sequence);
+  }
+  if (r.runs.size() == 3 && AllOk(r.runs)) {
+    notes += " " + CompareSentence(r.runs[2], r.runs[2].errors.step_translation_mean_m, r.runs[0],
+                                   r.runs[0].errors.step_translation_mean_m,
+                                   "mean per-frame translation error");
   }
   if (r.skipped_frames > 0) {
     notes += Format("\n\n%d listed frames had no ground truth within 5 ms and were left out.",

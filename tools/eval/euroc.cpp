@@ -5,10 +5,12 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
 
+#include "euroc_imu.hpp"
 #include "report.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "swf/image_io/image_io.hpp"
@@ -414,6 +416,35 @@ bool WriteTum(const std::string& path, const std::vector<TumPose>& poses) {
   return std::fclose(f) == 0;
 }
 
+namespace {
+
+// Gravity at the recording site (Zurich, about 9.807 m/s^2); its direction comes from the truth.
+constexpr double kEarthGravityMps2 = 9.807;
+
+// mav0/imu0 when it is there: samples, noise, the camera in the IMU frame; gravity and the
+// IMU's velocity at the first frame in the estimate's world (the first camera's frame) from the
+// ground truth (EuRoC's world z is up), standing in for the state guidance hands over.
+bool LoadImu(const std::string& mav0, const PoseD& body_T_camera, StereoSequence* s,
+             std::string* error) {
+  const std::string csv = mav0 + "/imu0/data.csv";
+  if (!std::filesystem::exists(csv)) return true;
+  EurocImuCalibration calibration;
+  if (!ReadEurocImuCalibration(mav0 + "/imu0/sensor.yaml", &calibration, error) ||
+      !ReadEurocImuSamples(csv, &s->imu, error)) {
+    return false;
+  }
+  s->imu_noise = calibration.noise;
+  s->imu_period_us = std::llround(1e6 / calibration.rate_hz);
+  s->imu_T_camera = calibration.body_T_imu.Inverse() * body_T_camera;
+  const PoseD& first = s->frames[0].truth;
+  s->gravity_world_mps2 = first.R.transpose() * Vec3D(0.0, 0.0, -kEarthGravityMps2);
+  const double dt_s = 1e-9 * static_cast<double>(s->frames[1].stamp_ns - s->frames[0].stamp_ns);
+  s->initial_velocity_mps = (first.Inverse() * s->frames[1].truth).t / dt_s;
+  return true;
+}
+
+}  // namespace
+
 bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
                std::string* error) {
   const std::string mav0 = dir + "/mav0";
@@ -448,7 +479,11 @@ bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult*
   const double interval_ns = MedianInterval(left);
   result->frame_interval_s = interval_ns * 1e-9;
   PathStats(result);
-  if (options.loop_seconds > 0.0) Loop(options.loop_seconds, interval_ns, &s);
+  if (options.loop_seconds > 0.0) {
+    Loop(options.loop_seconds, interval_ns, &s);  // the IMU does not loop with the images
+  } else if (!LoadImu(mav0, body_T_camera, &s, error)) {
+    return false;
+  }
   return true;
 }
 

@@ -186,7 +186,7 @@ bool ReadEurocImuSamples(const std::string& path,
                line.substr(0, 120) + "\")";
       return false;
     }
-    s.t_us = EurocNsToUs(t_ns);
+    s.t_us = NsToUs(t_ns);
     s.seq = static_cast<std::int64_t>(samples->size());
     s.flags = estimator::kImuValid;
     samples->push_back(s);

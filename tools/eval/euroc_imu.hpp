@@ -33,8 +33,8 @@ bool ReadEurocImuCalibration(const std::string& path, EurocImuCalibration* calib
 bool ReadEurocImuSamples(const std::string& path,
                          std::vector<estimator::ImuSample<double>>* samples, std::string* error);
 
-// EuRoC's nanosecond stamps on the microsecond clock of the flight messages (rounded).
-constexpr std::int64_t EurocNsToUs(std::int64_t t_ns) {
+// A dataset's nanosecond stamps on the microsecond clock of the flight messages (rounded).
+constexpr std::int64_t NsToUs(std::int64_t t_ns) {
   return t_ns >= 0 ? (t_ns + 500) / 1000 : -((-t_ns + 500) / 1000);
 }
 

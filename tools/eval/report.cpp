@@ -112,6 +112,19 @@ std::string RunJson(const RunRecord& run, const StereoSequence& sequence,
       .Number("tracked_per_frame", run.mean_tracked, "no frame was processed")
       .Number("seconds", run.seconds, "", 3);
   o.Raw("integrity", IntegrityJson(run, indent + 2));
+  if (run.options.imu) {
+    JsonObject imu;
+    imu.Integer("samples_accepted", run.imu_samples_accepted)
+        .Integer("samples_dropped", run.imu_samples_dropped)
+        .Integer("intervals_bridged", run.imu_intervals_bridged);
+    if (run.has_biases) {
+      const Vec3D& g = run.gyro_bias_radps;
+      const Vec3D& a = run.accel_bias_mps2;
+      imu.Raw("gyro_bias_radps", JsonArray({g.x(), g.y(), g.z()}))
+          .Raw("accel_bias_mps2", JsonArray({a.x(), a.y(), a.z()}));
+    }
+    o.Raw("imu", imu.Text(indent + 2));
+  }
   if (!trajectory.empty()) o.String("trajectory", trajectory);
   if (!run.frames.empty()) o.Raw("checkpoints", Checkpoints(run, sequence, indent));
   return o.Text(indent);

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 
+#include "euroc_imu.hpp"
 #include "report.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/image_io/image_io.hpp"
@@ -99,7 +100,7 @@ void RecordNav(const app::NavOutput& nav, FrameRecord* record) {
 
 // Runs the pipeline stages of frame j; false (with the run's verdict set) when the pipeline
 // refuses the input, after which nothing later can be scored.
-bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images,
+bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images, std::size_t* next_imu,
                   app::Pipeline* pipeline, RunRecord* run, FrameRecord* record) {
   const SequenceFrame& f = s.frames[j];
   std::string error;
@@ -112,8 +113,11 @@ bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images,
   app::PipelineFrame frame;
   frame.left = left->View();
   frame.right = right->View();
-  frame.utime = f.stamp_ns / 1000;
+  frame.utime = NsToUs(f.stamp_ns);
   frame.seq = static_cast<std::int64_t>(j);
+  // The IMU samples stamped up to this exposure, as the flight loop hands them over.
+  while (pipeline->Inertial() && *next_imu < s.imu.size() && s.imu[*next_imu].t_us <= frame.utime)
+    pipeline->AddImu(s.imu[(*next_imu)++]);
   Status st = pipeline->Rectify(frame);
   if (st == Status::kOk) st = pipeline->Track();
   if (st != Status::kOk) {
@@ -213,6 +217,16 @@ app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
   o.process_sigma_m = r.process_sigma_m;
   o.process_sigma_rad = r.process_sigma_rad;
   o.integrity.up_world = s.up_world;
+  if (r.imu && s.HasImu()) {
+    o.imu.enabled = true;
+    o.imu.noise = s.imu_noise;
+    o.imu.stream.nominal_period_us = s.imu_period_us;
+    o.imu.imu_T_camera = s.imu_T_camera;
+    o.imu.gravity_world_mps2 = s.gravity_world_mps2;
+    o.imu.initial_velocity_world_mps = s.initial_velocity_mps;
+    o.imu.first_gyro_bias_sigma_radps = r.gyro_bias_sigma_radps;
+    o.imu.first_accel_bias_sigma_mps2 = r.accel_bias_sigma_mps2;
+  }
   return o;  // initial_world_T_camera: identity, the estimate's world is the first camera
 }
 
@@ -224,6 +238,12 @@ std::vector<RunRecord> RunSwfAndVo(const StereoSequence& sequence, const RunOpti
     RunOptions o = base;
     o.name = (mode == estimator::SwfMode::kSlidingWindow ? "SWF(" : "VO(") + k + ")";
     o.mode = mode;
+    runs.push_back(RunSequence(sequence, o));
+  }
+  if (sequence.HasImu()) {
+    RunOptions o = base;
+    o.name = "SWF(" + k + ") + IMU";
+    o.imu = true;
     runs.push_back(RunSequence(sequence, o));
   }
   return runs;
@@ -258,9 +278,10 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
   ImageStore images(sequence);
   const auto start = std::chrono::steady_clock::now();
   double tracked = 0.0;
+  std::size_t next_imu = 0;
   for (std::size_t j = 0; j < sequence.frames.size(); ++j) {
     FrameRecord record;
-    if (!ProcessFrame(sequence, j, &images, pipeline.get(), &run, &record)) break;
+    if (!ProcessFrame(sequence, j, &images, &next_imu, pipeline.get(), &run, &record)) break;
     Judge(sequence, j, options, &run, &record);
     CountIntegrity(j, record, &run);
     tracked += record.tracked;
@@ -268,6 +289,18 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
     if (run.verdict == Verdict::kNonFinite) break;  // nothing later can be scored
   }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (const estimator::NavState<double>* x = pipeline->NewestNavState()) {
+    run.has_biases = true;
+    run.gyro_bias_radps = x->biases.gyro_radps;
+    run.accel_bias_mps2 = x->biases.accel_mps2;
+  }
+  if (pipeline->Inertial()) {
+    const app::ImuCounts c = pipeline->ImuStreamCounts();
+    run.imu_samples_accepted = c.stream.accepted;
+    run.imu_samples_dropped = c.stream.out_of_order + c.stream.duplicated + c.stream.invalid +
+                              c.stream.saturated + c.overflowed;
+    run.imu_intervals_bridged = c.intervals_bridged;
+  }
   if (run.frames.empty()) return run;
   run.mean_tracked = tracked / static_cast<double>(run.frames.size());
   std::vector<PoseD> truth;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "swf/app/pipeline.hpp"
+#include "swf/estimator/imu_preintegration.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "trajectory.hpp"
@@ -40,6 +41,17 @@ struct StereoSequence {
   // horizontal/vertical protection levels and to split the error the same way.
   Vec3D up_world = Vec3D(0.0, -1.0, 0.0);
   std::vector<SequenceFrame> frames;
+  // The recorded IMU, when the dataset has one (on the frames' clock, microseconds), with what
+  // the stereo-inertial run needs at start: the extrinsic, gravity and the IMU's velocity in the
+  // estimate's world (the first camera's frame), the last two from the ground truth standing in
+  // for the state guidance hands over.
+  std::vector<estimator::ImuSample<double>> imu;
+  estimator::ImuNoise<double> imu_noise;
+  std::int64_t imu_period_us = 0;
+  PoseD imu_T_camera;
+  Vec3D gravity_world_mps2 = Vec3D::Zero();
+  Vec3D initial_velocity_mps = Vec3D::Zero();
+  bool HasImu() const { return !imu.empty(); }
 };
 
 struct RunOptions {
@@ -58,6 +70,11 @@ struct RunOptions {
   // Diagnosis only: hand the pipeline the truth's frame-to-frame motion as its motion input
   // (what an IMU would provide, with the process noise above) instead of constant velocity.
   bool truth_motion = false;
+  // The stereo-inertial estimator on the sequence's IMU (PipelineOptions::imu), with the prior
+  // sigmas of the biases it starts from (zero: no static calibration before the first frame).
+  bool imu = false;
+  double gyro_bias_sigma_radps = 0.1;
+  double accel_bias_sigma_mps2 = 0.2;
 };
 
 struct FrameRecord {
@@ -98,6 +115,13 @@ struct RunRecord {
   int first_misleading_frame = -1;
   int degraded_beyond_protection = 0;  // DEGRADED frames with the error beyond a protection level
   double mean_tracked = 0.0;
+  // Stereo-inertial runs: the IMU biases estimated at the last frame, and the stream's counts.
+  bool has_biases = false;
+  Vec3D gyro_bias_radps = Vec3D::Zero();
+  Vec3D accel_bias_mps2 = Vec3D::Zero();
+  std::int64_t imu_samples_accepted = 0;
+  std::int64_t imu_samples_dropped = 0;
+  std::int64_t imu_intervals_bridged = 0;
   double seconds = 0.0;  // wall time, images loaded once
   bool Ok() const { return verdict == Verdict::kOk; }
 };

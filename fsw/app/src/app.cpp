@@ -4,6 +4,8 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -121,6 +123,44 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
   return o;
 }
 
+// The stereo-inertial estimator's IMU (imu.enabled; config.hpp ImuConfig): the simulator's unit
+// when sim.imu_unit names one, else imu.* as given. The velocity at start: the simulator's
+// (initial: truth) or imu.initial_velocity_mps.
+ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
+  const ImuConfig& k = c.imu;
+  ImuOptions o;
+  o.enabled = k.enabled;
+  double rate_hz = k.rate_hz;
+  o.noise.gyro_noise_density = k.gyro_noise_density;
+  o.noise.gyro_random_walk = k.gyro_random_walk;
+  o.noise.accel_noise_density = k.accel_noise_density;
+  o.noise.accel_random_walk = k.accel_random_walk;
+  o.stream.gyro_range_radps = k.gyro_range_radps;
+  o.stream.accel_range_mps2 = k.accel_range_mps2;
+  o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -k.gravity_mps2);
+  sim::ImuModelOptions unit;
+  if (SimImuUnit(c, &unit)) {
+    rate_hz = unit.rate_hz;
+    o.noise = sim::NoiseModelOf(unit);
+    o.stream.gyro_range_radps = unit.gyro.range;
+    o.stream.accel_range_mps2 = unit.accel.range;
+    o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -unit.gravity_mps2);
+  }
+  o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / rate_hz));
+  estimator::Pose<double> camera_T_imu;
+  camera_T_imu.t =
+      estimator::Vec3<double>(k.camera_t_imu_m[0], k.camera_t_imu_m[1], k.camera_t_imu_m[2]);
+  camera_T_imu.R = estimator::ExpSO3<double>(
+      estimator::Vec3<double>(k.camera_r_imu_rad[0], k.camera_r_imu_rad[1], k.camera_r_imu_rad[2]));
+  o.imu_T_camera = camera_T_imu.Inverse();
+  o.initial_velocity_world_mps =
+      truth != nullptr
+          ? truth->Options().velocity_world_mps
+          : estimator::Vec3<double>(k.initial_velocity_mps[0], k.initial_velocity_mps[1],
+                                    k.initial_velocity_mps[2]);
+  return o;
+}
+
 // The run's verdict, computed from the numbers (fsw/app/README.md "Results and exit codes"):
 //   failed   (exit 1) the run could not do its job: the loop or the source failed, the log was
 //            damaged, outputs were lost, the final estimate is INVALID, or (with truth) a VALID
@@ -215,12 +255,60 @@ void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const EvaluationRe
   std::fprintf(f, "},\n");
 }
 
+// A JSON number, or null when not finite (JSON has no inf/nan).
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
+// The IMU of a stereo-inertial run: its stream's counts and, in the simulator, the biases the
+// filter ended with against the unit's true ones.
+struct ImuReport {
+  ImuCounts counts;
+  bool has_biases = false;
+  estimator::ImuBiases<double> estimated;
+  bool has_truth = false;
+  estimator::ImuBiases<double> truth;
+};
+
+void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
+  const estimator::ImuStreamCounts& s = r.counts.stream;
+  std::fprintf(f,
+               "  \"imu\": {\"unit\": \"%s\", \"accepted\": %lld, \"out_of_order\": %lld, "
+               "\"duplicated\": %lld, \"invalid\": %lld, \"saturated\": %lld, "
+               "\"missing\": %lld, \"overflowed\": %lld, \"intervals_bridged\": %lld",
+               c.sim.imu_unit != "none" ? c.sim.imu_unit.c_str() : "external",
+               static_cast<long long>(s.accepted), static_cast<long long>(s.out_of_order),
+               static_cast<long long>(s.duplicated), static_cast<long long>(s.invalid),
+               static_cast<long long>(s.saturated), static_cast<long long>(s.missing_samples),
+               static_cast<long long>(r.counts.overflowed),
+               static_cast<long long>(r.counts.intervals_bridged));
+  const auto vec = [&](const char* key, const estimator::Vec3<double>& v) {
+    std::fprintf(f, ", \"%s\": [%s, %s, %s]", key, JsonNumber(v.x()).c_str(),
+                 JsonNumber(v.y()).c_str(), JsonNumber(v.z()).c_str());
+  };
+  if (r.has_biases) {
+    vec("gyro_bias_radps", r.estimated.gyro_radps);
+    vec("accel_bias_mps2", r.estimated.accel_mps2);
+  }
+  if (r.has_biases && r.has_truth) {
+    vec("true_gyro_bias_radps", r.truth.gyro_radps);
+    vec("true_accel_bias_mps2", r.truth.accel_mps2);
+    std::fprintf(f, ", \"gyro_bias_error_radps\": %s, \"accel_bias_error_mps2\": %s",
+                 JsonNumber((r.estimated.gyro_radps - r.truth.gyro_radps).norm()).c_str(),
+                 JsonNumber((r.estimated.accel_mps2 - r.truth.accel_mps2).norm()).c_str());
+  }
+  std::fprintf(f, "},\n");
+}
+
 void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
                   const HealthRecord& health, const EvaluationResult* eval,
                   const HazardEvaluation* hazard, std::int64_t hazard_maps, bool locked, bool fifo,
                   const Verdict& verdict, const IntegrityCounters& integrity,
                   const sim::Trajectory* trajectory, const sim::OrbitalTarget* target,
-                  const LogStreamStats* log) {
+                  const LogStreamStats* log, const ImuReport* imu) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) {
     std::fprintf(stderr, "swf-fsw: cannot write %s\n", path.c_str());
@@ -240,6 +328,7 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
   }
   // Where the simulated descent went: the nadir of the first frame, and for `sim.target:
   // orbital` the pre-selection's clearance from orbit-visible hazards.
+  if (imu != nullptr) WriteImu(f, c, *imu);
   if (trajectory != nullptr && trajectory->NumFrames() > 0) {
     const Eigen::Vector3d& p = trajectory->WorldTCamera(0).t;
     std::fprintf(f, "  \"descent_target\": {\"mode\": \"%s\", \"x_m\": %.3f, \"y_m\": %.3f",
@@ -419,11 +508,15 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
       return 2;
     }
     po.initial_world_T_camera = trajectory.WorldTCamera(0);
+    po.imu = ImuOptionsFor(config, &trajectory);
   } else if (config.initial != "truth") {
     po.initial_world_T_camera.R = sim::NadirRotation(0.0);
     po.initial_world_T_camera.t = Eigen::Vector3d(
         config.initial_position_m[0], config.initial_position_m[1], config.initial_position_m[2]);
+    po.imu = ImuOptionsFor(config, nullptr);
   }
+  const std::string imu_channel =
+      config.imu.channel.empty() ? config.channel_prefix + kImuSuffix : config.imu.channel;
   // Raw cameras (aravis, v4l2): the calibrations give the image size and the pipeline rectifies.
   [[maybe_unused]] auto use_camera_calibrations = [&]() {
     if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty() ||
@@ -450,8 +543,10 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
         std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
         return 1;
       }
-      if (config.initial == "truth")
+      if (config.initial == "truth") {
         po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
+        po.imu = ImuOptionsFor(config, &world->Trajectory());
+      }
       if (config.sim.target == "orbital") {
         const sim::OrbitalTarget& t = world->Target();
         std::fprintf(stderr,
@@ -468,6 +563,7 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
     }
     case SourceKind::kLog: {
       auto log = std::make_unique<LogStereoSource>();
+      if (config.imu.enabled) log->SetImuChannel(imu_channel);
       if (!log->Load(config.log_path, config.channel_prefix + kStereoSuffix, &error)) {
         std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
         return 1;
@@ -666,8 +762,28 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   FlightLoop loop;
   MotionProvider* motion = world != nullptr ? static_cast<MotionProvider*>(world.get())
                                             : static_cast<MotionProvider*>(log_source);
-  if (loop.Configure(lo, pipeline.get(), source.get(), channels.get(), motion,
-                     hazard_stage.get()) != core::Status::kOk) {
+  // The IMU: the simulator's unit, the log's recording, or (cameras) imu_t over LCM.
+  ImuProvider* imu = nullptr;
+  LcmImuInput lcm_imu;
+  if (config.imu.enabled) {
+    if (world != nullptr) {
+      imu = world.get();
+    } else if (log_source != nullptr) {
+      imu = log_source;
+      if (log_source->NumImuSamples() == 0) {
+        std::fprintf(stderr, "%s: %s: imu.enabled but no %s records in the log\n", tool,
+                     config.log_path.c_str(), imu_channel.c_str());
+        return 1;
+      }
+    } else if (!lcm_imu.Start(config.lcm_url, imu_channel, &error)) {
+      std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
+      return 1;
+    } else {
+      imu = &lcm_imu;
+    }
+  }
+  if (loop.Configure(lo, pipeline.get(), source.get(), channels.get(), motion, hazard_stage.get(),
+                     imu) != core::Status::kOk) {
     std::fprintf(stderr,
                  "%s: configuration refused: rate groups (rate_hz, hazard_every, "
                  "health_every)\n",
@@ -815,11 +931,34 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                static_cast<long long>(integrity.landmarks_rejected));
   std::fprintf(stderr, "%s: result: %s%s%s\n", tool, verdict.result,
                verdict.reasons.empty() ? "" : ": ", verdict.reasons.c_str());
+  ImuReport imu_report;
+  if (pipeline->Inertial()) {
+    imu_report.counts = pipeline->ImuStreamCounts();
+    if (const estimator::NavState<double>* x = pipeline->NewestNavState()) {
+      imu_report.has_biases = true;
+      imu_report.estimated = x->biases;
+    }
+    // The unit's true bias at the last sample the pipeline took.
+    const sim::ImuModel* unit = world ? world->ImuUnit() : nullptr;
+    const std::int64_t taken = counters.imu_samples;
+    if (unit != nullptr && taken > 0 &&
+        taken <= static_cast<std::int64_t>(unit->TrueBiases().size())) {
+      imu_report.has_truth = true;
+      imu_report.truth = unit->TrueBiases()[static_cast<std::size_t>(taken - 1)];
+    }
+    std::fprintf(stderr, "%s: imu: %lld samples integrated, %lld dropped, %lld intervals bridged\n",
+                 tool, static_cast<long long>(imu_report.counts.stream.accepted),
+                 static_cast<long long>(
+                     imu_report.counts.stream.out_of_order + imu_report.counts.stream.duplicated +
+                     imu_report.counts.stream.invalid + imu_report.counts.stream.saturated),
+                 static_cast<long long>(imu_report.counts.intervals_bridged));
+  }
   if (!config.summary_path.empty()) {
     WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr,
                  evaluate && hazard_counter.maps > 0 ? &hazard_eval : nullptr, hazard_counter.maps,
                  locked, fifo, verdict, integrity, world ? &world->Trajectory() : nullptr,
-                 world ? &world->Target() : nullptr, log_stream);
+                 world ? &world->Target() : nullptr, log_stream,
+                 pipeline->Inertial() ? &imu_report : nullptr);
   }
   return verdict.exit_code;
 }

@@ -158,6 +158,41 @@ Setter OneOf(Get get, std::initializer_list<const char*> allowed) {
   };
 }
 
+// Three finite numbers ("x y z" or "x, y, z") into field[3].
+template <typename Get>
+Setter Vector3(Get get) {
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    std::string spaced = v;
+    for (char& ch : spaced) ch = ch == ',' ? ' ' : ch;
+    std::istringstream in(spaced);
+    double p[3];
+    std::string rest;
+    if (!(in >> p[0] >> p[1] >> p[2]) || (in >> rest) || !std::isfinite(p[0]) ||
+        !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      *why = Quoted(v) + " is not three finite numbers (x y z)";
+      return false;
+    }
+    for (int i = 0; i < 3; ++i) get(c)[i] = p[i];
+    return true;
+  };
+}
+
+// A non-negative finite number into a member of ImuConfig, at most hi.
+Setter ImuNumber(double ImuConfig::*field, double hi) {
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    double d = 0.0;
+    if (!ParseDouble(v, &d, why)) return false;
+    if (d < 0.0 || d > hi) {
+      std::ostringstream o;
+      o << Excerpt(v) << " is outside [0, " << hi << "]";
+      *why = o.str();
+      return false;
+    }
+    c->imu.*field = d;
+    return true;
+  };
+}
+
 const std::map<std::string, Setter>& Fields() {
   static const std::map<std::string, Setter> kFields = [] {
     std::map<std::string, Setter> f;
@@ -234,6 +269,22 @@ const std::map<std::string, Setter>& Fields() {
       c->sim.imu_sigma_rad = d;
       return true;
     };
+    f["sim.imu_unit"] =
+        OneOf([](FswConfig* c) { return &c->sim.imu_unit; }, {"none", "mems", "tactical"});
+    f["imu.enabled"] = Bool([](FswConfig* c) { return &c->imu.enabled; });
+    f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
+    f["imu.rate_hz"] = ImuNumber(&ImuConfig::rate_hz, 10000.0);
+    f["imu.gyro_noise_density"] = ImuNumber(&ImuConfig::gyro_noise_density, 1.0);
+    f["imu.gyro_random_walk"] = ImuNumber(&ImuConfig::gyro_random_walk, 1.0);
+    f["imu.accel_noise_density"] = ImuNumber(&ImuConfig::accel_noise_density, 10.0);
+    f["imu.accel_random_walk"] = ImuNumber(&ImuConfig::accel_random_walk, 10.0);
+    f["imu.gyro_range_radps"] = ImuNumber(&ImuConfig::gyro_range_radps, 1000.0);
+    f["imu.accel_range_mps2"] = ImuNumber(&ImuConfig::accel_range_mps2, 10000.0);
+    f["imu.gravity_mps2"] = ImuNumber(&ImuConfig::gravity_mps2, 100.0);
+    f["imu.camera_t_imu_m"] = Vector3([](FswConfig* c) { return c->imu.camera_t_imu_m; });
+    f["imu.camera_r_imu_rad"] = Vector3([](FswConfig* c) { return c->imu.camera_r_imu_rad; });
+    f["imu.initial_velocity_mps"] =
+        Vector3([](FswConfig* c) { return c->imu.initial_velocity_mps; });
     f["sim.target"] = OneOf([](FswConfig* c) { return &c->sim.target; }, {"nominal", "orbital"});
     f["sim.target_search_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
       double d = 0.0;
@@ -639,6 +690,12 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   }
   if (c.initial == "truth" && c.source != SourceKind::kSim && c.source != SourceKind::kLog) {
     return fail("initial", "'truth' needs the simulator (source sim, or a log of a sim run)");
+  }
+  if (c.imu.enabled && c.source == SourceKind::kSim && c.sim.imu_unit == "none") {
+    return fail("imu.enabled", "the simulator carries no IMU: set sim.imu_unit (mems, tactical)");
+  }
+  if (c.imu.enabled && c.sim.imu_unit == "none" && !(c.imu.rate_hz >= 10.0)) {
+    return fail("imu.rate_hz", "must be at least 10 Hz for the stereo-inertial estimator");
   }
   if (c.inject_ms > 0.0 && c.inject_stage.empty()) {
     return fail("inject.stage", "required when inject.ms is set");

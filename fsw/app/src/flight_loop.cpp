@@ -54,7 +54,7 @@ FlightLoop::~FlightLoop() {
 
 Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
                              drivers::StereoSource* source, OutputChannels* outputs,
-                             MotionProvider* motion, HazardStage* hazard) {
+                             MotionProvider* motion, HazardStage* hazard, ImuProvider* imu) {
   if (pipeline == nullptr || source == nullptr || outputs == nullptr ||
       !(options.rate_hz > 0.0 && options.rate_hz <= 1000.0) || options.hazard_every < 1 ||
       options.health_every < 1 || options.max_frames < 0 || options.acquire_timeout_ns <= 0 ||
@@ -68,6 +68,7 @@ Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
   out_ = outputs;
   hazard_ = hazard;
   motion_ = motion;
+  imu_ = imu;
   period_ns_ = static_cast<TimeNs>(1e9 / options.rate_hz + 0.5);
   for (StageStats& s : stages_) s.Reset();
   hazard_stage_.Reset();
@@ -91,6 +92,33 @@ void FlightLoop::Inject(int stage) {
   if (f < options_.inject_first_frame || f >= options_.inject_first_frame + options_.inject_frames)
     return;
   Spin(static_cast<TimeNs>(options_.inject_ms * 1e6));
+}
+
+void FlightLoop::FeedImu(std::int64_t until_utime) {
+  if (imu_ == nullptr) return;
+  const bool lockstep = options_.pacing == Pacing::kLockstep;
+  std::int32_t slot = -1;
+  estimator::ImuSample<double> sample;
+  while (imu_->NextImu(until_utime, &sample)) {
+    pipeline_->AddImu(sample);
+    ++counters_.imu_samples;
+    if (!options_.record_frames) continue;
+    if (slot < 0) {
+      slot = AcquireOutput(&out_->imus, lockstep);
+      if (slot < 0) {
+        ++counters_.outputs_dropped;
+        continue;
+      }
+      out_->imus[slot].count = 0;
+    }
+    ImuRecord& r = out_->imus[slot];
+    r.samples[r.count++] = sample;
+    if (r.count == kImuRecordSamples) {
+      Push(&out_->frame_group, RecordRef{RecordKind::kImu, slot});
+      slot = -1;
+    }
+  }
+  if (slot >= 0) Push(&out_->frame_group, RecordRef{RecordKind::kImu, slot});
 }
 
 void FlightLoop::Push(core::SpscQueue<RecordRef, kOrderQueueSize>* q, RecordRef ref) {
@@ -135,6 +163,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   }
   expected_seq_ = frame.seq + 1;
   last_frame_utime_ = frame.utime;
+  FeedImu(frame.utime);
   MotionInput motion;
   frame.has_motion =
       motion_ != nullptr && motion_->Motion(static_cast<std::uint64_t>(frame.seq), &motion);
@@ -273,6 +302,7 @@ Status FlightLoop::MissCycle(Status source_status, bool synchronous) {
         motion.rotation_rad[0], motion.rotation_rad[1], motion.rotation_rad[2]));
   }
   ++expected_seq_;
+  FeedImu(pipeline_->CoastUtime());
   if (pipeline_->Coast(has_motion ? &camera_prev_T_camera : nullptr) == Status::kOk) {
     ++counters_.cycles_coasted;
     PublishNav();
@@ -498,6 +528,7 @@ void FlightLoop::PublishHealth() {
   h.num_features = pipeline_->NumFeatures();
   h.num_landmarks = pipeline_->NumLandmarks();
   h.integrity = pipeline_->Integrity();
+  h.imu = pipeline_->ImuStreamCounts();
   for (int i = 0; i < kNumStages; ++i) {
     if (i != kStageHazard) h.stages[i] = stages_[i].Summarize();
   }

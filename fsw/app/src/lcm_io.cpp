@@ -10,8 +10,10 @@
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
 
+#include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
+#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
@@ -25,6 +27,7 @@ struct OutputThread::Impl {
   std::vector<std::uint8_t> buffer;  // encode target, sized at Open
   std::string channel;               // reused: capacity reserved at Open
   swf_msgs::stereo_frame_t frame;
+  swf_msgs::imu_t imu;
   swf_msgs::nav_state_t nav;
   swf_msgs::landmark_map_t map;
   swf_msgs::health_t health;
@@ -107,11 +110,11 @@ void OutputThread::DrainOnce() {
   while (channels_->hazard_group.TryPop(&ref) == core::Status::kOk) Handle(ref);
 }
 
-void OutputThread::Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data,
-                        int size) {
+void OutputThread::Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data, int size,
+                        bool record_only) {
   impl_->channel.assign(impl_->prefix);
   impl_->channel.append(suffix);
-  if (impl_->lcm) {
+  if (impl_->lcm && !record_only) {
     if (impl_->lcm->publish(impl_->channel, data, static_cast<unsigned>(size)) == 0) {
       ++counters_.published;
     } else {
@@ -163,6 +166,28 @@ void OutputThread::Handle(const RecordRef& ref) {
         return;
       }
       Emit(kStereoSuffix, m.utime, buf, n);
+      return;
+    }
+    case RecordKind::kImu: {
+      const ImuRecord& r = channels_->imus[ref.slot];
+      swf_msgs::imu_t& m = impl_->imu;
+      for (std::int32_t k = 0; k < r.count; ++k) {
+        const estimator::ImuSample<double>& s = r.samples[k];
+        m.utime = s.t_us;
+        m.seq = s.seq;
+        for (int i = 0; i < 3; ++i) {
+          m.angular_rate_radps[i] = s.gyro_radps[i];
+          m.specific_force_mps2[i] = s.accel_mps2[i];
+        }
+        m.flags = static_cast<std::int32_t>(s.flags);
+        const int n = m.encode(buf, 0, max);
+        if (n < 0) {
+          ++counters_.encode_errors;
+          continue;
+        }
+        Emit(kImuSuffix, m.utime, buf, n, /*record_only=*/true);
+      }
+      channels_->imus.Release(ref.slot);
       return;
     }
     case RecordKind::kNav: {
@@ -297,6 +322,14 @@ void OutputThread::Handle(const RecordRef& ref) {
         m.stage_p99_ms[i] = r.stages[i].p99_ms;
         m.stage_max_ms[i] = r.stages[i].max_ms;
       }
+      const estimator::ImuStreamCounts& imu = r.imu.stream;
+      m.imu_accepted = imu.accepted;
+      m.imu_out_of_order = imu.out_of_order;
+      m.imu_duplicated = imu.duplicated;
+      m.imu_invalid = imu.invalid;
+      m.imu_saturated = imu.saturated;
+      m.imu_missing = imu.missing_samples + r.imu.overflowed;
+      m.imu_intervals_bridged = r.imu.intervals_bridged;
       for (OutputObserver* o : observers_) o->OnHealth(r);
       const int n = m.encode(buf, 0, max);
       channels_->healths.Release(ref.slot);
@@ -308,6 +341,86 @@ void OutputThread::Handle(const RecordRef& ref) {
       return;
     }
   }
+}
+
+struct LcmImuInput::Impl {
+  std::unique_ptr<lcm::LCM> lcm;
+};
+
+LcmImuInput::LcmImuInput() = default;
+LcmImuInput::~LcmImuInput() { Stop(); }
+
+bool LcmImuInput::Start(const std::string& lcm_url, const std::string& channel,
+                        std::string* error) {
+  impl_ = std::make_unique<Impl>();
+  impl_->lcm = std::make_unique<lcm::LCM>(lcm_url);
+  if (!impl_->lcm->good()) {
+    *error = "imu: cannot open LCM at '" + lcm_url + "' to receive " + channel;
+    return false;
+  }
+  impl_->lcm->subscribeFunction(
+      channel,
+      +[](const lcm::ReceiveBuffer* rbuf, const std::string&, LcmImuInput* self) {
+        self->received_.fetch_add(1, std::memory_order_relaxed);
+        swf_msgs::imu_t m;
+        if (!messages::CheckedDecode(rbuf->data, rbuf->data_size, &m).Ok()) {
+          self->undecodable_.fetch_add(1, std::memory_order_relaxed);
+          return;
+        }
+        estimator::ImuSample<double> s;
+        s.t_us = m.utime;
+        s.seq = m.seq;
+        for (int i = 0; i < 3; ++i) {
+          s.gyro_radps[i] = m.angular_rate_radps[i];
+          s.accel_mps2[i] = m.specific_force_mps2[i];
+        }
+        s.flags = static_cast<std::uint32_t>(m.flags);
+        if (self->queue_.TryPush(s) != core::Status::kOk)
+          self->queue_full_.fetch_add(1, std::memory_order_relaxed);
+      },
+      this);
+  quit_.store(false);
+  thread_ = std::thread([this] {
+    while (!quit_.load()) impl_->lcm->handleTimeout(50);
+  });
+  return true;
+}
+
+void LcmImuInput::Stop() {
+  quit_.store(true);
+  if (thread_.joinable()) thread_.join();
+}
+
+bool LcmImuInput::NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) {
+  for (;;) {
+    if (!held_) {
+      if (queue_.TryPop(&held_sample_) != core::Status::kOk) return false;
+      held_ = true;
+    }
+    // Unsigned difference: no overflow on a corrupt stamp.
+    const bool far_ahead =
+        held_sample_.t_us > until_utime &&
+        static_cast<std::uint64_t>(held_sample_.t_us) - static_cast<std::uint64_t>(until_utime) >
+            static_cast<std::uint64_t>(kMaxImuLeadUs);
+    if (far_ahead) {
+      held_ = false;
+      ++future_dropped_;
+      continue;
+    }
+    if (held_sample_.t_us > until_utime) return false;
+    *sample = held_sample_;
+    held_ = false;
+    return true;
+  }
+}
+
+LcmImuCounters LcmImuInput::Counters() const {
+  LcmImuCounters c;
+  c.received = received_.load();
+  c.undecodable = undecodable_.load();
+  c.queue_full = queue_full_.load();
+  c.future_dropped = future_dropped_;
+  return c;
 }
 
 }  // namespace swf::app

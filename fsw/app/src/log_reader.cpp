@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "swf/messages/checked_decode.hpp"
+#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
 namespace swf::app {
@@ -125,6 +126,8 @@ std::string CheckFrameFields(const swf_msgs::stereo_frame_t& msg) {
 
 void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
   frames_.clear();
+  imu_.clear();
+  imu_pending_ = 0;
   load_error_.clear();
   stream_ = LogStreamStats{};
   LogEvent event;
@@ -137,9 +140,15 @@ void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
       load_error_ = why;
       break;
     }
-    if (event.channel != channel) continue;
+    if (event.channel != channel && (imu_channel_.empty() || event.channel != imu_channel_))
+      continue;
     const std::string where = reader->Path() + ": record " + std::to_string(event.index) + " (" +
                               event.channel + ", event " + std::to_string(event.eventnum) + ")";
+    if (event.channel == imu_channel_) {
+      load_error_ = AddImuRecord(event.data, where);
+      if (!load_error_.empty()) break;
+      continue;
+    }
     const messages::DecodeError decoded =
         messages::CheckedDecode(event.data.data(), event.data.size(), &msg);
     if (!decoded.Ok()) {
@@ -176,6 +185,29 @@ void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
   }
 }
 
+// "" when the record decoded into a sample (kept for the next frame), else why not. The
+// sample's values are the stream checker's to judge (ImuStreamChecker), not the reader's.
+std::string LogStereoSource::AddImuRecord(const std::vector<std::uint8_t>& data,
+                                          const std::string& where) {
+  swf_msgs::imu_t msg;
+  const messages::DecodeError decoded = messages::CheckedDecode(data.data(), data.size(), &msg);
+  if (!decoded.Ok()) {
+    char what[128];
+    messages::Describe(decoded, what, sizeof what);
+    return where + ": imu_t does not decode (" + what + ")";
+  }
+  estimator::ImuSample<double> s;
+  s.t_us = msg.utime;
+  s.seq = msg.seq;
+  for (int i = 0; i < 3; ++i) {
+    s.gyro_radps[i] = msg.angular_rate_radps[i];
+    s.accel_mps2[i] = msg.specific_force_mps2[i];
+  }
+  s.flags = static_cast<std::uint32_t>(msg.flags);
+  imu_.push_back(s);
+  return "";
+}
+
 void LogStereoSource::Admit(Frame frame) {
   if (!frames_.empty()) {
     const Frame& last = frames_.back();
@@ -194,7 +226,20 @@ void LogStereoSource::Admit(Frame frame) {
     frame.dropped_before = static_cast<std::int32_t>(
         std::min<std::int64_t>(dropped, std::numeric_limits<std::int32_t>::max()));
   }
+  frame.imu_begin = imu_pending_;
+  frame.imu_end = imu_.size();
+  imu_pending_ = imu_.size();
   frames_.push_back(std::move(frame));
+}
+
+bool LogStereoSource::NextImu(std::int64_t /*until_utime*/, estimator::ImuSample<double>* sample) {
+  // The samples recorded before the frame just served (next_ - 1), in their order.
+  if (next_ == 0) return false;
+  const Frame& f = frames_[next_ - 1];
+  imu_next_ = std::max(imu_next_, f.imu_begin);
+  if (imu_next_ >= f.imu_end) return false;
+  *sample = imu_[imu_next_++];
+  return true;
 }
 
 bool LogStereoSource::Motion(std::uint64_t seq, MotionInput* input) {
@@ -207,6 +252,7 @@ bool LogStereoSource::Motion(std::uint64_t seq, MotionInput* input) {
 
 core::Status LogStereoSource::Start() {
   next_ = 0;
+  imu_next_ = 0;
   stats_ = drivers::SourceStats{};
   // Refused while loading; gaps are counted through each pair's dropped_before instead.
   stats_.frames_rejected = static_cast<std::uint64_t>(stream_.Refused());

@@ -19,6 +19,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
     return Status::kInvalidArgument;
   }
   if (options.swf.mode == estimator::SwfMode::kBatch) return Status::kInvalidArgument;
+  if (options.imu.enabled && !options.imu.Valid()) return Status::kInvalidArgument;
   if (!(options.still_translation_m >= 0.0) || !(options.still_rotation_rad >= 0.0) ||
       !(options.max_process_inflation >= 1.0) || !(options.max_turn_rate_radps > 0.0) ||
       monitor_.Configure(options.integrity) != Status::kOk) {
@@ -28,11 +29,18 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   // Everything large is created here, once, before the loop starts.
   frontend_.reset(new (std::nothrow) frontend::Frontend());
   output_.reset(new (std::nothrow) frontend::FrameOutput());
-  swf_.reset(new (std::nothrow) FlightSwf());
+  swf_.reset();
+  inertial_.reset();
+  if (options.imu.enabled) {
+    inertial_.reset(new (std::nothrow) InertialFlightSwf());
+  } else {
+    swf_.reset(new (std::nothrow) FlightSwf());
+  }
   estimates_.reset(new (std::nothrow) frontend::LandmarkEstimate[kMaxLandmarks]);
   sightings_.reset(new (std::nothrow) FirstSighting[kMaxSightings]);
   disparities_.reset(new (std::nothrow) float[2 * frontend::kMaxTracks]);
-  if (!frontend_ || !output_ || !swf_ || !estimates_ || !sightings_ || !disparities_)
+  if (!frontend_ || !output_ || (!swf_ && !inertial_) || !estimates_ || !sightings_ ||
+      !disparities_)
     return Status::kFull;
   if (options.rectify) {
     rectifier_.reset(new (std::nothrow) frontend::StereoRectifier());
@@ -55,7 +63,19 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   if (s != Status::kOk) return s;
   estimator::StereoModel<double> model;
   model.camera = options_.camera;
-  s = swf_->Configure(model, options_.swf);
+  if (inertial_) {
+    inertial_model_ = estimator::InertialStereoModel<double>{};
+    inertial_model_.stereo = model;
+    inertial_model_.imu_T_camera = options_.imu.imu_T_camera;
+    inertial_model_.gravity_world_mps2 = options_.imu.gravity_world_mps2;
+    inertial_model_.first_velocity_sigma_mps = options_.imu.first_velocity_sigma_mps;
+    inertial_model_.first_gyro_bias_sigma_radps = options_.imu.first_gyro_bias_sigma_radps;
+    inertial_model_.first_accel_bias_sigma_mps2 = options_.imu.first_accel_bias_sigma_mps2;
+    s = inertial_->Configure(inertial_model_, options_.swf);
+    if (s == Status::kOk) s = imu_.Configure(options_.imu);
+  } else {
+    s = swf_->Configure(model, options_.swf);
+  }
   if (s != Status::kOk) return s;
   r_sqrt_ = estimator::Mat3<double>::Identity() / options_.measurement_sigma_px;
   q_sqrt_.setZero();
@@ -82,6 +102,8 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   velocity_world_.setZero();
   last_dt_s_ = 0.0;
   distance_m_ = 0.0;
+  camera_covariance_.setZero();
+  imu_gap_ = false;
   ClearCoast();
   dr_reanchor_ = false;
   motion_refused_ = false;
@@ -114,19 +136,26 @@ Status Pipeline::Rectify(const PipelineFrame& frame) {
 Status Pipeline::Track() {
   if (!configured_) return Status::kNotConfigured;
   frontend::FramePrediction prediction;
-  if (has_previous_pose_ && swf_->NumPoses() > 0) {
+  if (has_previous_pose_ && NumPoses() > 0) {
     prediction.has_pose = true;
     prediction.world_T_camera =
         coast_frames_ > 0      ? coast_pose_ * last_motion_
         : has_before_previous_ ? previous_pose_ * (before_previous_pose_.Inverse() * previous_pose_)
                                : previous_pose_;
+    // With an IMU the search is predicted by the IMU since the newest state.
+    if (inertial_ && imu_.IntegrateTo(utime_) == Status::kOk) {
+      prediction.world_T_camera = inertial_model_.CameraPose(
+          inertial_model_.Propagate(inertial_->NewestPose(), imu_.SinceEstimate()));
+    }
     std::size_t n = 0;
-    swf_->ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int /*obs*/) {
-      if (n < static_cast<std::size_t>(kMaxLandmarks)) {
-        estimates_[n].id = static_cast<std::uint32_t>(id);
-        estimates_[n].p_world = p;
-        ++n;
-      }
+    Visit([&](const auto& filter) {
+      filter.ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int /*obs*/) {
+        if (n < static_cast<std::size_t>(kMaxLandmarks)) {
+          estimates_[n].id = static_cast<std::uint32_t>(id);
+          estimates_[n].p_world = p;
+          ++n;
+        }
+      });
     });
     prediction.landmarks = estimates_.get();
     prediction.num_landmarks = n;
@@ -136,46 +165,39 @@ Status Pipeline::Track() {
 
 Status Pipeline::Estimate(const Pose<double>* motion_input) {
   if (!configured_) return Status::kNotConfigured;
-  const Pose<double>* motion = AcceptMotion(motion_input);
-  Status s;
-  if (swf_->NumPoses() == 0 && !has_previous_pose_) {
-    s = swf_->AddPose(options_.initial_world_T_camera);  // the very first frame
-    last_motion_ = Pose<double>();
-    DeadReckon(nullptr);
-  } else if (swf_->NumPoses() == 0 || restart_pending_) {
-    s = RestartFromTrusted();
-    DeadReckon(nullptr);
-  } else {
-    // After a refused input or an outage the reckoning restarts from this frame's estimate.
-    const bool reckon = motion != nullptr && coast_frames_ == 0;
-    if (motion_refused_ || coast_frames_ > 0) dr_reanchor_ = true;
-    s = AddPredictedPose(motion);
-    if (reckon) {
-      DeadReckon(motion);
-    } else if (!dr_reanchor_) {
-      DeadReckon(nullptr);
-    }
-  }
+  // With an IMU the process input is the preintegrated IMU: a motion input is not used.
+  const Pose<double>* motion = inertial_ ? nullptr : AcceptMotion(motion_input);
+  Status s = AddFrameState(motion);
   const bool after_outage = coast_frames_ > 0;
   ClearCoast();
   if (s != Status::kOk) {
     last_status_ = s;
+    if (inertial_ && s == Status::kEmpty) {
+      // No IMU sample has ever arrived: nothing carries the state to this frame.
+      report_ = estimator::IntegrityReport{};
+      report_.status = estimator::NavIntegrity::kInvalid;
+      report_.flags = estimator::kFlagNoMotionInput;
+      CountReport();
+    }
     return s;
   }
   AddMeasurements();
-  s = swf_->Update();
+  s = Visit([](auto& filter) { return filter.Update(); });
   last_status_ = s;
   covariance_valid_ = false;
-  const bool filter_reset = swf_->NumPoses() == 0;  // its local recovery from a non-finite state
+  const bool filter_reset = NumPoses() == 0;  // its local recovery from a non-finite state
   if (!filter_reset) {
     const double dt_s = static_cast<double>(utime_ - last_estimate_utime_) * 1e-6;
-    const Pose<double> newest = swf_->NewestPose();
-    velocity_world_ = has_previous_pose_ && dt_s > 0.0
+    const Pose<double> newest = NewestCameraPose();
+    velocity_world_ = inertial_ ? inertial_->NewestPose().velocity_world_mps
+                      : has_previous_pose_ && dt_s > 0.0
                           ? Vec3<double>((newest.t - previous_pose_.t) / dt_s)
                           : Vec3<double>::Zero();
     if (dt_s > 0.0 && !after_outage) last_dt_s_ = dt_s;
     if (has_previous_pose_) distance_m_ += (newest.t - previous_pose_.t).norm();
-    if (swf_->Summary().motion_overruled && motion != nullptr) {
+    const bool overruled =
+        Visit([](const auto& filter) { return filter.Summary().motion_overruled; });
+    if (overruled && (motion != nullptr || inertial_)) {
       // The images overruled the input: what the frame really moved is the solved motion.
       last_motion_ = previous_pose_.Inverse() * newest;
       ++integrity_.motion_overruled;
@@ -187,20 +209,79 @@ Status Pipeline::Estimate(const Pose<double>* motion_input) {
     }
     previous_pose_ = newest;
     has_previous_pose_ = true;
-    covariance_valid_ = swf_->ComputeCovariances() == Status::kOk;
+    covariance_valid_ = ComputeCovariances() == Status::kOk;
     if (dr_reanchor_) {
       dr_valid_ = covariance_valid_;
       dr_pose_ = newest;
-      dr_variance_m2_ =
-          covariance_valid_ ? swf_->NewestPoseCovariance().topLeftCorner<3, 3>().trace() : 0.0;
+      dr_variance_m2_ = covariance_valid_ ? camera_covariance_.topLeftCorner<3, 3>().trace() : 0.0;
       dr_distance_m_ = 0.0;
       dr_reanchor_ = false;
     }
+    // The next interval is integrated at the biases just estimated.
+    if (inertial_) (void)imu_.RestartSinceEstimate(inertial_->NewestPose().biases);
   }
   last_estimate_utime_ = utime_;
   AssessIntegrity(filter_reset, motion != nullptr);
   ++frames_estimated_;
   return s == Status::kNotConverged ? Status::kOk : s;
+}
+
+// The state of this frame: the first, a restart from the trusted state, or a prediction.
+Status Pipeline::AddFrameState(const Pose<double>* motion) {
+  Status s;
+  if (NumPoses() == 0 && !has_previous_pose_) {
+    s = AddFirstState();  // the very first frame
+    last_motion_ = Pose<double>();
+    DeadReckon(nullptr);
+  } else if (NumPoses() == 0 || restart_pending_) {
+    s = RestartFromTrusted();
+    DeadReckon(nullptr);
+  } else if (inertial_) {
+    s = AddInertialState();
+  } else {
+    // After a refused input or an outage the reckoning restarts from this frame's estimate.
+    const bool reckon = motion != nullptr && coast_frames_ == 0;
+    if (motion_refused_ || coast_frames_ > 0) dr_reanchor_ = true;
+    s = AddPredictedPose(motion);
+    if (reckon) {
+      DeadReckon(motion);
+    } else if (!dr_reanchor_) {
+      DeadReckon(nullptr);
+    }
+  }
+  return s;
+}
+
+// The initial state (the guidance's pose; with an IMU also its velocity, biases zero) with the
+// first-state sigmas; the IMU intervals start at this frame.
+Status Pipeline::AddFirstState() {
+  if (!inertial_) return swf_->AddPose(options_.initial_world_T_camera);
+  estimator::NavState<double> first;
+  first.world_T_imu = options_.initial_world_T_camera * options_.imu.imu_T_camera.Inverse();
+  first.velocity_world_mps = options_.imu.initial_velocity_world_mps;
+  Status s = inertial_->AddPose(first);
+  if (s == Status::kOk) s = imu_.Start(utime_, first.biases);
+  trusted_state_ = first;
+  trusted_state_covariance_.setZero();
+  estimator::Vec15<double> sigma;
+  sigma << Vec3<double>::Constant(options_.swf.first_pose_sigma_m),
+      Vec3<double>::Constant(options_.swf.first_pose_sigma_rad), inertial_model_.FirstStateSigmas();
+  trusted_state_covariance_.diagonal() = sigma.cwiseAbs2();
+  return s;
+}
+
+// The IMU from the newest state to this exposure (an outage's cycles included) as the process
+// factor, with the preintegration's covariance and the bias random walk.
+Status Pipeline::AddInertialState() {
+  const Status integrated = imu_.IntegrateTo(utime_);
+  imu_gap_ = integrated != Status::kOk || imu_.LastInterval().gap;
+  if (integrated != Status::kOk) return integrated;
+  estimator::Mat15<double> sqrt_information;
+  if (!estimator::InertialStereoModel<double>::ProcessSqrtInformation(imu_.SinceEstimate(),
+                                                                      &sqrt_information)) {
+    return Status::kInvalidArgument;  // an empty interval: the frame time did not advance
+  }
+  return inertial_->AddPoseWithMotion(imu_.SinceEstimate(), sqrt_information);
 }
 
 // The process factor of a new pose: the navigation system's relative motion when there is one
@@ -267,11 +348,44 @@ const Pose<double>* Pipeline::AcceptMotion(const Pose<double>* motion) {
 Status Pipeline::Coast(const Pose<double>* motion_input) {
   if (!configured_) return Status::kNotConfigured;
   if (!has_previous_pose_) return Status::kEmpty;
-  const Pose<double>* motion = AcceptMotion(motion_input);
+  const Pose<double>* motion = inertial_ ? nullptr : AcceptMotion(motion_input);
   double inflation = 1.0;
   last_motion_ = FrameMotion(motion, &inflation);
   const Pose<double> before = coast_frames_ > 0 ? coast_pose_ : previous_pose_;
   ++coast_frames_;
+  utime_ = CoastUtime();
+  bool has_motion = motion != nullptr;
+  if (inertial_) {
+    has_motion = CoastInertial();
+  } else {
+    CoastStereo(inflation);
+  }
+  if (last_dt_s_ > 0.0) velocity_world_ = (coast_pose_.t - before.t) / last_dt_s_;
+  if (inertial_ && has_motion) velocity_world_ = coast_state_velocity_;
+  ++seq_;
+  estimator::IntegrityEvidence e;
+  e.has_motion_input = has_motion;
+  e.motion_rejected = motion_refused_;
+  e.position_world = coast_pose_.t;
+  e.velocity_world = velocity_world_;
+  e.has_covariance = true;
+  e.covariance = coast_covariance_;
+  e.distance_m = distance_m_ +
+                 (inertial_ ? (coast_pose_.t - previous_pose_.t).norm() : coast_motion_.t.norm());
+  report_ = monitor_.AssessCoast(e);
+  CountReport();
+  ++integrity_.frames_coasted;
+  integrity_.longest_outage_frames =
+      std::max(integrity_.longest_outage_frames, static_cast<std::int32_t>(coast_frames_));
+  since_trusted_ = since_trusted_ * last_motion_;
+  ++frames_since_trusted_;
+  dr_reanchor_ = true;
+  return Status::kOk;
+}
+
+// An outage cycle of the stereo-only estimator: the motion (input or bounded constant velocity)
+// composed, its process variance summed.
+void Pipeline::CoastStereo(double inflation) {
   coast_motion_ = coast_motion_ * last_motion_;
   const double sigma_t = inflation / q_sqrt_(0, 0);
   const double sigma_r = inflation / q_sqrt_(3, 3);
@@ -281,8 +395,8 @@ Status Pipeline::Coast(const Pose<double>* motion_input) {
   // Covariance: the newest estimate's (or the trusted one grown per frame since), plus the
   // process noise of the outage, plus every rotation uncertainty acting on the distance flown.
   estimator::Mat6<double> base = trusted_covariance_;
-  if (covariance_valid_ && swf_->NumPoses() > 0) {
-    base = swf_->NewestPoseCovariance();
+  if (covariance_valid_ && NumPoses() > 0) {
+    base = camera_covariance_;
   } else {
     base.diagonal() += static_cast<double>(frames_since_trusted_) *
                        q_sqrt_.diagonal().cwiseInverse().array().square().matrix();
@@ -293,28 +407,34 @@ Status Pipeline::Coast(const Pose<double>* motion_input) {
   coast_covariance_.topLeftCorner<3, 3>().diagonal().array() +=
       coast_variance_m2_ + rotation_rad2 * coast_motion_.t.squaredNorm();
   coast_covariance_.bottomRightCorner<3, 3>().diagonal().array() += coast_variance_rad2_;
-  if (last_dt_s_ > 0.0) {
-    utime_ += static_cast<std::int64_t>(last_dt_s_ * 1e6);
-    velocity_world_ = (coast_pose_.t - before.t) / last_dt_s_;
+}
+
+// An outage cycle of the stereo-inertial estimator: the newest state (or, without its
+// covariance, the trusted one) carried by the IMU to this cycle with its covariance. False when
+// the IMU could not carry it (no sample, a gap): the state is then held, its covariance grown
+// as the stereo-only coast would.
+bool Pipeline::CoastInertial() {
+  const bool integrated = imu_.IntegrateTo(utime_) == Status::kOk;
+  imu_gap_ = !integrated || imu_.LastInterval().gap;
+  const bool from_newest = covariance_valid_ && NumPoses() > 0;
+  estimator::NavState<double> state;
+  estimator::Mat15<double> covariance;
+  const bool carried =
+      integrated &&
+      (from_newest
+           ? inertial_model_.PropagateWithCovariance(inertial_->NewestPose(),
+                                                     inertial_->NewestStateCovariance(),
+                                                     imu_.SinceEstimate(), &state, &covariance)
+           : inertial_model_.PropagateWithCovariance(trusted_state_, trusted_state_covariance_,
+                                                     imu_.SinceTrusted(), &state, &covariance));
+  if (!carried) {
+    CoastStereo(options_.max_process_inflation);
+    return false;
   }
-  ++seq_;
-  estimator::IntegrityEvidence e;
-  e.has_motion_input = motion != nullptr;
-  e.motion_rejected = motion_refused_;
-  e.position_world = coast_pose_.t;
-  e.velocity_world = velocity_world_;
-  e.has_covariance = true;
-  e.covariance = coast_covariance_;
-  e.distance_m = distance_m_ + coast_motion_.t.norm();
-  report_ = monitor_.AssessCoast(e);
-  CountReport();
-  ++integrity_.frames_coasted;
-  integrity_.longest_outage_frames =
-      std::max(integrity_.longest_outage_frames, static_cast<std::int32_t>(coast_frames_));
-  since_trusted_ = since_trusted_ * last_motion_;
-  ++frames_since_trusted_;
-  dr_reanchor_ = true;
-  return Status::kOk;
+  coast_pose_ = inertial_model_.CameraPose(state);
+  coast_covariance_ = inertial_model_.CameraPoseCovariance(state, covariance.topLeftCorner<6, 6>());
+  coast_state_velocity_ = state.velocity_world_mps;
+  return !imu_gap_;
 }
 
 void Pipeline::ClearCoast() {
@@ -344,18 +464,41 @@ Pose<double> Pipeline::BoundedConstantVelocity() const {
 // with that pose's covariance grown by one process noise per frame since: the restarted
 // covariance (and protection levels) still covers the error made before the restart.
 Status Pipeline::RestartFromTrusted() {
-  swf_->Reset();
-  const Pose<double> start = trusted_pose_ * since_trusted_;
-  estimator::Mat6<double> covariance = trusted_covariance_;
-  const double n = static_cast<double>(std::max<std::int64_t>(1, frames_since_trusted_));
-  covariance.diagonal() += n * (q_sqrt_.diagonal().cwiseInverse().array().square()).matrix();
-  const Status s = swf_->AddFirstPose(start, covariance);
+  Status s;
+  if (inertial_) {
+    s = RestartInertial();
+  } else {
+    swf_->Reset();
+    const Pose<double> start = trusted_pose_ * since_trusted_;
+    estimator::Mat6<double> covariance = trusted_covariance_;
+    const double n = static_cast<double>(std::max<std::int64_t>(1, frames_since_trusted_));
+    covariance.diagonal() += n * (q_sqrt_.diagonal().cwiseInverse().array().square()).matrix();
+    s = swf_->AddFirstPose(start, covariance);
+  }
   restart_pending_ = false;
   has_before_previous_ = false;
   last_motion_ = Pose<double>();
   monitor_.NoteRestart();
   ++integrity_.restarts;
   frames_since_restart_ = 0;
+  return s;
+}
+
+// The trusted state carried to this frame by the IMU since, with its covariance: the restarted
+// covariance covers the error made before the restart the way the IMU's own would.
+Status Pipeline::RestartInertial() {
+  inertial_->Reset();
+  Status s = imu_.IntegrateTo(utime_);
+  imu_gap_ = s != Status::kOk || imu_.LastInterval().gap;
+  if (s != Status::kOk) return s;
+  estimator::NavState<double> start;
+  estimator::Mat15<double> covariance;
+  if (!inertial_model_.PropagateWithCovariance(trusted_state_, trusted_state_covariance_,
+                                               imu_.SinceTrusted(), &start, &covariance)) {
+    return Status::kNumericalFailure;
+  }
+  s = inertial_->AddFirstPose(start, covariance);
+  if (s == Status::kOk) s = imu_.RestartSinceEstimate(start.biases);
   return s;
 }
 
@@ -374,14 +517,12 @@ void Pipeline::AddMeasurements() {
   };
   for (const frontend::StereoMeasurement& m : output_->measurements) {
     if (m.quality < options_.min_quality) continue;
-    if (swf_->AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v), r_sqrt_) ==
-        Status::kOk) {
+    if (AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v))) {
       note(m.u_left, m.u_right, m.v);
     }
   }
   for (const frontend::NewLandmark& n : output_->new_landmarks) {
-    if (swf_->AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v), r_sqrt_) ==
-        Status::kOk) {
+    if (AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v))) {
       note(n.u_left, n.u_right, n.v);
       FirstSighting& f = sightings_[n.landmark_id % kMaxSightings];
       f.frame_seq = seq_;
@@ -406,8 +547,8 @@ void Pipeline::AddMeasurements() {
 // there is nothing independent to reckon with.
 void Pipeline::DeadReckon(const Pose<double>* motion) {
   if (motion == nullptr) {
-    dr_valid_ = swf_->NumPoses() == 1;
-    if (dr_valid_) dr_pose_ = swf_->NewestPose();
+    dr_valid_ = NumPoses() == 1;
+    if (dr_valid_) dr_pose_ = NewestCameraPose();
     dr_variance_m2_ = options_.swf.first_pose_sigma_m * options_.swf.first_pose_sigma_m;
     dr_distance_m_ = 0.0;
     return;
@@ -423,17 +564,38 @@ void Pipeline::DeadReckon(const Pose<double>* motion) {
 // d^T (P_est + P_dr)^-1 d for d = estimate - dead reckoning (the two are treated as
 // independent; the estimate used the same inputs, so this understates the distance).
 double Pipeline::MotionDisagreement() const {
-  if (!dr_valid_ || !covariance_valid_ || swf_->NumPoses() == 0) return -1.0;
-  const Vec3<double> d = swf_->NewestPose().t - dr_pose_.t;
-  const estimator::Mat3<double> s = swf_->NewestPoseCovariance().topLeftCorner<3, 3>() +
+  if (!dr_valid_ || !covariance_valid_ || NumPoses() == 0) return -1.0;
+  const Vec3<double> d = NewestCameraPose().t - dr_pose_.t;
+  const estimator::Mat3<double> s = camera_covariance_.topLeftCorner<3, 3>() +
                                     dr_variance_m2_ * estimator::Mat3<double>::Identity();
   const Eigen::LDLT<estimator::Mat3<double>> ldlt(s);
   const double d2 = d.dot(ldlt.solve(d));
   return ldlt.info() == Eigen::Success && std::isfinite(d2) ? d2 : -1.0;
 }
 
+// The same distance for the IMU: the estimate against the trusted state carried by the IMU
+// alone (its position covariance from the preintegration and the trusted state's).
+double Pipeline::ImuDisagreement() const {
+  if (!covariance_valid_ || NumPoses() == 0 || imu_gap_) return -1.0;
+  estimator::NavState<double> reckoned;
+  estimator::Mat15<double> covariance;
+  if (!inertial_model_.PropagateWithCovariance(trusted_state_, trusted_state_covariance_,
+                                               imu_.SinceTrusted(), &reckoned, &covariance)) {
+    return -1.0;
+  }
+  const Vec3<double> d = inertial_->NewestPose().world_T_imu.t - reckoned.world_T_imu.t;
+  const estimator::Mat3<double> s =
+      inertial_->NewestStateCovariance().topLeftCorner<3, 3>() + covariance.topLeftCorner<3, 3>();
+  const Eigen::LDLT<estimator::Mat3<double>> ldlt(s);
+  const double d2 = d.dot(ldlt.solve(d));
+  return ldlt.info() == Eigen::Success && std::isfinite(d2) ? d2 : -1.0;
+}
+
 void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
-  const estimator::SwfSummary& summary = swf_->Summary();
+  const estimator::SwfSummary& summary =
+      Visit([](const auto& filter) -> const estimator::SwfSummary& { return filter.Summary(); });
+  // The IMU is the motion input of the stereo-inertial estimator (unless it left a gap).
+  if (inertial_) has_motion = !imu_gap_;
   estimator::IntegrityEvidence e;
   e.update_status = last_status_;
   e.filter_reset = filter_reset;
@@ -443,18 +605,18 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   e.num_measurements = summary.num_measurements;
   e.num_inliers = summary.num_inliers;
   // A (re)started window has nothing tracked yet: its first frame counts what it measured.
-  const bool first_frame = swf_->NumPoses() == 1;
+  const bool first_frame = NumPoses() == 1;
   e.tracked_inliers = first_frame ? summary.new_landmarks : summary.tracked_inliers;
   e.tracked_measurements = first_frame ? summary.new_landmarks : summary.tracked_measurements;
   e.rejected_measurements = summary.measurements_gated + summary.measurements_rejected;
-  e.motion_disagreement = has_motion ? MotionDisagreement() : -1.0;
+  e.motion_disagreement = inertial_ ? ImuDisagreement() : has_motion ? MotionDisagreement() : -1.0;
   e.inlier_sigma = summary.inlier_sigma;
   e.step_m = summary.newest_pose_step_m;
   e.step_rad = summary.newest_pose_step_rad;
   e.position_world = previous_pose_.t;
   e.velocity_world = velocity_world_;
   e.has_covariance = covariance_valid_;
-  if (covariance_valid_) e.covariance = swf_->NewestPoseCovariance();
+  if (covariance_valid_) e.covariance = camera_covariance_;
   e.image_spread_px = image_spread_px_;
   e.distance_m = distance_m_;
   if (num_disparities_ > 0) {
@@ -471,7 +633,12 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
   CountReport();
   if (report_.status == estimator::NavIntegrity::kValid) {
     trusted_pose_ = previous_pose_;
-    trusted_covariance_ = swf_->NewestPoseCovariance();
+    trusted_covariance_ = camera_covariance_;
+    if (inertial_) {
+      trusted_state_ = inertial_->NewestPose();
+      trusted_state_covariance_ = inertial_->NewestStateCovariance();
+      (void)imu_.RestartSinceTrusted(trusted_state_.biases);
+    }
     since_trusted_ = Pose<double>();
     frames_since_trusted_ = 0;
     // Smoothed per-frame motion of the VALID frames (time constant ~5 frames).
@@ -523,7 +690,7 @@ void Pipeline::MakeNav(NavOutput* nav) {
   for (int i = 0; i < 3; ++i) nav->velocity_world_mps[i] = velocity_world_[i];
   // The newest pose's marginal covariance (computed by Estimate for the integrity checks).
   if (coasting || covariance_valid_) {
-    const estimator::Mat6<double>& c = coasting ? coast_covariance_ : swf_->NewestPoseCovariance();
+    const estimator::Mat6<double>& c = coasting ? coast_covariance_ : camera_covariance_;
     for (int r = 0; r < 6; ++r)
       for (int k = 0; k < 6; ++k) nav->covariance[6 * r + k] = c(r, k);
   } else {
@@ -535,20 +702,22 @@ void Pipeline::MakeNav(NavOutput* nav) {
   nav->vertical_protection_m = report_.vpl_m;
   nav->integrity_risk = options_.integrity.integrity_risk;
   nav->update_status = static_cast<std::int8_t>(last_status_);
-  nav->fault_bits = static_cast<std::int32_t>(swf_->FaultBits());
-  nav->iterations = swf_->Summary().iterations;
-  nav->num_measurements = swf_->Summary().num_measurements;
+  nav->fault_bits = static_cast<std::int32_t>(FaultBits());
+  const estimator::SwfSummary& summary =
+      Visit([](const auto& filter) -> const estimator::SwfSummary& { return filter.Summary(); });
+  nav->iterations = summary.iterations;
+  nav->num_measurements = summary.num_measurements;
 }
 
 Status Pipeline::NewestPose(Pose<double>* pose, estimator::Mat6<double>* covariance) {
-  if (swf_->NumPoses() == 0) return Status::kEmpty;
+  if (NumPoses() == 0) return Status::kEmpty;
   if (!covariance_valid_) {
-    const Status s = swf_->ComputeCovariances();
+    const Status s = ComputeCovariances();
     if (s != Status::kOk) return s;
     covariance_valid_ = true;
   }
-  *pose = swf_->NewestPose();
-  *covariance = swf_->NewestPoseCovariance();
+  *pose = NewestCameraPose();
+  *covariance = camera_covariance_;
   return Status::kOk;
 }
 
@@ -556,27 +725,71 @@ Status Pipeline::MakeMap(MapOutput* map) {
   map->utime = utime_;
   map->frame_seq = seq_;
   map->num_landmarks = 0;
-  if (swf_->NumPoses() == 0) return Status::kEmpty;
+  if (NumPoses() == 0) return Status::kEmpty;
   if (!covariance_valid_) {
-    const Status s = swf_->ComputeCovariances();
+    const Status s = ComputeCovariances();
     if (s != Status::kOk) return s;
     covariance_valid_ = true;
   }
-  swf_->ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int obs) {
-    if (map->num_landmarks >= kMaxMapLandmarks) return;
-    MapLandmark& l = map->landmarks[map->num_landmarks++];
-    l.id = id;
-    for (int i = 0; i < 3; ++i) l.position_world_m[i] = p[i];
-    estimator::Mat3<double> c;
-    if (!swf_->GetLandmarkCovariance(id, &c)) c.setZero();
-    l.covariance_m2[0] = c(0, 0);
-    l.covariance_m2[1] = c(0, 1);
-    l.covariance_m2[2] = c(0, 2);
-    l.covariance_m2[3] = c(1, 1);
-    l.covariance_m2[4] = c(1, 2);
-    l.covariance_m2[5] = c(2, 2);
-    l.num_observations = obs;
+  Visit([&](const auto& filter) {
+    filter.ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int obs) {
+      if (map->num_landmarks >= kMaxMapLandmarks) return;
+      MapLandmark& l = map->landmarks[map->num_landmarks++];
+      l.id = id;
+      for (int i = 0; i < 3; ++i) l.position_world_m[i] = p[i];
+      estimator::Mat3<double> c;
+      if (!filter.GetLandmarkCovariance(id, &c)) c.setZero();
+      l.covariance_m2[0] = c(0, 0);
+      l.covariance_m2[1] = c(0, 1);
+      l.covariance_m2[2] = c(0, 2);
+      l.covariance_m2[3] = c(1, 1);
+      l.covariance_m2[4] = c(1, 2);
+      l.covariance_m2[5] = c(2, 2);
+      l.num_observations = obs;
+    });
   });
+  return Status::kOk;
+}
+
+estimator::ImuSampleVerdict Pipeline::AddImu(const estimator::ImuSample<double>& sample) {
+  if (!inertial_) return estimator::ImuSampleVerdict::kDroppedInvalid;
+  return imu_.Add(sample);
+}
+
+std::int64_t Pipeline::CoastUtime() const {
+  return last_dt_s_ > 0.0 ? utime_ + static_cast<std::int64_t>(last_dt_s_ * 1e6) : utime_;
+}
+
+int Pipeline::NumLandmarks() const {
+  return Visit([](const auto& filter) { return filter.NumLandmarks(); });
+}
+
+std::uint32_t Pipeline::FaultBits() const {
+  return Visit([](const auto& filter) { return filter.FaultBits(); });
+}
+
+const estimator::NavState<double>* Pipeline::NewestNavState() const {
+  return inertial_ && inertial_->NumPoses() > 0 ? &inertial_->NewestPose() : nullptr;
+}
+
+int Pipeline::NumPoses() const {
+  return Visit([](const auto& filter) { return filter.NumPoses(); });
+}
+
+bool Pipeline::AddObservation(std::int64_t id, const Vec3<double>& z) {
+  return Visit([&](auto& filter) { return filter.AddObservation(id, z, r_sqrt_); }) == Status::kOk;
+}
+
+Pose<double> Pipeline::NewestCameraPose() const {
+  return inertial_ ? inertial_model_.CameraPose(inertial_->NewestPose()) : swf_->NewestPose();
+}
+
+Status Pipeline::ComputeCovariances() {
+  const Status s = Visit([](auto& filter) { return filter.ComputeCovariances(); });
+  if (s != Status::kOk) return s;
+  camera_covariance_ = inertial_ ? inertial_model_.CameraPoseCovariance(
+                                       inertial_->NewestPose(), inertial_->NewestPoseCovariance())
+                                 : swf_->NewestPoseCovariance();
   return Status::kOk;
 }
 

@@ -124,6 +124,13 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
       motion_[k].rotation_rad[i] = rv[i];
     }
   }
+  sim::ImuModelOptions unit;
+  has_imu_unit_ = SimImuUnit(config, &unit);
+  imu_next_ = 0;
+  if (has_imu_unit_ && imu_unit_.Configure(unit, trajectory_) != Status::kOk) {
+    *error = "sim.imu_unit: the IMU model refused the unit or the trajectory";
+    return false;
+  }
   sim::RenderOptions ro;
   ro.rig = rig_;
   ro.seed = config.sim.seed;
@@ -176,6 +183,28 @@ bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std
     *error = "sim: rendering failed";
     return false;
   }
+  return true;
+}
+
+bool SimImuUnit(const FswConfig& config, sim::ImuModelOptions* unit) {
+  if (config.sim.imu_unit == "none") return false;
+  *unit = config.sim.imu_unit == "tactical" ? sim::TacticalImu() : sim::MemsImu();
+  // Its own stream of the seed: the unit's errors do not change when the scene does.
+  unit->seed = config.sim.seed * 104729u + 3u;
+  const ImuConfig& c = config.imu;
+  unit->camera_T_imu.t =
+      Eigen::Vector3d(c.camera_t_imu_m[0], c.camera_t_imu_m[1], c.camera_t_imu_m[2]);
+  unit->camera_T_imu.R = estimator::ExpSO3<double>(
+      Eigen::Vector3d(c.camera_r_imu_rad[0], c.camera_r_imu_rad[1], c.camera_r_imu_rad[2]));
+  return true;
+}
+
+bool SimWorld::NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) {
+  if (!has_imu_unit_ || imu_next_ >= imu_unit_.Samples().size()) return false;
+  const estimator::ImuSample<double>& s = imu_unit_.Samples()[imu_next_];
+  if (s.t_us > until_utime) return false;
+  *sample = s;
+  ++imu_next_;
   return true;
 }
 

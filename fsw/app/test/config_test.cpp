@@ -146,6 +146,36 @@ TEST(ConfigTest, RefusesInconsistentCombinationsAtTheLineOfTheField) {
           "t.cfg:2: envelope.min_range_m: only for camera and log sources");
 }
 
+// The stereo-inertial keys: the simulator's unit, the IMU's parameters for camera sources, and
+// the combinations that cannot fly.
+TEST(ConfigTest, ImuKeysParseAndBadOnesAreRefusedNamingTheField) {
+  FswConfig c;
+  ASSERT_TRUE(Accepted(
+      "source: sim\nsim.imu_unit: tactical\nimu.enabled: true\nimu.camera_t_imu_m: 0.1, -0.2, 0.3\n"
+      "imu.camera_r_imu_rad: 0 0 1.5\nimu.initial_velocity_mps: 0 0 -10\nimu.rate_hz: 400\n"
+      "imu.gyro_noise_density: 2e-5\nimu.channel: LANDER_IMU\n",
+      &c));
+  EXPECT_TRUE(c.imu.enabled);
+  EXPECT_EQ(c.sim.imu_unit, "tactical");
+  EXPECT_EQ(c.imu.camera_t_imu_m[1], -0.2);
+  EXPECT_EQ(c.imu.camera_r_imu_rad[2], 1.5);
+  EXPECT_EQ(c.imu.initial_velocity_mps[2], -10.0);
+  EXPECT_EQ(c.imu.rate_hz, 400.0);
+  EXPECT_EQ(c.imu.gyro_noise_density, 2e-5);
+  EXPECT_EQ(c.imu.channel, "LANDER_IMU");
+  Refused("source: sim\nimu.enabled: true\n",
+          "t.cfg:2: imu.enabled: the simulator carries no IMU: set sim.imu_unit");
+  Refused("source: sim\nsim.imu_unit: consumer\n",
+          "t.cfg:2: sim.imu_unit: 'consumer' is not one of");
+  Refused("source: sim\nimu.camera_t_imu_m: 1 2\n",
+          "t.cfg:2: imu.camera_t_imu_m: '1 2' is not three");
+  Refused("source: sim\nimu.gyro_noise_density: -1\n",
+          "t.cfg:2: imu.gyro_noise_density: -1 is outside");
+  Refused("source: sim\nimu.initial_velocity_mps: 0 nan 0\n", "t.cfg:2: imu.initial_velocity_mps:");
+  Refused("source: log\nlog.path: x.lcmlog\nimu.enabled: true\nimu.rate_hz: 1\n",
+          "imu.rate_hz: must be at least 10 Hz");
+}
+
 // ---- A: files that must not fly --------------------------------------------------------------
 
 TEST(ConfigTest, RefusesAnEmptyOrCommentsOnlyFile) {

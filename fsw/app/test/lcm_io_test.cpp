@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
 namespace swf::app {
@@ -358,6 +359,82 @@ TEST(LcmIoTest, HostileFieldsStopTheLoadNamingRecordAndField) {
 
 // GIVEN a record header whose data length is negative or larger than any message WHEN read THEN
 // the reader refuses it before allocating, naming the record.
+std::vector<std::uint8_t> EncodeImu(std::int64_t seq, std::int64_t utime) {
+  swf_msgs::imu_t m{};
+  m.utime = utime;
+  m.seq = seq;
+  m.angular_rate_radps[2] = 0.01 * static_cast<double>(seq);
+  m.specific_force_mps2[2] = 9.81;
+  m.flags = swf_msgs::imu_t::FLAG_VALID;
+  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
+  EXPECT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  return buf;
+}
+
+// GIVEN a log with IMU samples recorded between the frames WHEN replayed THEN each frame serves
+// exactly the samples recorded before it (after the previous one), in their order, whatever
+// their stamps; samples after the last frame are never served.
+TEST(LcmIoTest, ReplayServesTheImuSamplesRecordedBeforeEachFrame) {
+  std::vector<FrameSpec> specs;
+  std::vector<std::vector<std::uint8_t>> payloads;
+  std::int64_t imu_seq = 0;
+  const auto imu = [&](int n) {
+    for (int i = 0; i < n; ++i, ++imu_seq) {
+      specs.push_back(FrameSpec{imu_seq, 1000 * imu_seq, "SWF_IMU"});
+      payloads.push_back(EncodeImu(imu_seq, 1000 * imu_seq));
+    }
+  };
+  const auto frame = [&](std::int64_t seq) {
+    specs.push_back(FrameSpec{seq, 100000 * (seq + 1)});
+    payloads.push_back(EncodeFrame(specs.back()));
+  };
+  imu(2);
+  frame(0);
+  imu(3);
+  frame(1);
+  frame(2);
+  imu(1);
+  const std::string path = TempPath("imu.lcmlog");
+  WriteRecords(path, specs, payloads);
+  LogStereoSource source;
+  source.SetImuChannel("SWF_IMU");
+  std::string error;
+  ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error)) << error;
+  EXPECT_EQ(source.LoadError(), "");
+  EXPECT_EQ(source.NumImuSamples(), 6u);
+  ASSERT_EQ(source.Start(), core::Status::kOk);
+  estimator::ImuSample<double> s;
+  EXPECT_FALSE(source.NextImu(0, &s));  // no frame served yet
+  std::vector<std::vector<std::int64_t>> served;
+  drivers::StereoPair pair;
+  while (source.Next(0, &pair) == core::Status::kOk) {
+    served.emplace_back();
+    while (source.NextImu(0, &s)) served.back().push_back(s.seq);
+  }
+  ASSERT_EQ(served.size(), 3u);
+  EXPECT_EQ(served[0], (std::vector<std::int64_t>{0, 1}));
+  EXPECT_EQ(served[1], (std::vector<std::int64_t>{2, 3, 4}));
+  EXPECT_TRUE(served[2].empty());
+}
+
+// GIVEN an IMU record that does not decode WHEN loaded THEN the load stops there, naming the
+// record and the type; the frames before it replay.
+TEST(LcmIoTest, AnUndecodableImuRecordStopsTheLoadNamingIt) {
+  std::vector<FrameSpec> specs{{0, 100000}, {0, 150000, "SWF_IMU"}, {1, 200000}};
+  std::vector<std::vector<std::uint8_t>> payloads{EncodeFrame(specs[0]), EncodeImu(0, 150000),
+                                                  EncodeFrame(specs[2])};
+  payloads[1].resize(payloads[1].size() / 2);  // truncated message
+  const std::string path = TempPath("bad_imu.lcmlog");
+  WriteRecords(path, specs, payloads);
+  LogStereoSource source;
+  source.SetImuChannel("SWF_IMU");
+  std::string error;
+  ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error)) << error;
+  EXPECT_NE(source.LoadError().find("record 1 (SWF_IMU"), std::string::npos) << source.LoadError();
+  EXPECT_NE(source.LoadError().find("imu_t does not decode"), std::string::npos);
+  EXPECT_EQ(source.NumFrames(), 1u);
+}
+
 TEST(LcmIoTest, RecordLengthsAreCheckedBeforeAllocating) {
   const std::string path = WriteSequence("len.lcmlog", {0, 1});
   const std::string bytes = Slurp(path);

@@ -3,6 +3,8 @@
 #  1. determinism: the live run's recording replayed twice gives bit-identical SWF_NAV,
 #     SWF_LANDMARKS and SWF_HAZARD messages, identical to the live run's own outputs (one hazard
 #     map per hazard_every = 5 frames: 6 maps);
+#  1b. the same with the simulated MEMS IMU and the stereo-inertial estimator: live and replay
+#     bit-identical, every IMU sample the pipeline took recorded (imu_t) and counted;
 #  2. a truncated log: swf-replay stops with an error naming the damaged record, after publishing
 #     the outputs of every frame before it;
 #  3. crafted logs (fsw/app/test/log_mutate.py on the live log's 11th frame): a dropped frame, a
@@ -31,6 +33,21 @@ navs=$($cmp --count SWF_NAV "$dir/live.lcmlog")
 hazards=$($cmp --count SWF_HAZARD "$dir/live.lcmlog")
 [ "$frames" -eq 30 ] && [ "$navs" -eq 30 ] && [ "$hazards" -eq 6 ] ||
   fail "live log holds $frames frames, $navs navs, $hazards hazard maps"
+
+echo "== stereo-inertial: live and replay with the simulated MEMS IMU"
+"$fsw" --config "$cfg" --set "sim.imu_unit: mems" --set "imu.enabled: true" \
+  --set "record.path: $dir/imu.lcmlog" --set "summary.path: $dir/imu.json" ||
+  fail "swf-fsw with the IMU failed"
+"$replay" --config "$cfg" --set "sim.imu_unit: mems" --set "imu.enabled: true" \
+  --log "$dir/imu.lcmlog" --record "$dir/imu_r.lcmlog" || fail "replay with the IMU failed"
+$cmp SWF_NAV,SWF_LANDMARKS,SWF_HAZARD "$dir/imu.lcmlog" "$dir/imu_r.lcmlog" ||
+  fail "stereo-inertial outputs are not bit-identical"
+samples=$($cmp --count SWF_IMU "$dir/imu.lcmlog")
+[ "$samples" -eq 1161 ] || fail "the log holds $samples IMU samples, expected 2.9 s at 400 Hz + 1"
+grep -q '"imu": {"unit": "mems", "accepted": 1161, "out_of_order": 0' "$dir/imu.json" ||
+  fail "the summary does not count the IMU samples"
+$cmp SWF_NAV "$dir/imu.lcmlog" "$dir/live.lcmlog" 2> /dev/null &&
+  fail "the IMU run's navigation equals the stereo-only run's"
 
 echo "== truncated log"
 size=$(stat -c %s "$dir/live.lcmlog")

@@ -106,7 +106,7 @@ std::vector<std::int64_t> FrameStamps() {
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#') continue;
-    stamps.push_back(EurocNsToUs(std::stoll(line.substr(0, line.find(',')))));
+    stamps.push_back(NsToUs(std::stoll(line.substr(0, line.find(',')))));
   }
   return stamps;
 }

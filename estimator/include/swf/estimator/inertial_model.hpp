@@ -84,6 +84,34 @@ struct InertialStereoModel {
 
   Pose<S> CameraPose(const PoseType& x) const { return x.world_T_imu * imu_T_camera; }
 
+  // Covariance of the camera pose's [rho_c; phi_c] from the IMU pose's [rho; phi] (the map of
+  // the file comment's measurement paragraph), for navigation outputs in the camera frame.
+  Mat6<S> CameraPoseCovariance(const PoseType& x, const Mat6<S>& imu_pose_covariance) const {
+    Mat6<S> j = Mat6<S>::Zero();
+    j.template topLeftCorner<3, 3>().setIdentity();
+    j.template topRightCorner<3, 3>() = -x.world_T_imu.R * Skew(imu_T_camera.t);
+    j.template bottomRightCorner<3, 3>() = imu_T_camera.R.transpose();
+    return j * imu_pose_covariance * j.transpose();
+  }
+
+  // x_j = f(x_i, u) and its covariance with nothing but the IMU: the process residual
+  // e = J_i dx_i + J_j dx_j + w (w ~ ProcessCovariance(u)) held at zero gives
+  // dx_j = -J_j^-1 (J_i dx_i + w), so P_j = J_j^-1 (J_i P_i J_i^T + Q) J_j^-T. For coasting
+  // through a camera outage and restarting from a trusted state. False if not finite.
+  bool PropagateWithCovariance(const PoseType& x, const Mat15<S>& covariance, const MotionType& u,
+                               PoseType* next, Mat15<S>* next_covariance) const {
+    *next = Propagate(x, u);
+    Mat15<S> j_prev;
+    Mat15<S> j_next;
+    (void)ProcessResidual(x, *next, u, &j_prev, &j_next);
+    const Mat15<S> a = j_next.partialPivLu().solve(j_prev);
+    const Mat15<S> b = j_next.partialPivLu().solve(Mat15<S>::Identity());
+    *next_covariance = a * covariance * a.transpose() + b * ProcessCovariance(u) * b.transpose();
+    *next_covariance = S(0.5) * (*next_covariance + next_covariance->transpose());
+    return next_covariance->allFinite() && next->world_T_imu.t.allFinite() &&
+           next->velocity_world_mps.allFinite();
+  }
+
   // The filter's measurement surface (see the file comment for the Jacobian).
   bool InitLandmark(const PoseType& x, const Vec3<S>& z, LandmarkAnchor* anchor,
                     Vec3<S>* params) const {

@@ -64,6 +64,9 @@ ImuModelOptions TacticalImu();
 ImuModelOptions MemsImu();
 // The same unit without any error (no noise, bias, scale factor or clipping).
 ImuModelOptions Noiseless(ImuModelOptions options);
+// A unit's noise densities and random walks as the estimator's ImuNoise (the Gauss-Markov term
+// added as the random walk it looks like over its correlation time, sigma sqrt(2 / tau)).
+estimator::ImuNoise<double> NoiseModelOf(const ImuModelOptions& options);
 
 class ImuModel {
  public:
@@ -77,8 +80,7 @@ class ImuModel {
   const std::vector<estimator::ImuBiases<double>>& TrueBiases() const { return true_biases_; }
   const Eigen::Vector3d& GyroScaleFactor() const { return gyro_scale_; }
   const Eigen::Vector3d& AccelScaleFactor() const { return accel_scale_; }
-  // The noise densities and random walks as the estimator's ImuNoise (the Gauss-Markov term
-  // added as the random walk it looks like over its correlation time, sigma sqrt(2 / tau)).
+  // NoiseModelOf(the unit).
   estimator::ImuNoise<double> NoiseModel() const;
   Eigen::Vector3d GravityWorld() const { return {0.0, 0.0, -options_.gravity_mps2}; }
 

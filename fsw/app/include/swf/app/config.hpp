@@ -43,6 +43,35 @@ struct SimConfig {
   bool imu = true;
   double imu_sigma_m = 0.02;
   double imu_sigma_rad = 0.0005;
+  // The simulated strapdown IMU (sim/imu_model.hpp) riding on the trajectory: "mems" (Analog
+  // Devices ADIS16448), "tactical" (Honeywell HG1700) or "none". Its samples feed the
+  // stereo-inertial estimator (imu.enabled), which then takes the unit's parameters.
+  std::string imu_unit = "none";
+};
+
+// The stereo-inertial estimator (PipelineOptions::imu) and its IMU. With the simulator's unit
+// (sim.imu_unit, also when replaying a log of a sim run) rate, noise, ranges and gravity are the
+// unit's and the unit is mounted at camera_*_imu; otherwise (cameras: the IMU arrives as imu_t
+// over LCM) all of these are as given.
+struct ImuConfig {
+  bool enabled = false;
+  std::string channel;  // LCM channel of the IMU ("" = channel_prefix + "IMU")
+  double rate_hz = 200.0;
+  // Continuous-time noise (Allan deviation of the datasheet; defaults: the ADIS16448 as EuRoC
+  // calibrated it).
+  double gyro_noise_density = 1.6968e-4;  // rad/s/sqrt(Hz)
+  double gyro_random_walk = 1.9393e-5;    // rad/s^2/sqrt(Hz)
+  double accel_noise_density = 2.0e-3;    // m/s^2/sqrt(Hz)
+  double accel_random_walk = 3.0e-3;      // m/s^3/sqrt(Hz)
+  double gyro_range_radps = 0.0;          // 0: trust the saturation flags only
+  double accel_range_mps2 = 0.0;
+  // The IMU in the left camera frame: position (m) and rotation vector (rad).
+  double camera_t_imu_m[3] = {0.0, 0.0, 0.0};
+  double camera_r_imu_rad[3] = {0.0, 0.0, 0.0};
+  double gravity_mps2 = 1.625;  // along world -z (the Moon's surface gravity)
+  // The IMU's velocity at the first frame, world frame (the state guidance hands over;
+  // initial: truth in the simulator takes the true one).
+  double initial_velocity_mps[3] = {0.0, 0.0, 0.0};
 };
 
 struct CameraConfig {
@@ -71,6 +100,7 @@ struct FswConfig {
   std::string log_path;                  // source: log
   SimConfig sim;
   CameraConfig camera;
+  ImuConfig imu;
 
   // Estimator.
   std::string mode = "swf";  // swf | ekf | vo | vsdf

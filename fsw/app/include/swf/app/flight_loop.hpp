@@ -99,6 +99,7 @@ struct LoopCounters {
   std::int64_t source_restarts = 0;        // restart attempts (Stop + Start) of a lost source
   std::int64_t source_recoveries = 0;      // outages ended by a pair
   std::int64_t longest_outage_cycles = 0;  // missed cycles of the longest outage
+  std::int64_t imu_samples = 0;            // handed to the pipeline (before its checks)
 };
 
 class FlightLoop {
@@ -111,7 +112,8 @@ class FlightLoop {
   // The pointed-to objects must outlive the loop. kInvalidArgument for bad options.
   core::Status Configure(const LoopOptions& options, Pipeline* pipeline,
                          drivers::StereoSource* source, OutputChannels* outputs,
-                         MotionProvider* motion = nullptr, HazardStage* hazard = nullptr);
+                         MotionProvider* motion = nullptr, HazardStage* hazard = nullptr,
+                         ImuProvider* imu = nullptr);
 
   // Starts the hazard group, runs the frame group on this thread until the source ends, fails
   // or RequestStop(); publishes a final health message; stops the hazard group. Returns kOk at
@@ -144,6 +146,8 @@ class FlightLoop {
   void RunHazard(std::int32_t input_slot, core::SpscQueue<RecordRef, kOrderQueueSize>* q,
                  bool wait);
   void PublishNav();
+  // Hands the IMU samples due by until_utime to the pipeline and queues them for recording.
+  void FeedImu(std::int64_t until_utime);
   // A cycle without a pair: count it, restart the source when due, coast and publish. kTimeout
   // to go on, kDeviceLost once the outage is longer than max_outage_ns.
   core::Status MissCycle(core::Status source_status, bool synchronous);
@@ -161,6 +165,7 @@ class FlightLoop {
   OutputChannels* out_ = nullptr;
   HazardStage* hazard_ = nullptr;
   MotionProvider* motion_ = nullptr;
+  ImuProvider* imu_ = nullptr;
   bool configured_ = false;
   core::TimeNs period_ns_ = 0;
 

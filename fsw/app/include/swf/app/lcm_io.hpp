@@ -13,6 +13,7 @@
 #include "swf/app/flight_loop.hpp"
 #include "swf/app/log_reader.hpp"
 #include "swf/app/records.hpp"
+#include "swf/core/spsc_queue.hpp"
 #include "swf/drivers/stereo_source.hpp"
 
 namespace swf::app {
@@ -23,6 +24,9 @@ inline constexpr const char* kNavSuffix = "NAV";
 inline constexpr const char* kLandmarksSuffix = "LANDMARKS";
 inline constexpr const char* kHazardSuffix = "HAZARD";
 inline constexpr const char* kHealthSuffix = "HEALTH";
+// The IMU stream (imu_t): subscribed to by a flight process on cameras, recorded (not
+// re-published) with the samples the pipeline used, replayed from a log.
+inline constexpr const char* kImuSuffix = "IMU";
 
 // Sees every output as it is published (evaluation, progress display). Output thread only.
 class OutputObserver {
@@ -71,12 +75,59 @@ class OutputThread {
  private:
   struct Impl;
   void Handle(const RecordRef& ref);
-  void Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data, int size);
+  // Publishes (unless record_only) and records one encoded message.
+  void Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data, int size,
+            bool record_only = false);
 
   std::unique_ptr<Impl> impl_;
   OutputChannels* channels_ = nullptr;
   std::vector<OutputObserver*> observers_;
   OutputCounters counters_;
+  std::atomic<bool> quit_{false};
+  std::thread thread_;
+};
+
+// The IMU over LCM for a flight process on cameras: a normal-priority thread receives imu_t on
+// one channel, checks each message (swf/messages/checked_decode.hpp: lengths and flags) and
+// queues the sample for the frame group, which takes them as an ImuProvider (stamped at or
+// before each exposure, in arrival order). What cannot be used is counted, never fatal: a
+// message that does not decode, a full queue (the frame group fell behind), a sample stamped
+// more than kMaxImuLeadUs after the exposure asked for (a corrupt stamp that would otherwise
+// hold back every sample behind it). Ordering, gaps and saturation are ImuStreamChecker's.
+inline constexpr std::int64_t kMaxImuLeadUs = 2'000'000;
+inline constexpr std::size_t kImuQueueSize = 8192;
+
+struct LcmImuCounters {
+  std::int64_t received = 0;
+  std::int64_t undecodable = 0;
+  std::int64_t queue_full = 0;
+  std::int64_t future_dropped = 0;
+};
+
+class LcmImuInput final : public ImuProvider {
+ public:
+  LcmImuInput();
+  ~LcmImuInput() override;
+  LcmImuInput(const LcmImuInput&) = delete;
+  LcmImuInput& operator=(const LcmImuInput&) = delete;
+
+  // Subscribes and starts the receiving thread. False with a message.
+  bool Start(const std::string& lcm_url, const std::string& channel, std::string* error);
+  void Stop();
+  bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override;
+  // Receiving-thread counts (read after Stop, or as a snapshot) and the frame group's drops.
+  LcmImuCounters Counters() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  core::SpscQueue<estimator::ImuSample<double>, kImuQueueSize> queue_;
+  bool held_ = false;  // frame group: the sample taken from the queue but not yet due
+  estimator::ImuSample<double> held_sample_;
+  std::int64_t future_dropped_ = 0;
+  std::atomic<std::int64_t> received_{0};
+  std::atomic<std::int64_t> undecodable_{0};
+  std::atomic<std::int64_t> queue_full_{0};
   std::atomic<bool> quit_{false};
   std::thread thread_;
 };

@@ -61,9 +61,15 @@ struct LogStreamStats {
 // damaged record, undecodable frame or out-of-range field; the frames before it are replayed and
 // the error is kept for the caller to report. Duplicated and reordered frames are refused and
 // counted (LogStreamStats, and SourceStats::frames_rejected); gaps reach the flight loop as
-// pair.dropped_before.
-class LogStereoSource final : public drivers::StereoSource, public MotionProvider {
+// pair.dropped_before. With an IMU channel set, the imu_t samples recorded between two frames
+// are served (ImuProvider) with the later frame, as the live run handed them over; a refused
+// frame's samples go with the next one served.
+class LogStereoSource final : public drivers::StereoSource,
+                              public MotionProvider,
+                              public ImuProvider {
  public:
+  // Before Load: the channel of the recorded IMU ("" = none).
+  void SetImuChannel(const std::string& channel) { imu_channel_ = channel; }
   // False only when the file cannot be opened; a damaged record sets LoadError().
   bool Load(const std::string& path, const std::string& channel, std::string* error);
   // The same from an opened reader (an in-memory log).
@@ -74,6 +80,7 @@ class LogStereoSource final : public drivers::StereoSource, public MotionProvide
   bool Rectified() const { return rectified_; }
   std::size_t NumFrames() const { return frames_.size(); }
   const LogStreamStats& StreamStats() const { return stream_; }
+  std::size_t NumImuSamples() const { return imu_.size(); }
 
   core::Status Start() override;
   core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override;
@@ -82,6 +89,7 @@ class LogStereoSource final : public drivers::StereoSource, public MotionProvide
   drivers::SourceStats Stats() const override { return stats_; }
   const char* Name() const override { return "log"; }
   bool Motion(std::uint64_t seq, MotionInput* input) override;
+  bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override;
 
  private:
   struct Frame {
@@ -93,9 +101,12 @@ class LogStereoSource final : public drivers::StereoSource, public MotionProvide
     MotionInput motion;
     std::vector<std::uint8_t> left;
     std::vector<std::uint8_t> right;
+    std::size_t imu_begin = 0;  // its IMU samples: imu_[imu_begin, imu_end)
+    std::size_t imu_end = 0;
   };
   // Appends the frame unless the sequence and time checks refuse it.
   void Admit(Frame frame);
+  std::string AddImuRecord(const std::vector<std::uint8_t>& data, const std::string& where);
   std::vector<Frame> frames_;
   LogStreamStats stream_;
   std::string load_error_;
@@ -104,6 +115,10 @@ class LogStereoSource final : public drivers::StereoSource, public MotionProvide
   bool rectified_ = true;
   std::size_t next_ = 0;
   drivers::SourceStats stats_;
+  std::string imu_channel_;
+  std::vector<estimator::ImuSample<double>> imu_;
+  std::size_t imu_pending_ = 0;  // first sample not yet given to a frame (loading)
+  std::size_t imu_next_ = 0;     // next sample to serve
 };
 
 }  // namespace swf::app

@@ -1,8 +1,10 @@
-// Motion input of the process model: the navigation system's (IMU's) relative motion between
-// consecutive frames.
+// Inputs of the process model: the navigation system's relative motion between consecutive
+// frames (stereo-only estimator), or the IMU's samples (stereo-inertial estimator).
 #pragma once
 
 #include <cstdint>
+
+#include "swf/estimator/imu_preintegration.hpp"
 
 namespace swf::app {
 
@@ -18,6 +20,18 @@ class MotionProvider {
  public:
   virtual ~MotionProvider() = default;
   virtual bool Motion(std::uint64_t seq, MotionInput* input) = 0;
+};
+
+// The IMU's samples in stream order (the simulator's unit, an LCM subscription, a log). Called
+// on the real-time thread before each cycle's stages with the exposure time the cycle stands
+// for: the next sample due by then (true), or false when none is. A live stream gives the
+// samples stamped at or before until_utime; a log gives the samples recorded before the frame
+// just served, so a replay hands the pipeline exactly what the live run did. Must not allocate
+// or block.
+class ImuProvider {
+ public:
+  virtual ~ImuProvider() = default;
+  virtual bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) = 0;
 };
 
 }  // namespace swf::app

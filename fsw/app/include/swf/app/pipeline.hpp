@@ -1,10 +1,21 @@
 // Pipeline: the frame group's computation for one stereo pair, in flight form (no allocation,
 // no exceptions, no clocks, single-threaded, deterministic):
 //   rectify (raw cameras only) -> front end (track + stereo + new landmarks) -> Sliding Window
-//   Filter (motion-input or bounded constant-velocity process factor, gated stereo
-//   measurements, robust Gauss-Newton) -> newest-pose covariance -> integrity monitor (status,
-//   protection levels, restart from the last trusted state on a detected divergence) ->
-//   navigation output and, on request, the landmark map with covariances for the hazard group.
+//   Filter (process factor, gated stereo measurements, robust Gauss-Newton) -> newest-pose
+//   covariance -> integrity monitor (status, protection levels, restart from the last trusted
+//   state on a detected divergence) -> navigation output and, on request, the landmark map with
+//   covariances for the hazard group.
+//
+// Two estimators, chosen by PipelineOptions::imu.enabled:
+//   stereo-only      pose states; the process factor is the navigation system's relative motion
+//                    (MotionInput) or, without one, a bounded constant-velocity model
+//   stereo-inertial  pose, velocity and IMU biases (InertialStereoModel); the process factor is
+//                    the IMU preintegrated between exposures (ImuInput, fed by AddImu), which
+//                    also predicts the front end's search, carries the state through a camera
+//                    outage with its covariance, and restarts the filter from the last trusted
+//                    state; a motion input is not used
+// The navigation output is the left camera's pose either way (the inertial state through the
+// camera extrinsic, velocity: the IMU's).
 //
 // The estimator's world frame is the frame `initial_world_T_camera` is expressed in (the
 // simulator's local level frame, or whatever the navigation system hands over at start).
@@ -15,8 +26,10 @@
 #include <cstdint>
 #include <memory>
 
+#include "swf/app/imu_input.hpp"
 #include "swf/core/status.hpp"
 #include "swf/estimator/geometry.hpp"
+#include "swf/estimator/inertial_model.hpp"
 #include "swf/estimator/integrity.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
@@ -35,6 +48,9 @@ inline constexpr int kMaxMapLandmarks = kMaxLandmarks;  // landmarks in one publ
 using FlightSwf =
     estimator::SlidingWindowFilter<estimator::StereoModel<double>, kMaxWindow, kMaxLandmarks,
                                    kMaxMeasurementsPerPose, kMaxPriorLandmarks>;
+using InertialFlightSwf =
+    estimator::SlidingWindowFilter<estimator::InertialStereoModel<double>, kMaxWindow,
+                                   kMaxLandmarks, kMaxMeasurementsPerPose, kMaxPriorLandmarks>;
 
 struct PipelineOptions {
   // Raw cameras: rectify with these calibrations. Otherwise frames arrive rectified and
@@ -68,6 +84,7 @@ struct PipelineOptions {
   double max_turn_rate_radps = 3.0;
   estimator::Pose<double> initial_world_T_camera;
   estimator::IntegrityOptions integrity;
+  ImuOptions imu;  // enabled: the stereo-inertial estimator (see the file comment)
 };
 
 // Integrity since Configure: statuses, restarts and every gate (health_t carries them).
@@ -150,6 +167,10 @@ class Pipeline {
   // Validates and sizes everything. kInvalidArgument for options the components refuse.
   core::Status Configure(const PipelineOptions& options);
 
+  // One IMU sample (stereo-inertial only), in stream order; the samples stamped at or before a
+  // frame's exposure must be added before its Track(). Returns the stream checker's verdict.
+  estimator::ImuSampleVerdict AddImu(const estimator::ImuSample<double>& sample);
+
   // Stages of one frame; call in this order. Each returns kOk or the reason it failed; a failed
   // estimate stage leaves the filter in its local recovery (fault bits) and the frame counted.
   core::Status Rectify(const PipelineFrame& frame);
@@ -162,6 +183,8 @@ class Pipeline {
   // envelope) and ready for MakeNav. The next Estimate() fuses the whole outage's motion as one
   // process factor. kEmpty before the first estimate (nothing to carry).
   core::Status Coast(const estimator::Pose<double>* motion);
+  // The exposure time the next Coast() stands for (the last one plus a frame period).
+  std::int64_t CoastUtime() const;
   // Fills the navigation output of the frame just estimated (or coasted).
   void MakeNav(NavOutput* nav);
   // Computes covariances and fills the landmark map (hazard-group rate: O(n^3)).
@@ -176,8 +199,12 @@ class Pipeline {
   const frontend::GrayView& RectifiedRight() const { return current_.right; }
 
   int NumFeatures() const { return static_cast<int>(output_->measurements.size()); }
-  int NumLandmarks() const { return swf_->NumLandmarks(); }
-  std::uint32_t FaultBits() const { return swf_->FaultBits(); }
+  int NumLandmarks() const;
+  std::uint32_t FaultBits() const;
+  bool Inertial() const { return inertial_ != nullptr; }
+  // The stereo-inertial filter's newest state (nullptr: stereo-only, or no state yet).
+  const estimator::NavState<double>* NewestNavState() const;
+  ImuCounts ImuStreamCounts() const { return imu_.Counts(); }
   core::Status LastStatus() const { return last_status_; }
   const estimator::IntegrityReport& LastIntegrity() const { return report_; }
   const IntegrityCounters& Integrity() const { return integrity_; }
@@ -196,7 +223,25 @@ class Pipeline {
   std::unique_ptr<frontend::Image<std::uint8_t>> rect_right_;
   std::unique_ptr<frontend::Frontend> frontend_;
   std::unique_ptr<frontend::FrameOutput> output_;
+  // Exactly one of the two filters exists (PipelineOptions::imu.enabled).
   std::unique_ptr<FlightSwf> swf_;
+  std::unique_ptr<InertialFlightSwf> inertial_;
+  estimator::InertialStereoModel<double> inertial_model_;
+  ImuInput imu_;
+  template <typename F>
+  decltype(auto) Visit(F&& f) {
+    return inertial_ ? f(*inertial_) : f(*swf_);
+  }
+  template <typename F>
+  decltype(auto) Visit(F&& f) const {
+    return inertial_ ? f(*inertial_) : f(*swf_);
+  }
+  int NumPoses() const;
+  bool AddObservation(std::int64_t landmark_id, const estimator::Vec3<double>& z);
+  estimator::Pose<double> NewestCameraPose() const;
+  // The filter's covariances, and the newest camera pose's 6x6 from them (camera_covariance_).
+  core::Status ComputeCovariances();
+  estimator::Mat6<double> camera_covariance_ = estimator::Mat6<double>::Zero();
   std::unique_ptr<frontend::LandmarkEstimate[]> estimates_;
   std::unique_ptr<FirstSighting[]> sightings_;
   frontend::StereoFrame current_{};
@@ -213,7 +258,21 @@ class Pipeline {
   bool covariance_valid_ = false;
 
   // Integrity: the monitor, the last VALID state, and what happened since.
+  core::Status AddFrameState(const estimator::Pose<double>* motion);
+  core::Status AddFirstState();
   core::Status AddPredictedPose(const estimator::Pose<double>* motion);
+  // Stereo-inertial: the IMU interval up to this frame as the process factor; the restart from
+  // the trusted state carried by the IMU; the coasted state; the IMU's disagreement with the
+  // estimate (MotionDisagreement's counterpart).
+  core::Status AddInertialState();
+  core::Status RestartInertial();
+  bool CoastInertial();
+  double ImuDisagreement() const;
+  estimator::NavState<double> trusted_state_;
+  estimator::Mat15<double> trusted_state_covariance_ = estimator::Mat15<double>::Zero();
+  bool imu_gap_ = false;  // this frame's IMU interval bridged a gap or had no sample
+  void CoastStereo(double inflation);
+  estimator::Vec3<double> coast_state_velocity_ = estimator::Vec3<double>::Zero();
   // The motion input if it is inside the envelope, else nullptr (refused and counted).
   const estimator::Pose<double>* AcceptMotion(const estimator::Pose<double>* motion);
   // The motion of one frame: the accepted input, or the bounded constant-velocity model with

@@ -49,6 +49,14 @@ struct FrameRecord {
   std::int32_t capacity_bytes = 0;
 };
 
+// IMU samples the frame group handed to the pipeline, in that order (imu_t, one per sample),
+// recorded ahead of the frame they precede.
+inline constexpr int kImuRecordSamples = 64;
+struct ImuRecord {
+  std::int32_t count = 0;
+  estimator::ImuSample<double> samples[kImuRecordSamples];
+};
+
 struct NavRecord {
   std::int64_t seq = 0;
   std::int8_t mode = 0;
@@ -75,6 +83,7 @@ struct HealthRecord {
   std::int32_t num_landmarks = 0;
   IntegrityCounters integrity;
   StageSummary stages[kNumStages];
+  ImuCounts imu;
 };
 
 // What the frame group hands to the hazard group every hazard_every frames: the rectified pair
@@ -115,7 +124,7 @@ struct HazardRecord {
   float update_ms = 0.0f;  // wall time of the hazard update (not published; not deterministic)
 };
 
-enum class RecordKind : std::uint8_t { kFrame, kNav, kMap, kHealth, kHazard };
+enum class RecordKind : std::uint8_t { kFrame, kNav, kMap, kHealth, kHazard, kImu };
 struct RecordRef {
   RecordKind kind = RecordKind::kNav;
   std::int32_t slot = -1;
@@ -149,17 +158,19 @@ class SlotPool {
 };
 
 inline constexpr std::size_t kFramePoolSize = 16;
+inline constexpr std::size_t kImuPoolSize = 64;
 inline constexpr std::size_t kNavPoolSize = 64;
 inline constexpr std::size_t kMapPoolSize = 4;
 inline constexpr std::size_t kHealthPoolSize = 8;
 inline constexpr std::size_t kHazardInputPoolSize = 2;
 inline constexpr std::size_t kHazardPoolSize = 3;
-inline constexpr std::size_t kOrderQueueSize = 128;
+inline constexpr std::size_t kOrderQueueSize = 256;
 
 // Everything the output thread consumes. Two producers (the frame group and the hazard group),
 // each with its own order queue; one consumer.
 struct OutputChannels {
   SlotPool<FrameRecord, kFramePoolSize> frames;
+  SlotPool<ImuRecord, kImuPoolSize> imus;
   SlotPool<NavRecord, kNavPoolSize> navs;
   SlotPool<MapRecord, kMapPoolSize> maps;
   SlotPool<HealthRecord, kHealthPoolSize> healths;
@@ -172,9 +183,10 @@ struct OutputChannels {
   // Sizes every pool; frame slots hold width*height bytes per image, hazard maps
   // hazard_cells^2 cells (0: no hazard mapping).
   core::Status Allocate(std::int32_t width, std::int32_t height, std::int32_t hazard_cells = 0) {
-    if (frames.Allocate() != core::Status::kOk || navs.Allocate() != core::Status::kOk ||
-        maps.Allocate() != core::Status::kOk || healths.Allocate() != core::Status::kOk ||
-        hazard_inputs.Allocate() != core::Status::kOk || hazards.Allocate() != core::Status::kOk) {
+    if (frames.Allocate() != core::Status::kOk || imus.Allocate() != core::Status::kOk ||
+        navs.Allocate() != core::Status::kOk || maps.Allocate() != core::Status::kOk ||
+        healths.Allocate() != core::Status::kOk || hazard_inputs.Allocate() != core::Status::kOk ||
+        hazards.Allocate() != core::Status::kOk) {
       return core::Status::kFull;
     }
     const std::int32_t bytes = width * height;

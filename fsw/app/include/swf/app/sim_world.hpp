@@ -13,6 +13,7 @@
 #include "swf/app/flight_loop.hpp"
 #include "swf/drivers/stereo_source.hpp"
 #include "swf/sim/appearance.hpp"
+#include "swf/sim/imu_model.hpp"
 #include "swf/sim/orbital.hpp"
 #include "swf/sim/renderer.hpp"
 #include "swf/sim/terrain.hpp"
@@ -26,6 +27,10 @@ bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* err
 // The camera rig of a sim configuration.
 sim::RigOptions SimRig(const FswConfig& config);
 
+// The simulated IMU unit of a sim configuration (sim.imu_unit, mounted at imu.camera_*_imu);
+// false for "none".
+bool SimImuUnit(const FswConfig& config, sim::ImuModelOptions* unit);
+
 // The trajectory (and rig) of a sim configuration. Cheap (no terrain) unless `sim.target:
 // orbital`: the descent target then comes from `terrain` (built here when null), and `chosen`
 // (optional) receives the selection.
@@ -33,7 +38,7 @@ bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::Ri
                    std::string* error, const sim::Terrain* terrain = nullptr,
                    sim::OrbitalTarget* chosen = nullptr);
 
-class SimWorld : public MotionProvider {
+class SimWorld : public MotionProvider, public ImuProvider {
  public:
   // Builds terrain, appearance and renderer (seconds for a 2048^2 terrain).
   bool Build(const FswConfig& config, std::string* error);
@@ -54,6 +59,10 @@ class SimWorld : public MotionProvider {
   // The simulated IMU: noisy true relative motion into frame seq (none for frame 0 or when
   // sim.imu is false).
   bool Motion(std::uint64_t seq, MotionInput* input) override;
+  // The simulated IMU unit's samples (sim.imu_unit), in time order.
+  bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override;
+  // The unit (nullptr for sim.imu_unit none): its samples, true biases and noise model.
+  const sim::ImuModel* ImuUnit() const { return has_imu_unit_ ? &imu_unit_ : nullptr; }
 
  private:
   sim::RigOptions rig_;
@@ -65,6 +74,9 @@ class SimWorld : public MotionProvider {
   std::int32_t num_frames_ = 0;
   std::vector<MotionInput> motion_;
   bool imu_ = false;
+  bool has_imu_unit_ = false;
+  sim::ImuModel imu_unit_;
+  std::size_t imu_next_ = 0;
   std::vector<std::vector<std::uint8_t>> left_;
   std::vector<std::vector<std::uint8_t>> right_;
 };

@@ -1,0 +1,105 @@
+// ImuInput: the IMU samples between camera frames, as the flight pipeline consumes them.
+//
+// Samples arrive (Add) in stream order, each judged by the ImuStreamChecker (dropped kinds are
+// counted, never fatal). Accepted ones wait in a fixed ring until the pipeline integrates up to
+// a frame's exposure (IntegrateTo), which appends the interval to two preintegrations:
+//   since the filter's newest state   the next process factor, or the coasted state in an outage
+//   since the last trusted state      a restart of the filter from that state
+// Each is started at the bias estimate of the state it begins at (first-order bias correction
+// stays small). The last sample at or before the integrated time is kept: it holds the signal
+// into the next interval, and bridges a hole when the stream stops (counted, flagged).
+//
+// Determinism: the result depends only on the samples added before IntegrateTo, so a live run
+// and its replay agree when both add the samples stamped at or before each exposure.
+//
+// Flight code: no allocation after Configure, bounded work per sample and per interval.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "swf/core/status.hpp"
+#include "swf/estimator/geometry.hpp"
+#include "swf/estimator/imu_preintegration.hpp"
+#include "swf/estimator/imu_stream.hpp"
+
+namespace swf::app {
+
+// Accepted samples held between two integrations (10 s at 400 Hz).
+inline constexpr int kMaxImuSamples = 4096;
+
+struct ImuOptions {
+  bool enabled = false;  // false: stereo-only (motion input or constant velocity)
+  estimator::ImuNoise<double> noise;
+  estimator::ImuStreamOptions<double> stream;
+  estimator::SampleHold hold = estimator::SampleHold::kMidpoint;
+  estimator::Pose<double> imu_T_camera;  // the left (rectified) camera in the IMU frame
+  estimator::Vec3<double> gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -9.81);
+  // The first state beyond its pose (the state guidance hands over): velocity of the IMU in the
+  // world frame, and the prior sigmas of velocity and biases (biases start at zero).
+  estimator::Vec3<double> initial_velocity_world_mps = estimator::Vec3<double>::Zero();
+  double first_velocity_sigma_mps = 0.1;
+  double first_gyro_bias_sigma_radps = 0.01;
+  double first_accel_bias_sigma_mps2 = 0.1;
+
+  bool Valid() const;
+};
+
+// What the last integration had to bridge.
+struct ImuIntervalReport {
+  int samples_used = 0;
+  bool gap = false;  // a step longer than the stream's gap threshold was held (or no sample)
+  double longest_step_s = 0.0;
+};
+
+struct ImuCounts {
+  estimator::ImuStreamCounts stream;   // every sample's verdict
+  std::int64_t overflowed = 0;         // accepted but lost: the ring was full (oldest dropped)
+  std::int64_t intervals_bridged = 0;  // integrations that held a sample over a gap
+};
+
+class ImuInput {
+ public:
+  using Pim = estimator::ImuPreintegration<double>;
+
+  core::Status Configure(const ImuOptions& options);
+
+  // One sample from the source (in stream order). Returns the checker's verdict.
+  estimator::ImuSampleVerdict Add(const estimator::ImuSample<double>& sample);
+
+  // Starts both intervals at t_us (the first estimated frame) with these biases.
+  core::Status Start(std::int64_t t_us, const estimator::ImuBiases<double>& biases);
+  bool Started() const { return started_; }
+  // Starts an interval again at the integrated time, at new biases.
+  core::Status RestartSinceEstimate(const estimator::ImuBiases<double>& biases);
+  core::Status RestartSinceTrusted(const estimator::ImuBiases<double>& biases);
+
+  // Appends [integrated time, t_us] to both intervals (nothing if t_us is not later). kEmpty
+  // when no sample was ever accepted (nothing to hold), kNotConfigured before Start.
+  core::Status IntegrateTo(std::int64_t t_us);
+
+  const Pim& SinceEstimate() const { return since_estimate_; }
+  const Pim& SinceTrusted() const { return since_trusted_; }
+  const ImuIntervalReport& LastInterval() const { return last_interval_; }
+  ImuCounts Counts() const;
+  const ImuOptions& Options() const { return options_; }
+  std::int64_t IntegratedTo() const { return integrated_to_us_; }
+
+ private:
+  void DropConsumed();
+
+  ImuOptions options_;
+  estimator::ImuStreamChecker<double> checker_;
+  std::unique_ptr<estimator::ImuSample<double>[]> samples_;
+  int count_ = 0;
+  bool started_ = false;
+  std::int64_t integrated_to_us_ = 0;
+  double max_step_s_ = 0.0;
+  Pim since_estimate_;
+  Pim since_trusted_;
+  ImuIntervalReport last_interval_;
+  std::int64_t overflowed_ = 0;
+  std::int64_t intervals_bridged_ = 0;
+};
+
+}  // namespace swf::app

@@ -1,0 +1,199 @@
+// The flight pipeline's stereo-inertial estimator over a simulated descent with the simulator's
+// MEMS IMU (sim::ImuModel, ADIS16448 parameters, riding on the rendered trajectory): accuracy
+// against the truth and against the stereo-only pipeline, the IMU biases, and a camera outage of
+// 2 s carried by the IMU (flagged, within its covariance) with re-acquisition afterwards.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "swf/app/config.hpp"
+#include "swf/app/pipeline.hpp"
+#include "swf/app/sim_world.hpp"
+#include "swf/sim/imu_model.hpp"
+
+namespace swf::app {
+namespace {
+
+using estimator::NavIntegrity;
+using estimator::Vec3;
+
+constexpr int kFrames = 80;
+
+struct FrameResult {
+  std::int8_t status = 0;
+  std::uint32_t flags = 0;
+  double error_m = 0.0;
+  double sigma_m = 0.0;  // 1-sigma of the position error along its own direction
+};
+
+class InertialDescent {
+ public:
+  InertialDescent() {
+    std::string error;
+    EXPECT_TRUE(
+        ParseConfig("source: sim\nsim.frames: 80\nsim.width_px: 256\nsim.height_px: 192\n"
+                    "sim.terrain_size: 1024\nrate_hz: 10\n",
+                    "test", &config_, &error))
+        << error;
+    EXPECT_TRUE(world_->Build(config_, &error)) << error;
+    EXPECT_TRUE(world_->RenderAll(2, nullptr, &error)) << error;
+    sim::ImuModelOptions unit = sim::MemsImu();
+    unit.camera_T_imu.t = Vec3<double>(0.1, -0.05, 0.02);
+    unit.seed = 7;
+    EXPECT_EQ(imu_.Configure(unit, world_->Trajectory()), core::Status::kOk);
+    camera_t_imu_ = unit.camera_T_imu;
+  }
+
+  PipelineOptions Options(bool inertial) const {
+    PipelineOptions po;
+    po.camera = world_->Camera();
+    po.width_px = world_->Width();
+    po.height_px = world_->Height();
+    po.frontend.harris.bucket_cols = po.width_px / 40;
+    po.frontend.harris.bucket_rows = po.height_px / 40;
+    po.frontend.max_tracks = 100;
+    po.frontend.stereo.max_disparity = 64;
+    po.swf.window_size = 5;
+    po.integrity.max_speed_mps = 50.0;
+    po.initial_world_T_camera = world_->Trajectory().WorldTCamera(0);
+    po.imu.enabled = inertial;
+    po.imu.noise = imu_.NoiseModel();
+    po.imu.stream.nominal_period_us = 2500;  // 400 Hz
+    po.imu.imu_T_camera = camera_t_imu_.Inverse();
+    po.imu.gravity_world_mps2 = imu_.GravityWorld();
+    po.imu.initial_velocity_world_mps = imu_.TrueState(FrameTimeS(0)).velocity_world_mps;
+    return po;
+  }
+
+  // Runs the descent; frames in [blind_begin, blind_end) have no stereo pair (the pipeline
+  // coasts). The IMU samples up to each exposure are added before the frame.
+  std::vector<FrameResult> Run(bool inertial, int blind_begin = -1, int blind_end = -1) {
+    pipeline_ = std::make_unique<Pipeline>();
+    EXPECT_EQ(pipeline_->Configure(Options(inertial)), core::Status::kOk);
+    std::vector<FrameResult> out(kFrames);
+    std::size_t next_sample = 0;
+    const auto& samples = imu_.Samples();
+    for (int k = 0; k < kFrames; ++k) {
+      const std::int64_t utime = world_->Trajectory().FrameTimeNs(k) / 1000;
+      while (inertial && next_sample < samples.size() && samples[next_sample].t_us <= utime)
+        pipeline_->AddImu(samples[next_sample++]);
+      const bool blind = k >= blind_begin && k < blind_end;
+      if (blind) {
+        EXPECT_EQ(pipeline_->Coast(nullptr), core::Status::kOk) << k;
+      } else {
+        PipelineFrame frame;
+        frame.left =
+            frontend::GrayView{world_->Left(k), world_->Width(), world_->Height(), world_->Width()};
+        frame.right = frontend::GrayView{world_->Right(k), world_->Width(), world_->Height(),
+                                         world_->Width()};
+        frame.utime = utime;
+        frame.seq = k;
+        EXPECT_EQ(pipeline_->Rectify(frame), core::Status::kOk) << k;
+        EXPECT_EQ(pipeline_->Track(), core::Status::kOk) << k;
+        EXPECT_EQ(pipeline_->Estimate(nullptr), core::Status::kOk) << k;
+      }
+      NavOutput nav;
+      pipeline_->MakeNav(&nav);
+      const Vec3<double> e =
+          Vec3<double>(nav.position_world_m[0], nav.position_world_m[1], nav.position_world_m[2]) -
+          world_->Trajectory().WorldTCamera(k).t;
+      estimator::Mat3<double> p;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) p(r, c) = nav.covariance[6 * r + c];
+      out[k].status = nav.status;
+      out[k].flags = static_cast<std::uint32_t>(nav.integrity_flags);
+      out[k].error_m = e.norm();
+      out[k].sigma_m = e.norm() > 0.0 ? std::sqrt(e.dot(p * e) / e.squaredNorm()) : 0.0;
+    }
+    return out;
+  }
+
+  double FrameTimeS(int k) const { return world_->Trajectory().FrameTimeNs(k) * 1e-9; }
+  const sim::ImuModel& Imu() const { return imu_; }
+  const Pipeline& LastPipeline() const { return *pipeline_; }
+
+ private:
+  FswConfig config_;
+  std::unique_ptr<SimWorld> world_ = std::make_unique<SimWorld>();
+  sim::ImuModel imu_;
+  estimator::Pose<double> camera_t_imu_;
+  std::unique_ptr<Pipeline> pipeline_;
+};
+
+double Rms(const std::vector<FrameResult>& r, int begin, int end) {
+  double sum = 0.0;
+  for (int k = begin; k < end; ++k) sum += r[k].error_m * r[k].error_m;
+  return std::sqrt(sum / (end - begin));
+}
+
+TEST(PipelineInertialTest, StereoInertialDescentIsAccurateAndEstimatesTheBiases) {
+  InertialDescent descent;
+  const std::vector<FrameResult> stereo = descent.Run(false);
+  const std::vector<FrameResult> inertial = descent.Run(true);
+  const Pipeline& p = descent.LastPipeline();
+  ASSERT_TRUE(p.Inertial());
+  const double stereo_rms = Rms(stereo, 0, kFrames);
+  const double inertial_rms = Rms(inertial, 0, kFrames);
+  int valid = 0;
+  int beyond_3_sigma = 0;
+  for (const FrameResult& f : inertial) {
+    valid += f.status == static_cast<std::int8_t>(NavIntegrity::kValid);
+    beyond_3_sigma += f.error_m > 3.0 * f.sigma_m;
+  }
+  const ImuCounts counts = p.ImuStreamCounts();
+  const estimator::NavState<double>* x = p.NewestNavState();
+  ASSERT_NE(x, nullptr);
+  const estimator::ImuBiases<double>& truth =
+      descent.Imu().TrueBiases()[counts.stream.accepted - 1];
+  const double gyro_error = (x->biases.gyro_radps - truth.gyro_radps).norm();
+  const double gyro_turn_on = truth.gyro_radps.norm();
+  std::printf(
+      "position RMS: stereo-only %.3f m, stereo-inertial %.3f m; VALID %d/%d, beyond 3 sigma %d; "
+      "gyro bias error %.2e rad/s (true bias %.2e); IMU samples %lld accepted\n",
+      stereo_rms, inertial_rms, valid, kFrames, beyond_3_sigma, gyro_error, gyro_turn_on,
+      static_cast<long long>(counts.stream.accepted));
+  EXPECT_EQ(counts.stream.accepted,
+            static_cast<std::int64_t>(
+                (descent.FrameTimeS(kFrames - 1) - descent.FrameTimeS(0)) * 400.0 + 1.5));
+  EXPECT_EQ(counts.intervals_bridged, 0);
+  EXPECT_LT(inertial_rms, 0.5);
+  EXPECT_LE(inertial_rms, 1.2 * stereo_rms + 0.02);
+  EXPECT_GE(valid, kFrames - 5);
+  EXPECT_LE(beyond_3_sigma, 4);
+  EXPECT_LT(gyro_error, 0.5 * gyro_turn_on);  // the gyro bias is estimated, not left at zero
+}
+
+TEST(PipelineInertialTest, TwoSecondsBlindAreCarriedByTheImuAndReacquired) {
+  InertialDescent descent;
+  const int begin = 40;
+  const int end = 60;  // 2 s at 10 Hz
+  const std::vector<FrameResult> r = descent.Run(true, begin, end);
+  double worst_normalized = 0.0;
+  for (int k = begin; k < end; ++k) {
+    EXPECT_NE(r[k].flags & estimator::kFlagCameraOutage, 0u) << k;
+    EXPECT_NE(r[k].status, static_cast<std::int8_t>(NavIntegrity::kValid)) << k;
+    worst_normalized = std::max(worst_normalized, r[k].error_m / r[k].sigma_m);
+  }
+  const double end_error_m = r[end - 1].error_m;
+  const double end_sigma_m = r[end - 1].sigma_m;
+  int valid_after = 0;
+  for (int k = end; k < kFrames; ++k)
+    valid_after += r[k].status == static_cast<std::int8_t>(NavIntegrity::kValid);
+  std::printf(
+      "blind 2 s: error %.3f m -> %.3f m (sigma %.3f m), worst error/sigma %.2f; after: error "
+      "%.3f m, VALID %d/%d frames\n",
+      r[begin - 1].error_m, end_error_m, end_sigma_m, worst_normalized, r[kFrames - 1].error_m,
+      valid_after, kFrames - end);
+  EXPECT_LT(worst_normalized, 3.0);
+  EXPECT_LT(end_error_m, 1.0);
+  EXPECT_LT(r[kFrames - 1].error_m, 0.5);
+  EXPECT_GE(valid_after, kFrames - end - 8);
+  EXPECT_EQ(descent.LastPipeline().Integrity().frames_coasted, end - begin);
+}
+
+}  // namespace
+}  // namespace swf::app
