@@ -138,6 +138,8 @@ ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
   o.stream.gyro_range_radps = k.gyro_range_radps;
   o.stream.accel_range_mps2 = k.accel_range_mps2;
   o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -k.gravity_mps2);
+  o.first_gyro_bias_sigma_radps = k.gyro_bias_sigma_radps;
+  o.first_accel_bias_sigma_mps2 = k.accel_bias_sigma_mps2;
   sim::ImuModelOptions unit;
   if (SimImuUnit(c, &unit)) {
     rate_hz = unit.rate_hz;
@@ -145,6 +147,11 @@ ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
     o.stream.gyro_range_radps = unit.gyro.range;
     o.stream.accel_range_mps2 = unit.accel.range;
     o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -unit.gravity_mps2);
+    // The unit's own spread at start: turn-on offset and the in-run term's stationary sigma.
+    o.first_gyro_bias_sigma_radps =
+        std::hypot(unit.gyro.turn_on_bias_sigma, unit.gyro.bias_instability);
+    o.first_accel_bias_sigma_mps2 =
+        std::hypot(unit.accel.turn_on_bias_sigma, unit.accel.bias_instability);
   }
   o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / rate_hz));
   estimator::Pose<double> camera_T_imu;
@@ -225,21 +232,22 @@ Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
 }
 
 void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const EvaluationResult* eval) {
-  std::fprintf(
-      f,
-      "  \"integrity\": {\"frames_valid\": %lld, \"frames_degraded\": %lld, "
-      "\"frames_invalid\": %lld, \"restarts\": %lld, \"last_recovery_frames\": %d, "
-      "\"measurements_gated\": %lld, \"measurements_rejected\": %lld, "
-      "\"landmarks_rejected\": %lld, \"new_landmarks_refused\": %lld, "
-      "\"gate_suspensions\": %lld, \"motion_refused\": %lld, \"motion_overruled\": %lld, "
-      "\"frames_coasted\": %lld, \"longest_outage_frames\": %d",
-      static_cast<long long>(c.frames_valid), static_cast<long long>(c.frames_degraded),
-      static_cast<long long>(c.frames_invalid), static_cast<long long>(c.restarts),
-      c.last_recovery_frames, static_cast<long long>(c.measurements_gated),
-      static_cast<long long>(c.measurements_rejected), static_cast<long long>(c.landmarks_rejected),
-      static_cast<long long>(c.new_landmarks_refused), static_cast<long long>(c.gate_suspensions),
-      static_cast<long long>(c.motion_refused), static_cast<long long>(c.motion_overruled),
-      static_cast<long long>(c.frames_coasted), c.longest_outage_frames);
+  std::fprintf(f,
+               "  \"integrity\": {\"frames_valid\": %lld, \"frames_degraded\": %lld, "
+               "\"frames_invalid\": %lld, \"restarts\": %lld, \"last_recovery_frames\": %d, "
+               "\"measurements_gated\": %lld, \"measurements_rejected\": %lld, "
+               "\"landmarks_rejected\": %lld, \"new_landmarks_refused\": %lld, "
+               "\"gate_suspensions\": %lld, \"motion_refused\": %lld, \"motion_overruled\": %lld, "
+               "\"frames_coasted\": %lld, \"frames_blind\": %lld, \"longest_outage_frames\": %d",
+               static_cast<long long>(c.frames_valid), static_cast<long long>(c.frames_degraded),
+               static_cast<long long>(c.frames_invalid), static_cast<long long>(c.restarts),
+               c.last_recovery_frames, static_cast<long long>(c.measurements_gated),
+               static_cast<long long>(c.measurements_rejected),
+               static_cast<long long>(c.landmarks_rejected),
+               static_cast<long long>(c.new_landmarks_refused),
+               static_cast<long long>(c.gate_suspensions), static_cast<long long>(c.motion_refused),
+               static_cast<long long>(c.motion_overruled), static_cast<long long>(c.frames_coasted),
+               static_cast<long long>(c.frames_blind), c.longest_outage_frames);
   std::fprintf(f, ", \"flag_counts\": [");
   for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
     std::fprintf(f, "%s%lld", b > 0 ? ", " : "", static_cast<long long>(c.flag_counts[b]));
@@ -271,6 +279,7 @@ struct ImuReport {
   estimator::ImuBiases<double> estimated;
   bool has_truth = false;
   estimator::ImuBiases<double> truth;
+  double imu_only_pose_rms_m = NAN;  // the unit alone from the same start (simulator)
 };
 
 void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
@@ -299,6 +308,10 @@ void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
     std::fprintf(f, ", \"gyro_bias_error_radps\": %s, \"accel_bias_error_mps2\": %s",
                  JsonNumber((r.estimated.gyro_radps - r.truth.gyro_radps).norm()).c_str(),
                  JsonNumber((r.estimated.accel_mps2 - r.truth.accel_mps2).norm()).c_str());
+  }
+  if (r.has_truth) {
+    std::fprintf(f, ", \"imu_only_pose_rms_error_m\": %s",
+                 JsonNumber(r.imu_only_pose_rms_m).c_str());
   }
   std::fprintf(f, "},\n");
 }
@@ -357,6 +370,11 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                  static_cast<long long>(eval->landmarks_evaluated), eval->pose_rms_error_m,
                  eval->final_pose_error_m, static_cast<long long>(eval->navs),
                  static_cast<long long>(eval->maps));
+    std::fprintf(f, "  \"mean_position_nees\": %s,\n  \"position_nees\": [",
+                 JsonNumber(eval->mean_position_nees).c_str());
+    for (std::size_t k = 0; k < eval->position_nees.size(); ++k)
+      std::fprintf(f, "%s%s", k > 0 ? ", " : "", JsonNumber(eval->position_nees[k]).c_str());
+    std::fprintf(f, "],\n");
   }
   WriteIntegrity(f, integrity, eval);
   std::fprintf(f, "  \"stages\": {\n");
@@ -945,6 +963,8 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
         taken <= static_cast<std::int64_t>(unit->TrueBiases().size())) {
       imu_report.has_truth = true;
       imu_report.truth = unit->TrueBiases()[static_cast<std::size_t>(taken - 1)];
+      imu_report.imu_only_pose_rms_m =
+          ImuOnlyPoseRms(*unit, world->Trajectory(), po.imu, po.initial_world_T_camera);
     }
     std::fprintf(stderr, "%s: imu: %lld samples integrated, %lld dropped, %lld intervals bridged\n",
                  tool, static_cast<long long>(imu_report.counts.stream.accepted),

@@ -281,6 +281,8 @@ const std::map<std::string, Setter>& Fields() {
     f["imu.gyro_range_radps"] = ImuNumber(&ImuConfig::gyro_range_radps, 1000.0);
     f["imu.accel_range_mps2"] = ImuNumber(&ImuConfig::accel_range_mps2, 10000.0);
     f["imu.gravity_mps2"] = ImuNumber(&ImuConfig::gravity_mps2, 100.0);
+    f["imu.gyro_bias_sigma_radps"] = ImuNumber(&ImuConfig::gyro_bias_sigma_radps, 10.0);
+    f["imu.accel_bias_sigma_mps2"] = ImuNumber(&ImuConfig::accel_bias_sigma_mps2, 100.0);
     f["imu.camera_t_imu_m"] = Vector3([](FswConfig* c) { return c->imu.camera_t_imu_m; });
     f["imu.camera_r_imu_rad"] = Vector3([](FswConfig* c) { return c->imu.camera_r_imu_rad; });
     f["imu.initial_velocity_mps"] =
@@ -393,6 +395,10 @@ const std::map<std::string, Setter>& Fields() {
     f["inject.frames"] =
         Int<std::int64_t>([](FswConfig* c) { return &c->inject_frames; }, 1, std::int64_t{1} << 40);
     f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
+    f["inject.black_from"] = Int<std::int64_t>([](FswConfig* c) { return &c->inject_black_from; },
+                                               -1, std::int64_t{1} << 40);
+    f["inject.black_frames"] = Int<std::int64_t>(
+        [](FswConfig* c) { return &c->inject_black_frames; }, 1, std::int64_t{1} << 40);
     f["envelope.min_range_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
       double d = 0.0;
       if (!ParseDouble(v, &d, why)) return false;
@@ -696,6 +702,9 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   }
   if (c.imu.enabled && c.sim.imu_unit == "none" && !(c.imu.rate_hz >= 10.0)) {
     return fail("imu.rate_hz", "must be at least 10 Hz for the stereo-inertial estimator");
+  }
+  if (c.inject_black_from >= 0 && c.source != SourceKind::kSim) {
+    return fail("inject.black_from", "blinds the simulated camera: needs source sim");
   }
   if (c.inject_ms > 0.0 && c.inject_stage.empty()) {
     return fail("inject.stage", "required when inject.ms is set");

@@ -9,12 +9,52 @@
 namespace swf::app {
 
 void Evaluation::OnNav(const NavRecord& r) {
-  navs_.push_back(
-      Nav{r.nav.frame_seq,
-          {r.nav.position_world_m[0], r.nav.position_world_m[1], r.nav.position_world_m[2]},
-          r.nav.status,
-          r.nav.horizontal_protection_m,
-          r.nav.vertical_protection_m});
+  Nav n{r.nav.frame_seq,
+        {r.nav.position_world_m[0], r.nav.position_world_m[1], r.nav.position_world_m[2]},
+        r.nav.status,
+        r.nav.horizontal_protection_m,
+        r.nav.vertical_protection_m,
+        {}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) n.position_covariance[3 * i + j] = r.nav.covariance[6 * i + j];
+  navs_.push_back(n);
+}
+
+namespace {
+// e^T P^-1 e, NaN when P is not positive definite (an output without covariance).
+double Nees(const Eigen::Vector3d& e, const double* covariance) {
+  const Eigen::Matrix3d p =
+      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(covariance);
+  const Eigen::LLT<Eigen::Matrix3d> llt(p);
+  if (llt.info() != Eigen::Success || !(p.trace() > 0.0)) return NAN;
+  return e.dot(llt.solve(e));
+}
+}  // namespace
+
+double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajectory,
+                      const ImuOptions& imu,
+                      const estimator::Pose<double>& initial_world_T_camera) {
+  estimator::InertialStereoModel<double> model;
+  model.imu_T_camera = imu.imu_T_camera;
+  model.gravity_world_mps2 = imu.gravity_world_mps2;
+  estimator::NavState<double> x;
+  x.world_T_imu = initial_world_T_camera * imu.imu_T_camera.Inverse();
+  x.velocity_world_mps = imu.initial_velocity_world_mps;
+  const std::vector<estimator::ImuSample<double>>& samples = unit.Samples();
+  double sum2 = 0.0;
+  for (std::int32_t k = 1; k < trajectory.NumFrames(); ++k) {
+    estimator::ImuPreintegration<double> pim;
+    estimator::IntervalSummary summary;
+    if (pim.Reset(imu.noise, x.biases) != core::Status::kOk ||
+        estimator::PreintegrateInterval(
+            samples.data(), static_cast<int>(samples.size()), trajectory.FrameTimeNs(k - 1) / 1000,
+            trajectory.FrameTimeNs(k) / 1000, imu.hold, 1.0, &pim, &summary) != core::Status::kOk) {
+      return NAN;
+    }
+    x = model.Propagate(x, pim);
+    sum2 += (model.CameraPose(x).t - trajectory.WorldTCamera(k).t).squaredNorm();
+  }
+  return trajectory.NumFrames() > 1 ? std::sqrt(sum2 / trajectory.NumFrames()) : 0.0;
 }
 
 void Evaluation::OnMap(const MapRecord& r) {
@@ -40,11 +80,19 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
     std::fprintf(traj, "# frame est_x est_y est_z true_x true_y true_z error_m\n");
   }
   double sum2 = 0.0;
+  double nees_sum = 0.0;
+  int nees_count = 0;
   for (const Nav& n : navs_) {
     if (n.frame_seq < 0 || n.frame_seq >= trajectory.NumFrames()) continue;
     const Eigen::Vector3d t = trajectory.WorldTCamera(static_cast<std::int32_t>(n.frame_seq)).t;
     const double e = (Eigen::Vector3d(n.p[0], n.p[1], n.p[2]) - t).norm();
     sum2 += e * e;
+    const double nees = Nees(Eigen::Vector3d(n.p[0], n.p[1], n.p[2]) - t, n.position_covariance);
+    result.position_nees.push_back(nees);
+    if (std::isfinite(nees)) {
+      nees_sum += nees;
+      ++nees_count;
+    }
     ++result.navs;
     result.final_pose_error_m = e;
     if (n.status == static_cast<std::int8_t>(estimator::NavIntegrity::kValid)) {
@@ -66,6 +114,7 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
   }
   if (traj != nullptr) std::fclose(traj);
   result.pose_rms_error_m = result.navs > 0 ? std::sqrt(sum2 / result.navs) : 0.0;
+  result.mean_position_nees = nees_count > 0 ? nees_sum / nees_count : NAN;
 
   // True landmark positions, computed once per id.
   std::map<std::int64_t, Eigen::Vector3d> truth;

@@ -165,6 +165,14 @@ Status Pipeline::Track() {
 
 Status Pipeline::Estimate(const Pose<double>* motion_input) {
   if (!configured_) return Status::kNotConfigured;
+  // Stereo-inertial: a frame whose images gave (next to) nothing to measure (black, blinded,
+  // a lens cap) is a camera outage, the IMU carries the state; not a solve on nothing.
+  const std::size_t features = output_->measurements.size() + output_->new_landmarks.size();
+  if (inertial_ && has_previous_pose_ && NumPoses() > 0 && !restart_pending_ &&
+      features < static_cast<std::size_t>(options_.integrity.min_valid_tracks)) {
+    ++integrity_.frames_blind;
+    return CoastCycle(nullptr);
+  }
   // With an IMU the process input is the preintegrated IMU: a motion input is not used.
   const Pose<double>* motion = inertial_ ? nullptr : AcceptMotion(motion_input);
   Status s = AddFrameState(motion);
@@ -348,12 +356,18 @@ const Pose<double>* Pipeline::AcceptMotion(const Pose<double>* motion) {
 Status Pipeline::Coast(const Pose<double>* motion_input) {
   if (!configured_) return Status::kNotConfigured;
   if (!has_previous_pose_) return Status::kEmpty;
+  utime_ = CoastUtime();
+  ++seq_;
+  return CoastCycle(motion_input);
+}
+
+// The coasted state of the cycle stamped utime_, seq_ (a missing pair, or a blind frame).
+Status Pipeline::CoastCycle(const Pose<double>* motion_input) {
   const Pose<double>* motion = inertial_ ? nullptr : AcceptMotion(motion_input);
   double inflation = 1.0;
   last_motion_ = FrameMotion(motion, &inflation);
   const Pose<double> before = coast_frames_ > 0 ? coast_pose_ : previous_pose_;
   ++coast_frames_;
-  utime_ = CoastUtime();
   bool has_motion = motion != nullptr;
   if (inertial_) {
     has_motion = CoastInertial();
@@ -362,7 +376,6 @@ Status Pipeline::Coast(const Pose<double>* motion_input) {
   }
   if (last_dt_s_ > 0.0) velocity_world_ = (coast_pose_.t - before.t) / last_dt_s_;
   if (inertial_ && has_motion) velocity_world_ = coast_state_velocity_;
-  ++seq_;
   estimator::IntegrityEvidence e;
   e.has_motion_input = has_motion;
   e.motion_rejected = motion_refused_;
@@ -624,7 +637,11 @@ void Pipeline::AssessIntegrity(bool filter_reset, bool has_motion) {
     std::nth_element(disparities_.get(), mid, disparities_.get() + num_disparities_);
     e.median_disparity_px = *mid;
   }
-  report_ = monitor_.Assess(e);
+  // Stereo-inertial: a frame whose pose no tracked measurement constrains (the first one after
+  // an outage: every landmark is new) is carried by the IMU, and graded like a coasted cycle.
+  const bool imu_carried = inertial_ && !filter_reset && !first_frame && !imu_gap_ &&
+                           e.tracked_measurements < options_.integrity.min_valid_tracks;
+  report_ = imu_carried ? monitor_.AssessCoast(e) : monitor_.Assess(e);
   integrity_.measurements_gated += summary.measurements_gated;
   integrity_.measurements_rejected += summary.measurements_rejected;
   integrity_.landmarks_rejected += summary.landmarks_rejected;

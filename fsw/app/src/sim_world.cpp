@@ -1,6 +1,7 @@
 #include "swf/app/sim_world.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <random>
@@ -105,6 +106,8 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
              core::ToString(a) + ")";
     return false;
   }
+  black_from_ = config.inject_black_from;
+  black_frames_ = config.inject_black_frames;
   // The simulated IMU, drawn once from the seed: same configuration, same motion inputs.
   imu_ = config.sim.imu;
   motion_.assign(num_frames_, MotionInput{});
@@ -182,6 +185,12 @@ bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std
   if (failed) {
     *error = "sim: rendering failed";
     return false;
+  }
+  // Fault injection: the camera blinded (black pairs) over inject.black_*.
+  for (std::int64_t k = black_from_; k >= 0 && k < black_from_ + black_frames_ && k < num_frames_;
+       ++k) {
+    std::fill(left_[k].begin(), left_[k].end(), std::uint8_t{0});
+    std::fill(right_[k].begin(), right_[k].end(), std::uint8_t{0});
   }
   return true;
 }

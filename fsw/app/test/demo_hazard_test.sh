@@ -2,7 +2,11 @@
 # The flight demo's hazard results (issue 8): swf-fsw on config/demo.cfg (full size: the rock
 # field, the orbital target, 512x384, 100 -> 10 m) under lockstep pacing, without LCM, must write
 # a summary whose final hazard map has a detection probability over resolved truth rocks and a
-# safe site outside the footprint of every truth hazard.
+# safe site outside the footprint of every truth hazard. Then the same descent with the camera
+# blinded for 2 s mid-descent (black pairs, inject.black_from): the IMU carries the state (the
+# frames coasted and flagged, none INVALID, the position error inside its published covariance:
+# NEES below the chi-square 3-dof 0.999 point), the filter re-acquires (at most 8 frames after
+# the blind not VALID) and the run says it was degraded (exit 3).
 # usage: demo_hazard_test.sh SWF-FSW CONFIG
 set -eu
 fsw=$1 cfg=$2
@@ -29,6 +33,37 @@ if site is None:
     problems.append("no safe site")
 elif site["on_truth_hazard"] or site["clearance_to_truth_hazard_m"] <= 1.5:
     problems.append("the safe site is within the 1.5 m footprint of a truth hazard")
+for p in problems:
+    print("FAIL:", p, file=sys.stderr)
+sys.exit(1 if problems else 0)
+PY
+
+rc=0
+"$fsw" --config "$cfg" --set "lcm.publish: false" --set "pacing: lockstep" \
+  --set "rt.mlockall: false" --set "rt.priority: 0" --set "inject.black_from: 40" \
+  --set "summary.path: $dir/blind.json" || rc=$?
+[ "$rc" -eq 3 ] || { echo "FAIL: the blinded run exited $rc, not 3 (degraded)" >&2; exit 1; }
+/usr/bin/python3 - "$dir/blind.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+i, nees = s["integrity"], s["position_nees"]
+blind = nees[40:60]
+print("blind: integrity", {k: i[k] for k in ("frames_valid", "frames_degraded", "frames_invalid",
+                                             "frames_blind", "restarts")})
+print("blind: position NEES over the 20 black frames, max %.2f" % max(blind))
+problems = []
+if i["frames_blind"] != 20 or i["frames_coasted"] != 20:
+    problems.append("not every black frame was coasted on the IMU")
+if i["frames_invalid"] != 0 or i["restarts"] != 0:
+    problems.append("the blinded run went INVALID or restarted")
+if max(blind) > 16.27:
+    problems.append("the error left the published covariance during the blind (NEES %.1f)" % max(blind))
+if i["flag_counts"][18] < 20:
+    problems.append("the black frames were not flagged CAMERA_OUTAGE")
+if i["frames_valid"] < 91 - 20 - 8:
+    problems.append("the filter did not re-acquire (%d VALID frames)" % i["frames_valid"])
+if s["pose_rms_error_m"] > 0.2:
+    problems.append("pose RMS %.3f m" % s["pose_rms_error_m"])
 for p in problems:
     print("FAIL:", p, file=sys.stderr)
 sys.exit(1 if problems else 0)

@@ -50,9 +50,9 @@ struct SimConfig {
 };
 
 // The stereo-inertial estimator (PipelineOptions::imu) and its IMU. With the simulator's unit
-// (sim.imu_unit, also when replaying a log of a sim run) rate, noise, ranges and gravity are the
-// unit's and the unit is mounted at camera_*_imu; otherwise (cameras: the IMU arrives as imu_t
-// over LCM) all of these are as given.
+// (sim.imu_unit, also when replaying a log of a sim run) rate, noise, ranges, bias sigmas and
+// gravity are the unit's and the unit is mounted at camera_*_imu; otherwise (cameras: the IMU
+// arrives as imu_t over LCM) all of these are as given.
 struct ImuConfig {
   bool enabled = false;
   std::string channel;  // LCM channel of the IMU ("" = channel_prefix + "IMU")
@@ -69,6 +69,9 @@ struct ImuConfig {
   double camera_t_imu_m[3] = {0.0, 0.0, 0.0};
   double camera_r_imu_rad[3] = {0.0, 0.0, 0.0};
   double gravity_mps2 = 1.625;  // along world -z (the Moon's surface gravity)
+  // 1-sigma of the biases at start (they start at zero): the datasheet's turn-on bias.
+  double gyro_bias_sigma_radps = 0.01;
+  double accel_bias_sigma_mps2 = 0.1;
   // The IMU's velocity at the first frame, world frame (the state guidance hands over;
   // initial: truth in the simulator takes the true one).
   double initial_velocity_mps[3] = {0.0, 0.0, 0.0};
@@ -152,6 +155,9 @@ struct FswConfig {
   std::int64_t inject_frame = -1;
   std::int64_t inject_frames = 1;
   double inject_ms = 0.0;
+  // The simulated camera blinded: frames [black_from, black_from + black_frames) are black pairs.
+  std::int64_t inject_black_from = -1;
+  std::int64_t inject_black_frames = 20;
 
   ConfigOrigins origins;
 };

@@ -12,6 +12,7 @@
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
+#include "swf/sim/imu_model.hpp"
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
 
@@ -30,7 +31,18 @@ struct EvaluationResult {
   std::int64_t valid_navs = 0;
   std::int64_t protection_violations = 0;
   double max_error_over_protection = 0.0;  // largest true error / protection level (VALID)
+  // Consistency of the published covariance: e^T P^-1 e of the position error against the
+  // output's 3x3 position covariance, per output (NaN where it had none); chi-square with 3
+  // degrees of freedom, mean 3, for a consistent estimator.
+  std::vector<double> position_nees;
+  double mean_position_nees = 0.0;  // over the outputs with a covariance
 };
+
+// The IMU alone from the filter's starting state (its pose, the guidance's velocity, zero
+// biases): each frame interval preintegrated and propagated, no camera. Returns the RMS of the
+// camera position error over the frames, the yardstick stereo-inertial estimation is against.
+double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajectory,
+                      const ImuOptions& imu, const estimator::Pose<double>& initial_world_T_camera);
 
 // The final hazard map against the simulator's hazard truth (sim/hazard.hpp, same thresholds).
 struct HazardEvaluation {
@@ -71,6 +83,7 @@ class Evaluation : public OutputObserver {
     std::int8_t status;
     double hpl_m;
     double vpl_m;
+    double position_covariance[9];
   };
   struct Landmark {
     std::int64_t id;

@@ -101,7 +101,8 @@ struct IntegrityCounters {
   std::int64_t gate_suspensions = 0;
   std::int64_t motion_refused = 0;    // motion inputs outside the envelope (not fused)
   std::int64_t motion_overruled = 0;  // motion inputs the images overruled in the filter
-  std::int64_t frames_coasted = 0;    // cycles without a stereo pair (camera outage)
+  std::int64_t frames_coasted = 0;    // cycles without a stereo pair (camera outage) ...
+  std::int64_t frames_blind = 0;      // ... or, stereo-inertial, with images too poor to measure
   std::int32_t longest_outage_frames = 0;
   std::int64_t flag_counts[estimator::kNumIntegrityFlags] = {};
 };
@@ -178,10 +179,12 @@ class Pipeline {
   // motion: camera_prev_T_camera from the navigation system (nullptr: constant velocity).
   core::Status Estimate(const estimator::Pose<double>* motion);
   // A cycle without a stereo pair (camera stall or loss): the estimate is carried forward by
-  // the motion input (nullptr: the bounded constant-velocity model) with its covariance grown
-  // per cycle, assessed (CAMERA_OUTAGE: DEGRADED, INVALID once the covariance leaves the
-  // envelope) and ready for MakeNav. The next Estimate() fuses the whole outage's motion as one
-  // process factor. kEmpty before the first estimate (nothing to carry).
+  // the motion input (nullptr: the bounded constant-velocity model; stereo-inertial: the IMU)
+  // with its covariance grown per cycle, assessed (CAMERA_OUTAGE: DEGRADED, INVALID once the
+  // covariance leaves the envelope) and ready for MakeNav. The next Estimate() fuses the whole
+  // outage's motion as one process factor. kEmpty before the first estimate (nothing to carry).
+  // The stereo-inertial Estimate() coasts the same way on a frame with fewer features than
+  // integrity.min_valid_tracks (black or blinded images): IntegrityCounters::frames_blind.
   core::Status Coast(const estimator::Pose<double>* motion);
   // The exposure time the next Coast() stands for (the last one plus a frame period).
   std::int64_t CoastUtime() const;
@@ -272,6 +275,7 @@ class Pipeline {
   estimator::Mat15<double> trusted_state_covariance_ = estimator::Mat15<double>::Zero();
   bool imu_gap_ = false;  // this frame's IMU interval bridged a gap or had no sample
   void CoastStereo(double inflation);
+  core::Status CoastCycle(const estimator::Pose<double>* motion);
   estimator::Vec3<double> coast_state_velocity_ = estimator::Vec3<double>::Zero();
   // The motion input if it is inside the envelope, else nullptr (refused and counted).
   const estimator::Pose<double>* AcceptMotion(const estimator::Pose<double>* motion);
