@@ -31,8 +31,8 @@ import subprocess
 import sys
 
 INPUTS = {
-    'ideal': [],
-    'stereo': ['sim.imu: false'],
+    'ideal': ['imu.enabled: false', 'sim.imu: true'],
+    'stereo': ['imu.enabled: false', 'sim.imu: false'],
     'mems': ['sim.imu_unit: mems', 'imu.enabled: true'],
     'tactical': ['sim.imu_unit: tactical', 'imu.enabled: true'],
 }
