@@ -160,5 +160,56 @@ TEST(InertialSwf, AllocatesNothingAndRepeatsBitForBit) {
   }
 }
 
+// GIVEN 2 s of a tilted IMU at rest (noise, a gyroscope bias) and a guidance attitude 50 mrad off
+// in tilt and 0.3 rad off in heading WHEN aligned THEN the tilt is levelled to the accelerometer's
+// noise, the heading is the guidance's, and the gyroscope bias is the mean rate; a vibrating or
+// accelerating IMU, and too few samples, are refused.
+TEST(StaticAlignmentTest, LevelsTheGuidanceAttitudeAndReadsTheGyroBias) {
+  const Vec3<double> gravity(0.0, 0.0, -1.625);
+  const Mat3<double> truth = ExpSO3<double>(Vec3<double>(0.2, -0.1, 1.0));
+  const Vec3<double> bias(0.002, -0.001, 0.003);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<ImuSample<double>> samples(400);
+  for (int k = 0; k < 400; ++k) {
+    samples[k].t_us = 5000 * k;
+    samples[k].seq = k;
+    for (int i = 0; i < 3; ++i) {
+      samples[k].gyro_radps[i] = bias[i] + 1e-3 * noise(rng);
+      samples[k].accel_mps2[i] = (truth.transpose() * -gravity)[i] + 5e-3 * noise(rng);
+    }
+  }
+  const Mat3<double> guess =
+      ExpSO3<double>(Vec3<double>(0.05, 0.0, 0.3)) * truth;  // tilt and heading errors
+  StaticAlignment<double> a;
+  ASSERT_TRUE(
+      AlignStatic(samples.data(), 400, guess, gravity, StaticAlignmentOptions<double>{}, &a));
+  const Vec3<double> up_error =
+      (a.world_R_imu * truth.transpose() * Vec3<double>::UnitZ()) - Vec3<double>::UnitZ();
+  EXPECT_LT(up_error.norm(), 1e-3);  // levelled: 5e-3 / 1.625 / sqrt(400) ~ 2e-4 rad per axis
+  EXPECT_NEAR(a.tilt_correction_rad, 0.05, 0.01);
+  // The heading stays the guidance's: the x axis' horizontal direction is the guess's.
+  const Vec3<double> x_aligned = a.world_R_imu.col(0);
+  const Vec3<double> x_guess = guess.col(0);
+  EXPECT_NEAR(std::atan2(x_aligned.y(), x_aligned.x()), std::atan2(x_guess.y(), x_guess.x()), 0.01);
+  EXPECT_LT((a.gyro_bias_radps - bias).norm(), 3e-4);  // 1e-3 / sqrt(400) = 5e-5 per axis
+  EXPECT_NEAR(a.duration_s, 1.995, 1e-9);
+
+  std::vector<ImuSample<double>> shaken = samples;
+  for (int k = 0; k < 400; ++k) shaken[k].accel_mps2.x() += (k % 2 == 0 ? 1.0 : -1.0);
+  EXPECT_FALSE(
+      AlignStatic(shaken.data(), 400, guess, gravity, StaticAlignmentOptions<double>{}, &a));
+  std::vector<ImuSample<double>> turning = samples;
+  for (int k = 0; k < 400; ++k) turning[k].gyro_radps.z() += 0.1 * std::sin(0.05 * k);
+  EXPECT_FALSE(
+      AlignStatic(turning.data(), 400, guess, gravity, StaticAlignmentOptions<double>{}, &a));
+  std::vector<ImuSample<double>> pushed = samples;
+  for (ImuSample<double>& s : pushed) s.accel_mps2 *= 1.5;  // accelerating along the force
+  EXPECT_FALSE(
+      AlignStatic(pushed.data(), 400, guess, gravity, StaticAlignmentOptions<double>{}, &a));
+  EXPECT_FALSE(
+      AlignStatic(samples.data(), 10, guess, gravity, StaticAlignmentOptions<double>{}, &a));
+}
+
 }  // namespace
 }  // namespace swf::estimator

@@ -123,51 +123,6 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
   return o;
 }
 
-// The stereo-inertial estimator's IMU (imu.enabled; config.hpp ImuConfig): the simulator's unit
-// when sim.imu_unit names one, else imu.* as given. The velocity at start: the simulator's
-// (initial: truth) or imu.initial_velocity_mps.
-ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
-  const ImuConfig& k = c.imu;
-  ImuOptions o;
-  o.enabled = k.enabled;
-  double rate_hz = k.rate_hz;
-  o.noise.gyro_noise_density = k.gyro_noise_density;
-  o.noise.gyro_random_walk = k.gyro_random_walk;
-  o.noise.accel_noise_density = k.accel_noise_density;
-  o.noise.accel_random_walk = k.accel_random_walk;
-  o.stream.gyro_range_radps = k.gyro_range_radps;
-  o.stream.accel_range_mps2 = k.accel_range_mps2;
-  o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -k.gravity_mps2);
-  o.first_gyro_bias_sigma_radps = k.gyro_bias_sigma_radps;
-  o.first_accel_bias_sigma_mps2 = k.accel_bias_sigma_mps2;
-  sim::ImuModelOptions unit;
-  if (SimImuUnit(c, &unit)) {
-    rate_hz = unit.rate_hz;
-    o.noise = sim::NoiseModelOf(unit);
-    o.stream.gyro_range_radps = unit.gyro.range;
-    o.stream.accel_range_mps2 = unit.accel.range;
-    o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -unit.gravity_mps2);
-    // The unit's own spread at start: turn-on offset and the in-run term's stationary sigma.
-    o.first_gyro_bias_sigma_radps =
-        std::hypot(unit.gyro.turn_on_bias_sigma, unit.gyro.bias_instability);
-    o.first_accel_bias_sigma_mps2 =
-        std::hypot(unit.accel.turn_on_bias_sigma, unit.accel.bias_instability);
-  }
-  o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / rate_hz));
-  estimator::Pose<double> camera_T_imu;
-  camera_T_imu.t =
-      estimator::Vec3<double>(k.camera_t_imu_m[0], k.camera_t_imu_m[1], k.camera_t_imu_m[2]);
-  camera_T_imu.R = estimator::ExpSO3<double>(
-      estimator::Vec3<double>(k.camera_r_imu_rad[0], k.camera_r_imu_rad[1], k.camera_r_imu_rad[2]));
-  o.imu_T_camera = camera_T_imu.Inverse();
-  o.initial_velocity_world_mps =
-      truth != nullptr
-          ? truth->Options().velocity_world_mps
-          : estimator::Vec3<double>(k.initial_velocity_mps[0], k.initial_velocity_mps[1],
-                                    k.initial_velocity_mps[2]);
-  return o;
-}
-
 // The run's verdict, computed from the numbers (fsw/app/README.md "Results and exit codes"):
 //   failed   (exit 1) the run could not do its job: the loop or the source failed, the log was
 //            damaged, outputs were lost, the final estimate is INVALID, or (with truth) a VALID
@@ -287,13 +242,15 @@ void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
   std::fprintf(f,
                "  \"imu\": {\"unit\": \"%s\", \"accepted\": %lld, \"out_of_order\": %lld, "
                "\"duplicated\": %lld, \"invalid\": %lld, \"saturated\": %lld, "
-               "\"missing\": %lld, \"overflowed\": %lld, \"intervals_bridged\": %lld",
+               "\"missing\": %lld, \"overflowed\": %lld, \"intervals_bridged\": %lld, "
+               "\"static_start\": %d, \"static_tilt_correction_rad\": %s",
                c.sim.imu_unit != "none" ? c.sim.imu_unit.c_str() : "external",
                static_cast<long long>(s.accepted), static_cast<long long>(s.out_of_order),
                static_cast<long long>(s.duplicated), static_cast<long long>(s.invalid),
                static_cast<long long>(s.saturated), static_cast<long long>(s.missing_samples),
                static_cast<long long>(r.counts.overflowed),
-               static_cast<long long>(r.counts.intervals_bridged));
+               static_cast<long long>(r.counts.intervals_bridged), r.counts.static_start,
+               JsonNumber(r.counts.static_tilt_correction_rad).c_str());
   const auto vec = [&](const char* key, const estimator::Vec3<double>& v) {
     std::fprintf(f, ", \"%s\": [%s, %s, %s]", key, JsonNumber(v.x()).c_str(),
                  JsonNumber(v.y()).c_str(), JsonNumber(v.z()).c_str());

@@ -272,6 +272,7 @@ const std::map<std::string, Setter>& Fields() {
     f["sim.imu_unit"] =
         OneOf([](FswConfig* c) { return &c->sim.imu_unit; }, {"none", "mems", "tactical"});
     f["imu.enabled"] = Bool([](FswConfig* c) { return &c->imu.enabled; });
+    f["imu.static_start"] = Bool([](FswConfig* c) { return &c->imu.static_start; });
     f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
     f["imu.rate_hz"] = ImuNumber(&ImuConfig::rate_hz, 10000.0);
     f["imu.gyro_noise_density"] = ImuNumber(&ImuConfig::gyro_noise_density, 1.0);

@@ -13,7 +13,8 @@ bool ImuOptions::Valid() const {
          initial_velocity_world_mps.allFinite() && imu_T_camera.t.allFinite() &&
          imu_T_camera.R.allFinite() && finite_non_negative(first_velocity_sigma_mps) &&
          finite_non_negative(first_gyro_bias_sigma_radps) &&
-         finite_non_negative(first_accel_bias_sigma_mps2);
+         finite_non_negative(first_accel_bias_sigma_mps2) &&
+         finite_non_negative(static_velocity_sigma_mps) && static_alignment.min_samples >= 2;
 }
 
 Status ImuInput::Configure(const ImuOptions& options) {
@@ -31,7 +32,16 @@ Status ImuInput::Configure(const ImuOptions& options) {
   last_interval_ = ImuIntervalReport{};
   overflowed_ = 0;
   intervals_bridged_ = 0;
+  static_start_ = 0;
+  static_tilt_correction_rad_ = 0.0;
   return Status::kOk;
+}
+
+int ImuInput::Buffered(std::int64_t t_us, const estimator::ImuSample<double>** samples) const {
+  *samples = samples_.get();
+  int n = 0;
+  while (n < count_ && samples_[n].t_us <= t_us) ++n;
+  return n;
 }
 
 estimator::ImuSampleVerdict ImuInput::Add(const estimator::ImuSample<double>& sample) {
@@ -107,6 +117,8 @@ ImuCounts ImuInput::Counts() const {
   c.stream = checker_.Counts();
   c.overflowed = overflowed_;
   c.intervals_bridged = intervals_bridged_;
+  c.static_start = static_start_;
+  c.static_tilt_correction_rad = static_tilt_correction_rad_;
   return c;
 }
 

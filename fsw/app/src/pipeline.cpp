@@ -267,15 +267,52 @@ Status Pipeline::AddFirstState() {
   estimator::NavState<double> first;
   first.world_T_imu = options_.initial_world_T_camera * options_.imu.imu_T_camera.Inverse();
   first.velocity_world_mps = options_.imu.initial_velocity_world_mps;
-  Status s = inertial_->AddPose(first);
-  if (s == Status::kOk) s = imu_.Start(utime_, first.biases);
-  trusted_state_ = first;
-  trusted_state_covariance_.setZero();
   estimator::Vec15<double> sigma;
   sigma << Vec3<double>::Constant(options_.swf.first_pose_sigma_m),
       Vec3<double>::Constant(options_.swf.first_pose_sigma_rad), inertial_model_.FirstStateSigmas();
+  const bool aligned = options_.imu.static_start && AlignStaticStart(&first, &sigma);
+  trusted_state_ = first;
+  trusted_state_covariance_.setZero();
   trusted_state_covariance_.diagonal() = sigma.cwiseAbs2();
+  // The guidance's start takes the filter's own first-state prior (the same sigmas).
+  Status s = aligned ? inertial_->AddFirstPose(first, trusted_state_covariance_)
+                     : inertial_->AddPose(first);
+  if (s == Status::kOk) s = imu_.Start(utime_, first.biases);
   return s;
+}
+
+// The static start (ImuOptions::static_start): the samples up to the first exposure level the
+// guidance's attitude and give the gyroscope bias; the camera stays where guidance put it. The
+// sigmas: the tilt as well as the accelerometer bias lets it be known (sigma_ba / g, and never
+// tighter than the guidance's), the gyroscope bias the mean's standard error and its drift over
+// the static period, the velocity at rest. Not at rest: false, counted; the guidance's state
+// stands.
+bool Pipeline::AlignStaticStart(estimator::NavState<double>* first,
+                                estimator::Vec15<double>* sigma) {
+  using Model = estimator::InertialStereoModel<double>;
+  const ImuOptions& o = options_.imu;
+  const estimator::ImuSample<double>* samples = nullptr;
+  const int n = imu_.Buffered(utime_, &samples);
+  estimator::StaticAlignment<double> a;
+  if (!estimator::AlignStatic(samples, n, first->world_T_imu.R, o.gravity_world_mps2,
+                              o.static_alignment, &a)) {
+    imu_.NoteStaticStart(-1, 0.0);
+    return false;
+  }
+  imu_.NoteStaticStart(1, a.tilt_correction_rad);
+  first->world_T_imu.R = a.world_R_imu;
+  first->world_T_imu.t = options_.initial_world_T_camera.t - a.world_R_imu * o.imu_T_camera.t;
+  first->velocity_world_mps.setZero();
+  first->biases.gyro_radps = a.gyro_bias_radps;
+  const double tilt_sigma = std::max(options_.swf.first_pose_sigma_rad,
+                                     o.first_accel_bias_sigma_mps2 / o.gravity_world_mps2.norm());
+  const double t = std::max(a.duration_s, 1e-3);
+  const double gyro_sigma =
+      o.noise.gyro_noise_density / std::sqrt(t) + o.noise.gyro_random_walk * std::sqrt(t);
+  sigma->segment<3>(Model::kRotation).setConstant(tilt_sigma);
+  sigma->segment<3>(Model::kVelocity).setConstant(o.static_velocity_sigma_mps);
+  sigma->segment<3>(Model::kGyroBias).setConstant(gyro_sigma);
+  return true;
 }
 
 // The IMU from the newest state to this exposure (an outage's cycles included) as the process

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <random>
 #include <thread>
@@ -206,6 +207,49 @@ bool SimImuUnit(const FswConfig& config, sim::ImuModelOptions* unit) {
   unit->camera_T_imu.R = estimator::ExpSO3<double>(
       Eigen::Vector3d(c.camera_r_imu_rad[0], c.camera_r_imu_rad[1], c.camera_r_imu_rad[2]));
   return true;
+}
+
+ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
+  const ImuConfig& k = c.imu;
+  ImuOptions o;
+  o.enabled = k.enabled;
+  double rate_hz = k.rate_hz;
+  o.noise.gyro_noise_density = k.gyro_noise_density;
+  o.noise.gyro_random_walk = k.gyro_random_walk;
+  o.noise.accel_noise_density = k.accel_noise_density;
+  o.noise.accel_random_walk = k.accel_random_walk;
+  o.stream.gyro_range_radps = k.gyro_range_radps;
+  o.stream.accel_range_mps2 = k.accel_range_mps2;
+  o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -k.gravity_mps2);
+  o.first_gyro_bias_sigma_radps = k.gyro_bias_sigma_radps;
+  o.first_accel_bias_sigma_mps2 = k.accel_bias_sigma_mps2;
+  o.static_start = k.static_start;
+  sim::ImuModelOptions unit;
+  if (SimImuUnit(c, &unit)) {
+    rate_hz = unit.rate_hz;
+    o.noise = sim::NoiseModelOf(unit);
+    o.stream.gyro_range_radps = unit.gyro.range;
+    o.stream.accel_range_mps2 = unit.accel.range;
+    o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -unit.gravity_mps2);
+    // The unit's own spread at start: turn-on offset and the in-run term's stationary sigma.
+    o.first_gyro_bias_sigma_radps =
+        std::hypot(unit.gyro.turn_on_bias_sigma, unit.gyro.bias_instability);
+    o.first_accel_bias_sigma_mps2 =
+        std::hypot(unit.accel.turn_on_bias_sigma, unit.accel.bias_instability);
+  }
+  o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / rate_hz));
+  estimator::Pose<double> camera_T_imu;
+  camera_T_imu.t =
+      estimator::Vec3<double>(k.camera_t_imu_m[0], k.camera_t_imu_m[1], k.camera_t_imu_m[2]);
+  camera_T_imu.R = estimator::ExpSO3<double>(
+      estimator::Vec3<double>(k.camera_r_imu_rad[0], k.camera_r_imu_rad[1], k.camera_r_imu_rad[2]));
+  o.imu_T_camera = camera_T_imu.Inverse();
+  o.initial_velocity_world_mps =
+      truth != nullptr
+          ? truth->Options().velocity_world_mps
+          : estimator::Vec3<double>(k.initial_velocity_mps[0], k.initial_velocity_mps[1],
+                                    k.initial_velocity_mps[2]);
+  return o;
 }
 
 bool SimWorld::NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) {

@@ -50,6 +50,7 @@ struct Rig {
     po.process_sigma_m = 0.05;
     po.process_sigma_rad = 0.001;
     po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
+    po.imu = ImuOptionsFor(config, &world->Trajectory());
     EXPECT_EQ(pipeline->Configure(po), core::Status::kOk);
     hazard::HazardMapperOptions ho;
     ho.camera = pipeline->Camera();
@@ -109,21 +110,27 @@ TEST(FlightLoopTest, HazardClassesMapToTheSchema) {
 // GIVEN the whole simulated descent (100 m -> 10 m, 91 frames) WHEN every frame-group cycle runs
 // inside an allocation-counting scope, hazard mapping every 5th frame included, THEN not one
 // allocation happens, every snapshot frame gives a hazard map, and the estimate stays within a
-// metre of the truth.
-TEST(FlightLoopTest, NoAllocationOnTheRealTimePathOverAWholeDescent) {
-  Rig rig(
-      "source: sim\nsim.width_px: 256\nsim.height_px: 192\nsim.terrain_size: 1024\n"
-      "rate_hz: 10\n");
+// metre of the truth. Stereo-only with the motion input, and stereo-inertial with the simulated
+// MEMS IMU (its samples handed over and queued for recording every cycle).
+class FlightLoopAllocations : public ::testing::TestWithParam<bool> {};
+
+TEST_P(FlightLoopAllocations, NoAllocationOnTheRealTimePathOverAWholeDescent) {
+  const bool inertial = GetParam();
+  Rig rig(std::string("source: sim\nsim.width_px: 256\nsim.height_px: 192\n"
+                      "sim.terrain_size: 1024\nrate_hz: 10\n") +
+          (inertial ? "sim.imu_unit: mems\nimu.enabled: true\n" : ""));
   ASSERT_EQ(rig.world->NumFrames(), 91);
+  ASSERT_EQ(rig.pipeline->Inertial(), inertial);
   HazardCollector hazards;
   rig.output.AddObserver(&hazards);
   FlightLoop loop;
   rig.loop_options.rate_hz = 10.0;
   rig.loop_options.hazard_every = 5;
   rig.loop_options.health_every = 10;
-  ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
-                           rig.channels.get(), rig.world.get(), rig.hazard.get()),
-            core::Status::kOk);
+  ASSERT_EQ(
+      loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(), rig.channels.get(),
+                     rig.world.get(), rig.hazard.get(), inertial ? rig.world.get() : nullptr),
+      core::Status::kOk);
   std::uint64_t allocations = 0;
   int frames = 0;
   for (;;) {
@@ -154,7 +161,13 @@ TEST(FlightLoopTest, NoAllocationOnTheRealTimePathOverAWholeDescent) {
   const Eigen::Vector3d estimate(nav.position_world_m[0], nav.position_world_m[1],
                                  nav.position_world_m[2]);
   EXPECT_LT((estimate - truth).norm(), 1.0) << estimate.transpose();
+  if (inertial) {
+    EXPECT_EQ(loop.Counters().imu_samples, 3601);  // 9 s at 400 Hz and the first sample
+    EXPECT_EQ(rig.pipeline->ImuStreamCounts().stream.accepted, 3601);
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(StereoAndInertial, FlightLoopAllocations, ::testing::Bool());
 
 // GIVEN a short descent WHEN it runs once with the hazard group on its own thread (lockstep
 // pacing) and once synchronously (Step) THEN every snapshot frame is mapped in both runs and the

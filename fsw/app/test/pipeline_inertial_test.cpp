@@ -209,5 +209,84 @@ TEST_P(PipelineInertialBlind, TwoSecondsBlindAreCarriedByTheImuAndReacquired) {
 
 INSTANTIATE_TEST_SUITE_P(NoPairsOrBlackFrames, PipelineInertialBlind, ::testing::Bool());
 
+// GIVEN the simulated hover (at rest, 50 m, the tactical unit) and a guidance attitude 100 mrad
+// off in tilt WHEN the pipeline starts at frame 10 with imu.static_start THEN the second of
+// samples before it levels the attitude to what the accelerometer's own bias allows (its
+// horizontal part over g: on the Moon's 1.625 m/s^2 a 1 mg bias is 6 mrad), and the gyroscope
+// bias is read to its noise over that second (3 sigma); without the static start the first
+// state keeps the guidance's tilt error.
+TEST(PipelineInertialTest, StaticStartLevelsTheAttitudeAndReadsTheGyroBias) {
+  FswConfig config;
+  std::string error;
+  ASSERT_TRUE(
+      ParseConfig("source: sim\nsim.scenario: hover\nsim.frames: 20\nsim.width_px: 256\n"
+                  "sim.height_px: 192\nsim.terrain_size: 1024\nrate_hz: 10\n"
+                  "sim.imu_unit: tactical\nimu.enabled: true\nimu.static_start: true\n",
+                  "test", &config, &error))
+      << error;
+  SimWorld world;
+  ASSERT_TRUE(world.Build(config, &error)) << error;
+  ASSERT_TRUE(world.RenderAll(2, nullptr, &error)) << error;
+  const sim::ImuModel& unit = *world.ImuUnit();
+  const int first = 10;
+  const estimator::Pose<double> truth = world.Trajectory().WorldTCamera(first);
+  for (const bool static_start : {true, false}) {
+    PipelineOptions po;
+    po.camera = world.Camera();
+    po.width_px = world.Width();
+    po.height_px = world.Height();
+    po.frontend.harris.bucket_cols = po.width_px / 40;
+    po.frontend.harris.bucket_rows = po.height_px / 40;
+    po.swf.window_size = 5;
+    po.imu = ImuOptionsFor(config, &world.Trajectory());
+    po.imu.static_start = static_start;
+    po.initial_world_T_camera = truth;
+    po.initial_world_T_camera.R = estimator::ExpSO3<double>(Vec3<double>(0.1, 0.0, 0.0)) * truth.R;
+    Pipeline pipeline;
+    ASSERT_EQ(pipeline.Configure(po), core::Status::kOk);
+    const std::int64_t utime = world.Trajectory().FrameTimeNs(first) / 1000;
+    std::size_t k = 0;
+    for (; k < unit.Samples().size() && unit.Samples()[k].t_us <= utime; ++k)
+      pipeline.AddImu(unit.Samples()[k]);
+    PipelineFrame frame;
+    frame.left =
+        frontend::GrayView{world.Left(first), world.Width(), world.Height(), world.Width()};
+    frame.right =
+        frontend::GrayView{world.Right(first), world.Width(), world.Height(), world.Width()};
+    frame.utime = utime;
+    frame.seq = first;
+    ASSERT_EQ(pipeline.Rectify(frame), core::Status::kOk);
+    ASSERT_EQ(pipeline.Track(), core::Status::kOk);
+    ASSERT_EQ(pipeline.Estimate(nullptr), core::Status::kOk);
+    const estimator::NavState<double>* x = pipeline.NewestNavState();
+    ASSERT_NE(x, nullptr);
+    const estimator::Mat3<double> world_R_camera = x->world_T_imu.R * po.imu.imu_T_camera.R;
+    const double tilt_error =
+        (world_R_camera * truth.R.transpose() * Vec3<double>::UnitZ() - Vec3<double>::UnitZ())
+            .norm();
+    const double gyro_error = (x->biases.gyro_radps - unit.TrueBiases()[k - 1].gyro_radps).norm();
+    // What levelling on a biased accelerometer must leave: the bias's horizontal part over g.
+    const Vec3<double> bias_world =
+        truth.R * po.imu.imu_T_camera.R * unit.TrueBiases()[k - 1].accel_mps2;
+    const double expected_tilt = bias_world.head<2>().norm() / 1.625;
+    const double gyro_bound = 3.0 * std::sqrt(3.0) * po.imu.noise.gyro_noise_density;  // 1 s
+    const ImuCounts counts = pipeline.ImuStreamCounts();
+    std::printf(
+        "static start %s: tilt error %.2f mrad (accelerometer bias allows %.2f), gyro bias error "
+        "%.2e rad/s (3 sigma of the mean %.2e; %lld samples)\n",
+        static_start ? "on" : "off", 1e3 * tilt_error, 1e3 * expected_tilt, gyro_error, gyro_bound,
+        static_cast<long long>(counts.stream.accepted));
+    if (static_start) {
+      EXPECT_EQ(counts.static_start, 1);
+      EXPECT_NEAR(counts.static_tilt_correction_rad, 0.1, 0.03);
+      EXPECT_NEAR(tilt_error, expected_tilt, 0.005);
+      EXPECT_LT(gyro_error, gyro_bound);
+    } else {
+      EXPECT_EQ(counts.static_start, 0);
+      EXPECT_GT(tilt_error, 0.09);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace swf::app

@@ -252,4 +252,68 @@ struct InertialStereoModel {
   }
 };
 
+// Static alignment: an IMU at rest reads its gyroscope bias as the mean rate, and minus gravity
+// as the mean specific force (f = R^T (a - g) with a = 0). Given the attitude guidance hands
+// over (world_R_imu), the mean force rotated into the world must point along -g: the smallest
+// rotation doing so (about a horizontal axis, so the guidance's heading is kept: a tactical or
+// MEMS gyroscope cannot find north from the Earth's or a planet's rotation) levels it. Refused
+// (false) when the samples do not look static: fewer than min_samples, a rate or force spread
+// (standard deviation per axis) above the bounds, or a mean force whose norm is more than
+// max_gravity_error from |g|. The biases' and attitude's uncertainty stay the caller's to state.
+template <typename S>
+struct StaticAlignmentOptions {
+  int min_samples = 50;
+  S max_rate_std_radps = S(0.01);
+  S max_force_std_mps2 = S(0.2);
+  S max_gravity_error_mps2 = S(0.3);
+};
+
+template <typename S>
+struct StaticAlignment {
+  Mat3<S> world_R_imu = Mat3<S>::Identity();
+  Vec3<S> gyro_bias_radps = Vec3<S>::Zero();
+  S tilt_correction_rad = S(0);  // angle of the levelling rotation applied to the guidance
+  S duration_s = S(0);
+};
+
+template <typename S>
+bool AlignStatic(const ImuSample<S>* samples, int count, const Mat3<S>& guess_world_R_imu,
+                 const Vec3<S>& gravity_world_mps2, const StaticAlignmentOptions<S>& options,
+                 StaticAlignment<S>* out) {
+  if (count < options.min_samples || count < 2) return false;
+  Vec3<S> rate_sum = Vec3<S>::Zero();
+  Vec3<S> force_sum = Vec3<S>::Zero();
+  Vec3<S> rate_sq = Vec3<S>::Zero();
+  Vec3<S> force_sq = Vec3<S>::Zero();
+  for (int k = 0; k < count; ++k) {
+    rate_sum += samples[k].gyro_radps;
+    force_sum += samples[k].accel_mps2;
+    rate_sq += samples[k].gyro_radps.cwiseAbs2();
+    force_sq += samples[k].accel_mps2.cwiseAbs2();
+  }
+  const S n = S(count);
+  const Vec3<S> rate = rate_sum / n;
+  const Vec3<S> force = force_sum / n;
+  const Vec3<S> rate_var = (rate_sq / n - rate.cwiseAbs2()).cwiseMax(S(0));
+  const Vec3<S> force_var = (force_sq / n - force.cwiseAbs2()).cwiseMax(S(0));
+  const S g = gravity_world_mps2.norm();
+  if (!rate.allFinite() || !force.allFinite() || !(g > S(0)) ||
+      rate_var.cwiseSqrt().maxCoeff() > options.max_rate_std_radps ||
+      force_var.cwiseSqrt().maxCoeff() > options.max_force_std_mps2 ||
+      std::abs(force.norm() - g) > options.max_gravity_error_mps2) {
+    return false;
+  }
+  // Rotate the world force direction onto -g (the up direction) by the smallest rotation.
+  const Vec3<S> measured_up = (guess_world_R_imu * force).normalized();
+  const Vec3<S> up = -gravity_world_mps2 / g;
+  const Vec3<S> axis = measured_up.cross(up);
+  const S angle = std::atan2(axis.norm(), measured_up.dot(up));
+  const Vec3<S> phi = axis.norm() > S(0) ? Vec3<S>(axis.normalized() * angle) : Vec3<S>::Zero();
+  out->world_R_imu = ExpSO3<S>(phi) * guess_world_R_imu;
+  out->gyro_bias_radps = rate;
+  out->tilt_correction_rad = angle;
+  out->duration_s = S(samples[count - 1].t_us - samples[0].t_us) * S(1e-6);
+  return true;
+}
+
 }  // namespace swf::estimator

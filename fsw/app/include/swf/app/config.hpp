@@ -75,6 +75,11 @@ struct ImuConfig {
   // The IMU's velocity at the first frame, world frame (the state guidance hands over;
   // initial: truth in the simulator takes the true one).
   double initial_velocity_mps[3] = {0.0, 0.0, 0.0};
+  // The vehicle stands still before the first frame (on the pad, a parked rover): the samples up
+  // to it give the gyroscope bias and level the attitude, the velocity starts at zero
+  // (ImuOptions::static_start). An IMU cannot tell rest from constant velocity: set it only when
+  // the vehicle is known to be at rest.
+  bool static_start = false;
 };
 
 struct CameraConfig {

@@ -22,6 +22,7 @@
 #include "swf/estimator/geometry.hpp"
 #include "swf/estimator/imu_preintegration.hpp"
 #include "swf/estimator/imu_stream.hpp"
+#include "swf/estimator/inertial_model.hpp"
 
 namespace swf::app {
 
@@ -41,6 +42,13 @@ struct ImuOptions {
   double first_velocity_sigma_mps = 0.1;
   double first_gyro_bias_sigma_radps = 0.01;
   double first_accel_bias_sigma_mps2 = 0.1;
+  // Static start: the vehicle stands still before the first frame; the samples up to it give
+  // the gyroscope bias and level the guidance's attitude (estimator::AlignStatic), and the
+  // velocity starts at zero with static_velocity_sigma_mps. Refused (counted) when the samples
+  // do not look static: the start then takes the guidance's state.
+  bool static_start = false;
+  estimator::StaticAlignmentOptions<double> static_alignment;
+  double static_velocity_sigma_mps = 0.01;
 
   bool Valid() const;
 };
@@ -56,6 +64,10 @@ struct ImuCounts {
   estimator::ImuStreamCounts stream;   // every sample's verdict
   std::int64_t overflowed = 0;         // accepted but lost: the ring was full (oldest dropped)
   std::int64_t intervals_bridged = 0;  // integrations that held a sample over a gap
+  // Static start (ImuOptions::static_start): 1 aligned, -1 refused (not at rest), 0 not asked;
+  // the levelling applied to the guidance's attitude.
+  std::int32_t static_start = 0;
+  double static_tilt_correction_rad = 0.0;
 };
 
 class ImuInput {
@@ -83,6 +95,13 @@ class ImuInput {
   const ImuIntervalReport& LastInterval() const { return last_interval_; }
   ImuCounts Counts() const;
   const ImuOptions& Options() const { return options_; }
+  // The accepted samples stamped at or before t_us that wait in the ring (before Start: all of
+  // them since Configure, up to kMaxImuSamples), for the static start.
+  int Buffered(std::int64_t t_us, const estimator::ImuSample<double>** samples) const;
+  void NoteStaticStart(std::int32_t outcome, double tilt_correction_rad) {
+    static_start_ = outcome;
+    static_tilt_correction_rad_ = tilt_correction_rad;
+  }
   std::int64_t IntegratedTo() const { return integrated_to_us_; }
 
  private:
@@ -100,6 +119,8 @@ class ImuInput {
   ImuIntervalReport last_interval_;
   std::int64_t overflowed_ = 0;
   std::int64_t intervals_bridged_ = 0;
+  std::int32_t static_start_ = 0;
+  double static_tilt_correction_rad_ = 0.0;
 };
 
 }  // namespace swf::app

@@ -268,6 +268,7 @@ class Pipeline {
   // the trusted state carried by the IMU; the coasted state; the IMU's disagreement with the
   // estimate (MotionDisagreement's counterpart).
   core::Status AddInertialState();
+  bool AlignStaticStart(estimator::NavState<double>* first, estimator::Vec15<double>* sigma);
   core::Status RestartInertial();
   bool CoastInertial();
   double ImuDisagreement() const;

@@ -31,6 +31,11 @@ sim::RigOptions SimRig(const FswConfig& config);
 // false for "none".
 bool SimImuUnit(const FswConfig& config, sim::ImuModelOptions* unit);
 
+// The stereo-inertial estimator's IMU (imu.enabled; config.hpp ImuConfig): the simulator's unit
+// when sim.imu_unit names one, else imu.* as given. The velocity at start: the truth's
+// (`truth`: the simulated trajectory with initial: truth) or imu.initial_velocity_mps.
+ImuOptions ImuOptionsFor(const FswConfig& config, const sim::Trajectory* truth);
+
 // The trajectory (and rig) of a sim configuration. Cheap (no terrain) unless `sim.target:
 // orbital`: the descent target then comes from `terrain` (built here when null), and `chosen`
 // (optional) receives the selection.
