@@ -10,10 +10,10 @@
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
 
+#include "swf/app/imu_message.hpp"
 #include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
-#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
@@ -172,14 +172,7 @@ void OutputThread::Handle(const RecordRef& ref) {
       const ImuRecord& r = channels_->imus[ref.slot];
       swf_msgs::imu_t& m = impl_->imu;
       for (std::int32_t k = 0; k < r.count; ++k) {
-        const estimator::ImuSample<double>& s = r.samples[k];
-        m.utime = s.t_us;
-        m.seq = s.seq;
-        for (int i = 0; i < 3; ++i) {
-          m.angular_rate_radps[i] = s.gyro_radps[i];
-          m.specific_force_mps2[i] = s.accel_mps2[i];
-        }
-        m.flags = static_cast<std::int32_t>(s.flags);
+        ImuMessageOf(r.samples[k], &m);
         const int n = m.encode(buf, 0, max);
         if (n < 0) {
           ++counters_.encode_errors;
@@ -367,15 +360,7 @@ bool LcmImuInput::Start(const std::string& lcm_url, const std::string& channel,
           self->undecodable_.fetch_add(1, std::memory_order_relaxed);
           return;
         }
-        estimator::ImuSample<double> s;
-        s.t_us = m.utime;
-        s.seq = m.seq;
-        for (int i = 0; i < 3; ++i) {
-          s.gyro_radps[i] = m.angular_rate_radps[i];
-          s.accel_mps2[i] = m.specific_force_mps2[i];
-        }
-        s.flags = static_cast<std::uint32_t>(m.flags);
-        if (self->queue_.TryPush(s) != core::Status::kOk)
+        if (self->queue_.TryPush(ImuSampleOf(m)) != core::Status::kOk)
           self->queue_full_.fetch_add(1, std::memory_order_relaxed);
       },
       this);

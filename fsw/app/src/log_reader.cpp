@@ -6,8 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "swf/app/imu_message.hpp"
 #include "swf/messages/checked_decode.hpp"
-#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
 namespace swf::app {
@@ -196,15 +196,7 @@ std::string LogStereoSource::AddImuRecord(const std::vector<std::uint8_t>& data,
     messages::Describe(decoded, what, sizeof what);
     return where + ": imu_t does not decode (" + what + ")";
   }
-  estimator::ImuSample<double> s;
-  s.t_us = msg.utime;
-  s.seq = msg.seq;
-  for (int i = 0; i < 3; ++i) {
-    s.gyro_radps[i] = msg.angular_rate_radps[i];
-    s.accel_mps2[i] = msg.specific_force_mps2[i];
-  }
-  s.flags = static_cast<std::uint32_t>(msg.flags);
-  imu_.push_back(s);
+  imu_.push_back(ImuSampleOf(msg));
   return "";
 }
 
