@@ -11,6 +11,7 @@
 
 #include "euroc_imu.hpp"
 #include "report.hpp"
+#include "swf/app/motion.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/image_io/image_io.hpp"
 
@@ -100,8 +101,9 @@ void RecordNav(const app::NavOutput& nav, FrameRecord* record) {
 
 // Runs the pipeline stages of frame j; false (with the run's verdict set) when the pipeline
 // refuses the input, after which nothing later can be scored.
-bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images, std::size_t* next_imu,
-                  app::Pipeline* pipeline, RunRecord* run, FrameRecord* record) {
+bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images,
+                  app::StoredImuProvider* imu, app::Pipeline* pipeline, RunRecord* run,
+                  FrameRecord* record) {
   const SequenceFrame& f = s.frames[j];
   std::string error;
   const image_io::GrayImage* left = images->Get(f.left_path, 0, &error);
@@ -116,8 +118,8 @@ bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images, st
   frame.utime = NsToUs(f.stamp_ns);
   frame.seq = static_cast<std::int64_t>(j);
   // The IMU samples stamped up to this exposure, as the flight loop hands them over.
-  while (pipeline->Inertial() && *next_imu < s.imu.size() && s.imu[*next_imu].t_us <= frame.utime)
-    pipeline->AddImu(s.imu[(*next_imu)++]);
+  estimator::ImuSample<double> sample;
+  while (pipeline->Inertial() && imu->NextImu(frame.utime, &sample)) pipeline->AddImu(sample);
   Status st = pipeline->Rectify(frame);
   if (st == Status::kOk) st = pipeline->Track();
   if (st != Status::kOk) {
@@ -278,10 +280,11 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
   ImageStore images(sequence);
   const auto start = std::chrono::steady_clock::now();
   double tracked = 0.0;
-  std::size_t next_imu = 0;
+  app::StoredImuProvider imu;
+  imu.Reset(&sequence.imu);
   for (std::size_t j = 0; j < sequence.frames.size(); ++j) {
     FrameRecord record;
-    if (!ProcessFrame(sequence, j, &images, &next_imu, pipeline.get(), &run, &record)) break;
+    if (!ProcessFrame(sequence, j, &images, &imu, pipeline.get(), &run, &record)) break;
     Judge(sequence, j, options, &run, &record);
     CountIntegrity(j, record, &run);
     tracked += record.tracked;

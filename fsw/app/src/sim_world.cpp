@@ -130,11 +130,11 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
   }
   sim::ImuModelOptions unit;
   has_imu_unit_ = SimImuUnit(config, &unit);
-  imu_next_ = 0;
   if (has_imu_unit_ && imu_unit_.Configure(unit, trajectory_) != Status::kOk) {
     *error = "sim.imu_unit: the IMU model refused the unit or the trajectory";
     return false;
   }
+  imu_samples_.Reset(has_imu_unit_ ? &imu_unit_.Samples() : nullptr);
   sim::RenderOptions ro;
   ro.rig = rig_;
   ro.seed = config.sim.seed;
@@ -253,12 +253,7 @@ ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
 }
 
 bool SimWorld::NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) {
-  if (!has_imu_unit_ || imu_next_ >= imu_unit_.Samples().size()) return false;
-  const estimator::ImuSample<double>& s = imu_unit_.Samples()[imu_next_];
-  if (s.t_us > until_utime) return false;
-  *sample = s;
-  ++imu_next_;
-  return true;
+  return imu_samples_.NextImu(until_utime, sample);
 }
 
 bool SimWorld::Motion(std::uint64_t seq, MotionInput* input) {

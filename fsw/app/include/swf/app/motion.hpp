@@ -2,7 +2,9 @@
 // frames (stereo-only estimator), or the IMU's samples (stereo-inertial estimator).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "swf/estimator/imu_preintegration.hpp"
 
@@ -32,6 +34,26 @@ class ImuProvider {
  public:
   virtual ~ImuProvider() = default;
   virtual bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) = 0;
+};
+
+// A stream held in memory (the simulator's unit, a dataset's imu0), served in order as its
+// samples fall due. The vector is the caller's and must outlive the provider.
+class StoredImuProvider final : public ImuProvider {
+ public:
+  void Reset(const std::vector<estimator::ImuSample<double>>* samples) {
+    samples_ = samples;
+    next_ = 0;
+  }
+  bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override {
+    if (samples_ == nullptr || next_ >= samples_->size() || (*samples_)[next_].t_us > until_utime)
+      return false;
+    *sample = (*samples_)[next_++];
+    return true;
+  }
+
+ private:
+  const std::vector<estimator::ImuSample<double>>* samples_ = nullptr;
+  std::size_t next_ = 0;
 };
 
 }  // namespace swf::app

@@ -80,10 +80,11 @@ class SimWorld : public MotionProvider, public ImuProvider {
   std::vector<MotionInput> motion_;
   bool imu_ = false;
   bool has_imu_unit_ = false;
+  StoredImuProvider imu_samples_;
   std::int64_t black_from_ = -1;  // inject.black_from / black_frames
   std::int64_t black_frames_ = 0;
   sim::ImuModel imu_unit_;
-  std::size_t imu_next_ = 0;
+
   std::vector<std::vector<std::uint8_t>> left_;
   std::vector<std::vector<std::uint8_t>> right_;
 };
