@@ -235,6 +235,8 @@ struct ImuReport {
   bool has_truth = false;
   estimator::ImuBiases<double> truth;
   double imu_only_pose_rms_m = NAN;  // the unit alone from the same start (simulator)
+  bool has_lcm = false;              // the IMU came over LCM: what the subscription lost
+  LcmImuCounters lcm;
 };
 
 void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
@@ -269,6 +271,14 @@ void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
   if (r.has_truth) {
     std::fprintf(f, ", \"imu_only_pose_rms_error_m\": %s",
                  JsonNumber(r.imu_only_pose_rms_m).c_str());
+  }
+  if (r.has_lcm) {
+    std::fprintf(f,
+                 ", \"lcm\": {\"received\": %lld, \"undecodable\": %lld, \"queue_full\": %lld, "
+                 "\"future_dropped\": %lld}",
+                 static_cast<long long>(r.lcm.received), static_cast<long long>(r.lcm.undecodable),
+                 static_cast<long long>(r.lcm.queue_full),
+                 static_cast<long long>(r.lcm.future_dropped));
   }
   std::fprintf(f, "},\n");
 }
@@ -909,6 +919,18 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   ImuReport imu_report;
   if (pipeline->Inertial()) {
     imu_report.counts = pipeline->ImuStreamCounts();
+    if (imu == &lcm_imu) {
+      lcm_imu.Stop();
+      imu_report.has_lcm = true;
+      imu_report.lcm = lcm_imu.Counters();
+      std::fprintf(stderr,
+                   "%s: imu over LCM: %lld received, %lld undecodable, %lld lost to a full "
+                   "queue, %lld stamped too far ahead\n",
+                   tool, static_cast<long long>(imu_report.lcm.received),
+                   static_cast<long long>(imu_report.lcm.undecodable),
+                   static_cast<long long>(imu_report.lcm.queue_full),
+                   static_cast<long long>(imu_report.lcm.future_dropped));
+    }
     if (const estimator::NavState<double>* x = pipeline->NewestNavState()) {
       imu_report.has_biases = true;
       imu_report.estimated = x->biases;

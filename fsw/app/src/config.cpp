@@ -371,18 +371,7 @@ const std::map<std::string, Setter>& Fields() {
     f["summary.path"] = Text([](FswConfig* c) { return &c->summary_path; });
     f["summary.plot_dir"] = Text([](FswConfig* c) { return &c->plot_dir; });
     f["initial"] = OneOf([](FswConfig* c) { return &c->initial; }, {"truth", "position"});
-    f["initial.position_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      std::istringstream in(v);
-      double p[3];
-      std::string rest;
-      if (!(in >> p[0] >> p[1] >> p[2]) || (in >> rest) || !std::isfinite(p[0]) ||
-          !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-        *why = Quoted(v) + " is not three finite numbers (x y z)";
-        return false;
-      }
-      for (int i = 0; i < 3; ++i) c->initial_position_m[i] = p[i];
-      return true;
-    };
+    f["initial.position_m"] = Vector3([](FswConfig* c) { return c->initial_position_m; });
     f["inject.stage"] = [](const std::string& v, FswConfig* c, std::string* why) {
       if (StageIndex(v) < 0 || StageIndex(v) >= kStageCycle) {
         *why = Quoted(v) + " is not a stage (acquire rectify track estimate output map)";
