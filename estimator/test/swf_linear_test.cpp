@@ -207,14 +207,22 @@ Batch<D> SolveBatch(const Problem<D>& pr, int last_frame) {
   return out;
 }
 
-// Runs the SWF over the first `last_frame + 1` frames and compares with the batch solution.
-template <int K, int D>
-void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int last_frame) {
-  using Filter = SlidingWindowFilter<LinearModel<D>, K, 64, 64, 64>;
+// Runs the SWF with a window of `window` poses (kBatch: the capacity) over the first
+// `last_frame + 1` frames and compares with the batch solution.
+// One capacity serves every window size (the window is a run-time option), which keeps this
+// file to one filter instantiation per D.
+constexpr int kCapacity = 16;
+template <int D>
+using LinearSwf = SlidingWindowFilter<LinearModel<D>, kCapacity, 64, 64, 64>;
+
+template <int D>
+void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_frame) {
+  using Filter = LinearSwf<D>;
   using StateMat = Eigen::Matrix<double, D, D>;
   auto swf = std::make_unique<Filter>();
   SwfOptions options = pr.options;
   options.mode = mode;
+  options.window_size = mode == SwfMode::kBatch ? kCapacity : window;
   ASSERT_EQ(swf->Configure(pr.model, options), core::Status::kOk);
   const StateMat q_sqrt = StateMat::Identity() / pr.sigma_q;
   const Mat3<double> r_sqrt = Mat3<double>::Identity() / pr.sigma_z;
@@ -233,7 +241,7 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int last_frame) {
   ASSERT_EQ(swf->ComputeCovariances(), core::Status::kOk);
   const Batch<D> batch = SolveBatch(pr, last_frame);
   const int np = swf->NumPoses();
-  ASSERT_EQ(np, mode == SwfMode::kBatch ? last_frame + 1 : std::min(K, last_frame + 1));
+  ASSERT_EQ(np, mode == SwfMode::kBatch ? last_frame + 1 : std::min(window, last_frame + 1));
   for (int j = 0; j < np; ++j) {
     const int frame = last_frame + 1 - np + j;
     const Eigen::Matrix<double, D, 1> expected =
@@ -259,7 +267,7 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int last_frame) {
   });
   compared_prior = swf->NumPriorLandmarks();
   EXPECT_GT(compared, 5);
-  if (mode != SwfMode::kBatch && last_frame + 1 > K) {
+  if (mode != SwfMode::kBatch && last_frame + 1 > window) {
     // The interesting case: information reached these landmarks only through the prior.
     EXPECT_GT(compared_prior, 0);
   }
@@ -269,7 +277,7 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int last_frame) {
 template <int D>
 void BatchModeEqualsIndependentBatch() {
   const Problem<D> pr = MakeProblem<D>(1, 12, 30, 2, 6);
-  ExpectEqualsBatch<16>(pr, SwfMode::kBatch, 11);
+  ExpectEqualsBatch(pr, SwfMode::kBatch, 0, 11);
 }
 TEST(SwfLinear, BatchModeEqualsIndependentBatch) { BatchModeEqualsIndependentBatch<6>(); }
 TEST(SwfLinear, BatchModeEqualsIndependentBatchExtendedState) {
@@ -280,13 +288,13 @@ template <int D>
 void SlidingWindowEqualsBatchForEveryWindowSize() {
   for (std::uint64_t seed : {2u, 3u, 4u}) {
     const Problem<D> pr = MakeProblem<D>(seed, 14, 40, 1, 8);
-    ExpectEqualsBatch<1>(pr, SwfMode::kSlidingWindow, 13);
-    ExpectEqualsBatch<2>(pr, SwfMode::kSlidingWindow, 13);
-    ExpectEqualsBatch<3>(pr, SwfMode::kSlidingWindow, 13);
-    ExpectEqualsBatch<5>(pr, SwfMode::kSlidingWindow, 13);
+    ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 1, 13);
+    ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 2, 13);
+    ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 3, 13);
+    ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 5, 13);
     // Stopping at different frames changes which poses and landmarks were marginalized when.
-    ExpectEqualsBatch<4>(pr, SwfMode::kSlidingWindow, 6);
-    ExpectEqualsBatch<4>(pr, SwfMode::kSlidingWindow, 9);
+    ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 4, 6);
+    ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 4, 9);
   }
 }
 TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSize) {
@@ -299,15 +307,16 @@ TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSizeExtendedState) {
 template <int D>
 void LongTracksFillThePriorAndStillMatch() {
   const Problem<D> pr = MakeProblem<D>(5, 10, 20, 8, 10);  // landmarks live across many windows
-  ExpectEqualsBatch<2>(pr, SwfMode::kSlidingWindow, 9);
-  ExpectEqualsBatch<3>(pr, SwfMode::kSlidingWindow, 9);
+  ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 2, 9);
+  ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 3, 9);
 }
 TEST(SwfLinear, LongTracksFillThePriorAndStillMatch) { LongTracksFillThePriorAndStillMatch<6>(); }
 TEST(SwfLinear, LongTracksFillThePriorAndStillMatchExtendedState) {
   LongTracksFillThePriorAndStillMatch<15>();
 }
 
-// K = 1 against a Kalman filter over [pose ; landmarks], written here in covariance form.
+// A window of one pose against a Kalman filter over [pose ; landmarks], written here in covariance
+// form.
 template <int D>
 void WindowOfOneEqualsKalmanFilter() {
   using StateMat = Eigen::Matrix<double, D, D>;
@@ -354,8 +363,10 @@ void WindowOfOneEqualsKalmanFilter() {
   Eigen::MatrixXd cov = info.inverse();
   Eigen::VectorXd x = cov * rhs;
 
-  auto swf = std::make_unique<SlidingWindowFilter<LinearModel<D>, 1, 16, 16, 16>>();
-  ASSERT_EQ(swf->Configure(pr.model, pr.options), core::Status::kOk);
+  auto swf = std::make_unique<LinearSwf<D>>();
+  SwfOptions options = pr.options;
+  options.window_size = 1;
+  ASSERT_EQ(swf->Configure(pr.model, options), core::Status::kOk);
   const StateMat q_sqrt = StateMat::Identity() / pr.sigma_q;
   const Mat3<double> r_sqrt = Mat3<double>::Identity() / pr.sigma_z;
   for (int j = 0; j < pr.frames; ++j) {
