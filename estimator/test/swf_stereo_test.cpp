@@ -201,6 +201,41 @@ TEST(SwfStereo, HuberWeightingResistsGrossOutliers) {
   EXPECT_LT(e_robust, 0.8 * e_plain);
 }
 
+// The summary says why the last solve stopped; only the converged reasons set `converged`, and
+// a solve that runs out of iterations raises kFaultNotConverged.
+TEST(SwfStereo, SummaryGivesTheTerminationReason) {
+  SceneOptions so;
+  so.frames = 8;
+  so.num_landmarks = 40;
+  const SyntheticScene scene(so);
+  auto swf = std::make_unique<StereoSwf<5>>();
+  EXPECT_EQ(swf->Summary().termination, SwfTermination::kNoSolve);
+  (void)RunScene(swf.get(), scene, ModeOptions(SwfMode::kSlidingWindow));
+  const SwfTermination normal = swf->Summary().termination;
+  EXPECT_TRUE(normal == SwfTermination::kCostTolerance ||
+              normal == SwfTermination::kStepTolerance || normal == SwfTermination::kNoDescent)
+      << TerminationName(normal);
+  EXPECT_TRUE(swf->Summary().converged);
+
+  // One iteration and no tolerance: the loop can only run out or find no descent.
+  SwfOptions one = ModeOptions(SwfMode::kSlidingWindow);
+  one.max_iterations = 1;
+  one.relative_cost_tolerance = 0.0;
+  one.step_tolerance = 0.0;
+  (void)RunScene(swf.get(), scene, one);
+  const SwfSummary& summary = swf->Summary();
+  ASSERT_TRUE(summary.termination == SwfTermination::kMaxIterations ||
+              summary.termination == SwfTermination::kNoDescent)
+      << TerminationName(summary.termination);
+  const bool ran_out = summary.termination == SwfTermination::kMaxIterations;
+  EXPECT_EQ(summary.converged, !ran_out);
+  EXPECT_EQ(summary.status == core::Status::kNotConverged, ran_out);
+  if (ran_out) {
+    EXPECT_NE(swf->FaultBits() & kFaultNotConverged, 0u);
+  }
+  EXPECT_STREQ(TerminationName(SwfTermination::kMaxIterations), "max iterations");
+}
+
 // A landmark initialized from a corrupted first stereo measurement. As a world point started
 // far beyond the terrain, its later measurements barely constrain its depth (dh/dZ ~ 1/Z^2),
 // Huber down-weights them and the landmark stays there. Two defences, measured here: inverse

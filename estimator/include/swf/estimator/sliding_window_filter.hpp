@@ -193,10 +193,33 @@ struct SwfOptions {
   }
 };
 
+// Why the last solve's Gauss-Newton loop stopped (Ceres-style termination reason).
+enum class SwfTermination {
+  kNoSolve,           // nothing to solve: no pose in the window
+  kCostTolerance,     // relative cost decrease <= relative_cost_tolerance: converged
+  kStepTolerance,     // largest update component <= step_tolerance: converged
+  kNoDescent,         // no step length lowered the cost: at the minimum, converged
+  kMaxIterations,     // max_iterations used up first: not converged (kFaultNotConverged)
+  kNumericalFailure,  // the reduced system was not positive definite or a step not finite
+};
+
+inline const char* TerminationName(SwfTermination t) {
+  switch (t) {
+    case SwfTermination::kNoSolve: return "no solve";
+    case SwfTermination::kCostTolerance: return "cost tolerance";
+    case SwfTermination::kStepTolerance: return "step tolerance";
+    case SwfTermination::kNoDescent: return "no descent";
+    case SwfTermination::kMaxIterations: return "max iterations";
+    case SwfTermination::kNumericalFailure: return "numerical failure";
+  }
+  return "unknown";
+}
+
 struct SwfSummary {
   core::Status status = core::Status::kOk;
   int iterations = 0;
-  bool converged = false;
+  SwfTermination termination = SwfTermination::kNoSolve;
+  bool converged = false;     // termination is one of the three converged reasons
   double initial_cost = 0.0;  // robust cost at the start of the last solve
   double final_cost = 0.0;    // robust cost at its end
   int num_measurements = 0;   // measurements in the window
@@ -1152,7 +1175,7 @@ class SlidingWindowFilter {
   // Huber threshold from the inlier standard deviation: sigma_hat = median |r| / median of the
   // chi distribution with 3 degrees of freedom (1.5382), floored at the nominal 1 and capped at
   // max_robust_sigma. Without the cap the threshold follows the median up while the state
-  // diverges (measured on EuRoC and KITTI: 3.5 -> 75 nominal sigmas within five frames), and
+  // diverges (seen on EuRoC and KITTI: tens of nominal sigmas within a few frames), and
   // the data that disagrees with the drifting state gets its full weight back exactly then.
   // The uncapped scale is kept as evidence for the health monitor (residual_scale_).
   void UpdateRobustWeights() {
@@ -1371,9 +1394,10 @@ class SlidingWindowFilter {
     for (int j = 0; j < num_poses_; ++j) total += static_cast<int>(Slot(j).obs.size());
     summary_.num_measurements = total;
     summary_.state_dimension = kStateDim * num_poses_ + 3 * num_landmarks_;
+    summary_.termination = SwfTermination::kNoSolve;
     if (num_poses_ == 0) return core::Status::kOk;
     core::Status status = core::Status::kOk;
-    bool converged = false;
+    SwfTermination termination = SwfTermination::kMaxIterations;
     for (int it = 0; it < options_.max_iterations; ++it) {
       EvaluateMeasurements(true);
       UpdateRobustWeights();
@@ -1381,7 +1405,10 @@ class SlidingWindowFilter {
       if (it == 0) summary_.initial_cost = static_cast<double>(cost0);
       summary_.final_cost = static_cast<double>(cost0);
       status = BuildAndFactor();
-      if (status != core::Status::kOk) break;
+      if (status != core::Status::kOk) {
+        termination = SwfTermination::kNumericalFailure;
+        break;
+      }
       dense_.SolveInPlace(rhs_);
       const int lm0 = kStateDim * num_poses_;
       S max_step = S(0);
@@ -1410,6 +1437,7 @@ class SlidingWindowFilter {
       if (!finite) {
         fault_bits_ |= kFaultNonFinite;
         status = core::Status::kNumericalFailure;
+        termination = SwfTermination::kNumericalFailure;
         break;
       }
       // Step with backtracking: accept the first step length that does not raise the cost.
@@ -1429,19 +1457,25 @@ class SlidingWindowFilter {
         alpha *= S(0.5);
       }
       if (!accepted) {  // no descent along the Gauss-Newton direction: at the minimum
-        converged = true;
+        termination = SwfTermination::kNoDescent;
         break;
       }
       summary_.iterations = it + 1;
       summary_.final_cost = static_cast<double>(cost1);
-      if (cost0 - cost1 <= S(options_.relative_cost_tolerance) * cost0 ||
-          alpha * max_step <= S(options_.step_tolerance)) {
-        converged = true;
+      if (cost0 - cost1 <= S(options_.relative_cost_tolerance) * cost0) {
+        termination = SwfTermination::kCostTolerance;
+        break;
+      }
+      if (alpha * max_step <= S(options_.step_tolerance)) {
+        termination = SwfTermination::kStepTolerance;
         break;
       }
     }
-    summary_.converged = converged;
-    if (status == core::Status::kOk && !converged) {
+    summary_.termination = termination;
+    summary_.converged = termination == SwfTermination::kCostTolerance ||
+                         termination == SwfTermination::kStepTolerance ||
+                         termination == SwfTermination::kNoDescent;
+    if (status == core::Status::kOk && !summary_.converged) {
       fault_bits_ |= kFaultNotConverged;
       status = core::Status::kNotConverged;
     }
