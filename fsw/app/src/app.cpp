@@ -33,6 +33,7 @@
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/image_io/image_io.hpp"
 #include "swf/sim/rig.hpp"
+#include "swf_msgs/nav_state_t.hpp"
 
 namespace swf::app {
 
@@ -110,15 +111,16 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
   estimator::SwfOptions o;
   o.window_size = c.window;
   o.max_iterations = c.max_iterations;
+  using Nav = swf_msgs::nav_state_t;
   if (c.mode == "vo") {
     o.mode = estimator::SwfMode::kVisualOdometry;
-    *nav_mode = 3;
+    *nav_mode = Nav::MODE_VO;
   } else if (c.mode == "vsdf") {
     o.mode = estimator::SwfMode::kVsdf;
-    *nav_mode = 4;
+    *nav_mode = Nav::MODE_VSDF;
   } else {
     o.mode = estimator::SwfMode::kSlidingWindow;
-    *nav_mode = c.mode == "ekf" ? 2 : 0;
+    *nav_mode = c.mode == "ekf" ? Nav::MODE_EKF : Nav::MODE_SWF;
   }
   return o;
 }
@@ -502,8 +504,9 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   }
   const std::string imu_channel =
       config.imu.channel.empty() ? config.channel_prefix + kImuSuffix : config.imu.channel;
-  // Raw cameras (aravis, v4l2): the calibrations give the image size and the pipeline rectifies.
-  [[maybe_unused]] auto use_camera_calibrations = [&]() {
+  // Raw frames (aravis, v4l2, an unrectified log): the calibrations give the image size and the
+  // pipeline rectifies. Loaded here, once.
+  auto use_camera_calibrations = [&]() {
     if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty() ||
         !image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration, &error) ||
         !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
@@ -570,7 +573,15 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
         rig.height_px = log->Height();
         po.camera = sim::MakeStereoCamera(rig);
       } else {
-        po.rectify = true;
+        if (!use_camera_calibrations()) return 2;
+        if (po.width_px != log->Width() || po.height_px != log->Height()) {
+          std::fprintf(stderr,
+                       "%s: configuration refused: camera.left_calibration: %s is for %dx%d px, "
+                       "the log's frames are %dx%d px\n",
+                       tool, config.camera.left_calibration.c_str(), po.width_px, po.height_px,
+                       log->Width(), log->Height());
+          return 2;
+        }
       }
       total_frames = static_cast<std::int64_t>(log->NumFrames());
       log_source = log.get();
@@ -645,22 +656,6 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
                    tool);
       return 2;
 #endif
-    }
-  }
-  if (po.rectify) {
-    if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty()) {
-      std::fprintf(stderr,
-                   "%s: configuration refused: camera.left_calibration: raw frames need both "
-                   "calibrations\n",
-                   tool);
-      return 2;
-    }
-    if (!image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration, &error) ||
-        !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
-                                   &error)) {
-      std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", tool,
-                   error.c_str());
-      return 2;
     }
   }
   po.frontend = FrontendFor(config, po.width_px, po.height_px);

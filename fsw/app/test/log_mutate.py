@@ -6,12 +6,14 @@ usage: log_mutate.py IN OUT CHANNEL OP K
   duplicate K  write the K-th record on CHANNEL twice
   swap K       write the K-th and (K+1)-th records on CHANNEL in the other order
   neglen K     set the K-th record's stereo_frame_t.num_bytes to -1
+  unrectify K  mark every record on CHANNEL from the K-th on as not rectified (raw camera frames)
 """
 import struct
 import sys
 
 HEADER = struct.Struct(">IqqII")  # sync word, event number, timestamp, channel and data length
 NUM_BYTES = 8 + 86 + 8  # stereo_frame_t.num_bytes: fingerprint, fixed fields, width, height
+RECTIFIED = 8 + 4 * 8 + 4  # stereo_frame_t.rectified: fingerprint, four int64, dropped_before
 
 
 def records(data):
@@ -41,6 +43,8 @@ def main():
             continue
         if i == target and op == "neglen":
             rec[3][NUM_BYTES:NUM_BYTES + 4] = struct.pack(">i", -1)
+        if op == "unrectify" and i in stereo and i >= target:
+            rec[3][RECTIFIED] = 0
         out.append(rec)
         if i == target and op == "duplicate":
             out.append(rec)

@@ -85,6 +85,21 @@ replay_case neglen 1 "record [0-9]* (SWF_STEREO, event [0-9]*): .*num_bytes -1: 
   '"result_reasons": "damaged log"'
 grep -q "the 10 frames before it were replayed" "$dir/err" || fail "neglen: frames before it"
 
+echo "== raw frames: the calibrations must be for the log's image size"
+# A pinhole calibration for 320x240 px (the fake GigE rig's); the test log is of another size.
+calibration="$here/../../../tools/image_io/fuzz/calibration_corpus/pinhole.yaml"
+$mutate "$dir/live.lcmlog" "$dir/raw.lcmlog" SWF_STEREO unrectify 0
+rc=0
+"$replay" --config "$cfg" --log "$dir/raw.lcmlog" --set "camera.left_calibration: $calibration" \
+  --set "camera.right_calibration: $calibration" 2> "$dir/err" || rc=$?
+cat "$dir/err"
+[ "$rc" -eq 2 ] || fail "raw log with a calibration of another size: exit code $rc, expected 2"
+grep -q "camera.left_calibration: .*pinhole.yaml is for 320x240 px, the log's frames are" \
+  "$dir/err" || fail "the size mismatch is not named"
+rc=0
+"$replay" --config "$cfg" --log "$dir/raw.lcmlog" 2> "$dir/err" || rc=$?
+[ "$rc" -eq 2 ] && grep -q "calibration" "$dir/err" || fail "raw log without calibrations: $rc"
+
 echo "== bad configuration"
 printf 'source: sim\nwindow: 99\n' > "$dir/bad.cfg"
 rc=0
