@@ -412,6 +412,15 @@ void PrintRenderProgress(int done, int total) {
 
 }  // namespace
 
+void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int8_t* nav_mode) {
+  po->frontend = FrontendFor(config, po->width_px, po->height_px);
+  po->swf = SwfFor(config, nav_mode);
+  po->measurement_sigma_px = config.measurement_sigma_px;
+  po->min_quality = static_cast<float>(config.min_quality);
+  po->process_sigma_m = config.process_sigma_m;
+  po->process_sigma_rad = config.process_sigma_rad;
+}
+
 int RunFlightProcess(int argc, char** argv, bool replay) {
   const char* tool = replay ? "swf-replay" : "swf-fsw";
   std::string config_path;
@@ -658,13 +667,8 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
 #endif
     }
   }
-  po.frontend = FrontendFor(config, po.width_px, po.height_px);
   std::int8_t nav_mode = 0;
-  po.swf = SwfFor(config, &nav_mode);
-  po.measurement_sigma_px = config.measurement_sigma_px;
-  po.min_quality = static_cast<float>(config.min_quality);
-  po.process_sigma_m = config.process_sigma_m;
-  po.process_sigma_rad = config.process_sigma_rad;
+  ApplyEstimatorConfig(config, &po, &nav_mode);
 
   // ---- preallocation ----------------------------------------------------------------------------
   auto pipeline = std::make_unique<Pipeline>();

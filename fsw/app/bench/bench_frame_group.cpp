@@ -1,0 +1,124 @@
+// The flight process's frame group (rectify, track, estimate with the integrity checks and the
+// covariances, navigation output) on the demo descent (fsw/app/config/demo.cfg), at 512x384 (the
+// reference in the same run) and at the paper's 1024x768. The frames are rendered before timing;
+// each benchmark iteration flies the whole descent and reports the per-frame p50, p99 and max.
+// The idealized motion input flies (imu.enabled: false), so the numbers are the stereo filter's;
+// the stereo-inertial update's extra cost is in docs/benchmarks.md ("Stereo-inertial states").
+// Run with SWF_SHARED_DIR set (the simulator's terrain texture).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "swf/app/app.hpp"
+#include "swf/app/config.hpp"
+#include "swf/app/pipeline.hpp"
+#include "swf/app/sim_world.hpp"
+
+namespace swf::app {
+namespace {
+
+struct Descent {
+  FswConfig config;
+  std::unique_ptr<SimWorld> world = std::make_unique<SimWorld>();
+  PipelineOptions options;
+};
+
+// Builds and renders the demo descent at width x height once per size.
+const Descent* RenderedDescent(int width, int height) {
+  static std::unique_ptr<Descent> cache[2];
+  std::unique_ptr<Descent>& slot = cache[width > 512 ? 1 : 0];
+  if (slot) return slot.get();
+  auto d = std::make_unique<Descent>();
+  std::string error;
+  const std::vector<std::string> overrides = {
+      "imu.enabled: false", "pacing: lockstep", "lcm.publish: false",
+      "sim.width_px: " + std::to_string(width), "sim.height_px: " + std::to_string(height),
+      // The disparity at the lowest altitude grows with the image (configuration check).
+      "max_disparity_px: " + std::to_string(width > 512 ? 240 : 160)};
+  if (!LoadConfig(SWF_DEMO_CONFIG, overrides, &d->config, &error) ||
+      !d->world->Build(d->config, &error) || !d->world->RenderAll(2, nullptr, &error)) {
+    std::fprintf(stderr, "bench_frame_group: %s\n", error.c_str());
+    return nullptr;
+  }
+  PipelineOptions& po = d->options;
+  po.camera = d->world->Camera();
+  po.width_px = d->world->Width();
+  po.height_px = d->world->Height();
+  po.initial_world_T_camera = d->world->Trajectory().WorldTCamera(0);
+  std::int8_t nav_mode = 0;
+  ApplyEstimatorConfig(d->config, &po, &nav_mode);
+  slot = std::move(d);
+  return slot.get();
+}
+
+double Percentile(std::vector<double> v, double p) {
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
+}
+
+// NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
+void BM_FrameGroup(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0));
+  const Descent* d = RenderedDescent(width, width * 3 / 4);
+  if (d == nullptr) {
+    state.SkipWithError("the descent could not be built (SWF_SHARED_DIR?)");
+    return;
+  }
+  SimWorld& world = *d->world;
+  std::vector<double> ms;
+  for (auto _ : state) {
+    auto pipeline = std::make_unique<Pipeline>();
+    if (pipeline->Configure(d->options) != core::Status::kOk) {
+      state.SkipWithError("pipeline configuration refused");
+      return;
+    }
+    ms.clear();
+    for (std::int32_t k = 0; k < world.NumFrames(); ++k) {
+      PipelineFrame frame;
+      frame.left = frontend::GrayView{world.Left(k), world.Width(), world.Height(), world.Width()};
+      frame.right =
+          frontend::GrayView{world.Right(k), world.Width(), world.Height(), world.Width()};
+      frame.utime = 100000 * static_cast<std::int64_t>(k);
+      frame.seq = k;
+      MotionInput m;
+      const bool has_motion = world.Motion(static_cast<std::uint64_t>(k), &m);
+      estimator::Pose<double> motion;
+      motion.t =
+          estimator::Vec3<double>(m.translation_m[0], m.translation_m[1], m.translation_m[2]);
+      motion.R = estimator::ExpSO3<double>(
+          estimator::Vec3<double>(m.rotation_rad[0], m.rotation_rad[1], m.rotation_rad[2]));
+      const auto t0 = std::chrono::steady_clock::now();
+      const bool ok = pipeline->Rectify(frame) == core::Status::kOk &&
+                      pipeline->Track() == core::Status::kOk &&
+                      pipeline->Estimate(has_motion ? &motion : nullptr) == core::Status::kOk;
+      NavOutput nav;
+      pipeline->MakeNav(&nav);
+      const auto t1 = std::chrono::steady_clock::now();
+      if (!ok) {
+        state.SkipWithError("a frame failed");
+        return;
+      }
+      ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    }
+  }
+  state.counters["frames"] = static_cast<double>(ms.size());
+  state.counters["p50_ms"] = Percentile(ms, 0.50);
+  state.counters["p99_ms"] = Percentile(ms, 0.99);
+  state.counters["max_ms"] = Percentile(ms, 1.0);
+}
+BENCHMARK(BM_FrameGroup)
+    ->Arg(512)
+    ->Arg(1024)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(3);
+
+}  // namespace
+}  // namespace swf::app
+
+BENCHMARK_MAIN();
