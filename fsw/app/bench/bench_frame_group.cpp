@@ -1,9 +1,9 @@
 // The flight process's frame group (rectify, track, estimate with the integrity checks and the
 // covariances, navigation output) on the demo descent (fsw/app/config/demo.cfg), at 512x384 (the
-// reference in the same run) and at the paper's 1024x768. The frames are rendered before timing;
-// each benchmark iteration flies the whole descent and reports the per-frame p50, p99 and max.
-// The idealized motion input flies (imu.enabled: false), so the numbers are the stereo filter's;
-// the stereo-inertial update's extra cost is in docs/benchmarks.md ("Stereo-inertial states").
+// reference in the same run) and at the paper's 1024x768, with the demo's tactical IMU (second
+// argument 1: its samples up to each exposure are handed over inside the timed group) and with
+// the idealized motion input (0: the stereo filter). The frames are rendered before timing; each
+// benchmark iteration flies the whole descent and reports the per-frame p50, p99 and max.
 // Run with SWF_SHARED_DIR set (the simulator's terrain texture).
 #include <benchmark/benchmark.h>
 
@@ -28,15 +28,16 @@ struct Descent {
   PipelineOptions options;
 };
 
-// Builds and renders the demo descent at width x height once per size.
-const Descent* RenderedDescent(int width, int height) {
-  static std::unique_ptr<Descent> cache[2];
-  std::unique_ptr<Descent>& slot = cache[width > 512 ? 1 : 0];
+// Builds and renders the demo descent at width x height once per size and motion source.
+const Descent* RenderedDescent(int width, int height, bool inertial) {
+  static std::unique_ptr<Descent> cache[2][2];
+  std::unique_ptr<Descent>& slot = cache[width > 512 ? 1 : 0][inertial ? 1 : 0];
   if (slot) return slot.get();
   auto d = std::make_unique<Descent>();
   std::string error;
   const std::vector<std::string> overrides = {
-      "imu.enabled: false", "pacing: lockstep", "lcm.publish: false",
+      std::string("imu.enabled: ") + (inertial ? "true" : "false"), "pacing: lockstep",
+      "lcm.publish: false",
       "sim.width_px: " + std::to_string(width), "sim.height_px: " + std::to_string(height),
       // The disparity at the lowest altitude grows with the image (configuration check).
       "max_disparity_px: " + std::to_string(width > 512 ? 240 : 160)};
@@ -50,6 +51,7 @@ const Descent* RenderedDescent(int width, int height) {
   po.width_px = d->world->Width();
   po.height_px = d->world->Height();
   po.initial_world_T_camera = d->world->Trajectory().WorldTCamera(0);
+  if (inertial) po.imu = ImuOptionsFor(d->config, &d->world->Trajectory());
   std::int8_t nav_mode = 0;
   ApplyEstimatorConfig(d->config, &po, &nav_mode);
   slot = std::move(d);
@@ -64,12 +66,16 @@ double Percentile(std::vector<double> v, double p) {
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_FrameGroup(benchmark::State& state) {
   const int width = static_cast<int>(state.range(0));
-  const Descent* d = RenderedDescent(width, width * 3 / 4);
-  if (d == nullptr) {
+  const bool inertial = state.range(1) != 0;
+  const Descent* d = RenderedDescent(width, width * 3 / 4, inertial);
+  if (d == nullptr || (inertial && d->world->ImuUnit() == nullptr)) {
     state.SkipWithError("the descent could not be built (SWF_SHARED_DIR?)");
     return;
   }
   SimWorld& world = *d->world;
+  static const std::vector<estimator::ImuSample<double>> kNoSamples;
+  const std::vector<estimator::ImuSample<double>>& samples =
+      inertial ? world.ImuUnit()->Samples() : kNoSamples;
   std::vector<double> ms;
   for (auto _ : state) {
     auto pipeline = std::make_unique<Pipeline>();
@@ -78,12 +84,13 @@ void BM_FrameGroup(benchmark::State& state) {
       return;
     }
     ms.clear();
+    std::size_t next_sample = 0;
     for (std::int32_t k = 0; k < world.NumFrames(); ++k) {
       PipelineFrame frame;
       frame.left = frontend::GrayView{world.Left(k), world.Width(), world.Height(), world.Width()};
       frame.right =
           frontend::GrayView{world.Right(k), world.Width(), world.Height(), world.Width()};
-      frame.utime = 100000 * static_cast<std::int64_t>(k);
+      frame.utime = world.Trajectory().FrameTimeNs(k) / 1000;
       frame.seq = k;
       MotionInput m;
       const bool has_motion = world.Motion(static_cast<std::uint64_t>(k), &m);
@@ -93,6 +100,8 @@ void BM_FrameGroup(benchmark::State& state) {
       motion.R = estimator::ExpSO3<double>(
           estimator::Vec3<double>(m.rotation_rad[0], m.rotation_rad[1], m.rotation_rad[2]));
       const auto t0 = std::chrono::steady_clock::now();
+      while (next_sample < samples.size() && samples[next_sample].t_us <= frame.utime)
+        (void)pipeline->AddImu(samples[next_sample++]);
       const bool ok = pipeline->Rectify(frame) == core::Status::kOk &&
                       pipeline->Track() == core::Status::kOk &&
                       pipeline->Estimate(has_motion ? &motion : nullptr) == core::Status::kOk;
@@ -112,8 +121,11 @@ void BM_FrameGroup(benchmark::State& state) {
   state.counters["max_ms"] = Percentile(ms, 1.0);
 }
 BENCHMARK(BM_FrameGroup)
-    ->Arg(512)
-    ->Arg(1024)
+    ->ArgNames({"width_px", "imu"})
+    ->Args({512, 0})
+    ->Args({1024, 0})
+    ->Args({512, 1})
+    ->Args({1024, 1})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
     ->Repetitions(3);
