@@ -37,8 +37,8 @@ const Descent* RenderedDescent(int width, int height, bool inertial) {
   std::string error;
   const std::vector<std::string> overrides = {
       std::string("imu.enabled: ") + (inertial ? "true" : "false"), "pacing: lockstep",
-      "lcm.publish: false",
-      "sim.width_px: " + std::to_string(width), "sim.height_px: " + std::to_string(height),
+      "lcm.publish: false", "sim.width_px: " + std::to_string(width),
+      "sim.height_px: " + std::to_string(height),
       // The disparity at the lowest altitude grows with the image (configuration check).
       "max_disparity_px: " + std::to_string(width > 512 ? 240 : 160)};
   if (!LoadConfig(SWF_DEMO_CONFIG, overrides, &d->config, &error) ||
