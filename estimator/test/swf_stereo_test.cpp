@@ -215,7 +215,7 @@ TEST(SwfStereo, SummaryGivesTheTerminationReason) {
   EXPECT_TRUE(normal == SwfTermination::kCostTolerance ||
               normal == SwfTermination::kStepTolerance || normal == SwfTermination::kNoDescent)
       << TerminationName(normal);
-  EXPECT_TRUE(swf->Summary().converged);
+  EXPECT_TRUE(swf->Summary().Converged());
 
   // One iteration and no tolerance: the loop can only run out or find no descent.
   SwfOptions one = ModeOptions(SwfMode::kSlidingWindow);
@@ -228,7 +228,7 @@ TEST(SwfStereo, SummaryGivesTheTerminationReason) {
               summary.termination == SwfTermination::kNoDescent)
       << TerminationName(summary.termination);
   const bool ran_out = summary.termination == SwfTermination::kMaxIterations;
-  EXPECT_EQ(summary.converged, !ran_out);
+  EXPECT_EQ(summary.Converged(), !ran_out);
   EXPECT_EQ(summary.status == core::Status::kNotConverged, ran_out);
   if (ran_out) {
     EXPECT_NE(swf->FaultBits() & kFaultNotConverged, 0u);

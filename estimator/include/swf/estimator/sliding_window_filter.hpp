@@ -219,7 +219,6 @@ struct SwfSummary {
   core::Status status = core::Status::kOk;
   int iterations = 0;
   SwfTermination termination = SwfTermination::kNoSolve;
-  bool converged = false;     // termination is one of the three converged reasons
   double initial_cost = 0.0;  // robust cost at the start of the last solve
   double final_cost = 0.0;    // robust cost at its end
   int num_measurements = 0;   // measurements in the window
@@ -254,6 +253,13 @@ struct SwfSummary {
   double motion_chi2 = 0.0;
   bool motion_gate_failed = false;
   bool motion_overruled = false;
+
+  // The solve stopped for one of the three converged reasons.
+  bool Converged() const {
+    return termination == SwfTermination::kCostTolerance ||
+           termination == SwfTermination::kStepTolerance ||
+           termination == SwfTermination::kNoDescent;
+  }
 };
 
 // A landmark that left the estimator in the last Update (its final estimate).
@@ -1472,10 +1478,7 @@ class SlidingWindowFilter {
       }
     }
     summary_.termination = termination;
-    summary_.converged = termination == SwfTermination::kCostTolerance ||
-                         termination == SwfTermination::kStepTolerance ||
-                         termination == SwfTermination::kNoDescent;
-    if (status == core::Status::kOk && !summary_.converged) {
+    if (status == core::Status::kOk && !summary_.Converged()) {
       fault_bits_ |= kFaultNotConverged;
       status = core::Status::kNotConverged;
     }
