@@ -12,6 +12,7 @@
 #include "swf/app/motion.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/stage_timer.hpp"
+#include "swf/core/slot_pool.hpp"
 #include "swf/core/spsc_queue.hpp"
 #include "swf/core/status.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
@@ -130,33 +131,6 @@ struct RecordRef {
   std::int32_t slot = -1;
 };
 
-// N slots of T with a free list; Acquire on the producer thread, Release on the consumer.
-template <typename T, std::size_t N>
-class SlotPool {
- public:
-  core::Status Allocate() {
-    slots_.reset(new (std::nothrow) T[N]);
-    free_.reset(new (std::nothrow) core::SpscQueue<std::int32_t, N>());
-    if (!slots_ || !free_) return core::Status::kFull;
-    for (std::size_t i = 0; i < N; ++i) (void)free_->TryPush(static_cast<std::int32_t>(i));
-    return core::Status::kOk;
-  }
-  // Producer: a free slot index, or -1 when every slot is still with the consumer.
-  std::int32_t Acquire() {
-    std::int32_t i = -1;
-    return free_->TryPop(&i) == core::Status::kOk ? i : -1;
-  }
-  // Consumer: gives a slot back.
-  void Release(std::int32_t i) { (void)free_->TryPush(i); }
-  T& operator[](std::int32_t i) { return slots_[i]; }
-  const T& operator[](std::int32_t i) const { return slots_[i]; }
-  static constexpr std::size_t capacity() { return N; }
-
- private:
-  std::unique_ptr<T[]> slots_;
-  std::unique_ptr<core::SpscQueue<std::int32_t, N>> free_;
-};
-
 inline constexpr std::size_t kFramePoolSize = 16;
 inline constexpr std::size_t kImuPoolSize = 64;
 inline constexpr std::size_t kNavPoolSize = 64;
@@ -169,13 +143,13 @@ inline constexpr std::size_t kOrderQueueSize = 256;
 // Everything the output thread consumes. Two producers (the frame group and the hazard group),
 // each with its own order queue; one consumer.
 struct OutputChannels {
-  SlotPool<FrameRecord, kFramePoolSize> frames;
-  SlotPool<ImuRecord, kImuPoolSize> imus;
-  SlotPool<NavRecord, kNavPoolSize> navs;
-  SlotPool<MapRecord, kMapPoolSize> maps;
-  SlotPool<HealthRecord, kHealthPoolSize> healths;
-  SlotPool<HazardInput, kHazardInputPoolSize> hazard_inputs;  // frame group -> hazard group
-  SlotPool<HazardRecord, kHazardPoolSize> hazards;            // hazard group -> output thread
+  core::SlotPool<FrameRecord, kFramePoolSize> frames;
+  core::SlotPool<ImuRecord, kImuPoolSize> imus;
+  core::SlotPool<NavRecord, kNavPoolSize> navs;
+  core::SlotPool<MapRecord, kMapPoolSize> maps;
+  core::SlotPool<HealthRecord, kHealthPoolSize> healths;
+  core::SlotPool<HazardInput, kHazardInputPoolSize> hazard_inputs;  // frame group -> hazard group
+  core::SlotPool<HazardRecord, kHazardPoolSize> hazards;            // hazard group -> output thread
   core::SpscQueue<std::int32_t, kHazardInputPoolSize + 1> hazard_work;  // filled HazardInputs
   core::SpscQueue<RecordRef, kOrderQueueSize> frame_group;
   core::SpscQueue<RecordRef, kOrderQueueSize> hazard_group;
