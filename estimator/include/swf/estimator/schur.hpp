@@ -1,0 +1,76 @@
+// Marginalization on a dense symmetric information form, the filter's one Schur-complement
+// step (eqs. 8-10 and 12). Variables are grouped in 3-wide chunks (a pose state is
+// kStateDim / 3 chunks, a landmark one); matrices are column-major with a leading dimension.
+//
+// Removing variable block o (width D) from the information form  Lambda x = g  leaves
+//     Lambda_rr - Lambda_ro Lambda_oo^-1 Lambda_or,   g_r - Lambda_ro Lambda_oo^-1 g_o   (eq. 9)
+// over the rest r: the exact marginal of the rest. The VSDF (eq. 12) keeps only the blocks of
+// that update inside one variable, dropping the fill-in between variables.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+namespace swf::estimator {
+
+// The R x C block at (row, col) of the column-major matrix `a` with leading dimension ld.
+template <typename S, int R, int C>
+Eigen::Map<Eigen::Matrix<S, R, C>, Eigen::Unaligned, Eigen::OuterStride<>> DenseBlock(S* a, int ld,
+                                                                                      int row,
+                                                                                      int col) {
+  return Eigen::Map<Eigen::Matrix<S, R, C>, Eigen::Unaligned, Eigen::OuterStride<>>(
+      a + col * ld + row, Eigen::OuterStride<>(ld));
+}
+
+// Schur complement of the D variables starting at `o` of the dim x dim system (lambda, g)
+// onto the other chunks, in place (eq. 9). The rows and columns of `o` itself are left as they
+// were; the caller drops them. Only chunk pairs (r, c) for which couple(r, c) holds are updated
+// (all of them: the exact marginal; within one variable: the VSDF's eq. 12). `x` (ld_x >= dim
+// rows, D columns) receives Lambda_ro Lambda_oo^-1. False, and nothing changed, when
+// Lambda_oo is not positive definite.
+template <int D, typename S, typename Couple>
+bool EliminateVariable(S* lambda, int ld, S* g, int dim, int o, S* x, int ld_x, Couple couple) {
+  static_assert(D % 3 == 0, "variables are whole 3-wide chunks");
+  using Block = Eigen::Matrix<S, D, D>;
+  const Block aa = DenseBlock<S, D, D>(lambda, ld, o, o);
+  const Eigen::LLT<Block> llt(aa);
+  if (llt.info() != Eigen::Success) return false;
+  const Block t = llt.solve(Block::Identity());
+  const Eigen::Matrix<S, D, 1> go = DenseBlock<S, D, 1>(g, ld, o, 0);
+  const int chunks = dim / 3;
+  const auto eliminated = [o](int chunk) { return 3 * chunk >= o && 3 * chunk < o + D; };
+  for (int r = 0; r < chunks; ++r) {
+    if (eliminated(r)) continue;
+    const Eigen::Matrix<S, 3, D> xr = DenseBlock<S, 3, D>(lambda, ld, 3 * r, o) * t;
+    DenseBlock<S, 3, D>(x, ld_x, 3 * r, 0) = xr;
+    DenseBlock<S, 3, 1>(g, ld, 3 * r, 0) -= xr * go;
+  }
+  for (int c = 0; c < chunks; ++c) {
+    if (eliminated(c)) continue;
+    const Eigen::Matrix<S, D, 3> a_c = DenseBlock<S, D, 3>(lambda, ld, o, 3 * c);
+    for (int r = 0; r < chunks; ++r) {
+      if (eliminated(r) || !couple(r, c)) continue;
+      DenseBlock<S, 3, 3>(lambda, ld, 3 * r, 3 * c) -=
+          Eigen::Matrix<S, 3, D>(DenseBlock<S, 3, D>(x, ld_x, 3 * r, 0)) * a_c;
+    }
+  }
+  return true;
+}
+
+// Removes the `width` rows and columns starting at `o` of the dim x dim system (lambda, g),
+// keeping the order of the rest: the last step of a marginalization.
+template <typename S>
+void DropVariable(S* lambda, int ld, S* g, int dim, int o, int width) {
+  for (int c = 0; c < dim; ++c) {
+    if (c >= o && c < o + width) continue;
+    const int cc = c < o ? c : c - width;
+    for (int r = 0; r < dim; ++r) {
+      if (r >= o && r < o + width) continue;
+      const int rr = r < o ? r : r - width;
+      lambda[cc * ld + rr] = lambda[c * ld + r];
+    }
+  }
+  for (int r = o + width; r < dim; ++r) g[r - width] = g[r];
+}
+
+}  // namespace swf::estimator

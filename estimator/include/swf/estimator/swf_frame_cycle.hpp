@@ -1,0 +1,274 @@
+// SlidingWindowFilter, the frame cycle: configuration, adding a pose and its measurements,
+// Update() (marginalize, solve, gate, solve again), and reading results. The order of one
+// Update() is the paper's section 3: marginalization first, so that the solve sees the prior
+// it leaves behind. Included by sliding_window_filter.hpp; not a header to include alone.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <cstdint>
+
+#include "swf/estimator/chi_square.hpp"
+#include "swf/estimator/sliding_window_filter.hpp"
+
+namespace swf::estimator {
+
+template <typename Model, int K, int N, int M, int P>
+core::Status SlidingWindowFilter<Model, K, N, M, P>::Configure(const Model& model,
+                                                               const SwfOptions& options) {
+  const core::Status status = options.Validate();
+  if (status != core::Status::kOk) return status;
+  if (options.window_size < 0 || options.window_size > K) return core::Status::kInvalidArgument;
+  model_ = model;
+  options_ = options;
+  window_ = options.window_size == 0 ? K : options.window_size;
+  gate_threshold_ = S(ChiSquareQuantile(3, options.gate_probability));
+  motion_gate_threshold_ = S(ChiSquareQuantile(6, options.gate_probability));
+  configured_ = true;
+  Reset();
+  return core::Status::kOk;
+}
+
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::Reset() {
+  num_poses_ = 0;
+  head_ = 0;
+  for (int i = 0; i < N; ++i) landmarks_[i].used = false;
+  free_slots_.clear();
+  for (int i = N - 1; i >= 0; --i) (void)free_slots_.push_back(i);
+  ids_.Clear();
+  num_landmarks_ = 0;
+  prior_landmarks_.clear();
+  frames_added_ = 0;
+  tau_ = S(1e30);
+  residual_scale_ = S(1);
+  fault_bits_ = 0;
+  summary_ = SwfSummary{};
+  pending_ = SwfSummary{};
+  covariances_current_ = false;
+  predicted_cov_valid_ = false;
+  has_motion_fallback_ = false;
+  retired_.clear();
+}
+
+template <typename Model, int K, int N, int M, int P>
+core::Status SlidingWindowFilter<Model, K, N, M, P>::AddFirstPose(const PoseType& estimate,
+                                                                  const StateMat& covariance) {
+  if (num_poses_ != 0) return core::Status::kInvalidArgument;
+  const Eigen::LLT<StateMat> llt(covariance);
+  if (!covariance.allFinite() || llt.info() != Eigen::Success)
+    return core::Status::kInvalidArgument;
+  const core::Status status = PushPose(estimate, nullptr, nullptr);
+  if (status != core::Status::kOk || Slot(0).fixed) return status;
+  const StateMat information = llt.solve(StateMat::Identity());
+  for (int c = 0; c < kStateDim; ++c)
+    for (int r = 0; r < kStateDim; ++r) prior_[c * kMaxPriorDim + r] = information(r, c);
+  return core::Status::kOk;
+}
+
+template <typename Model, int K, int N, int M, int P>
+core::Status SlidingWindowFilter<Model, K, N, M, P>::AddObservation(
+    std::int64_t landmark_id, const Vec3<S>& z, const Mat3<S>& sqrt_information) {
+  if (num_poses_ == 0) return core::Status::kNotConfigured;
+  if (!z.allFinite() || !sqrt_information.allFinite()) return core::Status::kInvalidArgument;
+  PoseSlot& pose = Newest();
+  if (pose.obs.full()) {
+    fault_bits_ |= kFaultMeasurementCapacity;
+    return core::Status::kFull;
+  }
+  int slot = ids_.Find(landmark_id);
+  bool gate_failed = false;
+  if (slot >= 0) {
+    for (const Observation& o : pose.obs)
+      if (o.landmark == slot) return core::Status::kInvalidArgument;  // duplicate in frame
+    gate_failed = FailsPredictionGate(pose.pose, landmarks_[slot], z, sqrt_information);
+  } else {
+    Vec3<S> params;
+    LandmarkAnchor anchor{};
+    if (!model_.InitLandmark(pose.pose, z, &anchor, &params) ||
+        !TriangulationAcceptable(pose.pose, anchor, params, sqrt_information)) {
+      ++pending_.new_landmarks_refused;
+      return core::Status::kInvalidArgument;
+    }
+    if (free_slots_.empty()) {
+      fault_bits_ |= kFaultLandmarkCapacity;
+      return core::Status::kFull;
+    }
+    slot = free_slots_.back();
+    free_slots_.pop_back();
+    LandmarkSlot& l = landmarks_[slot];
+    l = LandmarkSlot{};
+    l.used = true;
+    l.id = landmark_id;
+    l.params = params;
+    l.anchor = anchor;
+    ids_.Insert(landmark_id, slot);
+    ++num_landmarks_;
+  }
+  Observation o;
+  o.landmark = slot;
+  o.z = z;
+  o.sqrt_info = sqrt_information;
+  o.gate_failed = gate_failed;
+  (void)pose.obs.push_back(o);
+  ++landmarks_[slot].obs_in_window;
+  ++landmarks_[slot].total_obs;
+  return core::Status::kOk;
+}
+
+template <typename Model, int K, int N, int M, int P>
+core::Status SlidingWindowFilter<Model, K, N, M, P>::Update() {
+  if (!configured_) return core::Status::kNotConfigured;
+  summary_ = SwfSummary{};
+  retired_.clear();
+  const MotionGateResult motion_gate = GateNewestMotion();
+  ApplyPredictionGate();
+  summary_.motion_chi2 = motion_gate.chi2;
+  summary_.motion_gate_failed = motion_gate.failed;
+  summary_.motion_overruled = motion_gate.overruled;
+  if (num_poses_ > window_) {
+    if (options_.mode == SwfMode::kVisualOdometry) {
+      DeleteOldestPose();
+    } else {
+      MarginalizeOldestPose();
+    }
+    summary_.poses_marginalized = 1;
+  }
+  RetireUnsupportedLandmarks();
+  core::Status status = Solve();
+  for (int pass = 0; pass < options_.max_gate_resolves && IsSolved(status); ++pass) {
+    if (RejectResidualOutliers() == 0) break;
+    RetireUnsupportedLandmarks();
+    status = Solve();
+  }
+  RecordEvidence();
+  covariances_current_ = false;
+  predicted_cov_valid_ = false;
+  if (!StateIsFinite()) {
+    // Local recovery: a non-finite state cannot be repaired in place. Start over; the caller
+    // re-initializes with its next AddPose (it sees kNumericalFailure and the sticky bit).
+    const std::uint32_t faults = fault_bits_ | kFaultReset | kFaultNonFinite;
+    Reset();
+    fault_bits_ = faults;
+    status = core::Status::kNumericalFailure;
+  }
+  summary_.status = status;
+  return status;
+}
+
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::GetLandmark(std::int64_t id, Vec3<S>* position) const {
+  const int slot = ids_.Find(id);
+  if (slot < 0) return false;
+  return Model::LandmarkPosition(landmarks_[slot].anchor, landmarks_[slot].params, position,
+                                 nullptr);
+}
+
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::GetLandmarkCovariance(std::int64_t id,
+                                                                   Mat3<S>* covariance) const {
+  const int slot = ids_.Find(id);
+  if (slot < 0) return false;
+  Vec3<S> position;
+  Mat3<S> j;
+  const LandmarkSlot& l = landmarks_[slot];
+  if (!Model::LandmarkPosition(l.anchor, l.params, &position, &j)) return false;
+  *covariance = j * l.covariance * j.transpose();
+  return true;
+}
+
+template <typename Model, int K, int N, int M, int P>
+auto SlidingWindowFilter<Model, K, N, M, P>::StateCovariance(int j) const -> StateMat {
+  StateMat c;
+  for (int k = 0; k < kStateDim; ++k)
+    for (int r = 0; r < kStateDim; ++r)
+      c(r, k) = pose_cov_[(kStateDim * j + k) * kMaxPosesDim + kStateDim * j + r];
+  return c;
+}
+
+template <typename Model, int K, int N, int M, int P>
+double SlidingWindowFilter<Model, K, N, M, P>::MeasurementCost() {
+  EvaluateMeasurements(false);
+  double cost = 0.0;
+  for (int j = 0; j < num_poses_; ++j)
+    for (const Observation& o : Slot(j).obs)
+      if (o.valid) cost += 0.5 * static_cast<double>(o.r.squaredNorm());
+  return cost;
+}
+
+template <typename Model, int K, int N, int M, int P>
+core::Status SlidingWindowFilter<Model, K, N, M, P>::PushPose(const PoseType& estimate,
+                                                              const MotionType* u,
+                                                              const StateMat* sqrt_info) {
+  if (!configured_) return core::Status::kNotConfigured;
+  const int limit = options_.mode == SwfMode::kBatch ? window_ : window_ + 1;
+  if (num_poses_ >= limit) return core::Status::kFull;
+  if (num_poses_ == 0) head_ = 0;
+  ++num_poses_;
+  predicted_cov_valid_ = u != nullptr && num_poses_ >= 2 && covariances_current_ &&
+                         PredictPoseCovariance(Slot(num_poses_ - 2).pose, estimate, *u, *sqrt_info,
+                                               &predicted_pose_cov_, &prediction_transition_);
+  newest_prediction_ = estimate;
+  PoseSlot& slot = Newest();
+  slot.pose = estimate;
+  slot.obs.clear();
+  slot.fixed = false;
+  slot.has_process = u != nullptr;
+  if (u != nullptr) {
+    slot.motion = *u;
+    slot.process_sqrt_info = *sqrt_info;
+  }
+  if (num_poses_ == 1) InitializePrior();
+  ++frames_added_;
+  return core::Status::kOk;
+}
+
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::StateIsFinite() const {
+  for (int j = 0; j < num_poses_; ++j) {
+    const StateVec d = Model::Difference(prior_pose_lin_, Slot(j).pose, &scratch_jacobian_);
+    if (!d.allFinite()) return false;
+  }
+  for (int i = 0; i < N; ++i)
+    if (landmarks_[i].used && !landmarks_[i].params.allFinite()) return false;
+  for (int r = 0; r < prior_dim_; ++r)
+    if (!std::isfinite(prior_g_[r])) return false;
+  return true;
+}
+
+// The health monitor's evidence from the final linearization (integrity.hpp).
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::RecordEvidence() {
+  summary_.inlier_sigma = static_cast<double>(options_.robust ? residual_scale_ : S(1));
+  double chi2 = 0.0;
+  int inliers = 0;
+  int total = 0;
+  for (int j = 0; j < num_poses_; ++j) {
+    for (const Observation& o : Slot(j).obs) {
+      ++total;
+      if (!o.valid) continue;
+      chi2 += static_cast<double>(o.r.squaredNorm());
+      inliers += o.weight >= S(1) ? 1 : 0;
+    }
+  }
+  summary_.num_measurements = total;
+  summary_.measurement_chi2 = chi2;
+  summary_.num_inliers = inliers;
+  summary_.tracked_measurements = 0;
+  summary_.tracked_inliers = 0;
+  summary_.new_landmarks = 0;
+  if (num_poses_ == 0) return;
+  for (const Observation& o : Newest().obs) {
+    const bool tracked = landmarks_[o.landmark].obs_in_window > 1;
+    summary_.tracked_measurements += tracked ? 1 : 0;
+    summary_.tracked_inliers += tracked && o.valid && o.weight >= S(1) ? 1 : 0;
+    summary_.new_landmarks += tracked ? 0 : 1;
+  }
+  if (num_poses_ > 0) {
+    StateMat unused;
+    const StateVec d = Model::Difference(newest_prediction_, Newest().pose, &unused);
+    summary_.newest_pose_step_m = static_cast<double>(d.template head<3>().norm());
+    summary_.newest_pose_step_rad = static_cast<double>(d.template segment<3>(3).norm());
+  }
+}
+
+}  // namespace swf::estimator

@@ -1,0 +1,290 @@
+// SlidingWindowFilter, the prior and marginalization (eqs. 8-12): the first pose's prior, the
+// prior's quadratic at the current state, removing the oldest pose into the prior by the Schur
+// complement (schur.hpp) and landmarks out of it, and the VO alternative of deleting instead.
+// Included by sliding_window_filter.hpp; not a header to include alone.
+#pragma once
+
+#include "swf/estimator/schur.hpp"
+#include "swf/estimator/sliding_window_filter.hpp"
+
+namespace swf::estimator {
+
+// The prior over the very first pose: fixed (gauge) or a Gaussian around its estimate (the
+// model gives the sigmas of the state beyond the pose).
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::InitializePrior() {
+  prior_landmarks_.clear();
+  ClearPosePrior();
+  prior_pose_lin_ = Slot(0).pose;
+  const bool fixed = options_.fix_first_pose || options_.mode == SwfMode::kVisualOdometry;
+  Slot(0).fixed = fixed;
+  if (!fixed) {
+    for (int i = 0; i < 3; ++i) {
+      prior_[i * kMaxPriorDim + i] =
+          S(1.0 / (options_.first_pose_sigma_m * options_.first_pose_sigma_m));
+      prior_[(i + 3) * kMaxPriorDim + i + 3] =
+          S(1.0 / (options_.first_pose_sigma_rad * options_.first_pose_sigma_rad));
+    }
+    if constexpr (kStateDim > 6) {
+      const Eigen::Matrix<S, kStateDim - 6, 1> sigma = model_.FirstStateSigmas();
+      for (int i = 6; i < kStateDim; ++i)
+        prior_[i * kMaxPriorDim + i] = S(1) / (sigma[i - 6] * sigma[i - 6]);
+    }
+  }
+}
+
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::ClearPosePrior() {
+  prior_dim_ = kStateDim;
+  for (int c = 0; c < kStateDim; ++c)
+    for (int r = 0; r < kStateDim; ++r) prior_[c * kMaxPriorDim + r] = S(0);
+  for (int i = 0; i < kStateDim; ++i) prior_g_[i] = S(0);
+}
+
+// prior_grad_ = Pi Delta - g at the current state (Delta coordinates). Accumulated column by
+// column so the inner loop is contiguous. (A strided row-dot-product form of this loop was
+// mis-vectorized by GCC 12 at -O3 into an aligned load of a misaligned address.)
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::PriorGradient() {
+  PriorDelta();
+  for (int r = 0; r < prior_dim_; ++r) prior_grad_[r] = -prior_g_[r];
+  for (int c = 0; c < prior_dim_; ++c) {
+    const S dc = prior_delta_[c];
+    const S* column = prior_ + c * kMaxPriorDim;
+    for (int r = 0; r < prior_dim_; ++r) prior_grad_[r] += column[r] * dc;
+  }
+}
+
+// Delta = x (-) x_bar for the prior's variables and the pose block's Jacobian.
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::PriorDelta() {
+  const StateVec d = Model::Difference(prior_pose_lin_, Slot(0).pose, &prior_pose_jacobian_);
+  for (int i = 0; i < kStateDim; ++i) prior_delta_[i] = d[i];
+  for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
+    const Vec3<S> dl = landmarks_[prior_landmarks_[q]].params - prior_landmark_lin_[q];
+    for (int k = 0; k < 3; ++k) prior_delta_[kStateDim + 3 * q + k] = dl[k];
+  }
+}
+
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::AddPrior(int lm0) {
+  const int nq = static_cast<int>(prior_landmarks_.size());
+  PriorGradient();
+  const StateMat& jp = prior_pose_jacobian_;
+  const StateMat pi_pp = Blk<kStateDim, kStateDim>(prior_, kMaxPriorDim, 0, 0);
+  dense_.AddBlock(0, 0, jp.transpose() * pi_pp * jp);
+  Blk<kStateDim, 1>(rhs_, kMaxDense, 0, 0) -=
+      jp.transpose() * Blk<kStateDim, 1>(prior_grad_, kMaxPriorDim, 0, 0);
+  for (int q = 0; q < nq; ++q) {
+    const Eigen::Matrix<S, 3, kStateDim> pi_qp =
+        Blk<3, kStateDim>(prior_, kMaxPriorDim, kStateDim + 3 * q, 0);
+    dense_.AddBlock(lm0 + 3 * q, 0, pi_qp * jp);
+    Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * q, 0) -=
+        Blk<3, 1>(prior_grad_, kMaxPriorDim, kStateDim + 3 * q, 0);
+  }
+  // Landmark-landmark block of Pi, copied as a whole (it is dense: Fig. 8).
+  dense_.AddSymmetric(lm0, prior_ + kStateDim * kMaxPriorDim + kStateDim, kMaxPriorDim, 3 * nq);
+}
+
+// Removes the oldest pose by the Schur complement (eqs. 8-10), or by its block diagonal only
+// in VSDF mode (eq. 12). See the file comment for the local system it forms.
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
+  PoseSlot& p0 = Slot(0);
+  PoseSlot& p1 = Slot(1);
+  // Variables of the new prior: the old prior landmarks (same order), then landmarks seen
+  // from p0 that are not yet in the prior, as long as the prior has room.
+  for (Observation& o : p0.obs) {
+    EvaluateObservation(p0.pose, &o, true);
+    if (!o.valid) continue;
+    LandmarkSlot& l = landmarks_[o.landmark];
+    if (l.prior_index >= 0) continue;
+    if (prior_landmarks_.full()) {
+      o.valid = false;  // its information is dropped, and reported
+      fault_bits_ |= kFaultPriorCapacity;
+      continue;
+    }
+    l.prior_index = static_cast<int>(prior_landmarks_.size());
+    (void)prior_landmarks_.push_back(o.landmark);
+    prior_landmark_lin_[l.prior_index] = l.params;
+    first_estimate_[l.prior_index] = l.params;
+    // A new prior variable enters with zero information about itself until the Schur below.
+    GrowPrior();
+  }
+  const int nq = static_cast<int>(prior_landmarks_.size());
+  const int dim = 2 * kStateDim + 3 * nq;  // [p0 | p1 | landmarks]
+  for (int c = 0; c < dim; ++c)
+    for (int r = 0; r < dim; ++r) local_[c * kMaxLocalDim + r] = S(0);
+  for (int r = 0; r < dim; ++r) local_b_[r] = S(0);
+  auto local_index = [](int prior_index) {
+    return prior_index < kStateDim ? prior_index : prior_index + kStateDim;
+  };
+  // Prior at the current estimate: Hessian J^T Pi J, right-hand side -J^T (Pi Delta - g).
+  PriorGradient();
+  // J = blockdiag(prior_pose_jacobian_, I): scale the pose rows/columns of Pi.
+  for (int c = 0; c < prior_dim_; ++c)
+    for (int r = 0; r < prior_dim_; ++r)
+      local_[local_index(c) * kMaxLocalDim + local_index(r)] = prior_[c * kMaxPriorDim + r];
+  {
+    const StateMat& jp = prior_pose_jacobian_;
+    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, 0) =
+        jp.transpose() * Blk<kStateDim, kStateDim>(prior_, kMaxPriorDim, 0, 0) * jp;
+    for (int q = 0; q < nq; ++q) {
+      const Eigen::Matrix<S, 3, kStateDim> pi_qp =
+          Blk<3, kStateDim>(prior_, kMaxPriorDim, kStateDim + 3 * q, 0);
+      Blk<3, kStateDim>(local_, kMaxLocalDim, 2 * kStateDim + 3 * q, 0) = pi_qp * jp;
+      Blk<kStateDim, 3>(local_, kMaxLocalDim, 0, 2 * kStateDim + 3 * q) = (pi_qp * jp).transpose();
+    }
+    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, 0, 0) =
+        -(jp.transpose() * Blk<kStateDim, 1>(prior_grad_, kMaxPriorDim, 0, 0));
+    for (int r = kStateDim; r < prior_dim_; ++r) local_b_[r + kStateDim] = -prior_grad_[r];
+  }
+  // Process factor between p0 and p1.
+  if (p1.has_process) {
+    StateMat a;
+    StateMat b;
+    const StateVec r = WhitenedProcessFactor(1, &a, &b);
+    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, 0) += a.transpose() * a;
+    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, kStateDim) += b.transpose() * b;
+    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, 0) += b.transpose() * a;
+    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, kStateDim) += a.transpose() * b;
+    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, 0, 0) -= a.transpose() * r;
+    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, kStateDim, 0) -= b.transpose() * r;
+  }
+  // p0's measurements, with the weights of the last solve.
+  for (const Observation& o : p0.obs) {
+    if (!o.valid) continue;
+    const int k = 2 * kStateDim + 3 * landmarks_[o.landmark].prior_index;
+    const S norm = o.r.norm();
+    const S w = norm <= tau_ ? S(1) : tau_ / norm;
+    Blk<6, 6>(local_, kMaxLocalDim, 0, 0) += w * o.jp.transpose() * o.jp;
+    Blk<3, 3>(local_, kMaxLocalDim, k, k) += w * o.jl.transpose() * o.jl;
+    Blk<3, 6>(local_, kMaxLocalDim, k, 0) += w * o.jl.transpose() * o.jp;
+    Blk<6, 3>(local_, kMaxLocalDim, 0, k) += w * o.jp.transpose() * o.jl;
+    Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0) += w * o.jp.transpose() * o.r;
+    Blk<3, 1>(local_b_, kMaxLocalDim, k, 0) += w * o.jl.transpose() * o.r;
+  }
+  // Eliminate p0 (or condition on it when it is fixed).
+  if (!p0.fixed) {
+    const bool diagonal_only = options_.mode == SwfMode::kVsdf;
+    if (!EliminateFirstPose(dim, diagonal_only)) fault_bits_ |= kFaultNotPositiveDefinite;
+  }
+  // The new prior is the [p1 | landmarks] part, linearized at the current estimate.
+  prior_dim_ = dim - kStateDim;
+  for (int c = 0; c < prior_dim_; ++c)
+    for (int r = 0; r < prior_dim_; ++r)
+      prior_[c * kMaxPriorDim + r] = local_[(c + kStateDim) * kMaxLocalDim + r + kStateDim];
+  for (int r = 0; r < prior_dim_; ++r) prior_g_[r] = local_b_[r + kStateDim];
+  prior_pose_lin_ = p1.pose;
+  for (int q = 0; q < nq; ++q) prior_landmark_lin_[q] = landmarks_[prior_landmarks_[q]].params;
+  // Drop p0.
+  for (const Observation& o : p0.obs) --landmarks_[o.landmark].obs_in_window;
+  p0.obs.clear();
+  head_ = (head_ + 1) % kMaxPoses;
+  --num_poses_;
+  Slot(0).has_process = false;  // consumed into the prior
+}
+
+// Adds three zero rows/columns to the prior for a landmark entering it.
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::GrowPrior() {
+  const int d = prior_dim_;
+  for (int c = 0; c < d + 3; ++c)
+    for (int r = (c < d ? d : 0); r < d + 3; ++r) {
+      prior_[c * kMaxPriorDim + r] = S(0);
+      prior_[r * kMaxPriorDim + c] = S(0);
+    }
+  for (int r = d; r < d + 3; ++r) prior_g_[r] = S(0);
+  prior_dim_ = d + 3;
+}
+
+// Schur complement of the first kStateDim variables (p0) of the local system onto the rest
+// (eq. 9), or only its blocks within p1 and within each landmark (VSDF, eq. 12).
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::EliminateFirstPose(int dim, bool diagonal_only) {
+  // Chunks of p1 are one variable; every later chunk is a landmark of its own.
+  const auto variable = [](int chunk) { return chunk < 2 * kStateDim / 3 ? 0 : chunk; };
+  return EliminateVariable<kStateDim>(
+      local_, kMaxLocalDim, local_b_, dim, 0, x_, kXRows,
+      [&](int r, int c) { return !diagonal_only || variable(r) == variable(c); });
+}
+
+// VO mode: forget the oldest pose and everything attached to it; hold the next one fixed.
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::DeleteOldestPose() {
+  PoseSlot& p0 = Slot(0);
+  for (const Observation& o : p0.obs) --landmarks_[o.landmark].obs_in_window;
+  p0.obs.clear();
+  head_ = (head_ + 1) % kMaxPoses;
+  --num_poses_;
+  Slot(0).has_process = false;
+  Slot(0).fixed = true;
+  ClearPosePrior();
+  prior_pose_lin_ = Slot(0).pose;
+}
+
+// Landmarks with no measurement left in the window leave the estimator (Fig. 7c).
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::RetireUnsupportedLandmarks() {
+  for (int i = 0; i < N; ++i) {
+    LandmarkSlot& l = landmarks_[i];
+    if (!l.used || l.obs_in_window > 0) continue;
+    if (options_.mode == SwfMode::kBatch) continue;
+    if (l.prior_index >= 0) {
+      if (!EliminatePriorLandmark(l.prior_index)) fault_bits_ |= kFaultNotPositiveDefinite;
+    }
+    RetiredLandmark<S> r;
+    r.id = l.id;
+    r.total_observations = l.total_obs;
+    if (Model::LandmarkPosition(l.anchor, l.params, &r.position, nullptr)) {
+      (void)retired_.push_back(r);
+    } else {
+      ++summary_.landmarks_unplaced;  // at or beyond infinity: no position to report
+    }
+    ids_.Erase(l.id);
+    l.used = false;
+    (void)free_slots_.push_back(i);
+    --num_landmarks_;
+    ++summary_.landmarks_marginalized;
+  }
+}
+
+// Schur complement of prior landmark q onto the rest of the prior, then removal of its rows.
+// A landmark whose block is not positive definite is removed without the complement.
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::EliminatePriorLandmark(int q) {
+  const int o = kStateDim + 3 * q;
+  const bool ok = EliminateVariable<3>(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, x_, kXRows,
+                                       [](int, int) { return true; });
+  DropVariable(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, 3);
+  prior_dim_ -= 3;
+  landmarks_[prior_landmarks_[q]].prior_index = -1;
+  prior_landmarks_.erase(static_cast<std::size_t>(q));
+  for (int k = q; k < static_cast<int>(prior_landmarks_.size()); ++k) {
+    landmarks_[prior_landmarks_[k]].prior_index = k;
+    prior_landmark_lin_[k] = prior_landmark_lin_[k + 1];
+    first_estimate_[k] = first_estimate_[k + 1];
+  }
+  return ok;
+}
+
+// Takes a landmark out with all its window measurements. A prior landmark is marginalized
+// out of the prior (what earlier measurements told about the rest stays there).
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::RemoveLandmark(int slot) {
+  LandmarkSlot& l = landmarks_[slot];
+  for (int j = 0; j < num_poses_; ++j) {
+    PoseSlot& p = Slot(j);
+    for (std::size_t k = p.obs.size(); k-- > 0;)
+      if (p.obs[k].landmark == slot) p.obs.erase(k);
+  }
+  if (l.prior_index >= 0 && !EliminatePriorLandmark(l.prior_index))
+    fault_bits_ |= kFaultNotPositiveDefinite;
+  ids_.Erase(l.id);
+  l.used = false;
+  l.obs_in_window = 0;
+  (void)free_slots_.push_back(slot);
+  --num_landmarks_;
+}
+
+}  // namespace swf::estimator
