@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "swf/app/config.hpp"
 #include "swf/app/evaluation.hpp"
@@ -58,26 +59,31 @@ int Usage(bool replay) {
 // Progress on stderr: one line rewritten in place (a terminal) or every 10th frame (a file).
 class Progress : public OutputObserver {
  public:
-  Progress(std::int64_t total, bool enabled) : total_(total), enabled_(enabled) {}
+  void Reset(std::int64_t total, bool enabled, bool tty) {
+    total_ = total;
+    enabled_ = enabled;
+    tty_ = tty;
+    navs_ = 0;
+    landmarks_ = 0;
+  }
   void OnNav(const NavRecord& r) override {
     if (!enabled_) return;
     ++navs_;
-    const bool tty = isatty_;
-    if (!tty && navs_ % 10 != 0 && navs_ != total_) return;
+    if (!tty_ && navs_ % 10 != 0 && navs_ != total_) return;
     std::fprintf(stderr, "%sswf-fsw: frame %lld/%lld  altitude %.1f m  landmarks in map %d%s",
-                 tty ? "\r" : "", static_cast<long long>(r.nav.frame_seq + 1),
+                 tty_ ? "\r" : "", static_cast<long long>(r.nav.frame_seq + 1),
                  static_cast<long long>(total_), r.nav.position_world_m[2], landmarks_,
-                 tty ? "   " : "\n");
+                 tty_ ? "   " : "\n");
   }
   void OnMap(const MapRecord& r) override { landmarks_ = r.map.num_landmarks; }
   void Finish() {
-    if (enabled_ && isatty_) std::fprintf(stderr, "\n");
+    if (enabled_ && tty_) std::fprintf(stderr, "\n");
   }
-  bool isatty_ = false;
 
  private:
-  std::int64_t total_;
-  bool enabled_;
+  std::int64_t total_ = 0;
+  bool enabled_ = false;
+  bool tty_ = false;
   std::int64_t navs_ = 0;
   int landmarks_ = 0;
 };
@@ -410,6 +416,599 @@ void PrintRenderProgress(int done, int total) {
   if (done == total) std::fprintf(stderr, "\n");
 }
 
+struct CommandLine {
+  std::string config_path;
+  std::string log_path;
+  std::string record_override;
+  bool record_given = false;
+  bool progress = false;
+  std::vector<std::string> sets;
+};
+
+bool ParseCommandLine(int argc, char** argv, bool replay, CommandLine* cl) {
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    const bool has_value = a + 1 < argc;
+    if (arg == "--config" && has_value) {
+      cl->config_path = argv[++a];
+    } else if (arg == "--set" && has_value) {
+      cl->sets.emplace_back(argv[++a]);
+    } else if (replay && arg == "--log" && has_value) {
+      cl->log_path = argv[++a];
+    } else if (replay && arg == "--record" && has_value) {
+      cl->record_override = argv[++a];
+      cl->record_given = true;
+    } else if (arg == "--progress") {
+      cl->progress = true;
+    } else {
+      return false;
+    }
+  }
+  return !cl->config_path.empty() && (!replay || !cl->log_path.empty());
+}
+
+// Exit codes of the phases below: kContinue, or what the process exits with.
+constexpr int kContinue = -1;
+constexpr int kRefused = 2;
+constexpr int kRunError = 1;
+
+// Everything one run of the flight process holds, built phase by phase before real time starts
+// and read by the report after it.
+struct FlightProcess {
+  const char* tool = "swf-fsw";
+  bool replay = false;
+  bool progress = false;
+  FswConfig config;
+  std::string error;
+  // The source and what it told about the run.
+  PipelineOptions po;
+  std::int8_t nav_mode = 0;
+  std::int64_t total_frames = 0;
+  std::string imu_channel;
+  std::unique_ptr<SimWorld> world;
+#if SWF_APP_HAVE_ARAVIS
+  // Aravis's GigE Vision fake cameras served by this process (camera.fake); they outlive the
+  // source that talks to them.
+  struct FakeCameras {
+    std::vector<ArvGvFakeCamera*> cameras;
+    ~FakeCameras() {
+      for (ArvGvFakeCamera* c : cameras) g_object_unref(c);
+    }
+  } fake_cameras;
+#endif
+  std::unique_ptr<drivers::StereoSource> source;
+  LogStereoSource* log_source = nullptr;
+#if SWF_APP_HAVE_ARAVIS
+  drivers::AravisStereoSource* aravis_source = nullptr;
+  std::string aravis_left_id;  // the source keeps pointers to these
+  std::string aravis_right_id;
+#endif
+#if SWF_APP_HAVE_V4L2
+  drivers::V4l2StereoSource* v4l2_source = nullptr;
+#endif
+  FlightParts parts;  // the preallocated flight process
+  FlightLoop loop;
+  ImuProvider* imu = nullptr;
+  LcmImuInput lcm_imu;
+  // Output observers.
+  Evaluation evaluation;
+  bool evaluate = false;
+  Progress progress_display;
+  LastHealth last_health;
+  HazardCounter hazard_counter;
+  // Real time.
+  bool locked = false;
+  bool fifo = false;
+  core::Status run_status = core::Status::kOk;
+
+  FlightProcess() = default;
+  FlightProcess(const FlightProcess&) = delete;
+  FlightProcess& operator=(const FlightProcess&) = delete;
+
+  int Refuse() const {
+    std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
+    return kRefused;
+  }
+  int RunError() const {
+    std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
+    return kRunError;
+  }
+};
+
+// The file and every --set, validated once as a whole (their order does not matter); a replay
+// takes its source from --log. Output paths are checked now, not discovered unwritable after the
+// whole descent.
+int Configure(const CommandLine& cl, FlightProcess* fp) {
+  FswConfig& config = fp->config;
+  if (!LoadConfig(cl.config_path, cl.sets, &config, &fp->error)) return fp->Refuse();
+  if (fp->replay) {
+    config.source = SourceKind::kLog;
+    config.log_path = cl.log_path;
+    config.record_frames = false;
+    const auto record = config.origins.keys.find("record.path");
+    if (cl.record_given) {
+      config.record_path = cl.record_override;
+    } else if (record == config.origins.keys.end() || record->second != "--set") {
+      config.record_path = "";
+    }
+    if (!ValidateConfig(config, cl.config_path, &fp->error)) return fp->Refuse();
+  }
+  if (!CheckOutputPaths(config, &fp->error)) return fp->Refuse();
+  fp->imu_channel =
+      config.imu.channel.empty() ? config.channel_prefix + kImuSuffix : config.imu.channel;
+  return kContinue;
+}
+
+// The first pose: the simulated descent's own (initial: truth) or the configured one. The
+// simulator's orbital target needs the terrain: that start is taken from the world once built.
+int SetInitialState(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  PipelineOptions& po = fp->po;
+  if (config.initial == "truth" &&
+      (config.source != SourceKind::kSim || config.sim.target != "orbital")) {
+    sim::Trajectory trajectory;
+    sim::RigOptions rig;
+    if (!SimTrajectory(config, &trajectory, &rig, &fp->error)) return fp->Refuse();
+    po.initial_world_T_camera = trajectory.WorldTCamera(0);
+    po.imu = ImuOptionsFor(config, &trajectory);
+  } else if (config.initial != "truth") {
+    po.initial_world_T_camera.R = sim::NadirRotation(0.0);
+    po.initial_world_T_camera.t = Eigen::Vector3d(
+        config.initial_position_m[0], config.initial_position_m[1], config.initial_position_m[2]);
+    po.imu = ImuOptionsFor(config, nullptr);
+  }
+  return kContinue;
+}
+
+// Raw frames (aravis, v4l2, an unrectified log): the calibrations give the image size and the
+// pipeline rectifies. Loaded here, once.
+int UseCameraCalibrations(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  PipelineOptions& po = fp->po;
+  fp->error.clear();
+  if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty() ||
+      !image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration,
+                                 &fp->error) ||
+      !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
+                                 &fp->error)) {
+    std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", fp->tool,
+                 fp->error.empty() ? "both calibration files are required" : fp->error.c_str());
+    return kRefused;
+  }
+  po.rectify = true;
+  po.width_px = po.left_calibration.width;
+  po.height_px = po.left_calibration.height;
+  return kContinue;
+}
+
+int OpenSimSource(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  fp->world = std::make_unique<SimWorld>();
+  SimWorld& world = *fp->world;
+  std::fprintf(stderr, "%s: building the simulated world (terrain %s, %dx%d px) ...\n", fp->tool,
+               config.sim.terrain.c_str(), config.sim.width_px, config.sim.height_px);
+  if (!world.Build(config, &fp->error) ||
+      !world.RenderAll(config.sim.render_threads, fp->progress ? PrintRenderProgress : nullptr,
+                       &fp->error)) {
+    return fp->RunError();
+  }
+  if (config.initial == "truth") {
+    fp->po.initial_world_T_camera = world.Trajectory().WorldTCamera(0);
+    fp->po.imu = ImuOptionsFor(config, &world.Trajectory());
+  }
+  if (config.sim.target == "orbital") {
+    const sim::OrbitalTarget& t = world.Target();
+    std::fprintf(stderr,
+                 "%s: orbital target (%.1f, %.1f) m, %.1f m from the nominal, orbital "
+                 "clearance %.1f m\n",
+                 fp->tool, t.target_m.x(), t.target_m.y(), t.distance_m, t.clearance_m);
+  }
+  fp->po.camera = world.Camera();
+  fp->po.width_px = world.Width();
+  fp->po.height_px = world.Height();
+  fp->total_frames = world.NumFrames();
+  fp->source = std::make_unique<PrerenderedSimSource>(fp->world.get());
+  return kContinue;
+}
+
+int OpenLogSource(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  PipelineOptions& po = fp->po;
+  auto log = std::make_unique<LogStereoSource>();
+  if (config.imu.enabled) log->SetImuChannel(fp->imu_channel);
+  if (!log->Load(config.log_path, config.channel_prefix + kStereoSuffix, &fp->error))
+    return fp->RunError();
+  if (log->NumFrames() == 0 && !log->LoadError().empty()) {
+    std::fprintf(stderr, "%s: %s (no frame before it)\n", fp->tool, log->LoadError().c_str());
+    return kRunError;
+  }
+  if (log->NumFrames() == 0) {
+    std::fprintf(stderr, "%s: %s: no %s%s records\n", fp->tool, config.log_path.c_str(),
+                 config.channel_prefix.c_str(), kStereoSuffix);
+    return kRunError;
+  }
+  po.width_px = log->Width();
+  po.height_px = log->Height();
+  if (log->Rectified()) {
+    sim::RigOptions rig = SimRig(config);
+    rig.width_px = log->Width();
+    rig.height_px = log->Height();
+    po.camera = sim::MakeStereoCamera(rig);
+  } else {
+    if (const int code = UseCameraCalibrations(fp); code != kContinue) return code;
+    if (po.width_px != log->Width() || po.height_px != log->Height()) {
+      std::fprintf(stderr,
+                   "%s: configuration refused: camera.left_calibration: %s is for %dx%d px, "
+                   "the log's frames are %dx%d px\n",
+                   fp->tool, config.camera.left_calibration.c_str(), po.width_px, po.height_px,
+                   log->Width(), log->Height());
+      return kRefused;
+    }
+  }
+  fp->total_frames = static_cast<std::int64_t>(log->NumFrames());
+  fp->log_source = log.get();
+  fp->source = std::move(log);
+  return kContinue;
+}
+
+int OpenAravisSource(FlightProcess* fp) {
+#if SWF_APP_HAVE_ARAVIS
+  const FswConfig& config = fp->config;
+  if (const int code = UseCameraCalibrations(fp); code != kContinue) return code;
+  fp->aravis_left_id = config.camera.left.empty() ? "127.0.0.1" : config.camera.left;
+  fp->aravis_right_id = config.camera.right.empty() ? "127.0.0.2" : config.camera.right;
+  if (config.camera.fake) {
+    // Aravis's GigE Vision fake cameras served by this process (tests, no hardware).
+    for (const std::string& address : {fp->aravis_left_id, fp->aravis_right_id}) {
+      ArvGvFakeCamera* fake = arv_gv_fake_camera_new(address.c_str(), nullptr);
+      if (fake == nullptr || !arv_gv_fake_camera_is_running(fake)) {
+        std::fprintf(stderr, "%s: cannot serve a fake GigE camera on %s\n", fp->tool,
+                     address.c_str());
+        if (fake != nullptr) g_object_unref(fake);
+        return kRunError;
+      }
+      fp->fake_cameras.cameras.push_back(fake);
+    }
+  }
+  auto aravis = std::make_unique<drivers::AravisStereoSource>();
+  drivers::AravisStereoOptions ao;
+  ao.left_id = fp->aravis_left_id.c_str();
+  ao.right_id = fp->aravis_right_id.c_str();
+  ao.width = fp->po.left_calibration.width;
+  ao.height = fp->po.left_calibration.height;
+  ao.trigger =
+      config.camera.fake ? drivers::TriggerMode::kSoftware : drivers::TriggerMode::kFreeRun;
+  ao.frame_rate_hz = config.camera.fake ? 0.0 : config.rate_hz;
+  if (const core::Status s = aravis->Configure(ao); s != core::Status::kOk) {
+    std::fprintf(stderr, "%s: the aravis source refused its options (%s): %s\n", fp->tool,
+                 core::ToString(s), aravis->LastError());
+    return kRefused;
+  }
+  fp->total_frames = config.max_frames;
+  fp->aravis_source = aravis.get();
+  fp->source = std::move(aravis);
+  return kContinue;
+#else
+  std::fprintf(stderr,
+               "%s: configuration refused: source: aravis: this build has no Aravis "
+               "(SWF_WITH_ARAVIS=OFF)\n",
+               fp->tool);
+  return kRefused;
+#endif
+}
+
+int OpenV4l2Source(FlightProcess* fp) {
+#if SWF_APP_HAVE_V4L2
+  if (const int code = UseCameraCalibrations(fp); code != kContinue) return code;
+  // The device paths stay in `config`, which outlives the source.
+  std::unique_ptr<drivers::V4l2StereoSource> v4l2 =
+      MakeV4l2Source(fp->config, fp->po.left_calibration.width, fp->po.left_calibration.height,
+                     drivers::LinuxV4l2Kernel(), &fp->error);
+  if (v4l2 == nullptr) return fp->Refuse();
+  fp->total_frames = fp->config.max_frames;
+  fp->v4l2_source = v4l2.get();
+  fp->source = std::move(v4l2);
+  return kContinue;
+#else
+  std::fprintf(stderr,
+               "%s: configuration refused: source: v4l2: this build has no V4L2 "
+               "(SWF_WITH_V4L2=OFF)\n",
+               fp->tool);
+  return kRefused;
+#endif
+}
+
+int OpenSource(FlightProcess* fp) {
+  switch (fp->config.source) {
+    case SourceKind::kSim: return OpenSimSource(fp);
+    case SourceKind::kLog: return OpenLogSource(fp);
+    case SourceKind::kAravis: return OpenAravisSource(fp);
+    case SourceKind::kV4l2: return OpenV4l2Source(fp);
+  }
+  return kRefused;
+}
+
+// The flight parts with all of their memory (AssembleFlightParts), then the output thread's
+// observers.
+int Preallocate(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  PipelineOptions& po = fp->po;
+  ApplyEstimatorConfig(config, &po, &fp->nav_mode);
+  hazard::HazardMapperOptions ho;
+  ho.max_disparities = config.hazard_max_disparities;
+  ho.downsample = config.hazard_downsample;
+  OutputOptions oo;
+  oo.lcm_url = config.publish ? config.lcm_url : "";
+  oo.channel_prefix = config.channel_prefix;
+  oo.record_path = config.record_path;
+  if (const core::Status s = AssembleFlightParts(po, ho, oo, &fp->parts, &fp->error);
+      s != core::Status::kOk) {
+    return s == core::Status::kInvalidArgument ? fp->Refuse() : fp->RunError();
+  }
+  const Pipeline& pipeline = *fp->parts.pipeline;
+  if (!CheckEnvelopeDisparity(config, pipeline.Camera().fx, pipeline.Camera().baseline_m,
+                              po.width_px, &fp->error)) {
+    return fp->Refuse();
+  }
+  fp->evaluate = config.source == SourceKind::kSim && fp->world != nullptr;
+  if (fp->evaluate) fp->parts.output.AddObserver(&fp->evaluation);
+  fp->progress_display.Reset(
+      config.max_frames > 0 ? std::min(config.max_frames, fp->total_frames) : fp->total_frames,
+      fp->progress, isatty(2) != 0);
+  fp->parts.output.AddObserver(&fp->progress_display);
+  fp->parts.output.AddObserver(&fp->last_health);
+  fp->parts.output.AddObserver(&fp->hazard_counter);
+  return kContinue;
+}
+
+// The IMU: the simulator's unit, the log's recording, or (cameras) imu_t over LCM.
+int ConnectImu(FlightProcess* fp) {
+  if (!fp->config.imu.enabled) return kContinue;
+  if (fp->world != nullptr) {
+    fp->imu = fp->world.get();
+  } else if (fp->log_source != nullptr) {
+    if (fp->log_source->NumImuSamples() == 0) {
+      std::fprintf(stderr, "%s: %s: imu.enabled but no %s records in the log\n", fp->tool,
+                   fp->config.log_path.c_str(), fp->imu_channel.c_str());
+      return kRunError;
+    }
+    fp->imu = fp->log_source;
+  } else {
+    if (!fp->lcm_imu.Start(fp->config.lcm_url, fp->imu_channel, &fp->error)) return fp->RunError();
+    fp->imu = &fp->lcm_imu;
+  }
+  return kContinue;
+}
+
+// The rate groups around the pipeline, then the source started.
+int ConfigureLoop(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  LoopOptions lo;
+  lo.rate_hz = config.rate_hz;
+  lo.pacing = fp->replay && config.pacing == Pacing::kRealtime ? Pacing::kLockstep : config.pacing;
+  lo.hazard_every = config.hazard_every;
+  lo.health_every = config.health_every;
+  lo.record_frames = config.record_frames && !config.record_path.empty();
+  lo.max_frames = config.max_frames;
+  lo.nav_mode = fp->nav_mode;
+  lo.hazard_priority = config.priority > 1 ? config.priority - 1 : 0;
+  lo.inject_stage = config.inject_stage.empty() ? -1 : StageIndex(config.inject_stage);
+  lo.inject_first_frame = config.inject_frame;
+  lo.inject_frames = config.inject_frames;
+  lo.inject_ms = config.inject_ms;
+  MotionProvider* motion = fp->world != nullptr ? static_cast<MotionProvider*>(fp->world.get())
+                                                : static_cast<MotionProvider*>(fp->log_source);
+  if (fp->loop.Configure(lo, fp->parts.pipeline.get(), fp->source.get(), fp->parts.channels.get(),
+                         motion, fp->parts.hazard.get(), fp->imu) != core::Status::kOk) {
+    std::fprintf(stderr,
+                 "%s: configuration refused: rate groups (rate_hz, hazard_every, "
+                 "health_every)\n",
+                 fp->tool);
+    return kRefused;
+  }
+  if (fp->source->Start() == core::Status::kOk) return kContinue;
+  const char* detail = "";
+#if SWF_APP_HAVE_ARAVIS
+  if (fp->aravis_source != nullptr) detail = fp->aravis_source->LastError();
+#endif
+#if SWF_APP_HAVE_V4L2
+  if (fp->v4l2_source != nullptr) detail = fp->v4l2_source->LastError();
+#endif
+  std::fprintf(stderr, "%s: the %s source did not start%s%s\n", fp->tool, fp->source->Name(),
+               detail[0] != '\0' ? ": " : "", detail);
+  return kRunError;
+}
+
+// The frame group on its own SCHED_FIFO thread (pinned with `cpu`) until the source ends or a
+// signal stops it; then the source stops and the outputs drain.
+void RunRealTime(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  char message[200];
+  if (config.mlockall) {
+    fp->locked = LockMemory(message, sizeof message);
+    std::fprintf(stderr, "%s: %s\n", fp->tool, message);
+  }
+  fp->parts.output.Start();
+  g_loop = &fp->loop;
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  std::thread rt([fp, &config] {
+    char m[200];
+    fp->fifo = MakeThreadRealtime(config.priority, m, sizeof m);
+    std::fprintf(stderr, "%s: frame group: %s\n", fp->tool, m);
+    if (config.cpu >= 0) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(config.cpu, &set);
+      if (pthread_setaffinity_np(pthread_self(), sizeof set, &set) != 0) {
+        std::fprintf(stderr, "%s: pinning to CPU %d refused: continuing unpinned\n", fp->tool,
+                     config.cpu);
+      }
+    }
+#if SWF_APP_HAVE_ARAVIS
+    // GLib gives a thread it did not create its GThread record on first use (one allocation
+    // inside the first Aravis call of the frame group): take it here, before counting starts.
+    if (fp->aravis_source != nullptr) (void)g_thread_self();
+#endif
+    fp->run_status = fp->loop.Run();
+  });
+  rt.join();
+  g_loop = nullptr;
+  fp->source->Stop();
+  fp->parts.output.StopAndDrain();
+  fp->progress_display.Finish();
+}
+
+// The IMU's part of the report; stops the LCM subscription.
+ImuReport ReportImu(FlightProcess* fp) {
+  ImuReport report;
+  const Pipeline& pipeline = *fp->parts.pipeline;
+  report.counts = pipeline.ImuStreamCounts();
+  if (fp->imu == &fp->lcm_imu) {
+    fp->lcm_imu.Stop();
+    report.has_lcm = true;
+    report.lcm = fp->lcm_imu.Counters();
+    std::fprintf(stderr,
+                 "%s: imu over LCM: %lld received, %lld undecodable, %lld lost to a full "
+                 "queue, %lld stamped too far ahead\n",
+                 fp->tool, static_cast<long long>(report.lcm.received),
+                 static_cast<long long>(report.lcm.undecodable),
+                 static_cast<long long>(report.lcm.queue_full),
+                 static_cast<long long>(report.lcm.future_dropped));
+  }
+  if (const estimator::NavState<double>* x = pipeline.NewestNavState()) {
+    report.has_biases = true;
+    report.estimated = x->biases;
+  }
+  // The unit's true bias at the last sample the pipeline took.
+  const sim::ImuModel* unit = fp->world ? fp->world->ImuUnit() : nullptr;
+  const std::int64_t taken = fp->loop.Counters().imu_samples;
+  if (unit != nullptr && taken > 0 &&
+      taken <= static_cast<std::int64_t>(unit->TrueBiases().size())) {
+    report.has_truth = true;
+    report.truth = unit->TrueBiases()[static_cast<std::size_t>(taken - 1)];
+    report.imu_only_pose_rms_m =
+        ImuOnlyPoseRms(*unit, fp->world->Trajectory(), fp->po.imu, fp->po.initial_world_T_camera);
+  }
+  const estimator::ImuStreamCounts& s = report.counts.stream;
+  std::fprintf(stderr, "%s: imu: %lld samples integrated, %lld dropped, %lld intervals bridged\n",
+               fp->tool, static_cast<long long>(s.accepted),
+               static_cast<long long>(s.out_of_order + s.duplicated + s.invalid + s.saturated),
+               static_cast<long long>(report.counts.intervals_bridged));
+  return report;
+}
+
+void PrintRunLine(const FlightProcess& fp, const EvaluationResult& eval) {
+  const LoopCounters& counters = fp.loop.Counters();
+  const HealthRecord& h = fp.last_health.last;
+  std::fprintf(stderr,
+               "%s: %lld frames, %lld overruns, %lld outputs dropped, %lld allocations after "
+               "start, cycle p50 %.1f ms p99 %.1f ms max %.1f ms",
+               fp.tool, static_cast<long long>(counters.frames),
+               static_cast<long long>(counters.overruns), static_cast<long long>(h.outputs_dropped),
+               static_cast<long long>(h.allocations_after_start), h.stages[kStageCycle].p50_ms,
+               h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms);
+  if (fp.evaluate) {
+    if (eval.landmarks_evaluated > 0) {
+      std::fprintf(stderr, ", landmark RMS error %.3f m", eval.landmark_rms_error_m);
+    } else {
+      std::fprintf(stderr, ", no landmark map to evaluate");
+    }
+    std::fprintf(stderr, ", pose RMS error %.3f m", eval.pose_rms_error_m);
+  }
+  std::fprintf(stderr, ", %lld hazard maps (%lld skipped, %lld failed), hazard p50 %.1f ms\n",
+               static_cast<long long>(fp.hazard_counter.maps),
+               static_cast<long long>(counters.hazard_skipped),
+               static_cast<long long>(fp.loop.HazardErrors()), h.stages[kStageHazard].p50_ms);
+}
+
+void PrintIntegrityLine(const FlightProcess& fp, const Verdict& verdict) {
+  const IntegrityCounters& integrity = fp.parts.pipeline->Integrity();
+  std::fprintf(stderr,
+               "%s: integrity: %lld VALID, %lld DEGRADED, %lld INVALID frames, %lld restarts, "
+               "%lld measurements gated, %lld rejected, %lld landmarks rejected\n",
+               fp.tool, static_cast<long long>(integrity.frames_valid),
+               static_cast<long long>(integrity.frames_degraded),
+               static_cast<long long>(integrity.frames_invalid),
+               static_cast<long long>(integrity.restarts),
+               static_cast<long long>(integrity.measurements_gated),
+               static_cast<long long>(integrity.measurements_rejected),
+               static_cast<long long>(integrity.landmarks_rejected));
+  std::fprintf(stderr, "%s: result: %s%s%s\n", fp.tool, verdict.result,
+               verdict.reasons.empty() ? "" : ": ", verdict.reasons.c_str());
+}
+
+// After the run: the evaluation against the simulator's truth, the verdict from the numbers,
+// the lines on stderr and the summary file. Returns the exit code.
+int Report(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  const LoopCounters& counters = fp->loop.Counters();
+  const LogStereoSource* log_source = fp->log_source;
+  const bool damaged_log = log_source != nullptr && !log_source->LoadError().empty();
+  if (damaged_log) {
+    std::fprintf(stderr,
+                 "%s: stopped at a damaged log: %s (the %zu frames before it were "
+                 "replayed)\n",
+                 fp->tool, log_source->LoadError().c_str(), log_source->NumFrames());
+  }
+#if SWF_APP_HAVE_V4L2
+  if (fp->v4l2_source != nullptr && fp->run_status != core::Status::kOk) {
+    std::fprintf(stderr, "%s: the v4l2 source failed: %s\n", fp->tool,
+                 fp->v4l2_source->LastError());
+  }
+#endif
+  EvaluationResult eval;
+  HazardEvaluation hazard_eval;
+  const std::int64_t hazard_maps = fp->hazard_counter.maps;
+  if (fp->evaluate) {
+    const SimWorld& world = *fp->world;
+    eval = fp->evaluation.Evaluate(*fp->parts.pipeline, world.Trajectory(), world.Terrain(),
+                                   config.plot_dir);
+    hazard_eval = EvaluateHazard(fp->parts.hazard->Mapper(), world.Terrain(), hazard_maps);
+  }
+  if (!config.plot_dir.empty() && hazard_maps > 0) {
+    const std::string png = config.plot_dir + "/hazard.png";
+    if (hazard_eval::WriteHazardMapPng(fp->parts.hazard->Mapper(), png) != core::Status::kOk)
+      std::fprintf(stderr, "%s: cannot write %s\n", fp->tool, png.c_str());
+  }
+  PrintRunLine(*fp, eval);
+  const HealthRecord& h = fp->last_health.last;
+  const IntegrityCounters& integrity = fp->parts.pipeline->Integrity();
+  const LogStreamStats* log_stream = log_source != nullptr ? &log_source->StreamStats() : nullptr;
+  if (log_stream != nullptr && (log_stream->frames_missing > 0 || log_stream->Refused() > 0)) {
+    std::fprintf(stderr,
+                 "%s: log: %lld frames missing (sequence gaps), %lld duplicated and %lld "
+                 "out-of-order frames refused\n",
+                 fp->tool, static_cast<long long>(log_stream->frames_missing),
+                 static_cast<long long>(log_stream->duplicates),
+                 static_cast<long long>(log_stream->out_of_order));
+  }
+  Verdict verdict = JudgeRun(counters, h, integrity, fp->parts.pipeline->LastIntegrity().status,
+                             fp->evaluate ? &eval : nullptr, log_stream);
+  if (fp->run_status != core::Status::kOk)
+    Fail(&verdict, std::string("the frame group stopped: ") + core::ToString(fp->run_status));
+  if (damaged_log) Fail(&verdict, "damaged log");
+  const OutputCounters& out = fp->parts.output.Counters();
+  if (out.record_errors > 0 || out.encode_errors > 0) {
+    std::fprintf(stderr, "%s: %lld records could not be written, %lld not encoded\n", fp->tool,
+                 static_cast<long long>(out.record_errors),
+                 static_cast<long long>(out.encode_errors));
+    Fail(&verdict, "records lost");
+  }
+  PrintIntegrityLine(*fp, verdict);
+  ImuReport imu_report;
+  if (fp->parts.pipeline->Inertial()) imu_report = ReportImu(fp);
+  if (!config.summary_path.empty()) {
+    const SimWorld* world = fp->world.get();
+    WriteSummary(config.summary_path, config, counters, h, fp->evaluate ? &eval : nullptr,
+                 fp->evaluate && hazard_maps > 0 ? &hazard_eval : nullptr, hazard_maps, fp->locked,
+                 fp->fifo, verdict, integrity, world != nullptr ? &world->Trajectory() : nullptr,
+                 world != nullptr ? &world->Target() : nullptr, log_stream,
+                 fp->parts.pipeline->Inertial() ? &imu_report : nullptr);
+  }
+  return verdict.exit_code;
+}
+
 }  // namespace
 
 void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int8_t* nav_mode) {
@@ -421,544 +1020,62 @@ void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int
   po->process_sigma_rad = config.process_sigma_rad;
 }
 
-int RunFlightProcess(int argc, char** argv, bool replay) {
-  const char* tool = replay ? "swf-replay" : "swf-fsw";
-  std::string config_path;
-  std::string log_path;
-  std::string record_override;
-  bool record_given = false;
-  bool progress = false;
-  std::vector<std::string> sets;
-  for (int a = 1; a < argc; ++a) {
-    const std::string arg = argv[a];
-    const bool has_value = a + 1 < argc;
-    if (arg == "--config" && has_value) {
-      config_path = argv[++a];
-    } else if (arg == "--set" && has_value) {
-      sets.emplace_back(argv[++a]);
-    } else if (replay && arg == "--log" && has_value) {
-      log_path = argv[++a];
-    } else if (replay && arg == "--record" && has_value) {
-      record_override = argv[++a];
-      record_given = true;
-    } else if (arg == "--progress") {
-      progress = true;
-    } else {
-      return Usage(replay);
-    }
+core::Status AssembleFlightParts(const PipelineOptions& po,
+                                 hazard::HazardMapperOptions hazard_options,
+                                 OutputOptions output_options, FlightParts* parts,
+                                 std::string* error) {
+  char text[300];
+  parts->pipeline = std::make_unique<Pipeline>();
+  if (const core::Status s = parts->pipeline->Configure(po); s != core::Status::kOk) {
+    std::snprintf(text, sizeof text,
+                  "the pipeline rejected it (%s): check window, max_tracks, max_disparity_px and "
+                  "the rig",
+                  core::ToString(s));
+    *error = text;
+    return core::Status::kInvalidArgument;
   }
-  if (config_path.empty() || (replay && log_path.empty())) return Usage(replay);
-
-  // ---- configuration: refused before anything starts ------------------------------------------
-  FswConfig config;
-  std::string error;
-  const auto refuse = [&]() {
-    std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
-    return 2;
-  };
-  // The file and every --set are validated once, as a whole, so their order does not matter.
-  if (!LoadConfig(config_path, sets, &config, &error)) return refuse();
-  if (replay) {
-    config.source = SourceKind::kLog;
-    config.log_path = log_path;
-    config.record_frames = false;
-    const auto record = config.origins.keys.find("record.path");
-    if (record_given) {
-      config.record_path = record_override;
-    } else if (record == config.origins.keys.end() || record->second != "--set") {
-      config.record_path = "";
-    }
-    if (!ValidateConfig(config, config_path, &error)) return refuse();
+  parts->hazard = std::make_unique<MapperHazardStage>();
+  hazard_options.camera = parts->pipeline->Camera();
+  hazard_options.image_width = po.width_px;
+  hazard_options.image_height = po.height_px;
+  if (const core::Status s = parts->hazard->Configure(hazard_options); s != core::Status::kOk) {
+    std::snprintf(text, sizeof text,
+                  "hazard.max_disparities / hazard.downsample: the hazard mapper rejected them "
+                  "for %dx%d images (%s)",
+                  po.width_px, po.height_px, core::ToString(s));
+    *error = text;
+    return core::Status::kInvalidArgument;
   }
-  // Output paths are checked now, not discovered unwritable after the whole descent.
-  if (!CheckOutputPaths(config, &error)) return refuse();
-
-  // ---- source and pipeline options --------------------------------------------------------------
-  PipelineOptions po;
-  std::unique_ptr<SimWorld> world;
-  std::unique_ptr<drivers::StereoSource> source;
-  LogStereoSource* log_source = nullptr;
-  drivers::StereoSource* aravis_source = nullptr;
-  std::string aravis_left_id;
-  std::string aravis_right_id;
-  (void)aravis_source;  // used only when built with Aravis
-  drivers::StereoSource* v4l2_source = nullptr;
-  (void)v4l2_source;  // used only when built with V4L2
-#if SWF_APP_HAVE_ARAVIS
-  struct FakeCameras {
-    std::vector<ArvGvFakeCamera*> cameras;
-    void push_back(ArvGvFakeCamera* c) { cameras.push_back(c); }
-    ~FakeCameras() {
-      for (ArvGvFakeCamera* c : cameras) g_object_unref(c);
-    }
-  } fake_cameras;
-#endif
-  std::int64_t total_frames = 0;
-  if (config.initial == "truth" &&
-      (config.source != SourceKind::kSim || config.sim.target != "orbital")) {
-    // (The simulator's orbital target needs the terrain: taken from the world once built.)
-    sim::Trajectory trajectory;
-    sim::RigOptions rig;
-    if (!SimTrajectory(config, &trajectory, &rig, &error)) {
-      std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
-      return 2;
-    }
-    po.initial_world_T_camera = trajectory.WorldTCamera(0);
-    po.imu = ImuOptionsFor(config, &trajectory);
-  } else if (config.initial != "truth") {
-    po.initial_world_T_camera.R = sim::NadirRotation(0.0);
-    po.initial_world_T_camera.t = Eigen::Vector3d(
-        config.initial_position_m[0], config.initial_position_m[1], config.initial_position_m[2]);
-    po.imu = ImuOptionsFor(config, nullptr);
-  }
-  const std::string imu_channel =
-      config.imu.channel.empty() ? config.channel_prefix + kImuSuffix : config.imu.channel;
-  // Raw frames (aravis, v4l2, an unrectified log): the calibrations give the image size and the
-  // pipeline rectifies. Loaded here, once.
-  auto use_camera_calibrations = [&]() {
-    if (config.camera.left_calibration.empty() || config.camera.right_calibration.empty() ||
-        !image_io::LoadCalibration(config.camera.left_calibration, &po.left_calibration, &error) ||
-        !image_io::LoadCalibration(config.camera.right_calibration, &po.right_calibration,
-                                   &error)) {
-      std::fprintf(stderr, "%s: configuration refused: camera calibration: %s\n", tool,
-                   error.empty() ? "both calibration files are required" : error.c_str());
-      return false;
-    }
-    po.rectify = true;
-    po.width_px = po.left_calibration.width;
-    po.height_px = po.left_calibration.height;
-    return true;
-  };
-  switch (config.source) {
-    case SourceKind::kSim: {
-      world = std::make_unique<SimWorld>();
-      std::fprintf(stderr, "%s: building the simulated world (terrain %s, %dx%d px) ...\n", tool,
-                   config.sim.terrain.c_str(), config.sim.width_px, config.sim.height_px);
-      if (!world->Build(config, &error) ||
-          !world->RenderAll(config.sim.render_threads, progress ? PrintRenderProgress : nullptr,
-                            &error)) {
-        std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
-        return 1;
-      }
-      if (config.initial == "truth") {
-        po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
-        po.imu = ImuOptionsFor(config, &world->Trajectory());
-      }
-      if (config.sim.target == "orbital") {
-        const sim::OrbitalTarget& t = world->Target();
-        std::fprintf(stderr,
-                     "%s: orbital target (%.1f, %.1f) m, %.1f m from the nominal, orbital "
-                     "clearance %.1f m\n",
-                     tool, t.target_m.x(), t.target_m.y(), t.distance_m, t.clearance_m);
-      }
-      po.camera = world->Camera();
-      po.width_px = world->Width();
-      po.height_px = world->Height();
-      total_frames = world->NumFrames();
-      source = std::make_unique<PrerenderedSimSource>(world.get());
-      break;
-    }
-    case SourceKind::kLog: {
-      auto log = std::make_unique<LogStereoSource>();
-      if (config.imu.enabled) log->SetImuChannel(imu_channel);
-      if (!log->Load(config.log_path, config.channel_prefix + kStereoSuffix, &error)) {
-        std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
-        return 1;
-      }
-      if (log->NumFrames() == 0 && !log->LoadError().empty()) {
-        std::fprintf(stderr, "%s: %s (no frame before it)\n", tool, log->LoadError().c_str());
-        return 1;
-      }
-      if (log->NumFrames() == 0) {
-        std::fprintf(stderr, "%s: %s: no %s%s records\n", tool, config.log_path.c_str(),
-                     config.channel_prefix.c_str(), kStereoSuffix);
-        return 1;
-      }
-      po.width_px = log->Width();
-      po.height_px = log->Height();
-      if (log->Rectified()) {
-        sim::RigOptions rig = SimRig(config);
-        rig.width_px = log->Width();
-        rig.height_px = log->Height();
-        po.camera = sim::MakeStereoCamera(rig);
-      } else {
-        if (!use_camera_calibrations()) return 2;
-        if (po.width_px != log->Width() || po.height_px != log->Height()) {
-          std::fprintf(stderr,
-                       "%s: configuration refused: camera.left_calibration: %s is for %dx%d px, "
-                       "the log's frames are %dx%d px\n",
-                       tool, config.camera.left_calibration.c_str(), po.width_px, po.height_px,
-                       log->Width(), log->Height());
-          return 2;
-        }
-      }
-      total_frames = static_cast<std::int64_t>(log->NumFrames());
-      log_source = log.get();
-      source = std::move(log);
-      break;
-    }
-    case SourceKind::kAravis: {
-#if SWF_APP_HAVE_ARAVIS
-      if (!use_camera_calibrations()) return 2;
-      // The source keeps the id pointers: the strings live as long as this function.
-      aravis_left_id = config.camera.left.empty() ? "127.0.0.1" : config.camera.left;
-      aravis_right_id = config.camera.right.empty() ? "127.0.0.2" : config.camera.right;
-      const std::string& left_id = aravis_left_id;
-      const std::string& right_id = aravis_right_id;
-      if (config.camera.fake) {
-        // Aravis's GigE Vision fake cameras served by this process (tests, no hardware).
-        for (const std::string& address : {left_id, right_id}) {
-          ArvGvFakeCamera* fake = arv_gv_fake_camera_new(address.c_str(), nullptr);
-          if (fake == nullptr || !arv_gv_fake_camera_is_running(fake)) {
-            std::fprintf(stderr, "%s: cannot serve a fake GigE camera on %s\n", tool,
-                         address.c_str());
-            return 1;
-          }
-          fake_cameras.push_back(fake);
-        }
-      }
-      auto aravis = std::make_unique<drivers::AravisStereoSource>();
-      drivers::AravisStereoOptions ao;
-      ao.left_id = left_id.c_str();
-      ao.right_id = right_id.c_str();
-      ao.width = po.left_calibration.width;
-      ao.height = po.left_calibration.height;
-      ao.trigger =
-          config.camera.fake ? drivers::TriggerMode::kSoftware : drivers::TriggerMode::kFreeRun;
-      ao.frame_rate_hz = config.camera.fake ? 0.0 : config.rate_hz;
-      if (const core::Status s = aravis->Configure(ao); s != core::Status::kOk) {
-        std::fprintf(stderr, "%s: the aravis source refused its options (%s): %s\n", tool,
-                     core::ToString(s), aravis->LastError());
-        return 2;
-      }
-      total_frames = config.max_frames;
-      aravis_source = aravis.get();
-      source = std::move(aravis);
-      break;
-#else
-      std::fprintf(stderr,
-                   "%s: configuration refused: source: aravis: this build has no Aravis "
-                   "(SWF_WITH_ARAVIS=OFF)\n",
-                   tool);
-      return 2;
-#endif
-    }
-    case SourceKind::kV4l2: {
-#if SWF_APP_HAVE_V4L2
-      if (!use_camera_calibrations()) return 2;
-      // The device paths stay in `config`, which outlives the source.
-      std::unique_ptr<drivers::V4l2StereoSource> v4l2 =
-          MakeV4l2Source(config, po.left_calibration.width, po.left_calibration.height,
-                         drivers::LinuxV4l2Kernel(), &error);
-      if (v4l2 == nullptr) {
-        std::fprintf(stderr, "%s: configuration refused: %s\n", tool, error.c_str());
-        return 2;
-      }
-      total_frames = config.max_frames;
-      v4l2_source = v4l2.get();
-      source = std::move(v4l2);
-      break;
-#else
-      std::fprintf(stderr,
-                   "%s: configuration refused: source: v4l2: this build has no V4L2 "
-                   "(SWF_WITH_V4L2=OFF)\n",
-                   tool);
-      return 2;
-#endif
-    }
-  }
-  std::int8_t nav_mode = 0;
-  ApplyEstimatorConfig(config, &po, &nav_mode);
-
-  // ---- preallocation ----------------------------------------------------------------------------
-  auto pipeline = std::make_unique<Pipeline>();
-  if (const core::Status s = pipeline->Configure(po); s != core::Status::kOk) {
-    std::fprintf(stderr,
-                 "%s: configuration refused: the pipeline rejected it (%s): check window, "
-                 "max_tracks, max_disparity_px and the rig\n",
-                 tool, core::ToString(s));
-    return 2;
-  }
-  if (!CheckEnvelopeDisparity(config, pipeline->Camera().fx, pipeline->Camera().baseline_m,
-                              po.width_px, &error)) {
-    return refuse();
-  }
-  // Hazard mapping on the rectified pair (all of its memory now).
-  auto hazard_stage = std::make_unique<MapperHazardStage>();
-  {
-    hazard::HazardMapperOptions ho;
-    ho.camera = pipeline->Camera();
-    ho.image_width = po.width_px;
-    ho.image_height = po.height_px;
-    ho.max_disparities = config.hazard_max_disparities;
-    ho.downsample = config.hazard_downsample;
-    if (const core::Status s = hazard_stage->Configure(ho); s != core::Status::kOk) {
-      std::fprintf(stderr,
-                   "%s: configuration refused: hazard.max_disparities / hazard.downsample: the "
-                   "hazard mapper rejected them for %dx%d images (%s)\n",
-                   tool, po.width_px, po.height_px, core::ToString(s));
-      return 2;
-    }
-  }
-  auto channels = std::make_unique<OutputChannels>();
-  if (channels->Allocate(po.width_px, po.height_px, hazard_stage->GridCells()) !=
+  parts->channels = std::make_unique<OutputChannels>();
+  if (parts->channels->Allocate(po.width_px, po.height_px, parts->hazard->GridCells()) !=
       core::Status::kOk) {
-    std::fprintf(stderr, "%s: out of memory for the output pools\n", tool);
-    return 1;
+    *error = "out of memory for the output pools";
+    return core::Status::kFull;
   }
-  OutputOptions oo;
-  oo.lcm_url = config.publish ? config.lcm_url : "";
-  oo.channel_prefix = config.channel_prefix;
-  oo.record_path = config.record_path;
-  oo.max_width = po.width_px;
-  oo.max_height = po.height_px;
-  oo.max_hazard_cells = hazard_stage->GridCells();
-  OutputThread output;
-  if (!output.Open(oo, channels.get(), &error)) {
-    std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
-    return 1;
-  }
-  Evaluation evaluation;
-  const bool evaluate = config.source == SourceKind::kSim && world != nullptr;
-  if (evaluate) output.AddObserver(&evaluation);
-  Progress progress_display(
-      config.max_frames > 0 ? std::min(config.max_frames, total_frames) : total_frames, progress);
-  progress_display.isatty_ = isatty(2) != 0;
-  output.AddObserver(&progress_display);
-  LastHealth last_health;
-  output.AddObserver(&last_health);
-  HazardCounter hazard_counter;
-  output.AddObserver(&hazard_counter);
+  output_options.max_width = po.width_px;
+  output_options.max_height = po.height_px;
+  output_options.max_hazard_cells = parts->hazard->GridCells();
+  if (!parts->output.Open(output_options, parts->channels.get(), error))
+    return core::Status::kIoError;
+  return core::Status::kOk;
+}
 
-  LoopOptions lo;
-  lo.rate_hz = config.rate_hz;
-  lo.pacing = replay && config.pacing == Pacing::kRealtime ? Pacing::kLockstep : config.pacing;
-  lo.hazard_every = config.hazard_every;
-  lo.health_every = config.health_every;
-  lo.record_frames = config.record_frames && !config.record_path.empty();
-  lo.max_frames = config.max_frames;
-  lo.nav_mode = nav_mode;
-  lo.hazard_priority = config.priority > 1 ? config.priority - 1 : 0;
-  lo.inject_stage = config.inject_stage.empty() ? -1 : StageIndex(config.inject_stage);
-  lo.inject_first_frame = config.inject_frame;
-  lo.inject_frames = config.inject_frames;
-  lo.inject_ms = config.inject_ms;
-  FlightLoop loop;
-  MotionProvider* motion = world != nullptr ? static_cast<MotionProvider*>(world.get())
-                                            : static_cast<MotionProvider*>(log_source);
-  // The IMU: the simulator's unit, the log's recording, or (cameras) imu_t over LCM.
-  ImuProvider* imu = nullptr;
-  LcmImuInput lcm_imu;
-  if (config.imu.enabled) {
-    if (world != nullptr) {
-      imu = world.get();
-    } else if (log_source != nullptr) {
-      imu = log_source;
-      if (log_source->NumImuSamples() == 0) {
-        std::fprintf(stderr, "%s: %s: imu.enabled but no %s records in the log\n", tool,
-                     config.log_path.c_str(), imu_channel.c_str());
-        return 1;
-      }
-    } else if (!lcm_imu.Start(config.lcm_url, imu_channel, &error)) {
-      std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
-      return 1;
-    } else {
-      imu = &lcm_imu;
-    }
+int RunFlightProcess(int argc, char** argv, bool replay) {
+  CommandLine command_line;
+  if (!ParseCommandLine(argc, argv, replay, &command_line)) return Usage(replay);
+  auto fp = std::make_unique<FlightProcess>();
+  fp->tool = replay ? "swf-replay" : "swf-fsw";
+  fp->replay = replay;
+  fp->progress = command_line.progress;
+  if (const int code = Configure(command_line, fp.get()); code != kContinue) return code;
+  // Each phase either continues or gives the exit code: nothing runs before all are done.
+  using Phase = int (*)(FlightProcess*);
+  for (const Phase phase :
+       {&SetInitialState, &OpenSource, &Preallocate, &ConnectImu, &ConfigureLoop}) {
+    if (const int code = phase(fp.get()); code != kContinue) return code;
   }
-  if (loop.Configure(lo, pipeline.get(), source.get(), channels.get(), motion, hazard_stage.get(),
-                     imu) != core::Status::kOk) {
-    std::fprintf(stderr,
-                 "%s: configuration refused: rate groups (rate_hz, hazard_every, "
-                 "health_every)\n",
-                 tool);
-    return 2;
-  }
-  if (source->Start() != core::Status::kOk) {
-#if SWF_APP_HAVE_ARAVIS
-    if (aravis_source != nullptr) {
-      std::fprintf(stderr, "%s: the aravis source did not start: %s\n", tool,
-                   static_cast<drivers::AravisStereoSource*>(aravis_source)->LastError());
-      return 1;
-    }
-#endif
-#if SWF_APP_HAVE_V4L2
-    if (v4l2_source != nullptr) {
-      std::fprintf(stderr, "%s: the v4l2 source did not start: %s\n", tool,
-                   static_cast<drivers::V4l2StereoSource*>(v4l2_source)->LastError());
-      return 1;
-    }
-#endif
-    std::fprintf(stderr, "%s: the %s source did not start\n", tool, source->Name());
-    return 1;
-  }
-
-  // ---- real time ----------------------------------------------------------------------------
-  char message[200];
-  bool locked = false;
-  if (config.mlockall) {
-    locked = LockMemory(message, sizeof message);
-    std::fprintf(stderr, "%s: %s\n", tool, message);
-  }
-  output.Start();
-  g_loop = &loop;
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  core::Status run_status = core::Status::kOk;
-  bool fifo = false;
-  std::thread rt([&] {
-    char m[200];
-    fifo = MakeThreadRealtime(config.priority, m, sizeof m);
-    std::fprintf(stderr, "%s: frame group: %s\n", tool, m);
-    if (config.cpu >= 0) {
-      cpu_set_t set;
-      CPU_ZERO(&set);
-      CPU_SET(config.cpu, &set);
-      if (pthread_setaffinity_np(pthread_self(), sizeof set, &set) != 0) {
-        std::fprintf(stderr, "%s: pinning to CPU %d refused: continuing unpinned\n", tool,
-                     config.cpu);
-      }
-    }
-#if SWF_APP_HAVE_ARAVIS
-    // GLib gives a thread it did not create its GThread record on first use (one allocation
-    // inside the first Aravis call of the frame group): take it here, before counting starts.
-    if (aravis_source != nullptr) (void)g_thread_self();
-#endif
-    run_status = loop.Run();
-  });
-  rt.join();
-  g_loop = nullptr;
-  source->Stop();
-  output.StopAndDrain();
-  progress_display.Finish();
-
-  // ---- report ---------------------------------------------------------------------------------
-  const LoopCounters& counters = loop.Counters();
-  const bool damaged_log = log_source != nullptr && !log_source->LoadError().empty();
-  if (damaged_log) {
-    std::fprintf(stderr,
-                 "%s: stopped at a damaged log: %s (the %zu frames before it were "
-                 "replayed)\n",
-                 tool, log_source->LoadError().c_str(), log_source->NumFrames());
-  }
-#if SWF_APP_HAVE_V4L2
-  if (v4l2_source != nullptr && run_status != core::Status::kOk) {
-    std::fprintf(stderr, "%s: the v4l2 source failed: %s\n", tool,
-                 static_cast<drivers::V4l2StereoSource*>(v4l2_source)->LastError());
-  }
-#endif
-  EvaluationResult eval;
-  if (evaluate) {
-    eval = evaluation.Evaluate(*pipeline, world->Trajectory(), world->Terrain(), config.plot_dir);
-  }
-  HazardEvaluation hazard_eval;
-  if (evaluate) {
-    hazard_eval = EvaluateHazard(hazard_stage->Mapper(), world->Terrain(), hazard_counter.maps);
-  }
-  if (!config.plot_dir.empty() && hazard_counter.maps > 0) {
-    const std::string png = config.plot_dir + "/hazard.png";
-    if (hazard_eval::WriteHazardMapPng(hazard_stage->Mapper(), png) != core::Status::kOk) {
-      std::fprintf(stderr, "%s: cannot write %s\n", tool, png.c_str());
-    }
-  }
-  const HealthRecord& h = last_health.last;
-  std::fprintf(stderr,
-               "%s: %lld frames, %lld overruns, %lld outputs dropped, %lld allocations after "
-               "start, cycle p50 %.1f ms p99 %.1f ms max %.1f ms",
-               tool, static_cast<long long>(counters.frames),
-               static_cast<long long>(counters.overruns), static_cast<long long>(h.outputs_dropped),
-               static_cast<long long>(h.allocations_after_start), h.stages[kStageCycle].p50_ms,
-               h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms);
-  if (evaluate) {
-    if (eval.landmarks_evaluated > 0) {
-      std::fprintf(stderr, ", landmark RMS error %.3f m", eval.landmark_rms_error_m);
-    } else {
-      std::fprintf(stderr, ", no landmark map to evaluate");
-    }
-    std::fprintf(stderr, ", pose RMS error %.3f m", eval.pose_rms_error_m);
-  }
-  std::fprintf(stderr, ", %lld hazard maps (%lld skipped, %lld failed), hazard p50 %.1f ms",
-               static_cast<long long>(hazard_counter.maps),
-               static_cast<long long>(counters.hazard_skipped),
-               static_cast<long long>(loop.HazardErrors()), h.stages[kStageHazard].p50_ms);
-  std::fprintf(stderr, "\n");
-  const IntegrityCounters& integrity = pipeline->Integrity();
-  const LogStreamStats* log_stream = log_source != nullptr ? &log_source->StreamStats() : nullptr;
-  if (log_stream != nullptr && (log_stream->frames_missing > 0 || log_stream->Refused() > 0)) {
-    std::fprintf(stderr,
-                 "%s: log: %lld frames missing (sequence gaps), %lld duplicated and %lld "
-                 "out-of-order frames refused\n",
-                 tool, static_cast<long long>(log_stream->frames_missing),
-                 static_cast<long long>(log_stream->duplicates),
-                 static_cast<long long>(log_stream->out_of_order));
-  }
-  Verdict verdict = JudgeRun(counters, h, integrity, pipeline->LastIntegrity().status,
-                             evaluate ? &eval : nullptr, log_stream);
-  if (run_status != core::Status::kOk)
-    Fail(&verdict, std::string("the frame group stopped: ") + core::ToString(run_status));
-  if (damaged_log) Fail(&verdict, "damaged log");
-  if (output.Counters().record_errors > 0 || output.Counters().encode_errors > 0) {
-    std::fprintf(stderr, "%s: %lld records could not be written, %lld not encoded\n", tool,
-                 static_cast<long long>(output.Counters().record_errors),
-                 static_cast<long long>(output.Counters().encode_errors));
-    Fail(&verdict, "records lost");
-  }
-  std::fprintf(stderr,
-               "%s: integrity: %lld VALID, %lld DEGRADED, %lld INVALID frames, %lld restarts, "
-               "%lld measurements gated, %lld rejected, %lld landmarks rejected\n",
-               tool, static_cast<long long>(integrity.frames_valid),
-               static_cast<long long>(integrity.frames_degraded),
-               static_cast<long long>(integrity.frames_invalid),
-               static_cast<long long>(integrity.restarts),
-               static_cast<long long>(integrity.measurements_gated),
-               static_cast<long long>(integrity.measurements_rejected),
-               static_cast<long long>(integrity.landmarks_rejected));
-  std::fprintf(stderr, "%s: result: %s%s%s\n", tool, verdict.result,
-               verdict.reasons.empty() ? "" : ": ", verdict.reasons.c_str());
-  ImuReport imu_report;
-  if (pipeline->Inertial()) {
-    imu_report.counts = pipeline->ImuStreamCounts();
-    if (imu == &lcm_imu) {
-      lcm_imu.Stop();
-      imu_report.has_lcm = true;
-      imu_report.lcm = lcm_imu.Counters();
-      std::fprintf(stderr,
-                   "%s: imu over LCM: %lld received, %lld undecodable, %lld lost to a full "
-                   "queue, %lld stamped too far ahead\n",
-                   tool, static_cast<long long>(imu_report.lcm.received),
-                   static_cast<long long>(imu_report.lcm.undecodable),
-                   static_cast<long long>(imu_report.lcm.queue_full),
-                   static_cast<long long>(imu_report.lcm.future_dropped));
-    }
-    if (const estimator::NavState<double>* x = pipeline->NewestNavState()) {
-      imu_report.has_biases = true;
-      imu_report.estimated = x->biases;
-    }
-    // The unit's true bias at the last sample the pipeline took.
-    const sim::ImuModel* unit = world ? world->ImuUnit() : nullptr;
-    const std::int64_t taken = counters.imu_samples;
-    if (unit != nullptr && taken > 0 &&
-        taken <= static_cast<std::int64_t>(unit->TrueBiases().size())) {
-      imu_report.has_truth = true;
-      imu_report.truth = unit->TrueBiases()[static_cast<std::size_t>(taken - 1)];
-      imu_report.imu_only_pose_rms_m =
-          ImuOnlyPoseRms(*unit, world->Trajectory(), po.imu, po.initial_world_T_camera);
-    }
-    std::fprintf(stderr, "%s: imu: %lld samples integrated, %lld dropped, %lld intervals bridged\n",
-                 tool, static_cast<long long>(imu_report.counts.stream.accepted),
-                 static_cast<long long>(
-                     imu_report.counts.stream.out_of_order + imu_report.counts.stream.duplicated +
-                     imu_report.counts.stream.invalid + imu_report.counts.stream.saturated),
-                 static_cast<long long>(imu_report.counts.intervals_bridged));
-  }
-  if (!config.summary_path.empty()) {
-    WriteSummary(config.summary_path, config, counters, h, evaluate ? &eval : nullptr,
-                 evaluate && hazard_counter.maps > 0 ? &hazard_eval : nullptr, hazard_counter.maps,
-                 locked, fifo, verdict, integrity, world ? &world->Trajectory() : nullptr,
-                 world ? &world->Target() : nullptr, log_stream,
-                 pipeline->Inertial() ? &imu_report : nullptr);
-  }
-  return verdict.exit_code;
+  RunRealTime(fp.get());
+  return Report(fp.get());
 }
 
 }  // namespace swf::app

@@ -12,6 +12,7 @@
 #include <memory>
 #include <vector>
 
+#include "swf/app/app.hpp"
 #include "swf/app/config.hpp"
 #include "swf/app/hazard_stage.hpp"
 #include "swf/app/lcm_io.hpp"
@@ -22,14 +23,11 @@
 namespace swf::app {
 namespace {
 
-struct Rig {
+// The flight parts as swf-fsw assembles them, around the simulated descent.
+struct Rig : FlightParts {
   FswConfig config;
   std::unique_ptr<SimWorld> world = std::make_unique<SimWorld>();
   std::unique_ptr<PrerenderedSimSource> source;
-  std::unique_ptr<Pipeline> pipeline = std::make_unique<Pipeline>();
-  std::unique_ptr<OutputChannels> channels = std::make_unique<OutputChannels>();
-  std::unique_ptr<MapperHazardStage> hazard = std::make_unique<MapperHazardStage>();
-  OutputThread output;
   LoopOptions loop_options;
 
   explicit Rig(const std::string& text) {
@@ -51,18 +49,10 @@ struct Rig {
     po.process_sigma_rad = 0.001;
     po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
     po.imu = ImuOptionsFor(config, &world->Trajectory());
-    EXPECT_EQ(pipeline->Configure(po), core::Status::kOk);
     hazard::HazardMapperOptions ho;
-    ho.camera = pipeline->Camera();
-    ho.image_width = po.width_px;
-    ho.image_height = po.height_px;
     ho.max_disparities = 64;
-    EXPECT_EQ(hazard->Configure(ho), core::Status::kOk);
-    EXPECT_EQ(channels->Allocate(po.width_px, po.height_px, hazard->GridCells()),
-              core::Status::kOk);
-    OutputOptions oo;  // no LCM, no log: the outputs are only drained
-    oo.max_hazard_cells = hazard->GridCells();
-    EXPECT_TRUE(output.Open(oo, channels.get(), &error)) << error;
+    EXPECT_EQ(AssembleFlightParts(po, ho, OutputOptions{}, this, &error), core::Status::kOk)
+        << error;  // no LCM, no log: the outputs are only drained
     EXPECT_EQ(source->Start(), core::Status::kOk);
   }
 };

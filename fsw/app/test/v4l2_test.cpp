@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "scripted_v4l2_kernel.hpp"
+#include "swf/app/app.hpp"
 #include "swf/app/config.hpp"
 #include "swf/app/flight_loop.hpp"
 #include "swf/app/hazard_stage.hpp"
@@ -154,15 +155,11 @@ class NavCollector : public OutputObserver {
   std::vector<NavOutput> navs;
 };
 
-struct V4l2Rig {
+struct V4l2Rig : FlightParts {
   FswConfig config;
   ScriptedV4l2Kernel scripted;
   std::unique_ptr<TexturingKernel> kernel;
   std::unique_ptr<drivers::V4l2StereoSource> source;
-  std::unique_ptr<Pipeline> pipeline = std::make_unique<Pipeline>();
-  std::unique_ptr<OutputChannels> channels = std::make_unique<OutputChannels>();
-  std::unique_ptr<MapperHazardStage> hazard = std::make_unique<MapperHazardStage>();
-  OutputThread output;
   NavCollector navs;
   FlightLoop loop;
   int left_device = -1;
@@ -198,18 +195,10 @@ struct V4l2Rig {
     po.frontend.max_tracks = 100;
     po.frontend.stereo.max_disparity = 64;
     po.swf.window_size = 5;
-    EXPECT_EQ(pipeline->Configure(po), core::Status::kOk);
     hazard::HazardMapperOptions ho;
-    ho.camera = pipeline->Camera();
-    ho.image_width = po.width_px;
-    ho.image_height = po.height_px;
     ho.max_disparities = 64;
-    EXPECT_EQ(hazard->Configure(ho), core::Status::kOk);
-    EXPECT_EQ(channels->Allocate(po.width_px, po.height_px, hazard->GridCells()),
-              core::Status::kOk);
-    OutputOptions oo;  // no LCM, no log: the outputs are only drained
-    oo.max_hazard_cells = hazard->GridCells();
-    EXPECT_TRUE(output.Open(oo, channels.get(), &error)) << error;
+    EXPECT_EQ(AssembleFlightParts(po, ho, OutputOptions{}, this, &error), core::Status::kOk)
+        << error;  // no LCM, no log: the outputs are only drained
     output.AddObserver(&navs);
     LoopOptions lo;
     lo.rate_hz = 20.0;

@@ -3,11 +3,37 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <string>
+
+#include "swf/app/hazard_stage.hpp"
+#include "swf/app/lcm_io.hpp"
+#include "swf/app/pipeline.hpp"
+#include "swf/core/status.hpp"
 
 namespace swf::app {
 
-struct FswConfig;        // config.hpp
-struct PipelineOptions;  // pipeline.hpp
+struct FswConfig;  // config.hpp
+
+// The flight process's preallocated parts around a source: the frame group's pipeline, the
+// hazard stage, the output pools and the output thread (opened, not started). The observers,
+// the rate groups and the source are the caller's. swf-fsw, swf-replay and the tests all build
+// them with AssembleFlightParts.
+struct FlightParts {
+  std::unique_ptr<Pipeline> pipeline;
+  std::unique_ptr<MapperHazardStage> hazard;
+  std::unique_ptr<OutputChannels> channels;
+  OutputThread output;
+};
+
+// Sizes everything from `po` (the hazard mapper's camera and image size, the pools and the
+// output buffers) and allocates it all now. kInvalidArgument: the pipeline or the hazard mapper
+// refused its options; kFull: out of memory; kIoError: the output (LCM, the log) did not open.
+// `error` says which, for a "configuration refused:" or run-time error line.
+core::Status AssembleFlightParts(const PipelineOptions& po,
+                                 hazard::HazardMapperOptions hazard_options,
+                                 OutputOptions output_options, FlightParts* parts,
+                                 std::string* error);
 
 // The configuration's front-end, filter and noise settings into `po` (whose width_px and
 // height_px the source has already set); `nav_mode` gets nav_state_t's MODE_* for the filter
