@@ -74,10 +74,10 @@ inline bool InsideForSampling(const GrayView& image, float x, float y, float mar
          y < static_cast<float>(image.height - 1) - margin;
 }
 
-// Bilinear interpolation; the caller guarantees 0 <= x < width-1 and 0 <= y < height-1.
-inline float SampleBilinear(const GrayView& image, float x, float y) {
-  const int x0 = static_cast<int>(x);
-  const int y0 = static_cast<int>(y);
+// Bilinear interpolation at (x, y) in the cell whose top-left pixel is (x0, y0), with
+// x0 <= x <= x0 + 1 and y0 <= y <= y0 + 1: the arithmetic of SampleBilinear and
+// SampleBilinearClamped (SampleGrid performs the same operations per grid pixel).
+inline float SampleInCell(const GrayView& image, int x0, int y0, float x, float y) {
   const float ax = x - static_cast<float>(x0);
   const float ay = y - static_cast<float>(y0);
   const std::uint8_t* r0 = image.Row(y0) + x0;
@@ -85,6 +85,11 @@ inline float SampleBilinear(const GrayView& image, float x, float y) {
   const float top = static_cast<float>(r0[0]) + ax * static_cast<float>(r0[1] - r0[0]);
   const float bottom = static_cast<float>(r1[0]) + ax * static_cast<float>(r1[1] - r1[0]);
   return top + ay * (bottom - top);
+}
+
+// Bilinear interpolation; the caller guarantees 0 <= x < width-1 and 0 <= y < height-1.
+inline float SampleBilinear(const GrayView& image, float x, float y) {
+  return SampleInCell(image, static_cast<int>(x), static_cast<int>(y), x, y);
 }
 
 // Samples the (2r+1)^2 grid of pixels centred at (x, y) into out (row-major). All samples share
@@ -119,13 +124,7 @@ inline float SampleBilinearClamped(const GrayView& image, float x, float y) {
   int y0 = static_cast<int>(y);
   x0 = x0 > image.width - 2 ? image.width - 2 : x0;
   y0 = y0 > image.height - 2 ? image.height - 2 : y0;
-  const float ax = x - static_cast<float>(x0);
-  const float ay = y - static_cast<float>(y0);
-  const std::uint8_t* r0 = image.Row(y0) + x0;
-  const std::uint8_t* r1 = r0 + image.stride;
-  const float top = static_cast<float>(r0[0]) + ax * static_cast<float>(r0[1] - r0[0]);
-  const float bottom = static_cast<float>(r1[0]) + ax * static_cast<float>(r1[1] - r1[0]);
-  return top + ay * (bottom - top);
+  return SampleInCell(image, x0, y0, x, y);
 }
 
 // Halves an image with a [1 2 1]/4 x [1 2 1]/4 low-pass (rounded). dst is resized to
