@@ -31,15 +31,30 @@ bool Fail(std::string* error, const std::string& path, int line, const std::stri
   return false;
 }
 
-// Fills the poses and `index` (file id -> position) and `lines` (position -> file line).
-bool ReadPoses(std::istream& in, const std::string& path, KittiVoProblem* problem,
-               std::map<std::int64_t, int>* index, std::vector<int>* lines, std::string* error) {
+// Calls parse_line(line stream, line number) on every non-blank line of the file until it
+// returns false (it has set *error); a file without such a line is an error too: "no <what>".
+template <typename ParseLine>
+bool ForEachDataLine(std::istream& in, const std::string& path, const std::string& what,
+                     std::string* error, ParseLine parse_line) {
   std::string text;
   int line = 0;
+  bool any = false;
   while (std::getline(in, text)) {
     ++line;
     if (text.find_first_not_of(" \t\r") == std::string::npos) continue;
     std::istringstream ls(text);
+    if (!parse_line(ls, line)) return false;
+    any = true;
+  }
+  if (!any)
+    return Fail(error, path, 0, "no " + what + " in the file (" + std::to_string(line) + " lines)");
+  return true;
+}
+
+// Fills the poses and `index` (file id -> position) and `lines` (position -> file line).
+bool ReadPoses(std::istream& in, const std::string& path, KittiVoProblem* problem,
+               std::map<std::int64_t, int>* index, std::vector<int>* lines, std::string* error) {
+  return ForEachDataLine(in, path, "poses", error, [&](std::istringstream& ls, int line) {
     std::int64_t id = 0;
     Eigen::Matrix4d m;
     ls >> id;
@@ -58,22 +73,15 @@ bool ReadPoses(std::istream& in, const std::string& path, KittiVoProblem* proble
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
     problem->poses.push_back(
         Pose<double>{svd.matrixU() * svd.matrixV().transpose(), m.topRightCorner<3, 1>()});
-  }
-  if (problem->poses.empty())
-    return Fail(error, path, 0, "no poses in the file (" + std::to_string(line) + " lines)");
-  return true;
+    return true;
+  });
 }
 
 bool ReadFactors(std::istream& in, const std::string& path,
                  const std::map<std::int64_t, int>& index, KittiVoProblem* problem,
                  std::string* error) {
   std::map<std::pair<int, std::int64_t>, int> seen;  // (pose, landmark) -> first line
-  std::string text;
-  int line = 0;
-  while (std::getline(in, text)) {
-    ++line;
-    if (text.find_first_not_of(" \t\r") == std::string::npos) continue;
-    std::istringstream ls(text);
+  return ForEachDataLine(in, path, "factors", error, [&](std::istringstream& ls, int line) {
     std::int64_t pose_id = 0;
     KittiFactor f;
     double x = 0, y = 0, z = 0;
@@ -98,10 +106,8 @@ bool ReadFactors(std::istream& in, const std::string& path,
                       std::to_string(first->second));
     }
     problem->factors.push_back(f);
-  }
-  if (problem->factors.empty())
-    return Fail(error, path, 0, "no factors in the file (" + std::to_string(line) + " lines)");
-  return true;
+    return true;
+  });
 }
 
 // The first pose (in file order) that no chain of shared landmarks connects to the first pose, or
