@@ -263,6 +263,28 @@ core::Status Appearance::Build(const Terrain& terrain, const AppearanceOptions& 
   return core::Status::kOk;
 }
 
+inline Appearance::V4f Appearance::OctaveDetail4(V4f lane_ratio, V4f sx, V4f sy, V4i cell_x,
+                                                 V4i cell_y, V4f amplitude) const {
+  V4f w = (lane_ratio - 1.5f) * (1.0f / 1.5f);
+  w = w < 0.0f ? 0.0f : w;  // lane-wise select
+  w = w > 1.0f ? 1.0f : w;
+  w = w * w * (3.0f - 2.0f * w);
+  const V4i kx = __builtin_convertvector(sx, V4i);  // truncation = floor (non-negative)
+  const V4i ky = __builtin_convertvector(sy, V4i);
+  V4f rx = sx - __builtin_convertvector(kx, V4f);
+  V4f ry = sy - __builtin_convertvector(ky, V4f);
+  rx = rx * rx * (3.0f - 2.0f * rx);
+  ry = ry * ry * (3.0f - 2.0f * ry);
+  const V4i mask = {kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1};
+  const V4i a0 = (cell_x + kx) & mask;
+  const V4i b0 = (cell_y + ky) & mask;
+  const V4i i00 = b0 * kLatticeStride + a0;
+  const lanes::CellCorners4 v = lanes::GatherCellCorners4(lattice_.data(), i00, kLatticeStride);
+  const V4f upper = v.v00 + rx * (v.v10 - v.v00);
+  const V4f lower = v.v01 + rx * (v.v11 - v.v01);
+  return w * amplitude * (upper + ry * (lower - upper));
+}
+
 double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
   const double inv_cell = inv_cell_m_;
   const double gx = std::clamp((x_m - origin_m_) * inv_cell, 0.0, size_ - 1.0);
@@ -315,35 +337,17 @@ double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
     }
     return base * std::max(0.05, 1.0 + static_cast<double>(detail));
   }
-  const V4i mask = {kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1};
   V4f detail = {0.0f, 0.0f, 0.0f, 0.0f};
   for (int g = 0; g < kDetailOctaves / 4; ++g) {
     const float group_ratio = ratio * kGroupRatio[g];
     if (group_ratio < 1.5f) break;
     const V4f lane_ratio = group_ratio * V4f{1.0f, 0.5f, 0.25f, 0.125f};
-    V4f w = (lane_ratio - 1.5f) * (1.0f / 1.5f);
-    w = w < 0.0f ? 0.0f : w;  // lane-wise select
-    w = w > 1.0f ? 1.0f : w;
-    w = w * w * (3.0f - 2.0f * w);
     const V4f scale = kGroupScale[g] * V4f{1.0f, 2.0f, 4.0f, 8.0f};  // powers of two: exact
-    const V4f sx = cfx * scale;
-    const V4f sy = cfy * scale;
-    const V4i kx = __builtin_convertvector(sx, V4i);  // truncation = floor (non-negative)
-    const V4i ky = __builtin_convertvector(sy, V4i);
-    V4f rx = sx - __builtin_convertvector(kx, V4f);
-    V4f ry = sy - __builtin_convertvector(ky, V4f);
-    rx = rx * rx * (3.0f - 2.0f * rx);
-    ry = ry * ry * (3.0f - 2.0f * ry);
     const std::int32_t shift = 4 * g;
-    const V4i base_x = V4i{di, di * 2, di * 4, di * 8} << shift;
-    const V4i base_y = V4i{dj, dj * 2, dj * 4, dj * 8} << shift;
-    const V4i a0 = (base_x + kx + octave_offset_x_[g]) & mask;
-    const V4i b0 = (base_y + ky + octave_offset_y_[g]) & mask;
-    const V4i i00 = b0 * kLatticeStride + a0;
-    const lanes::CellCorners4 v = lanes::GatherCellCorners4(lattice, i00, kLatticeStride);
-    const V4f upper = v.v00 + rx * (v.v10 - v.v00);
-    const V4f lower = v.v01 + rx * (v.v11 - v.v01);
-    detail += w * octave_amplitude_[g] * (upper + ry * (lower - upper));
+    const V4i cell_x = (V4i{di, di * 2, di * 4, di * 8} << shift) + octave_offset_x_[g];
+    const V4i cell_y = (V4i{dj, dj * 2, dj * 4, dj * 8} << shift) + octave_offset_y_[g];
+    detail +=
+        OctaveDetail4(lane_ratio, cfx * scale, cfy * scale, cell_x, cell_y, octave_amplitude_[g]);
   }
   const float sum = (detail[0] + detail[1]) + (detail[2] + detail[3]);
   return base * std::max(0.05, 1.0 + static_cast<double>(sum));
@@ -413,8 +417,6 @@ void Appearance::Radiance4(const double* x_m, const double* y_m, const double* f
 }
 
 inline Appearance::V4f Appearance::Detail4(V4i di, V4i dj, V4f cfx, V4f cfy, V4f lane_ratio) const {
-  const V4i mask = {kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1, kLatticeSize - 1};
-  const float* lattice = lattice_.data();
   V4f detail = {0.0f, 0.0f, 0.0f, 0.0f};
   float scale = 1.0f;  // 2^o: exact
   for (int o = 0; o < kDetailOctaves; ++o, lane_ratio *= 0.5f, scale *= 2.0f) {
@@ -423,25 +425,11 @@ inline Appearance::V4f Appearance::Detail4(V4i di, V4i dj, V4f cfx, V4f cfy, V4f
           lane_ratio[3] >= 1.5f)) {
       break;
     }
-    V4f w = (lane_ratio - 1.5f) * (1.0f / 1.5f);
-    w = w < 0.0f ? 0.0f : w;  // lane-wise select
-    w = w > 1.0f ? 1.0f : w;
-    w = w * w * (3.0f - 2.0f * w);
-    const V4f sx = cfx * scale;
-    const V4f sy = cfy * scale;
-    const V4i kx = __builtin_convertvector(sx, V4i);  // truncation = floor (non-negative)
-    const V4i ky = __builtin_convertvector(sy, V4i);
-    V4f rx = sx - __builtin_convertvector(kx, V4f);
-    V4f ry = sy - __builtin_convertvector(ky, V4f);
-    rx = rx * rx * (3.0f - 2.0f * rx);
-    ry = ry * ry * (3.0f - 2.0f * ry);
-    const V4i a0 = ((di << o) + kx + octave_offset_x_[o / 4][o % 4]) & mask;
-    const V4i b0 = ((dj << o) + ky + octave_offset_y_[o / 4][o % 4]) & mask;
-    const V4i i00 = b0 * kLatticeStride + a0;
-    const lanes::CellCorners4 v = lanes::GatherCellCorners4(lattice, i00, kLatticeStride);
-    const V4f upper = v.v00 + rx * (v.v10 - v.v00);
-    const V4f lower = v.v01 + rx * (v.v11 - v.v01);
-    detail += w * octave_amplitude_[o / 4][o % 4] * (upper + ry * (lower - upper));
+    const float amplitude = octave_amplitude_[o / 4][o % 4];
+    detail += OctaveDetail4(lane_ratio, cfx * scale, cfy * scale,
+                            (di << o) + octave_offset_x_[o / 4][o % 4],
+                            (dj << o) + octave_offset_y_[o / 4][o % 4],
+                            V4f{amplitude, amplitude, amplitude, amplitude});
   }
   return detail;
 }

@@ -82,6 +82,11 @@ class Appearance {
   // detail(x, y) for four points: lattice cell (di, dj) and in-cell fraction (cfx, cfy) of the
   // first octave, pixels per first-octave wavelength lane_ratio.
   V4f Detail4(V4i di, V4i dj, V4f cfx, V4f cfy, V4f lane_ratio) const;
+  // One detail octave in four lanes (the lanes are points in Detail4, octaves in Radiance):
+  // weight (0 below 1.5 px per wavelength, smoothstep to 1 at 3 px) x amplitude x the
+  // smoothstep-bilinear lattice value at lattice cell (cell_x, cell_y) + floor(s), fraction
+  // s - floor(s), for the in-cell position s = (sx, sy) >= 0 in the octave's wavelengths.
+  V4f OctaveDetail4(V4f lane_ratio, V4f sx, V4f sy, V4i cell_x, V4i cell_y, V4f amplitude) const;
 
   static constexpr int kDetailOctaves = 8;
   static constexpr std::int32_t kLatticeSize = 512;  // power of two
