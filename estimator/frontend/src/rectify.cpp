@@ -119,9 +119,11 @@ inline std::uint8_t Blend1(const std::uint8_t* s0, const std::uint8_t* s1, int a
 }
 
 // One segment whose taps are all inside, gathered with a 16-bit load per tap pair (kInside in the
-// SIMD kernels). Writes kSegment bytes.
+// SIMD kernels). Writes min(kSegment, count) bytes: the last segment of a row may pass its end.
 [[gnu::always_inline]] inline void GatherSegment(const Quadratic& seg, const std::uint8_t* src,
-                                                 std::int32_t stride, std::uint8_t* dst) {
+                                                 std::int32_t stride, int count,
+                                                 std::uint8_t* dst) {
+  alignas(16) std::uint8_t bytes[kSegment];
   const V4i stride4 = {stride, stride, stride, stride};
   for (int q = 0; q < kSegment; q += 8) {
     const Coords8 c = SegmentCoords(seg, q);
@@ -137,9 +139,10 @@ inline std::uint8_t Blend1(const std::uint8_t* s0, const std::uint8_t* s1, int a
     }
     const V8s ax = Narrow(c.fx_lo, c.fx_hi) & (kWeightOne - 1);
     const V8s ay = Narrow(c.fy_lo, c.fy_hi) & (kWeightOne - 1);
-    const V8b bytes = Blend8(t, b, ax, ay);
-    std::memcpy(dst + q, &bytes, sizeof(bytes));
+    const V8b blended = Blend8(t, b, ax, ay);
+    std::memcpy(bytes + q, &blended, sizeof(blended));
   }
+  std::memcpy(dst, bytes, static_cast<std::size_t>(std::min(kSegment, count)));
 }
 
 // EvalHalf of pixels 0 .. 7 in 16-bit lanes without a multiply-high (portable kernel), for the
@@ -291,9 +294,7 @@ __attribute__((target("ssse3"))) void RemapSsse3(RemapJob job) {  // a copy: o a
                            WindowHalfSsse3(seg.half[h], src, stride, k));
         }
       } else if (job.kind[row + s] == SegmentKind::kInside) {
-        alignas(16) std::uint8_t bytes[kSegment];
-        GatherSegment(seg.quad, src, stride, bytes);
-        std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
+        GatherSegment(seg.quad, src, stride, job.width - u0, o + u0);
       }
     }
   }
@@ -403,9 +404,7 @@ __attribute__((target("avx2"))) void RemapAvx2Rows(const RemapJob& job, const M2
             _mm256_xor_si256(_mm256_permute4x64_epi64(_mm256_packs_epi16(a, a), 0x08), bias);
         _mm_storeu_si128(reinterpret_cast<M128*>(o + u0), _mm256_castsi256_si128(bytes));
       } else if (job.kind[row + s] == SegmentKind::kInside) {
-        alignas(16) std::uint8_t bytes[kSegment];
-        GatherSegment(seg[s].quad, src, stride, bytes);
-        std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
+        GatherSegment(seg[s].quad, src, stride, job.width - u0, o + u0);
       }
     }
   }
@@ -490,9 +489,7 @@ void RemapNeon(RemapJob job) {  // a copy: o aliases anything
           std::memcpy(o + u0 + h * kHalf, &bytes, sizeof(bytes));
         }
       } else if (job.kind[row + s] == SegmentKind::kInside) {
-        alignas(16) std::uint8_t bytes[kSegment];
-        GatherSegment(seg.quad, src, stride, bytes);
-        std::memcpy(o + u0, bytes, static_cast<std::size_t>(std::min(kSegment, job.width - u0)));
+        GatherSegment(seg.quad, src, stride, job.width - u0, o + u0);
       }
     }
   }
