@@ -185,6 +185,31 @@ struct RemapJob {
   const MutableGrayView* out;
 };
 
+// The segment walk of the kernels that take a kWindow segment as two WindowHalfs (SSSE3, NEON):
+// window_half(half, dst) writes the half's 8 output bytes; kInside segments are gathered; the
+// rest is left to the per-pixel pass. Always inlined, so that window_half inlines into the
+// kernel's own target.
+template <class WindowHalfKernel>
+[[gnu::always_inline]] inline void RemapByHalves(const RemapJob& job,
+                                                 WindowHalfKernel window_half) {
+  const std::uint8_t* src = job.raw->data;
+  const std::int32_t stride = job.raw->stride;
+  for (int v = 0; v < job.height; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
+    std::uint8_t* o = job.out->Row(v);
+    for (int s = 0; s < job.segments_per_row; ++s) {
+      const Segment& seg = job.segment[row + s];
+      const int u0 = s * kSegment;
+      if (job.kind[row + s] == SegmentKind::kWindow) {
+        window_half(seg.half[0], o + u0);
+        window_half(seg.half[1], o + u0 + kHalf);
+      } else if (job.kind[row + s] == SegmentKind::kInside) {
+        GatherSegment(seg.quad, src, stride, job.width - u0, o + u0);
+      }
+    }
+  }
+}
+
 // Constant vectors of the SIMD window kernels: 16 lanes of 16 bits (x86 SSSE3 uses the low 8; every
 // constant repeats per 128 bits), byte values named as such.
 struct alignas(32) WindowConstants {
@@ -282,22 +307,11 @@ __attribute__((target("ssse3"))) void RemapSsse3(RemapJob job) {  // a copy: o a
   const std::int32_t stride = job.raw->stride;
   WindowConstants k = MakeWindowConstants();
   asm("" : : "r"(&k) : "memory");  // constants stay memory operands (RemapAvx2)
-  for (int v = 0; v < job.height; ++v) {
-    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
-    std::uint8_t* o = job.out->Row(v);
-    for (int s = 0; s < job.segments_per_row; ++s) {
-      const Segment& seg = job.segment[row + s];
-      const int u0 = s * kSegment;
-      if (job.kind[row + s] == SegmentKind::kWindow) {
-        for (int h = 0; h < 2; ++h) {
-          _mm_storel_epi64(reinterpret_cast<M128*>(o + u0 + h * kHalf),
-                           WindowHalfSsse3(seg.half[h], src, stride, k));
-        }
-      } else if (job.kind[row + s] == SegmentKind::kInside) {
-        GatherSegment(seg.quad, src, stride, job.width - u0, o + u0);
-      }
-    }
-  }
+  // The lambda names the kernel's target itself: a lambda does not inherit its function's.
+  RemapByHalves(
+      job, [&](const WindowHalf& half, std::uint8_t* dst) __attribute__((target("ssse3"))) {
+        _mm_storel_epi64(reinterpret_cast<M128*>(dst), WindowHalfSsse3(half, src, stride, k));
+      });
 }
 
 // vpblendvb: a where the mask byte's top bit is clear, b where it is set. In asm because GCC
@@ -443,56 +457,50 @@ template <class V>
 }
 
 #if defined(__aarch64__)
-// NEON kernel: each WindowHalf with sqrdmulh (= pmulhrsw) coordinates and TBL taps (indices >= 16
-// give 0), blended by Blend8.
+// One WindowHalf (8 pixels) with NEON: sqrdmulh (= pmulhrsw) coordinates and TBL taps (indices
+// >= 16 give 0), blended by Blend8.
+[[gnu::always_inline]] inline V8b WindowHalfNeon(const WindowHalf& half, const std::uint8_t* src,
+                                                 std::int32_t stride, int16x8_t linear,
+                                                 int16x8_t quadratic) {
+  int16x8_t coef;
+  std::memcpy(&coef, &half, sizeof(coef));
+  const int16x8_t x =
+      vaddq_s16(vaddq_s16(vdupq_laneq_s16(coef, 0), vqrdmulhq_laneq_s16(linear, coef, 1)),
+                vqrdmulhq_laneq_s16(quadratic, coef, 2));
+  const int16x8_t y =
+      vaddq_s16(vaddq_s16(vdupq_laneq_s16(coef, 3), vqrdmulhq_laneq_s16(linear, coef, 4)),
+                vqrdmulhq_laneq_s16(quadratic, coef, 5));
+  const auto xs = reinterpret_cast<V8s>(x);
+  const auto ys = reinterpret_cast<V8s>(y);
+  V8u idx_a;
+  V8u idx_b;
+  WindowIndices(reinterpret_cast<V8u>(xs >> kFineBits), reinterpret_cast<V8u>(ys >> kFineBits),
+                &idx_a, &idx_b);
+  const std::uint8_t* p = src + static_cast<std::ptrdiff_t>(half.row) * stride + half.column;
+  const uint8x16_t r0 = vld1q_u8(p);
+  const uint8x16_t r1 = vld1q_u8(p + stride);
+  const uint8x16_t r2 = vld1q_u8(p + 2 * stride);
+  const auto ia = vreinterpretq_u8_u16(reinterpret_cast<uint16x8_t>(idx_a));
+  const auto ib = vreinterpretq_u8_u16(reinterpret_cast<uint16x8_t>(idx_b));
+  const auto t = reinterpret_cast<V8u>(vorrq_u8(vqtbl1q_u8(r0, ia), vqtbl1q_u8(r1, ib)));
+  const auto b = reinterpret_cast<V8u>(vorrq_u8(vqtbl1q_u8(r1, ia), vqtbl1q_u8(r2, ib)));
+  const V8s ax = (xs >> kFineToWeight) & (kWeightOne - 1);
+  const V8s ay = (ys >> kFineToWeight) & (kWeightOne - 1);
+  return Blend8(t, b, ax, ay);
+}
+
+// NEON kernel: kWindow segments by WindowHalfNeon, kInside by 16-bit gathers; the rest is left to
+// the per-pixel pass.
 void RemapNeon(RemapJob job) {  // a copy: o aliases anything
   const std::uint8_t* src = job.raw->data;
   const std::int32_t stride = job.raw->stride;
   constexpr WindowConstants kConstants = MakeWindowConstants();
   const int16x8_t linear = vld1q_s16(kConstants.linear);
   const int16x8_t quadratic = vld1q_s16(kConstants.quadratic);
-  for (int v = 0; v < job.height; ++v) {
-    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
-    std::uint8_t* o = job.out->Row(v);
-    for (int s = 0; s < job.segments_per_row; ++s) {
-      const Segment& seg = job.segment[row + s];
-      const int u0 = s * kSegment;
-      if (job.kind[row + s] == SegmentKind::kWindow) {
-        for (int h = 0; h < 2; ++h) {
-          const WindowHalf& half = seg.half[h];
-          int16x8_t coef;
-          std::memcpy(&coef, &half, sizeof(coef));
-          const int16x8_t x =
-              vaddq_s16(vaddq_s16(vdupq_laneq_s16(coef, 0), vqrdmulhq_laneq_s16(linear, coef, 1)),
-                        vqrdmulhq_laneq_s16(quadratic, coef, 2));
-          const int16x8_t y =
-              vaddq_s16(vaddq_s16(vdupq_laneq_s16(coef, 3), vqrdmulhq_laneq_s16(linear, coef, 4)),
-                        vqrdmulhq_laneq_s16(quadratic, coef, 5));
-          const auto xs = reinterpret_cast<V8s>(x);
-          const auto ys = reinterpret_cast<V8s>(y);
-          V8u idx_a;
-          V8u idx_b;
-          WindowIndices(reinterpret_cast<V8u>(xs >> kFineBits),
-                        reinterpret_cast<V8u>(ys >> kFineBits), &idx_a, &idx_b);
-          const std::uint8_t* p =
-              src + static_cast<std::ptrdiff_t>(half.row) * stride + half.column;
-          const uint8x16_t r0 = vld1q_u8(p);
-          const uint8x16_t r1 = vld1q_u8(p + stride);
-          const uint8x16_t r2 = vld1q_u8(p + 2 * stride);
-          const auto ia = vreinterpretq_u8_u16(reinterpret_cast<uint16x8_t>(idx_a));
-          const auto ib = vreinterpretq_u8_u16(reinterpret_cast<uint16x8_t>(idx_b));
-          const auto t = reinterpret_cast<V8u>(vorrq_u8(vqtbl1q_u8(r0, ia), vqtbl1q_u8(r1, ib)));
-          const auto b = reinterpret_cast<V8u>(vorrq_u8(vqtbl1q_u8(r1, ia), vqtbl1q_u8(r2, ib)));
-          const V8s ax = (xs >> kFineToWeight) & (kWeightOne - 1);
-          const V8s ay = (ys >> kFineToWeight) & (kWeightOne - 1);
-          const V8b bytes = Blend8(t, b, ax, ay);
-          std::memcpy(o + u0 + h * kHalf, &bytes, sizeof(bytes));
-        }
-      } else if (job.kind[row + s] == SegmentKind::kInside) {
-        GatherSegment(seg.quad, src, stride, job.width - u0, o + u0);
-      }
-    }
-  }
+  RemapByHalves(job, [&](const WindowHalf& half, std::uint8_t* dst) {
+    const V8b bytes = WindowHalfNeon(half, src, stride, linear, quadratic);
+    std::memcpy(dst, &bytes, sizeof(bytes));
+  });
 }
 #endif  // __aarch64__
 
