@@ -16,10 +16,12 @@
 
 #include "swf/frontend/frontend.hpp"
 #include "swf/frontend/rectify.hpp"
+#include "swf/frontend/synthetic_texture.hpp"
 
 namespace {
 
 using swf::frontend::GrayView;
+using swf::frontend::synthetic::Texture;
 
 constexpr int kW = 1024;
 constexpr int kH = 768;
@@ -27,44 +29,13 @@ constexpr double kShiftX = 1.7;  // image motion between the two frames, pixels
 constexpr double kShiftY = -0.9;
 constexpr double kDisparity = 14.3;
 
-// Sum of plane waves, wavelengths 7-120 px log-uniform, amplitude ~ sqrt(wavelength).
-class Texture {
- public:
-  Texture() {
-    std::uint32_t s = 12345u;
-    auto next = [&s]() {
-      s = s * 1664525u + 1013904223u;
-      return static_cast<double>(s >> 8) / static_cast<double>(1u << 24);
-    };
-    for (Wave& w : waves_) {
-      const double wavelength = 7.0 * std::exp(std::log(120.0 / 7.0) * next());
-      const double angle = 2.0 * M_PI * next();
-      w.kx = 2.0 * M_PI * std::cos(angle) / wavelength;
-      w.ky = 2.0 * M_PI * std::sin(angle) / wavelength;
-      w.phase = 2.0 * M_PI * next();
-      w.amplitude = 5.0 * std::sqrt(wavelength / 7.0) * (0.5 + next());
-    }
-  }
-  double operator()(double x, double y) const {
-    double v = 128.0;
-    for (const Wave& w : waves_) v += w.amplitude * std::sin(w.kx * x + w.ky * y + w.phase);
-    return v;
-  }
-
- private:
-  struct Wave {
-    double kx, ky, phase, amplitude;
-  };
-  Wave waves_[16];
-};
-
 struct Scene {
   cv::Mat prev_left;
   cv::Mat prev_right;
   cv::Mat cur_left;
   cv::Mat cur_right;
   Scene() {
-    const Texture t;
+    const Texture t(0);  // seed 0: the texture of every recorded result
     prev_left = Render([&](double x, double y) { return t(x, y); });
     prev_right = Render([&](double x, double y) { return t(x + kDisparity, y); });
     cur_left = Render([&](double x, double y) { return t(x - kShiftX, y - kShiftY); });
