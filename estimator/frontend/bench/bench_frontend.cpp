@@ -83,6 +83,29 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// A Harris detector with the benchmark's bucketing.
+std::unique_ptr<swf::frontend::HarrisDetector> MakeDetector() {
+  auto detector = std::make_unique<swf::frontend::HarrisDetector>();
+  (void)detector->Configure(Options().harris);
+  return detector;
+}
+
+// Accuracy against the known shift and disparity, as SwfDetectTrackStereo and
+// OpenCvDetectTrackStereo both score it.
+void SetAccuracyCounters(benchmark::State& state, const std::vector<double>& flow_err,
+                         const std::vector<double>& disp_err) {
+  state.counters["tracked"] = static_cast<double>(flow_err.size());
+  state.counters["stereo_matched"] = static_cast<double>(disp_err.size());
+  state.counters["flow_median_err_px"] = Median(flow_err);
+  state.counters["stereo_median_err_px"] = Median(disp_err);
+}
+
+// The whole-job benchmarks (the per-frame job, detect + track + stereo against OpenCV): in
+// milliseconds, at least 3 s each.
+void WholeJobTiming(benchmark::internal::Benchmark* b) {
+  b->Unit(benchmark::kMillisecond)->MinTime(3.0);
+}
+
 // The whole per-frame job (detect + stereo + track + consistency) in steady state: the front end
 // alternates between the two frames, so every call tracks ~300 landmarks and tops up detection.
 void FrontendFrame(benchmark::State& state) {
@@ -115,18 +138,12 @@ void FrontendFrame(benchmark::State& state) {
       static_cast<double>(measured) / std::max<std::size_t>(1, frames);
   state.counters["stereo_median_err_px"] = Median(disparity_errors);
 }
-BENCHMARK(FrontendFrame)
-    ->Arg(0)
-    ->Arg(1)
-    ->ArgName("detection_level")
-    ->Unit(benchmark::kMillisecond)
-    ->MinTime(3.0);
+BENCHMARK(FrontendFrame)->Arg(0)->Arg(1)->ArgName("detection_level")->Apply(WholeJobTiming);
 
 // Components on the same pair, for the breakdown.
 void HarrisDetect(benchmark::State& state) {
   const Scene& s = TheScene();
-  auto detector = std::make_unique<swf::frontend::HarrisDetector>();
-  (void)detector->Configure(Options().harris);
+  const auto detector = MakeDetector();
   auto corners = std::make_unique<swf::frontend::CornerList>();
   for (auto _ : state) {
     (void)detector->Detect(Scene::View(s.cur_left), nullptr, 0, corners.get());
@@ -143,8 +160,7 @@ BENCHMARK(HarrisDetect)->Unit(benchmark::kMillisecond);
 void SwfDetectTrackStereo(benchmark::State& state) {
   const bool offset = state.range(0) != 0;
   const Scene& s = TheScene();
-  auto detector = std::make_unique<swf::frontend::HarrisDetector>();
-  (void)detector->Configure(Options().harris);
+  const auto detector = MakeDetector();
   auto corners = std::make_unique<swf::frontend::CornerList>();
   auto prev = std::make_unique<swf::frontend::Pyramid>();
   auto cur = std::make_unique<swf::frontend::Pyramid>();
@@ -187,17 +203,13 @@ void SwfDetectTrackStereo(benchmark::State& state) {
       }
     }
   }
-  state.counters["tracked"] = static_cast<double>(flow_err.size());
-  state.counters["stereo_matched"] = static_cast<double>(disp_err.size());
-  state.counters["flow_median_err_px"] = Median(flow_err);
-  state.counters["stereo_median_err_px"] = Median(disp_err);
+  SetAccuracyCounters(state, flow_err, disp_err);
 }
 BENCHMARK(SwfDetectTrackStereo)
     ->Arg(1)
     ->Arg(0)
     ->ArgName("brightness_offset")
-    ->Unit(benchmark::kMillisecond)
-    ->MinTime(3.0);
+    ->Apply(WholeJobTiming);
 
 void OpenCvDetectTrackStereo(benchmark::State& state) {
   cv::setNumThreads(1);
@@ -233,14 +245,24 @@ void OpenCvDetectTrackStereo(benchmark::State& state) {
       disp_x_err.push_back(std::fabs(tracked[i].x - right[i].x - kDisparity));
     }
   }
-  state.counters["tracked"] = static_cast<double>(flow_err.size());
-  state.counters["stereo_matched"] = static_cast<double>(disp_err.size());
-  state.counters["flow_median_err_px"] = Median(flow_err);
-  state.counters["stereo_median_err_px"] = Median(disp_err);
+  SetAccuracyCounters(state, flow_err, disp_err);
   // Along the row only (OpenCV's stereo LK also moves in y; ours is constrained to the row).
   state.counters["stereo_x_median_err_px"] = Median(disp_x_err);
 }
-BENCHMARK(OpenCvDetectTrackStereo)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(OpenCvDetectTrackStereo)->Apply(WholeJobTiming);
+
+// Times the rectification of the scene's current pair.
+void TimeRectify(benchmark::State& state, const swf::frontend::StereoRectifier& rectifier) {
+  const Scene& s = TheScene();
+  cv::Mat out_l(kH, kW, CV_8UC1);
+  cv::Mat out_r(kH, kW, CV_8UC1);
+  const swf::frontend::MutableGrayView ol{out_l.ptr<std::uint8_t>(0), kW, kH, kW};
+  const swf::frontend::MutableGrayView orr{out_r.ptr<std::uint8_t>(0), kW, kH, kW};
+  for (auto _ : state) {
+    (void)rectifier.Rectify(Scene::View(s.cur_left), Scene::View(s.cur_right), ol, orr);
+    benchmark::DoNotOptimize(out_l.data);
+  }
+}
 
 // Rectification of a 1024x768 pair (reported separately; budget 1 ms). The argument forces a
 // kernel: 0 = the one Configure picks for this CPU, then RemapKernel order (1 portable, 2 SSSE3,
@@ -269,15 +291,7 @@ void RectifyPair(benchmark::State& state) {
   }
   constexpr const char* kKernelNames[] = {"auto", "portable", "ssse3", "avx2", "neon"};
   state.SetLabel(kKernelNames[static_cast<int>(rectifier->Kernel())]);
-  const Scene& s = TheScene();
-  cv::Mat out_l(kH, kW, CV_8UC1);
-  cv::Mat out_r(kH, kW, CV_8UC1);
-  const swf::frontend::MutableGrayView ol{out_l.ptr<std::uint8_t>(0), kW, kH, kW};
-  const swf::frontend::MutableGrayView orr{out_r.ptr<std::uint8_t>(0), kW, kH, kW};
-  for (auto _ : state) {
-    (void)rectifier->Rectify(Scene::View(s.cur_left), Scene::View(s.cur_right), ol, orr);
-    benchmark::DoNotOptimize(out_l.data);
-  }
+  TimeRectify(state, *rectifier);
   state.counters["table_error_px"] = rectifier->MaxTableErrorPx();
   state.counters["window_fraction"] = rectifier->WindowFraction();
 }
@@ -297,15 +311,7 @@ void RectifyIdentityPair(benchmark::State& state) {
   if (rectifier->Configure(left, right, {}) != swf::core::Status::kOk || !rectifier->IsIdentity()) {
     state.SkipWithError("identity");
   }
-  const Scene& s = TheScene();
-  cv::Mat out_l(kH, kW, CV_8UC1);
-  cv::Mat out_r(kH, kW, CV_8UC1);
-  const swf::frontend::MutableGrayView ol{out_l.ptr<std::uint8_t>(0), kW, kH, kW};
-  const swf::frontend::MutableGrayView orr{out_r.ptr<std::uint8_t>(0), kW, kH, kW};
-  for (auto _ : state) {
-    (void)rectifier->Rectify(Scene::View(s.cur_left), Scene::View(s.cur_right), ol, orr);
-    benchmark::DoNotOptimize(out_l.data);
-  }
+  TimeRectify(state, *rectifier);
 }
 BENCHMARK(RectifyIdentityPair)->Unit(benchmark::kMillisecond);
 
