@@ -117,37 +117,90 @@ void Configure(Filter* swf, const SyntheticScene& scene, SwfMode mode) {
   if (swf->Configure(model, options) != swf::core::Status::kOk) std::abort();
 }
 
-// Times the update of `frame`: configure(), then frames 0 .. frame - 1 added (add_frame(j))
-// and updated untimed, then `frame` added and its update timed. Batch solves once per frame in
-// Fig. 14a as well, but the untimed replay only needs the state, so it skips those solves.
-template <typename Filter, typename ConfigureFn, typename AddFrameFn>
-void TimeUpdateAt(benchmark::State& state, Filter* swf, std::size_t frame, SwfMode mode,
-                  ConfigureFn configure, AddFrameFn add_frame) {
+// The same two feeders for the stereo-inertial scenes (built with their benchmarks below): the
+// first pose with its prior, then each frame's preintegrated IMU motion. Declared before
+// TimeUpdateAt, whose calls find them by name.
+template <typename Filter>
+void Configure(Filter* swf, const InertialScene& scene, SwfMode mode) {
+  SwfOptions options;
+  options.mode = mode;
+  if (swf->Configure(scene.model, options) != swf::core::Status::kOk) std::abort();
+}
+
+template <typename Filter>
+void AddFrame(Filter* swf, const InertialScene& scene, std::size_t j) {
+  if (j == 0) {
+    NavState<double> start = scene.truth[0];
+    start.biases = ImuBiases<double>{};
+    Vec15<double> sigma;
+    sigma << Vec3<double>::Constant(1e-3), Vec3<double>::Constant(1e-5),
+        Vec3<double>::Constant(0.05), Vec3<double>::Constant(0.01), Vec3<double>::Constant(0.1);
+    (void)swf->AddFirstPose(start, Mat15<double>(sigma.cwiseAbs2().asDiagonal()));
+  } else {
+    ImuPreintegration<double> pim;
+    Mat15<double> q_sqrt;
+    if (!PreintegrateFrame(scene, j, swf->NewestPose().biases, &pim, &q_sqrt)) std::abort();
+    (void)swf->AddPoseWithMotion(pim, q_sqrt);
+  }
+  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options.sigma_px;
+  for (const auto& [id, z] : scene.obs[j]) (void)swf->AddObservation(id, z, r_sqrt);
+}
+
+// Times the update of `frame`: Configure, then frames 0 .. frame - 1 added and updated untimed,
+// then `frame` added and its update timed (Scene: SyntheticScene or InertialScene, whose
+// Configure / AddFrame overloads feed it). Batch solves once per frame in Fig. 14a as well, but
+// the untimed replay only needs the state, so it skips those solves.
+template <typename Filter, typename Scene>
+void TimeUpdateAt(benchmark::State& state, Filter* swf, const Scene& scene, std::size_t frame,
+                  SwfMode mode) {
   for (auto _ : state) {
     state.PauseTiming();
-    configure();
+    Configure(swf, scene, mode);
     for (std::size_t j = 0; j < frame; ++j) {
-      add_frame(j);
+      AddFrame(swf, scene, j);
       if (mode != SwfMode::kBatch) (void)swf->Update();
     }
-    add_frame(frame);
+    AddFrame(swf, scene, frame);
     state.ResumeTiming();
     benchmark::DoNotOptimize(swf->Update());
   }
 }
 
-// Times the update at frame state.range(0); earlier frames are replayed untimed.
-template <typename Filter>
-void Fig14a(benchmark::State& state, SwfMode mode) {
-  const SyntheticScene& scene = Fig14Scene();
+// Fig. 14a: times the update at frame state.range(0); earlier frames are replayed untimed.
+template <typename Filter, typename Scene>
+void Fig14a(benchmark::State& state, const Scene& scene, SwfMode mode) {
   const auto frame = static_cast<std::size_t>(state.range(0));
   auto swf = std::make_unique<Filter>();
-  TimeUpdateAt(
-      state, swf.get(), frame, mode, [&] { Configure(swf.get(), scene, mode); },
-      [&](std::size_t j) { AddFrame(swf.get(), scene, j); });
+  TimeUpdateAt(state, swf.get(), scene, frame, mode);
   state.counters["measurements"] = swf->Summary().num_measurements;
   state.counters["state_dim"] = swf->Summary().state_dimension;
   state.counters["iterations"] = swf->Summary().iterations;
+}
+
+// Fig. 13: times the steady-state update at frame 30 (every landmark in the prior by then).
+template <typename Filter, typename Scene>
+void Fig13Update(benchmark::State& state, const Scene& scene) {
+  auto swf = std::make_unique<Filter>();
+  TimeUpdateAt(state, swf.get(), scene, 30, SwfMode::kSlidingWindow);
+  state.counters["dense_dim"] = swf->Summary().dense_dimension;
+  state.counters["iterations"] = swf->Summary().iterations;
+  state.counters["prior_landmarks"] = swf->NumPriorLandmarks();
+}
+
+// The Fig. 14a sweep over the frame index, for the sliding windows (whose update time stays flat).
+void Fig14aFrames(benchmark::internal::Benchmark* b) {
+  b->Arg(25)
+      ->Arg(50)
+      ->Arg(100)
+      ->Arg(150)
+      ->Unit(benchmark::kMillisecond)
+      ->Iterations(10)
+      ->Repetitions(5);
+}
+
+// Fig. 13's timing: 5 timed updates per repetition, 5 repetitions.
+void Fig13Timing(benchmark::internal::Benchmark* b) {
+  b->Unit(benchmark::kMillisecond)->Iterations(5)->Repetitions(5);
 }
 
 using Swf10 = SlidingWindowFilter<StereoModel<double>, 10, 600, 64, 128>;
@@ -155,27 +208,18 @@ using Swf20 = SlidingWindowFilter<StereoModel<double>, 20, 600, 64, 128>;
 using Batch = SlidingWindowFilter<StereoModel<double>, 128, 4000, 64, 1>;
 
 // NOLINTNEXTLINE(readability-identifier-naming)
-void BM_Fig14a_Swf10(benchmark::State& s) { Fig14a<Swf10>(s, SwfMode::kSlidingWindow); }
+void BM_Fig14a_Swf10(benchmark::State& s) {
+  Fig14a<Swf10>(s, Fig14Scene(), SwfMode::kSlidingWindow);
+}
 // NOLINTNEXTLINE(readability-identifier-naming)
-void BM_Fig14a_Swf20(benchmark::State& s) { Fig14a<Swf20>(s, SwfMode::kSlidingWindow); }
+void BM_Fig14a_Swf20(benchmark::State& s) {
+  Fig14a<Swf20>(s, Fig14Scene(), SwfMode::kSlidingWindow);
+}
 // NOLINTNEXTLINE(readability-identifier-naming)
-void BM_Fig14a_Batch(benchmark::State& s) { Fig14a<Batch>(s, SwfMode::kBatch); }
-BENCHMARK(BM_Fig14a_Swf10)
-    ->Arg(25)
-    ->Arg(50)
-    ->Arg(100)
-    ->Arg(150)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(10)
-    ->Repetitions(5);
-BENCHMARK(BM_Fig14a_Swf20)
-    ->Arg(25)
-    ->Arg(50)
-    ->Arg(100)
-    ->Arg(150)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(10)
-    ->Repetitions(5);
+void BM_Fig14a_Batch(benchmark::State& s) { Fig14a<Batch>(s, Fig14Scene(), SwfMode::kBatch); }
+BENCHMARK(BM_Fig14a_Swf10)->Apply(Fig14aFrames);
+BENCHMARK(BM_Fig14a_Swf20)->Apply(Fig14aFrames);
+// The batch grows with the frame index: fewer frames and runs.
 BENCHMARK(BM_Fig14a_Batch)
     ->Arg(25)
     ->Arg(50)
@@ -184,25 +228,11 @@ BENCHMARK(BM_Fig14a_Batch)
     ->Iterations(3)
     ->Repetitions(3);
 
-template <typename Filter>
-void Fig13Counters(benchmark::State& state, const Filter& swf) {
-  state.counters["dense_dim"] = swf.Summary().dense_dimension;
-  state.counters["iterations"] = swf.Summary().iterations;
-  state.counters["prior_landmarks"] = swf.NumPriorLandmarks();
-}
+using Fig13Swf = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
 
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
-void BM_Fig13Update_K10(benchmark::State& state) {
-  using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
-  const SyntheticScene& scene = Fig13Scene();
-  auto swf = std::make_unique<Filter>();
-  TimeUpdateAt(
-      state, swf.get(), 30, SwfMode::kSlidingWindow,
-      [&] { Configure(swf.get(), scene, SwfMode::kSlidingWindow); },
-      [&](std::size_t j) { AddFrame(swf.get(), scene, j); });
-  Fig13Counters(state, *swf);
-}
-BENCHMARK(BM_Fig13Update_K10)->Unit(benchmark::kMillisecond)->Iterations(5)->Repetitions(5);
+void BM_Fig13Update_K10(benchmark::State& state) { Fig13Update<Fig13Swf>(state, Fig13Scene()); }
+BENCHMARK(BM_Fig13Update_K10)->Apply(Fig13Timing);
 
 // Integrity cost at the Fig. 13 load, as the flight pipeline runs a frame: the newest pose's
 // covariance of the previous frame is computed (untimed here, BM_Fig13Covariances below), then
@@ -210,9 +240,8 @@ BENCHMARK(BM_Fig13Update_K10)->Unit(benchmark::kMillisecond)->Iterations(5)->Rep
 // re-solve after rejections). Arg 0: gates off; 1: on (the flight default). Ratio = 1 / 0.
 // NOLINTNEXTLINE(readability-identifier-naming)
 void BM_Fig13Gates_K10(benchmark::State& state) {
-  using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
   const SyntheticScene& scene = Fig13Scene();
-  auto swf = std::make_unique<Filter>();
+  auto swf = std::make_unique<Fig13Swf>();
   constexpr std::size_t kFrame = 30;
   SwfOptions options;
   options.first_pose_sigma_m = 1e-3;
@@ -235,20 +264,14 @@ void BM_Fig13Gates_K10(benchmark::State& state) {
   state.counters["gate_checked"] = swf->Summary().gate_checked;
   state.counters["iterations"] = swf->Summary().iterations;
 }
-BENCHMARK(BM_Fig13Gates_K10)
-    ->Arg(0)
-    ->Arg(1)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(5)
-    ->Repetitions(5);
+BENCHMARK(BM_Fig13Gates_K10)->Arg(0)->Arg(1)->Apply(Fig13Timing);
 
 // The covariances the integrity checks need each frame (newest pose, every landmark and its
 // correlation with the newest pose), at the Fig. 13 load.
 // NOLINTNEXTLINE(readability-identifier-naming)
 void BM_Fig13Covariances_K10(benchmark::State& state) {
-  using Filter = SlidingWindowFilter<StereoModel<double>, 10, 160, 160, 160>;
   const SyntheticScene& scene = Fig13Scene();
-  auto swf = std::make_unique<Filter>();
+  auto swf = std::make_unique<Fig13Swf>();
   Configure(swf.get(), scene, SwfMode::kSlidingWindow);
   for (std::size_t j = 0; j <= 30; ++j) {
     AddFrame(swf.get(), scene, j);
@@ -293,70 +316,19 @@ const InertialScene& Fig14InertialScene() {
   return kScene;
 }
 
-template <typename Filter>
-void ConfigureInertial(Filter* swf, const InertialScene& scene, SwfMode mode) {
-  SwfOptions options;
-  options.mode = mode;
-  if (swf->Configure(scene.model, options) != swf::core::Status::kOk) std::abort();
-}
-
-template <typename Filter>
-void AddInertialFrame(Filter* swf, const InertialScene& scene, std::size_t j) {
-  if (j == 0) {
-    NavState<double> start = scene.truth[0];
-    start.biases = ImuBiases<double>{};
-    Vec15<double> sigma;
-    sigma << Vec3<double>::Constant(1e-3), Vec3<double>::Constant(1e-5),
-        Vec3<double>::Constant(0.05), Vec3<double>::Constant(0.01), Vec3<double>::Constant(0.1);
-    (void)swf->AddFirstPose(start, Mat15<double>(sigma.cwiseAbs2().asDiagonal()));
-  } else {
-    ImuPreintegration<double> pim;
-    Mat15<double> q_sqrt;
-    if (!PreintegrateFrame(scene, j, swf->NewestPose().biases, &pim, &q_sqrt)) std::abort();
-    (void)swf->AddPoseWithMotion(pim, q_sqrt);
-  }
-  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options.sigma_px;
-  for (const auto& [id, z] : scene.obs[j]) (void)swf->AddObservation(id, z, r_sqrt);
-}
-
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Fig13Update_Inertial_K10(benchmark::State& state) {
   using Filter = SlidingWindowFilter<InertialStereoModel<double>, 10, 160, 160, 160>;
-  const InertialScene& scene = Fig13InertialScene();
-  auto swf = std::make_unique<Filter>();
-  TimeUpdateAt(
-      state, swf.get(), 30, SwfMode::kSlidingWindow,
-      [&] { ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow); },
-      [&](std::size_t j) { AddInertialFrame(swf.get(), scene, j); });
-  Fig13Counters(state, *swf);
+  Fig13Update<Filter>(state, Fig13InertialScene());
 }
-BENCHMARK(BM_Fig13Update_Inertial_K10)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(5)
-    ->Repetitions(5);
+BENCHMARK(BM_Fig13Update_Inertial_K10)->Apply(Fig13Timing);
 
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Fig14a_InertialSwf10(benchmark::State& state) {
   using Filter = SlidingWindowFilter<InertialStereoModel<double>, 10, 600, 64, 128>;
-  const InertialScene& scene = Fig14InertialScene();
-  const auto frame = static_cast<std::size_t>(state.range(0));
-  auto swf = std::make_unique<Filter>();
-  TimeUpdateAt(
-      state, swf.get(), frame, SwfMode::kSlidingWindow,
-      [&] { ConfigureInertial(swf.get(), scene, SwfMode::kSlidingWindow); },
-      [&](std::size_t j) { AddInertialFrame(swf.get(), scene, j); });
-  state.counters["measurements"] = swf->Summary().num_measurements;
-  state.counters["state_dim"] = swf->Summary().state_dimension;
-  state.counters["iterations"] = swf->Summary().iterations;
+  Fig14a<Filter>(state, Fig14InertialScene(), SwfMode::kSlidingWindow);
 }
-BENCHMARK(BM_Fig14a_InertialSwf10)
-    ->Arg(25)
-    ->Arg(50)
-    ->Arg(100)
-    ->Arg(150)
-    ->Unit(benchmark::kMillisecond)
-    ->Iterations(10)
-    ->Repetitions(5);
+BENCHMARK(BM_Fig14a_InertialSwf10)->Apply(Fig14aFrames);
 
 // ---- the dense factorization alone ----------------------------------------------------------
 
