@@ -24,6 +24,19 @@ double HashValue(std::uint64_t key, std::int64_t ix, std::int64_t iy) {
   return static_cast<double>(h >> 11) * 0x1.0p-52 - 1.0;
 }
 
+// Bilinear sample of a row-major w x h float grid at 0 <= x <= w - 1, 0 <= y <= h - 1.
+double SampleBilinear(const std::vector<float>& grid, std::int32_t w, std::int32_t h, double x,
+                      double y) {
+  const std::int32_t i = std::min(static_cast<std::int32_t>(x), w - 2);
+  const std::int32_t j = std::min(static_cast<std::int32_t>(y), h - 2);
+  const double fx = x - i;
+  const double fy = y - j;
+  const float* p = &grid[static_cast<size_t>(j) * w + i];
+  const double top = p[0] + fx * (p[1] - p[0]);
+  const double bottom = p[w] + fx * (p[w + 1] - p[w]);
+  return top + fy * (bottom - top);
+}
+
 // Bilinear sample of an image at continuous pixel coordinates, mirror-repeated.
 double SampleMirrored(const std::vector<float>& img, std::int32_t w, std::int32_t h, double x,
                       double y) {
@@ -33,16 +46,7 @@ double SampleMirrored(const std::vector<float>& img, std::int32_t w, std::int32_
     if (m < 0.0) m += period;
     return m > n - 1 ? period - m : m;
   };
-  x = mirror(x, w);
-  y = mirror(y, h);
-  const std::int32_t i = std::min(static_cast<std::int32_t>(x), w - 2);
-  const std::int32_t j = std::min(static_cast<std::int32_t>(y), h - 2);
-  const double fx = x - i;
-  const double fy = y - j;
-  const float* p = &img[static_cast<size_t>(j) * w + i];
-  const double top = p[0] + fx * (p[1] - p[0]);
-  const double bottom = p[w] + fx * (p[w + 1] - p[w]);
-  return top + fy * (bottom - top);
+  return SampleBilinear(img, w, h, mirror(x, w), mirror(y, h));
 }
 
 }  // namespace
@@ -289,14 +293,7 @@ double Appearance::Radiance(double x_m, double y_m, double footprint_m) const {
   const double inv_cell = inv_cell_m_;
   const double gx = std::clamp((x_m - origin_m_) * inv_cell, 0.0, size_ - 1.0);
   const double gy = std::clamp((y_m - origin_m_) * inv_cell, 0.0, size_ - 1.0);
-  const std::int32_t i = std::min(static_cast<std::int32_t>(gx), size_ - 2);
-  const std::int32_t j = std::min(static_cast<std::int32_t>(gy), size_ - 2);
-  const double fx = gx - i;
-  const double fy = gy - j;
-  const float* p = &shaded_[static_cast<size_t>(j) * size_ + i];
-  const double top = p[0] + fx * (p[1] - p[0]);
-  const double bottom = p[size_] + fx * (p[size_ + 1] - p[size_]);
-  const double base = top + fy * (bottom - top);
+  const double base = SampleBilinear(shaded_, size_, size_, gx, gy);
 
   // Octave o has wavelength cell / 2^o: its lattice coordinate is (di + f) 2^o, split exactly into
   // di 2^o + floor(f 2^o) and the fraction of f 2^o (single precision suffices for the fraction
