@@ -136,38 +136,159 @@ void OutputThread::Emit(const char* suffix, std::int64_t utime, const std::uint8
   }
 }
 
+namespace {
+
+// Record -> message, one function per kind; the messages' buffers were sized at Open.
+void FillFrame(const FrameRecord& r, swf_msgs::stereo_frame_t* m) {
+  m->utime = r.utime;
+  m->seq = r.seq;
+  m->left_exposure_utime = r.left_exposure_utime;
+  m->right_exposure_utime = r.right_exposure_utime;
+  m->dropped_before = r.dropped_before;
+  m->rectified = r.rectified;
+  m->has_motion = r.has_motion;
+  for (int i = 0; i < 3; ++i) {
+    m->motion_translation_m[i] = r.has_motion ? r.motion.translation_m[i] : 0.0;
+    m->motion_rotation_rad[i] = r.has_motion ? r.motion.rotation_rad[i] : 0.0;
+  }
+  m->width = r.width;
+  m->height = r.height;
+  m->num_bytes = r.width * r.height;
+  m->left.assign(r.left.get(), r.left.get() + m->num_bytes);
+  m->right.assign(r.right.get(), r.right.get() + m->num_bytes);
+}
+
+void FillNav(const NavRecord& r, swf_msgs::nav_state_t* m) {
+  m->utime = r.nav.utime;
+  m->seq = r.seq;
+  m->frame_seq = r.nav.frame_seq;
+  std::memcpy(m->position_world_m, r.nav.position_world_m, sizeof m->position_world_m);
+  std::memcpy(m->orientation_world_q, r.nav.orientation_world_q, sizeof m->orientation_world_q);
+  std::memcpy(m->velocity_world_mps, r.nav.velocity_world_mps, sizeof m->velocity_world_mps);
+  std::memcpy(m->covariance, r.nav.covariance, sizeof m->covariance);
+  m->mode = r.mode;
+  m->status = r.nav.status;
+  m->integrity_flags = r.nav.integrity_flags;
+  m->horizontal_protection_m = r.nav.horizontal_protection_m;
+  m->vertical_protection_m = r.nav.vertical_protection_m;
+  m->integrity_risk = r.nav.integrity_risk;
+  m->update_status = r.nav.update_status;
+  m->fault_bits = r.nav.fault_bits;
+  m->iterations = r.nav.iterations;
+  m->num_measurements = r.nav.num_measurements;
+}
+
+void FillMap(const MapRecord& r, swf_msgs::landmark_map_t* m) {
+  m->utime = r.map.utime;
+  m->seq = r.seq;
+  m->frame_seq = r.map.frame_seq;
+  m->num_landmarks = r.map.num_landmarks;
+  m->id.resize(m->num_landmarks);
+  m->position_world_m.resize(m->num_landmarks);
+  m->covariance_m2.resize(m->num_landmarks);
+  m->num_observations.resize(m->num_landmarks);
+  for (int i = 0; i < m->num_landmarks; ++i) {
+    const MapLandmark& l = r.map.landmarks[i];
+    m->id[i] = l.id;
+    m->position_world_m[i].assign(l.position_world_m, l.position_world_m + 3);
+    m->covariance_m2[i].assign(l.covariance_m2, l.covariance_m2 + 6);
+    m->num_observations[i] = l.num_observations;
+  }
+}
+
+void FillHazard(const HazardRecord& r, swf_msgs::hazard_map_t* m) {
+  m->utime = r.utime;
+  m->seq = r.seq;
+  m->frame_seq = r.frame_seq;
+  m->origin_world_m[0] = r.origin_world_m[0];
+  m->origin_world_m[1] = r.origin_world_m[1];
+  m->up_world[0] = 0.0;  // the estimator's world frame is local level, z up
+  m->up_world[1] = 0.0;
+  m->up_world[2] = 1.0;
+  m->cell_size_m = r.cell_size_m;
+  m->rows = r.cells_per_side;
+  m->cols = r.cells_per_side;
+  m->num_cells = r.cells_per_side * r.cells_per_side;
+  m->elevation_m.assign(r.elevation_m.get(), r.elevation_m.get() + m->num_cells);
+  m->sigma_m.assign(r.sigma_m.get(), r.sigma_m.get() + m->num_cells);
+  m->slope_deg.assign(r.slope_deg.get(), r.slope_deg.get() + m->num_cells);
+  m->roughness_m.assign(r.roughness_m.get(), r.roughness_m.get() + m->num_cells);
+  m->hazard_class.assign(r.hazard_class.get(), r.hazard_class.get() + m->num_cells);
+  m->safe_site_valid = r.safe_site_valid;
+  m->safe_site_world_m[0] = r.safe_site_world_m[0];
+  m->safe_site_world_m[1] = r.safe_site_world_m[1];
+  m->safe_site_score = r.safe_site_score;
+}
+
+void FillHealth(const HealthRecord& r, swf_msgs::health_t* m) {
+  m->utime = r.utime;
+  m->seq = r.seq;
+  m->frames = r.frames;
+  m->frames_dropped = r.frames_dropped;
+  m->frames_rejected = r.frames_rejected;
+  m->overruns = r.overruns;
+  m->outputs_dropped = r.outputs_dropped;
+  m->allocations_after_start = r.allocations_after_start;
+  m->fault_bits = r.fault_bits;
+  m->estimator_status = r.estimator_status;
+  m->num_features = r.num_features;
+  m->num_landmarks = r.num_landmarks;
+  const IntegrityCounters& ic = r.integrity;
+  m->frames_valid = ic.frames_valid;
+  m->frames_degraded = ic.frames_degraded;
+  m->frames_invalid = ic.frames_invalid;
+  m->restarts = ic.restarts;
+  m->last_recovery_frames = ic.last_recovery_frames;
+  m->measurements_gated = ic.measurements_gated;
+  m->measurements_rejected = ic.measurements_rejected;
+  m->landmarks_rejected = ic.landmarks_rejected;
+  m->new_landmarks_refused = ic.new_landmarks_refused;
+  m->gate_suspensions = ic.gate_suspensions;
+  m->num_integrity_flags = estimator::kNumIntegrityFlags;
+  m->integrity_flag_counts.assign(ic.flag_counts, ic.flag_counts + estimator::kNumIntegrityFlags);
+  m->num_stages = kNumStages;
+  m->stage_name.resize(kNumStages);
+  m->stage_p50_ms.resize(kNumStages);
+  m->stage_p99_ms.resize(kNumStages);
+  m->stage_max_ms.resize(kNumStages);
+  for (int i = 0; i < kNumStages; ++i) {
+    m->stage_name[i] = StageName(i);
+    m->stage_p50_ms[i] = r.stages[i].p50_ms;
+    m->stage_p99_ms[i] = r.stages[i].p99_ms;
+    m->stage_max_ms[i] = r.stages[i].max_ms;
+  }
+  const estimator::ImuStreamCounts& imu = r.imu.stream;
+  m->imu_accepted = imu.accepted;
+  m->imu_out_of_order = imu.out_of_order;
+  m->imu_duplicated = imu.duplicated;
+  m->imu_invalid = imu.invalid;
+  m->imu_saturated = imu.saturated;
+  m->imu_missing = imu.missing_samples + r.imu.overflowed;
+  m->imu_intervals_bridged = r.imu.intervals_bridged;
+}
+
+}  // namespace
+
+// Each record: observers see it, it is encoded and its slot goes back to the producer, then it
+// is published and recorded. The IMU's records carry many samples, each recorded (not
+// published: the IMU's own publisher owns that channel).
 void OutputThread::Handle(const RecordRef& ref) {
   std::uint8_t* buf = impl_->buffer.data();
   const int max = static_cast<int>(impl_->buffer.size());
-  switch (ref.kind) {
-    case RecordKind::kFrame: {
-      const FrameRecord& r = channels_->frames[ref.slot];
-      swf_msgs::stereo_frame_t& m = impl_->frame;
-      m.utime = r.utime;
-      m.seq = r.seq;
-      m.left_exposure_utime = r.left_exposure_utime;
-      m.right_exposure_utime = r.right_exposure_utime;
-      m.dropped_before = r.dropped_before;
-      m.rectified = r.rectified;
-      m.has_motion = r.has_motion;
-      for (int i = 0; i < 3; ++i) {
-        m.motion_translation_m[i] = r.has_motion ? r.motion.translation_m[i] : 0.0;
-        m.motion_rotation_rad[i] = r.has_motion ? r.motion.rotation_rad[i] : 0.0;
-      }
-      m.width = r.width;
-      m.height = r.height;
-      m.num_bytes = r.width * r.height;
-      m.left.assign(r.left.get(), r.left.get() + m.num_bytes);
-      m.right.assign(r.right.get(), r.right.get() + m.num_bytes);
-      const int n = m.encode(buf, 0, max);
-      channels_->frames.Release(ref.slot);
-      if (n < 0) {
-        ++counters_.encode_errors;
-        return;
-      }
-      Emit(kStereoSuffix, m.utime, buf, n);
+  const auto publish = [&](auto& message, auto& pool, const char* suffix) {
+    const int n = message.encode(buf, 0, max);
+    pool.Release(ref.slot);
+    if (n < 0) {
+      ++counters_.encode_errors;
       return;
     }
+    Emit(suffix, message.utime, buf, n);
+  };
+  switch (ref.kind) {
+    case RecordKind::kFrame:
+      FillFrame(channels_->frames[ref.slot], &impl_->frame);
+      publish(impl_->frame, channels_->frames, kStereoSuffix);
+      return;
     case RecordKind::kImu: {
       const ImuRecord& r = channels_->imus[ref.slot];
       swf_msgs::imu_t& m = impl_->imu;
@@ -185,152 +306,30 @@ void OutputThread::Handle(const RecordRef& ref) {
     }
     case RecordKind::kNav: {
       const NavRecord& r = channels_->navs[ref.slot];
-      swf_msgs::nav_state_t& m = impl_->nav;
-      m.utime = r.nav.utime;
-      m.seq = r.seq;
-      m.frame_seq = r.nav.frame_seq;
-      std::memcpy(m.position_world_m, r.nav.position_world_m, sizeof m.position_world_m);
-      std::memcpy(m.orientation_world_q, r.nav.orientation_world_q, sizeof m.orientation_world_q);
-      std::memcpy(m.velocity_world_mps, r.nav.velocity_world_mps, sizeof m.velocity_world_mps);
-      std::memcpy(m.covariance, r.nav.covariance, sizeof m.covariance);
-      m.mode = r.mode;
-      m.status = r.nav.status;
-      m.integrity_flags = r.nav.integrity_flags;
-      m.horizontal_protection_m = r.nav.horizontal_protection_m;
-      m.vertical_protection_m = r.nav.vertical_protection_m;
-      m.integrity_risk = r.nav.integrity_risk;
-      m.update_status = r.nav.update_status;
-      m.fault_bits = r.nav.fault_bits;
-      m.iterations = r.nav.iterations;
-      m.num_measurements = r.nav.num_measurements;
+      FillNav(r, &impl_->nav);
       for (OutputObserver* o : observers_) o->OnNav(r);
-      const int n = m.encode(buf, 0, max);
-      channels_->navs.Release(ref.slot);
-      if (n < 0) {
-        ++counters_.encode_errors;
-        return;
-      }
-      Emit(kNavSuffix, m.utime, buf, n);
+      publish(impl_->nav, channels_->navs, kNavSuffix);
       return;
     }
     case RecordKind::kMap: {
       const MapRecord& r = channels_->maps[ref.slot];
-      swf_msgs::landmark_map_t& m = impl_->map;
-      m.utime = r.map.utime;
-      m.seq = r.seq;
-      m.frame_seq = r.map.frame_seq;
-      m.num_landmarks = r.map.num_landmarks;
-      m.id.resize(m.num_landmarks);
-      m.position_world_m.resize(m.num_landmarks);
-      m.covariance_m2.resize(m.num_landmarks);
-      m.num_observations.resize(m.num_landmarks);
-      for (int i = 0; i < m.num_landmarks; ++i) {
-        const MapLandmark& l = r.map.landmarks[i];
-        m.id[i] = l.id;
-        m.position_world_m[i].assign(l.position_world_m, l.position_world_m + 3);
-        m.covariance_m2[i].assign(l.covariance_m2, l.covariance_m2 + 6);
-        m.num_observations[i] = l.num_observations;
-      }
+      FillMap(r, &impl_->map);
       for (OutputObserver* o : observers_) o->OnMap(r);
-      const int n = m.encode(buf, 0, max);
-      channels_->maps.Release(ref.slot);
-      if (n < 0) {
-        ++counters_.encode_errors;
-        return;
-      }
-      Emit(kLandmarksSuffix, m.utime, buf, n);
+      publish(impl_->map, channels_->maps, kLandmarksSuffix);
       return;
     }
     case RecordKind::kHazard: {
       const HazardRecord& r = channels_->hazards[ref.slot];
-      swf_msgs::hazard_map_t& m = impl_->hazard;
-      m.utime = r.utime;
-      m.seq = r.seq;
-      m.frame_seq = r.frame_seq;
-      m.origin_world_m[0] = r.origin_world_m[0];
-      m.origin_world_m[1] = r.origin_world_m[1];
-      m.up_world[0] = 0.0;  // the estimator's world frame is local level, z up
-      m.up_world[1] = 0.0;
-      m.up_world[2] = 1.0;
-      m.cell_size_m = r.cell_size_m;
-      m.rows = r.cells_per_side;
-      m.cols = r.cells_per_side;
-      m.num_cells = r.cells_per_side * r.cells_per_side;
-      m.elevation_m.assign(r.elevation_m.get(), r.elevation_m.get() + m.num_cells);
-      m.sigma_m.assign(r.sigma_m.get(), r.sigma_m.get() + m.num_cells);
-      m.slope_deg.assign(r.slope_deg.get(), r.slope_deg.get() + m.num_cells);
-      m.roughness_m.assign(r.roughness_m.get(), r.roughness_m.get() + m.num_cells);
-      m.hazard_class.assign(r.hazard_class.get(), r.hazard_class.get() + m.num_cells);
-      m.safe_site_valid = r.safe_site_valid;
-      m.safe_site_world_m[0] = r.safe_site_world_m[0];
-      m.safe_site_world_m[1] = r.safe_site_world_m[1];
-      m.safe_site_score = r.safe_site_score;
+      FillHazard(r, &impl_->hazard);
       for (OutputObserver* o : observers_) o->OnHazard(r);
-      const int n = m.encode(buf, 0, max);
-      channels_->hazards.Release(ref.slot);
-      if (n < 0) {
-        ++counters_.encode_errors;
-        return;
-      }
-      Emit(kHazardSuffix, m.utime, buf, n);
+      publish(impl_->hazard, channels_->hazards, kHazardSuffix);
       return;
     }
     case RecordKind::kHealth: {
       const HealthRecord& r = channels_->healths[ref.slot];
-      swf_msgs::health_t& m = impl_->health;
-      m.utime = r.utime;
-      m.seq = r.seq;
-      m.frames = r.frames;
-      m.frames_dropped = r.frames_dropped;
-      m.frames_rejected = r.frames_rejected;
-      m.overruns = r.overruns;
-      m.outputs_dropped = r.outputs_dropped;
-      m.allocations_after_start = r.allocations_after_start;
-      m.fault_bits = r.fault_bits;
-      m.estimator_status = r.estimator_status;
-      m.num_features = r.num_features;
-      m.num_landmarks = r.num_landmarks;
-      const IntegrityCounters& ic = r.integrity;
-      m.frames_valid = ic.frames_valid;
-      m.frames_degraded = ic.frames_degraded;
-      m.frames_invalid = ic.frames_invalid;
-      m.restarts = ic.restarts;
-      m.last_recovery_frames = ic.last_recovery_frames;
-      m.measurements_gated = ic.measurements_gated;
-      m.measurements_rejected = ic.measurements_rejected;
-      m.landmarks_rejected = ic.landmarks_rejected;
-      m.new_landmarks_refused = ic.new_landmarks_refused;
-      m.gate_suspensions = ic.gate_suspensions;
-      m.num_integrity_flags = estimator::kNumIntegrityFlags;
-      m.integrity_flag_counts.assign(ic.flag_counts,
-                                     ic.flag_counts + estimator::kNumIntegrityFlags);
-      m.num_stages = kNumStages;
-      m.stage_name.resize(kNumStages);
-      m.stage_p50_ms.resize(kNumStages);
-      m.stage_p99_ms.resize(kNumStages);
-      m.stage_max_ms.resize(kNumStages);
-      for (int i = 0; i < kNumStages; ++i) {
-        m.stage_name[i] = StageName(i);
-        m.stage_p50_ms[i] = r.stages[i].p50_ms;
-        m.stage_p99_ms[i] = r.stages[i].p99_ms;
-        m.stage_max_ms[i] = r.stages[i].max_ms;
-      }
-      const estimator::ImuStreamCounts& imu = r.imu.stream;
-      m.imu_accepted = imu.accepted;
-      m.imu_out_of_order = imu.out_of_order;
-      m.imu_duplicated = imu.duplicated;
-      m.imu_invalid = imu.invalid;
-      m.imu_saturated = imu.saturated;
-      m.imu_missing = imu.missing_samples + r.imu.overflowed;
-      m.imu_intervals_bridged = r.imu.intervals_bridged;
+      FillHealth(r, &impl_->health);
       for (OutputObserver* o : observers_) o->OnHealth(r);
-      const int n = m.encode(buf, 0, max);
-      channels_->healths.Release(ref.slot);
-      if (n < 0) {
-        ++counters_.encode_errors;
-        return;
-      }
-      Emit(kHealthSuffix, m.utime, buf, n);
+      publish(impl_->health, channels_->healths, kHealthSuffix);
       return;
     }
   }
