@@ -122,9 +122,9 @@ double Std(const std::vector<double>& v) {
   return v.size() < 2 ? 0.0 : std::sqrt(s / (v.size() - 1));
 }
 
-int Usage() {
+int Usage(std::FILE* to = stderr) {
   std::fprintf(
-      stderr,
+      to,
       "usage: swf-eval paper OUT [--runs N] [--nees-runs N] [--shared DIR] [--only LIST]\n"
       "  LIST: comma-separated subset of fig12,fig13,fig14,fig15,fig16,fig17,nees,kitti\n%s",
       swf::eval::SequenceUsage());
@@ -430,6 +430,13 @@ bool AddFig16(const std::string& out, int runs, std::string* md) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int a = 1; a < argc; ++a) {
+    if (std::string(argv[a]) == "--help" || std::string(argv[a]) == "-h") {
+      Usage(stdout);
+      return 0;
+    }
+  }
+  if (argc >= 3 && argv[2][0] == '-') return Usage();  // an option where the path belongs
   if (argc >= 3 && std::string(argv[1]) == "euroc") return swf::eval::RunEurocCommand(argc, argv);
   if (argc >= 3 && std::string(argv[1]) == "kitti") return swf::eval::RunKittiCommand(argc, argv);
   if (argc < 3 || std::string(argv[1]) != "paper") return Usage();

@@ -648,12 +648,21 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3) {
-    std::fprintf(stderr,
+  const auto usage = [](std::FILE* to) {
+    std::fprintf(to,
                  "usage: swf-hazard eval OUTDIR [--descents N] [--sweep-seeds S] [--shared DIR] "
                  "[--width W] [--height H] [--downsample D]\n"
                  "       swf-hazard map OUT.png [--preset plains|craters|rocks] [--seed S] "
                  "[--shared DIR]\n");
+  };
+  for (int a = 1; a < argc; ++a) {
+    if (std::strcmp(argv[a], "--help") == 0 || std::strcmp(argv[a], "-h") == 0) {
+      usage(stdout);
+      return 0;
+    }
+  }
+  if (argc < 3 || argv[2][0] == '-') {  // an option where the output path belongs
+    usage(stderr);
     return 1;
   }
   EvalOptions eo;
