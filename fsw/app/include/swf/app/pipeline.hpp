@@ -333,13 +333,3 @@ class Pipeline {
 };
 
 }  // namespace swf::app
-
-namespace swf::estimator {
-// Each flight filter is instantiated once, in its own unit (flight_filter_*.cpp), not in every
-// unit that calls it: the two largest instantiations of the build then compile side by side.
-extern template class SlidingWindowFilter<StereoModel<double>, app::kMaxWindow, app::kMaxLandmarks,
-                                          app::kMaxMeasurementsPerPose, app::kMaxPriorLandmarks>;
-extern template class SlidingWindowFilter<InertialStereoModel<double>, app::kMaxWindow,
-                                          app::kMaxLandmarks, app::kMaxMeasurementsPerPose,
-                                          app::kMaxPriorLandmarks>;
-}  // namespace swf::estimator
