@@ -309,9 +309,9 @@ class SlidingWindowFilter {
     return core::Status::kOk;
   }
 
-  // Constant-velocity fallback: repeats the last relative motion (none with a single pose). A
-  // member template, so that instantiating the filter for a model without relative motion (the
-  // IMU's) leaves it out.
+  // Constant-velocity fallback: repeats the last relative motion (none with a single pose).
+  // Only for models with a relative-motion input; on the IMU's model the call fails at its
+  // constraint, not deep in this body.
   template <RelativeMotionModel CvModel = Model>
   core::Status AddPoseConstantVelocity(const StateMat& process_sqrt_information) {
     if (num_poses_ == 0) return core::Status::kInvalidArgument;
