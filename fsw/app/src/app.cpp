@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -291,17 +292,86 @@ void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
   std::fprintf(f, "},\n");
 }
 
-void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
-                  const HealthRecord& health, const EvaluationResult* eval,
-                  const HazardEvaluation* hazard, std::int64_t hazard_maps, bool locked, bool fifo,
-                  const Verdict& verdict, const IntegrityCounters& integrity,
-                  const sim::Trajectory* trajectory, const sim::OrbitalTarget* target,
-                  const LogStreamStats* log, const ImuReport* imu) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) {
-    std::fprintf(stderr, "swf-fsw: cannot write %s\n", path.c_str());
+// Per output, as columns: frame, true altitude, errors, status and protection levels.
+void WriteOutputs(std::FILE* f, const EvaluationResult& eval) {
+  bool first = true;
+  const auto column = [&](const char* key, auto&& value) {
+    std::fprintf(f, "%s\"%s\": [", first ? "" : ", ", key);
+    first = false;
+    for (std::size_t k = 0; k < eval.outputs.size(); ++k)
+      std::fprintf(f, "%s%s", k > 0 ? ", " : "", value(eval.outputs[k]).c_str());
+    std::fprintf(f, "]");
+  };
+  using Output = EvaluationResult::Output;
+  std::fprintf(f, "  \"outputs\": {");
+  column("frame", [](const Output& o) { return std::to_string(o.frame_seq); });
+  column("altitude_m", [](const Output& o) { return JsonNumber(o.altitude_m); });
+  column("horizontal_error_m", [](const Output& o) { return JsonNumber(o.horizontal_error_m); });
+  column("vertical_error_m", [](const Output& o) { return JsonNumber(o.vertical_error_m); });
+  column("attitude_error_deg", [](const Output& o) { return JsonNumber(o.attitude_error_deg); });
+  column("status", [](const Output& o) { return std::to_string(o.status); });
+  column("hpl_m", [](const Output& o) { return JsonNumber(o.hpl_m); });
+  column("vpl_m", [](const Output& o) { return JsonNumber(o.vpl_m); });
+  std::fprintf(f, "},\n");
+}
+
+// One hazard map's evaluation as a JSON object (without the safe site of the final map).
+void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& h) {
+  std::fprintf(
+      f,
+      "{\"frame\": %lld, \"altitude_m\": %s, \"known_cells\": %d, "
+      "\"rocks_resolved\": %d, \"rocks_detected\": %d, \"detection_probability\": %s, "
+      "\"rocks_resolved_by_height\": [%d, %d, %d], "
+      "\"rocks_detected_by_height\": [%d, %d, %d], \"rock_free_cells\": %d, "
+      "\"false_rock_cells\": %d, \"false_alarm_rate\": %.5f, \"site_on_truth_hazard\": %s}",
+      static_cast<long long>(h.frame_seq), JsonNumber(h.altitude_m).c_str(), h.known_cells,
+      h.rocks_resolved, h.rocks_detected,
+      h.detection_probability >= 0.0 ? JsonNumber(h.detection_probability).c_str() : "null",
+      h.rocks_resolved_by_height[0], h.rocks_resolved_by_height[1], h.rocks_resolved_by_height[2],
+      h.rocks_detected_by_height[0], h.rocks_detected_by_height[1], h.rocks_detected_by_height[2],
+      h.rock_free_cells, h.false_rock_cells, h.false_alarm_rate,
+      !h.site_valid ? "null" : (h.site_on_hazard ? "true" : "false"));
+}
+
+// The hazard maps: the final one with its safe site, and every one by altitude. The height
+// classes are [1, 2), [2, 4), [4, inf) times the rock threshold (hazard.max_rock_height_m).
+void WriteHazard(std::FILE* f, const std::vector<HazardEvaluation>& evals,
+                 std::int64_t hazard_maps) {
+  std::fprintf(f, "  \"hazard_maps\": %lld,\n", static_cast<long long>(hazard_maps));
+  if (evals.empty()) {
+    std::fprintf(f, "  \"hazard\": null,\n  \"hazard_by_map\": [],\n  \"safe_site\": null\n");
     return;
   }
+  const HazardEvaluation& h = evals.back();
+  std::fprintf(f, "  \"hazard\": ");
+  WriteHazardEvaluation(f, h);
+  std::fprintf(f, ",\n  \"hazard_by_map\": [");
+  for (std::size_t k = 0; k < evals.size(); ++k) {
+    std::fprintf(f, "%s\n    ", k > 0 ? "," : "");
+    WriteHazardEvaluation(f, evals[k]);
+  }
+  std::fprintf(f, "],\n");
+  if (h.site_valid) {
+    std::fprintf(f,
+                 "  \"safe_site\": {\"x_m\": %.3f, \"y_m\": %.3f, \"score\": %.4f, "
+                 "\"clearance_to_truth_hazard_m\": %.3f, \"on_truth_hazard\": %s}\n",
+                 h.site_x_m, h.site_y_m, h.site_score, h.site_clearance_m,
+                 h.site_on_hazard ? "true" : "false");
+  } else {
+    std::fprintf(f, "  \"safe_site\": null\n");
+  }
+}
+
+// False when the file could not be written whole (a full disk, an I/O error).
+bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
+                  const HealthRecord& health, const EvaluationResult* eval,
+                  const std::vector<HazardEvaluation>& hazard, std::int64_t hazard_maps,
+                  bool locked, bool fifo, const Verdict& verdict,
+                  const IntegrityCounters& integrity, const sim::Trajectory* trajectory,
+                  const sim::OrbitalTarget* target, const LogStreamStats* log,
+                  const ImuReport* imu) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
   std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"result_reasons\": \"%s\",\n", verdict.result,
                verdict.reasons.c_str());
   std::fprintf(f, "  \"source\": \"%s\",\n", SourceName(c.source));
@@ -349,7 +419,9 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                  JsonNumber(eval->mean_position_nees).c_str());
     for (std::size_t k = 0; k < eval->position_nees.size(); ++k)
       std::fprintf(f, "%s%s", k > 0 ? ", " : "", JsonNumber(eval->position_nees[k]).c_str());
-    std::fprintf(f, "],\n");
+    std::fprintf(f, "],\n  \"final_attitude_error_deg\": %s,\n",
+                 JsonNumber(eval->final_attitude_error_deg).c_str());
+    WriteOutputs(f, *eval);
   }
   WriteIntegrity(f, integrity, eval);
   std::fprintf(f, "  \"stages\": {\n");
@@ -379,36 +451,10 @@ void WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                  static_cast<long long>(log->duplicates),
                  static_cast<long long>(log->out_of_order));
   }
-  if (hazard == nullptr) {
-    std::fprintf(f, "  \"hazard_maps\": %lld,\n  \"hazard\": null,\n  \"safe_site\": null\n}\n",
-                 static_cast<long long>(hazard_maps));
-  } else {
-    const HazardEvaluation& h = *hazard;
-    std::fprintf(f, "  \"hazard_maps\": %lld,\n", static_cast<long long>(hazard_maps));
-    std::fprintf(f,
-                 "  \"hazard\": {\"known_cells\": %d, \"rocks_resolved\": %d, "
-                 "\"rocks_detected\": %d, ",
-                 h.known_cells, h.rocks_resolved, h.rocks_detected);
-    if (h.detection_probability >= 0.0) {
-      std::fprintf(f, "\"detection_probability\": %.4f, ", h.detection_probability);
-    } else {
-      std::fprintf(f, "\"detection_probability\": null, ");
-    }
-    std::fprintf(f,
-                 "\"rock_free_cells\": %d, \"false_rock_cells\": %d, "
-                 "\"false_alarm_rate\": %.5f},\n",
-                 h.rock_free_cells, h.false_rock_cells, h.false_alarm_rate);
-    if (h.site_valid) {
-      std::fprintf(f,
-                   "  \"safe_site\": {\"x_m\": %.3f, \"y_m\": %.3f, \"score\": %.4f, "
-                   "\"clearance_to_truth_hazard_m\": %.3f, \"on_truth_hazard\": %s}\n}\n",
-                   h.site_x_m, h.site_y_m, h.site_score, h.site_clearance_m,
-                   h.site_on_hazard ? "true" : "false");
-    } else {
-      std::fprintf(f, "  \"safe_site\": null\n}\n");
-    }
-  }
-  std::fclose(f);
+  WriteHazard(f, hazard, hazard_maps);
+  std::fprintf(f, "}\n");
+  const bool written = std::ferror(f) == 0;
+  return std::fclose(f) == 0 && written;
 }
 
 void PrintRenderProgress(int done, int total) {
@@ -958,13 +1004,14 @@ int Report(FlightProcess* fp) {
   }
 #endif
   EvaluationResult eval;
-  HazardEvaluation hazard_eval;
+  std::vector<HazardEvaluation> hazard_evals;
   const std::int64_t hazard_maps = fp->hazard_counter.maps;
   if (fp->evaluate) {
     const SimWorld& world = *fp->world;
     eval = fp->evaluation.Evaluate(*fp->parts.pipeline, world.Trajectory(), world.Terrain(),
                                    config.plot_dir);
-    hazard_eval = EvaluateHazard(fp->parts.hazard->Mapper(), world.Terrain(), hazard_maps);
+    hazard_evals = fp->evaluation.EvaluateHazard(fp->parts.hazard->Mapper().Options(),
+                                                 world.Trajectory(), world.Terrain());
   }
   if (!config.plot_dir.empty() && hazard_maps > 0) {
     const std::string png = config.plot_dir + "/hazard.png";
@@ -1000,11 +1047,15 @@ int Report(FlightProcess* fp) {
   if (fp->parts.pipeline->Inertial()) imu_report = ReportImu(fp);
   if (!config.summary_path.empty()) {
     const SimWorld* world = fp->world.get();
-    WriteSummary(config.summary_path, config, counters, h, fp->evaluate ? &eval : nullptr,
-                 fp->evaluate && hazard_maps > 0 ? &hazard_eval : nullptr, hazard_maps, fp->locked,
-                 fp->fifo, verdict, integrity, world != nullptr ? &world->Trajectory() : nullptr,
-                 world != nullptr ? &world->Target() : nullptr, log_stream,
-                 fp->parts.pipeline->Inertial() ? &imu_report : nullptr);
+    if (!WriteSummary(config.summary_path, config, counters, h, fp->evaluate ? &eval : nullptr,
+                      hazard_evals, hazard_maps, fp->locked, fp->fifo, verdict, integrity,
+                      world != nullptr ? &world->Trajectory() : nullptr,
+                      world != nullptr ? &world->Target() : nullptr, log_stream,
+                      fp->parts.pipeline->Inertial() ? &imu_report : nullptr)) {
+      std::fprintf(stderr, "%s: cannot write the summary %s: %s; exit 1\n", fp->tool,
+                   config.summary_path.c_str(), std::strerror(errno));
+      return kRunError;
+    }
   }
   return verdict.exit_code;
 }

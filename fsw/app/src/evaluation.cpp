@@ -4,13 +4,15 @@
 #include <cmath>
 #include <cstdio>
 
-#include "swf/sim/hazard.hpp"
+#include "swf/app/hazard_stage.hpp"
 
 namespace swf::app {
 
 void Evaluation::OnNav(const NavRecord& r) {
   Nav n{r.nav.frame_seq,
         {r.nav.position_world_m[0], r.nav.position_world_m[1], r.nav.position_world_m[2]},
+        {r.nav.orientation_world_q[0], r.nav.orientation_world_q[1], r.nav.orientation_world_q[2],
+         r.nav.orientation_world_q[3]},
         r.nav.status,
         r.nav.horizontal_protection_m,
         r.nav.vertical_protection_m,
@@ -28,6 +30,14 @@ double Nees(const Eigen::Vector3d& e, const double* covariance) {
   const Eigen::LLT<Eigen::Matrix3d> llt(p);
   if (llt.info() != Eigen::Success || !(p.trace() > 0.0)) return NAN;
   return e.dot(llt.solve(e));
+}
+
+// The angle of est_R^T true_R in degrees (est_R from a w, x, y, z quaternion).
+double AttitudeErrorDeg(const double* q, const Eigen::Matrix3d& true_rotation) {
+  const Eigen::Quaterniond est(q[0], q[1], q[2], q[3]);
+  if (!(est.norm() > 0.0)) return NAN;
+  const Eigen::AngleAxisd d(est.normalized().toRotationMatrix().transpose() * true_rotation);
+  return d.angle() * 180.0 / M_PI;
 }
 }  // namespace
 
@@ -84,8 +94,21 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
   int nees_count = 0;
   for (const Nav& n : navs_) {
     if (n.frame_seq < 0 || n.frame_seq >= trajectory.NumFrames()) continue;
-    const Eigen::Vector3d t = trajectory.WorldTCamera(static_cast<std::int32_t>(n.frame_seq)).t;
+    const estimator::Pose<double>& truth =
+        trajectory.WorldTCamera(static_cast<std::int32_t>(n.frame_seq));
+    const Eigen::Vector3d& t = truth.t;
     const double e = (Eigen::Vector3d(n.p[0], n.p[1], n.p[2]) - t).norm();
+    EvaluationResult::Output o;
+    o.frame_seq = n.frame_seq;
+    o.altitude_m = t.z() - terrain.HeightAt(t.x(), t.y());
+    o.horizontal_error_m = std::hypot(n.p[0] - t.x(), n.p[1] - t.y());
+    o.vertical_error_m = std::abs(n.p[2] - t.z());
+    o.attitude_error_deg = AttitudeErrorDeg(n.q, truth.R);
+    o.status = n.status;
+    o.hpl_m = n.hpl_m;
+    o.vpl_m = n.vpl_m;
+    result.outputs.push_back(o);
+    result.final_attitude_error_deg = o.attitude_error_deg;
     sum2 += e * e;
     const double nees = Nees(Eigen::Vector3d(n.p[0], n.p[1], n.p[2]) - t, n.position_covariance);
     result.position_nees.push_back(nees);
@@ -96,11 +119,8 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
     ++result.navs;
     result.final_pose_error_m = e;
     if (n.status == static_cast<std::int8_t>(estimator::NavIntegrity::kValid)) {
-      // The simulator's world is z-up: horizontal = x, y.
-      const double eh = std::hypot(n.p[0] - t.x(), n.p[1] - t.y());
-      const double ev = std::abs(n.p[2] - t.z());
-      const double ratio =
-          std::max(n.hpl_m > 0.0 ? eh / n.hpl_m : 1e9, n.vpl_m > 0.0 ? ev / n.vpl_m : 1e9);
+      const double ratio = std::max(n.hpl_m > 0.0 ? o.horizontal_error_m / n.hpl_m : 1e9,
+                                    n.vpl_m > 0.0 ? o.vertical_error_m / n.vpl_m : 1e9);
       ++result.valid_navs;
       result.protection_violations += ratio > 1.0 ? 1 : 0;
       result.max_error_over_protection =
@@ -188,23 +208,74 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
 
 namespace swf::app {
 
-HazardEvaluation EvaluateHazard(const hazard::HazardMapper& m, const sim::Terrain& terrain,
-                                std::int64_t maps_published) {
-  HazardEvaluation r;
-  r.maps = maps_published;
-  const hazard::HazardMapperOptions& o = m.Options();
+void Evaluation::OnHazard(const HazardRecord& r) {
+  PublishedHazardMap m;
+  m.frame_seq = r.frame_seq;
+  m.origin_m[0] = r.origin_world_m[0];
+  m.origin_m[1] = r.origin_world_m[1];
+  m.cell_m = r.cell_size_m;
+  m.cells_per_side = r.cells_per_side;
+  const std::size_t cells = static_cast<std::size_t>(r.cells_per_side) * r.cells_per_side;
+  m.elevation_m.assign(r.elevation_m.get(), r.elevation_m.get() + cells);
+  m.sigma_m.assign(r.sigma_m.get(), r.sigma_m.get() + cells);
+  m.classes.assign(r.hazard_class.get(), r.hazard_class.get() + cells);
+  m.site_valid = r.safe_site_valid;
+  m.site_m[0] = r.safe_site_world_m[0];
+  m.site_m[1] = r.safe_site_world_m[1];
+  m.site_score = r.safe_site_score;
+  hazard_maps_.push_back(std::move(m));
+}
+
+std::vector<HazardEvaluation> Evaluation::EvaluateHazard(
+    const hazard::HazardMapperOptions& thresholds, const sim::Trajectory& trajectory,
+    const sim::Terrain& terrain) const {
+  std::vector<HazardEvaluation> result;
   sim::HazardOptions ho;
-  ho.max_slope_deg = o.max_slope_deg;
-  ho.max_rock_height_m = o.max_rock_height_m;
+  ho.max_slope_deg = thresholds.max_slope_deg;
+  ho.max_rock_height_m = thresholds.max_rock_height_m;
   sim::HazardMap truth;
-  if (m.GridCells() <= 0 || sim::ComputeHazardTruth(terrain, ho, &truth) != core::Status::kOk) {
-    return r;
+  if (hazard_maps_.empty() || sim::ComputeHazardTruth(terrain, ho, &truth) != core::Status::kOk)
+    return result;
+  for (const PublishedHazardMap& m : hazard_maps_) {
+    HazardEvaluation e = EvaluateHazardMap(m, thresholds, terrain, truth);
+    if (m.frame_seq >= 0 && m.frame_seq < trajectory.NumFrames()) {
+      const Eigen::Vector3d& t = trajectory.WorldTCamera(static_cast<std::int32_t>(m.frame_seq)).t;
+      e.altitude_m = t.z() - terrain.HeightAt(t.x(), t.y());
+    }
+    result.push_back(e);
   }
-  const int n = m.GridCells();
-  const double cell = m.CellM();
+  return result;
+}
+
+namespace {
+// The height class of a rock of height h against the threshold (kRockHeightClasses classes).
+int RockHeightClass(double h, double threshold) {
+  if (h < 2.0 * threshold) return 0;
+  return h < 4.0 * threshold ? 1 : 2;
+}
+}  // namespace
+
+HazardEvaluation Evaluation::EvaluateHazardMap(const PublishedHazardMap& m,
+                                               const hazard::HazardMapperOptions& o,
+                                               const sim::Terrain& terrain,
+                                               const sim::HazardMap& truth) {
+  HazardEvaluation r;
+  r.frame_seq = m.frame_seq;
+  const int n = m.cells_per_side;
+  const double cell = m.cell_m;
+  if (n <= 0 || !(cell > 0.0)) return r;
+  const std::int8_t rock_code = HazardClassCode(hazard::HazardClass::kRock);
   const int tn = truth.size;
   const double tcell = terrain.CellM();
-  // Truth nodes within radius of (x, y); f(node index) for each.
+  const auto cell_of = [&](double x, double y, int* i, int* j) {
+    const double fx = (x - m.origin_m[0]) / cell;
+    const double fy = (y - m.origin_m[1]) / cell;
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < n && fy < n)) return false;
+    *i = static_cast<int>(fx);
+    *j = static_cast<int>(fy);
+    return true;
+  };
+  // Truth nodes within radius of (x, y); f(node index, distance) for each.
   const auto for_nodes_near = [&](double x, double y, double radius, auto&& f) {
     const int ci = static_cast<int>(std::lround((x - terrain.NodeX(0)) / tcell));
     const int cj = static_cast<int>(std::lround((y - terrain.NodeY(0)) / tcell));
@@ -219,15 +290,15 @@ HazardEvaluation EvaluateHazard(const hazard::HazardMapper& m, const sim::Terrai
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const std::size_t c = static_cast<std::size_t>(j) * n + i;
-      if (std::isnan(m.Elevation()[c])) continue;
+      if (std::isnan(m.elevation_m[c])) continue;
       ++r.known_cells;
       float rock = 0.0f;
-      for_nodes_near(m.CornerX() + (i + 0.5) * cell, m.CornerY() + (j + 0.5) * cell,
+      for_nodes_near(m.origin_m[0] + (i + 0.5) * cell, m.origin_m[1] + (j + 0.5) * cell,
                      0.5 * cell + 0.3,
                      [&](std::size_t k, double) { rock = std::max(rock, truth.rock_height_m[k]); });
       if (rock >= 0.5 * o.max_rock_height_m) continue;
       ++r.rock_free_cells;
-      r.false_rock_cells += m.Classes()[c] == hazard::HazardClass::kRock;
+      r.false_rock_cells += m.classes[c] == rock_code;
     }
   }
   if (r.rock_free_cells > 0) {
@@ -237,35 +308,37 @@ HazardEvaluation EvaluateHazard(const hazard::HazardMapper& m, const sim::Terrai
     if (rock.height_m < o.max_rock_height_m) continue;
     int ci = 0;
     int cj = 0;
-    if (!m.CellOf(rock.center_m.x(), rock.center_m.y(), &ci, &cj)) continue;
-    const float sigma = m.Sigma()[static_cast<std::size_t>(cj) * n + ci];
+    if (!cell_of(rock.center_m.x(), rock.center_m.y(), &ci, &cj)) continue;
+    const float sigma = m.sigma_m[static_cast<std::size_t>(cj) * n + ci];
     if (!(3.0 * sigma <= o.max_rock_height_m)) continue;
+    const int height_class = RockHeightClass(rock.height_m, o.max_rock_height_m);
     ++r.rocks_resolved;
+    ++r.rocks_resolved_by_height[height_class];
     const double radius = 0.5 * rock.diameter_m + cell;
     const int rc = static_cast<int>(std::ceil(radius / cell));
     bool found = false;
     for (int j = std::max(0, cj - rc); j <= std::min(n - 1, cj + rc) && !found; ++j) {
       for (int i = std::max(0, ci - rc); i <= std::min(n - 1, ci + rc); ++i) {
-        const double dx = m.CornerX() + (i + 0.5) * cell - rock.center_m.x();
-        const double dy = m.CornerY() + (j + 0.5) * cell - rock.center_m.y();
+        const double dx = m.origin_m[0] + (i + 0.5) * cell - rock.center_m.x();
+        const double dy = m.origin_m[1] + (j + 0.5) * cell - rock.center_m.y();
         if (std::hypot(dx, dy) <= radius &&
-            m.Classes()[static_cast<std::size_t>(j) * n + i] == hazard::HazardClass::kRock) {
+            m.classes[static_cast<std::size_t>(j) * n + i] == rock_code) {
           found = true;
           break;
         }
       }
     }
     r.rocks_detected += found;
+    r.rocks_detected_by_height[height_class] += found;
   }
   if (r.rocks_resolved > 0) {
     r.detection_probability = static_cast<double>(r.rocks_detected) / r.rocks_resolved;
   }
-  const hazard::SafeSite& site = m.Site();
-  r.site_valid = site.valid;
-  if (site.valid) {
-    r.site_x_m = site.position_world_m.x();
-    r.site_y_m = site.position_world_m.y();
-    r.site_score = site.score;
+  r.site_valid = m.site_valid;
+  if (m.site_valid) {
+    r.site_x_m = m.site_m[0];
+    r.site_y_m = m.site_m[1];
+    r.site_score = m.site_score;
     constexpr double kSearchM = 20.0;
     double nearest = kSearchM;
     for_nodes_near(r.site_x_m, r.site_y_m, kSearchM, [&](std::size_t k, double d) {

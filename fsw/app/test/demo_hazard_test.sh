@@ -2,7 +2,8 @@
 # The flight demo's hazard results (issue 8): swf-fsw on config/demo.cfg (full size: the rock
 # field, the orbital target, 512x384, 100 -> 10 m) under lockstep pacing, without LCM, must write
 # a summary whose final hazard map has a detection probability over resolved truth rocks and a
-# safe site outside the footprint of every truth hazard. Then the same descent with the camera
+# safe site outside the footprint of every truth hazard, and whose per-map and per-output columns
+# (what campaigns aggregate by altitude) agree with the totals. Then the same descent with the camera
 # blinded for 2 s mid-descent (black pairs, inject.black_from): the IMU carries the state (the
 # frames coasted and flagged, none INVALID, the position error inside its published covariance:
 # NEES below the chi-square 3-dof 0.999 point), the filter re-acquires (at most 8 frames after
@@ -33,6 +34,22 @@ if site is None:
     problems.append("no safe site")
 elif site["on_truth_hazard"] or site["clearance_to_truth_hazard_m"] <= 1.5:
     problems.append("the safe site is within the 1.5 m footprint of a truth hazard")
+by_map, out = s["hazard_by_map"], s["outputs"]
+if len(by_map) != s["hazard_maps"] or (by_map and by_map[-1] != h):
+    problems.append("hazard_by_map does not end with the final map's evaluation")
+if [m["altitude_m"] for m in by_map] != sorted([m["altitude_m"] for m in by_map], reverse=True):
+    problems.append("hazard map altitudes do not decrease over the descent")
+if any(len(v) != s["nav_outputs"] for v in out.values()):
+    problems.append("the outputs columns are not one entry per navigation output")
+rms = (sum(hh * hh + v * v for hh, v in zip(out["horizontal_error_m"], out["vertical_error_m"]))
+       / len(out["frame"])) ** 0.5
+if abs(rms - s["pose_rms_error_m"]) > 1e-4 * max(1.0, rms):
+    problems.append("per-output errors give RMS %.6f, the summary %.6f" % (rms, s["pose_rms_error_m"]))
+if not 9.0 < out["altitude_m"][-1] < 12.0 or not 95.0 < out["altitude_m"][0] < 105.0:
+    problems.append("true altitudes %.1f .. %.1f m, not the demo's 100 -> 10 m"
+                    % (out["altitude_m"][0], out["altitude_m"][-1]))
+if not 0.0 <= s["final_attitude_error_deg"] < 0.5:
+    problems.append("final attitude error %s deg" % s["final_attitude_error_deg"])
 for p in problems:
     print("FAIL:", p, file=sys.stderr)
 sys.exit(1 if problems else 0)

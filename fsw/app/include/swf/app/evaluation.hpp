@@ -1,7 +1,8 @@
 // Evaluation of a simulated run against the simulator's truth (ground side, after the run):
-// pose error of every navigation output, and the error of every landmark of every published map.
-// A landmark's true position is where the ray through the pixel it was first seen at, from the
-// true camera pose of that frame, meets the terrain.
+// pose error of every navigation output, the error of every landmark of every published map, and
+// every published hazard map against the terrain's hazard truth. A landmark's true position is
+// where the ray through the pixel it was first seen at, from the true camera pose of that frame,
+// meets the terrain.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
+#include "swf/sim/hazard.hpp"
 #include "swf/sim/imu_model.hpp"
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
@@ -36,6 +38,20 @@ struct EvaluationResult {
   // degrees of freedom, mean 3, for a consistent estimator.
   std::vector<double> position_nees;
   double mean_position_nees = 0.0;  // over the outputs with a covariance
+  // Per output, in output order: the true altitude of the camera above the terrain below it,
+  // the errors (the simulator's world is z-up: horizontal = x, y) and what the output claimed.
+  struct Output {
+    std::int64_t frame_seq = 0;
+    double altitude_m = 0.0;
+    double horizontal_error_m = 0.0;
+    double vertical_error_m = 0.0;
+    double attitude_error_deg = 0.0;  // angle of est_R^T true_R
+    std::int8_t status = 0;           // nav_state_t.STATUS_*
+    double hpl_m = 0.0;
+    double vpl_m = 0.0;
+  };
+  std::vector<Output> outputs;
+  double final_attitude_error_deg = 0.0;
 };
 
 // The IMU alone from the filter's starting state (its pose, the guidance's velocity, zero
@@ -44,17 +60,22 @@ struct EvaluationResult {
 double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajectory,
                       const ImuOptions& imu, const estimator::Pose<double>& initial_world_T_camera);
 
-// The final hazard map against the simulator's hazard truth (sim/hazard.hpp, same thresholds).
+// A published hazard map against the simulator's hazard truth (sim/hazard.hpp, same thresholds).
+// Rocks are counted in height classes [1, 2), [2, 4) and [4, inf) times the rock threshold.
+inline constexpr int kRockHeightClasses = 3;
 struct HazardEvaluation {
-  std::int64_t maps = 0;  // hazard maps published
+  std::int64_t frame_seq = -1;  // the frame the map belongs to
+  double altitude_m = 0.0;      // true altitude of the camera above the terrain at that frame
   int known_cells = 0;
   int rocks_resolved = 0;               // truth rocks >= the threshold whose cell resolves it
                                         // (sigma <= threshold / 3)
   int rocks_detected = 0;               // ... with a rock cell within the rock's radius + one cell
   double detection_probability = -1.0;  // detected / resolved (-1: none resolved)
-  int rock_free_cells = 0;              // known cells without a truth rock >= threshold / 2 nearby
-  int false_rock_cells = 0;             // ... classified rock
-  double false_alarm_rate = 0.0;        // false_rock_cells / rock_free_cells
+  int rocks_resolved_by_height[kRockHeightClasses] = {};
+  int rocks_detected_by_height[kRockHeightClasses] = {};
+  int rock_free_cells = 0;        // known cells without a truth rock >= threshold / 2 nearby
+  int false_rock_cells = 0;       // ... classified rock
+  double false_alarm_rate = 0.0;  // false_rock_cells / rock_free_cells
   bool site_valid = false;
   double site_x_m = 0.0;
   double site_y_m = 0.0;
@@ -63,23 +84,26 @@ struct HazardEvaluation {
   double site_clearance_m = -1.0;  // site to the nearest truth hazard node (capped at 20 m)
 };
 
-HazardEvaluation EvaluateHazard(const hazard::HazardMapper& mapper, const sim::Terrain& terrain,
-                                std::int64_t maps_published);
-
 // Keeps copies of the outputs (output thread) for the evaluation after the run.
 class Evaluation : public OutputObserver {
  public:
   void OnNav(const NavRecord& r) override;
   void OnMap(const MapRecord& r) override;
+  void OnHazard(const HazardRecord& r) override;
 
   // After the run (the pipeline is idle). Writes gnuplot data into plot_dir when not empty.
   EvaluationResult Evaluate(const Pipeline& pipeline, const sim::Trajectory& trajectory,
                             const sim::Terrain& terrain, const std::string& plot_dir) const;
+  // Every published hazard map, in order, against the truth of the mapper's thresholds.
+  std::vector<HazardEvaluation> EvaluateHazard(const hazard::HazardMapperOptions& thresholds,
+                                               const sim::Trajectory& trajectory,
+                                               const sim::Terrain& terrain) const;
 
  private:
   struct Nav {
     std::int64_t frame_seq;
     double p[3];
+    double q[4];  // world_R_camera (w, x, y, z)
     std::int8_t status;
     double hpl_m;
     double vpl_m;
@@ -93,8 +117,26 @@ class Evaluation : public OutputObserver {
     std::int64_t frame_seq;
     std::vector<Landmark> landmarks;
   };
+  // The fields of a published hazard map the evaluation reads.
+  struct PublishedHazardMap {
+    std::int64_t frame_seq = 0;
+    double origin_m[2] = {0.0, 0.0};
+    double cell_m = 0.0;
+    int cells_per_side = 0;
+    std::vector<float> elevation_m;
+    std::vector<float> sigma_m;
+    std::vector<std::int8_t> classes;  // hazard_map_t.CLASS_*
+    bool site_valid = false;
+    double site_m[2] = {0.0, 0.0};
+    double site_score = 0.0;
+  };
+  static HazardEvaluation EvaluateHazardMap(const PublishedHazardMap& map,
+                                            const hazard::HazardMapperOptions& thresholds,
+                                            const sim::Terrain& terrain,
+                                            const sim::HazardMap& truth);
   std::vector<Nav> navs_;
   std::vector<Map> maps_;
+  std::vector<PublishedHazardMap> hazard_maps_;
 };
 
 }  // namespace swf::app
