@@ -364,9 +364,9 @@ void WriteHazard(std::FILE* f, const std::vector<HazardEvaluation>& evals,
 
 // False when the file could not be written whole (a full disk, an I/O error).
 bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
-                  const HealthRecord& health, const EvaluationResult* eval,
-                  const std::vector<HazardEvaluation>& hazard, std::int64_t hazard_maps,
-                  bool locked, bool fifo, const Verdict& verdict,
+                  const OutputCounters& output, const HealthRecord& health,
+                  const EvaluationResult* eval, const std::vector<HazardEvaluation>& hazard,
+                  std::int64_t hazard_maps, bool locked, bool fifo, const Verdict& verdict,
                   const IntegrityCounters& integrity, const sim::Trajectory* trajectory,
                   const sim::OrbitalTarget* target, const LogStreamStats* log,
                   const ImuReport* imu) {
@@ -436,13 +436,15 @@ bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
       "  \"overruns\": %lld,\n  \"allocations_after_start\": %lld,\n"
       "  \"outputs_dropped\": %lld,\n  \"frames_dropped\": %lld,\n"
       "  \"frames_rejected\": %lld,\n"
-      "  \"stage_errors\": %lld,\n  \"fault_bits\": %d,\n  \"num_landmarks\": %d,\n"
+      "  \"stage_errors\": %lld,\n  \"records_lost\": %lld,\n  \"fault_bits\": %d,\n"
+      "  \"num_landmarks\": %d,\n"
       "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n",
       static_cast<long long>(counters.overruns),
       static_cast<long long>(health.allocations_after_start),
       static_cast<long long>(health.outputs_dropped), static_cast<long long>(health.frames_dropped),
       static_cast<long long>(health.frames_rejected), static_cast<long long>(counters.stage_errors),
-      health.fault_bits, health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
+      static_cast<long long>(output.record_errors + output.encode_errors), health.fault_bits,
+      health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
   if (log != nullptr) {
     std::fprintf(f,
                  "  \"log\": {\"frames_missing\": %lld, \"duplicates_refused\": %lld, "
@@ -1047,7 +1049,7 @@ int Report(FlightProcess* fp) {
   if (fp->parts.pipeline->Inertial()) imu_report = ReportImu(fp);
   if (!config.summary_path.empty()) {
     const SimWorld* world = fp->world.get();
-    if (!WriteSummary(config.summary_path, config, counters, h, fp->evaluate ? &eval : nullptr,
+    if (!WriteSummary(config.summary_path, config, counters, out, h, fp->evaluate ? &eval : nullptr,
                       hazard_evals, hazard_maps, fp->locked, fp->fifo, verdict, integrity,
                       world != nullptr ? &world->Trajectory() : nullptr,
                       world != nullptr ? &world->Target() : nullptr, log_stream,
