@@ -297,13 +297,22 @@ def run_slurm(spec, out, fsw, partition=None, time_limit_min=None, max_parallel=
     if not wait:
         print('  not waiting: `swf_campaign.py report %s` once the jobs are done' % out)
         return []
+    failing_since = None
     while True:
         proc = subprocess.run(['squeue', '-h', '-j', ','.join(jobs), '-o', '%i %T'],
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                               check=False)
-        left = [l for l in proc.stdout.splitlines() if l.strip()]
-        if proc.returncode == 0 and not left:
+        # A finished job leaves squeue after MinJobAge; then squeue calls its id invalid.
+        if (proc.returncode == 0 and not proc.stdout.strip()) or 'Invalid job id' in proc.stderr:
             break
+        if proc.returncode != 0:
+            failing_since = failing_since or time.monotonic()
+            if time.monotonic() - failing_since > 60.0:
+                raise CampaignError('squeue keeps failing (%s); the jobs %s may still run: '
+                                    '`swf_campaign.py report %s` once they are done' % (
+                                        proc.stderr.strip(), ','.join(jobs), out))
+        else:
+            failing_since = None
         time.sleep(poll_s)
     statuses = []
     for i in todo:
