@@ -159,17 +159,18 @@ core::Status ImuModel::Configure(const ImuModelOptions& options, const Trajector
   if (!(options.rate_hz >= 10.0) || !(options.rate_hz <= 10000.0) || !TriadValid(options.gyro) ||
       !TriadValid(options.accel) || !(options.gravity_mps2 >= 0.0) ||
       !std::isfinite(options.gravity_mps2) || trajectory.NumFrames() < 1 ||
-      !options.camera_T_imu.R.allFinite() || !options.camera_T_imu.t.allFinite()) {
+      !options.camera_T_imu.R.allFinite() || !options.camera_T_imu.t.allFinite() ||
+      !(options.tail_s >= 0.0) || !(options.tail_s <= 10.0)) {
     return core::Status::kInvalidArgument;
   }
   options_ = options;
   trajectory_ = trajectory.Options();
-  base_ = NadirRotation(trajectory_.heading_rad);
   const std::int32_t n = trajectory.NumFrames();
   knots_.assign(n, Eigen::Vector3d::Zero());
   for (std::int32_t k = 0; k < n; ++k) {
+    const Eigen::Matrix3d steered = SteeredAttitude(trajectory_, k / trajectory_.rate_hz);
     knots_[k] = estimator::LogSO3<double>(
-        Eigen::Matrix3d(base_.transpose() * trajectory.WorldTCamera(k).R));
+        Eigen::Matrix3d(steered.transpose() * trajectory.WorldTCamera(k).R));
   }
   knot_rates_ = SplineRates(knots_, 1.0 / trajectory_.rate_hz);
 
@@ -180,7 +181,7 @@ core::Status ImuModel::Configure(const ImuModelOptions& options, const Trajector
   BiasProcess accel_bias(options.accel, &rng);
   const double dt_s = 1.0 / options.rate_hz;
   const std::int64_t start_us = trajectory_.start_time_ns / 1000;
-  const double duration_s = (n - 1) / trajectory_.rate_hz;
+  const double duration_s = (n - 1) / trajectory_.rate_hz + options.tail_s;
   const auto count = static_cast<std::int64_t>(std::floor(duration_s * options.rate_hz)) + 2;
   samples_.reserve(count);
   true_biases_.reserve(count);
@@ -252,7 +253,9 @@ Eigen::Vector3d ImuModel::CameraRate(double t_s) const {
   Eigen::Vector3d phi;
   Eigen::Vector3d phi_rate;
   Jitter(t_s, &phi, &phi_rate);
-  return estimator::RightJacobianSO3<double>(phi) * phi_rate;
+  // The steered attitude turns at omega in its own frame, seen through the jitter rotation.
+  return estimator::ExpSO3<double>(phi).transpose() * trajectory_.body_rate_radps +
+         estimator::RightJacobianSO3<double>(phi) * phi_rate;
 }
 
 estimator::InertialState<double> ImuModel::TrueState(double t_s) const {
@@ -261,9 +264,9 @@ estimator::InertialState<double> ImuModel::TrueState(double t_s) const {
   Jitter(t_s, &phi, &phi_rate);
   const double tau = t_s - trajectory_.start_time_ns * 1e-9;
   estimator::Pose<double> world_T_camera;
-  world_T_camera.R = base_ * estimator::ExpSO3<double>(phi);
+  world_T_camera.R = SteeredAttitude(trajectory_, tau) * estimator::ExpSO3<double>(phi);
   world_T_camera.t = trajectory_.start_world_m + trajectory_.velocity_world_mps * tau;
-  const Eigen::Vector3d camera_rate = estimator::RightJacobianSO3<double>(phi) * phi_rate;
+  const Eigen::Vector3d camera_rate = CameraRate(t_s);
   const Eigen::Vector3d& lever_m = options_.camera_T_imu.t;
   estimator::InertialState<double> state;
   state.world_T_imu = world_T_camera * options_.camera_T_imu;

@@ -1,5 +1,6 @@
 #include "swf/sim/trajectory.hpp"
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 
@@ -7,13 +8,18 @@
 
 namespace swf::sim {
 
-TrajectoryOptions DescentTrajectory(double rate_hz) {
+TrajectoryOptions DescentTrajectory(double rate_hz, double start_altitude_m, double end_altitude_m,
+                                    double descent_rate_mps) {
   TrajectoryOptions o;
-  o.start_world_m = {0.0, 0.0, 100.0};
-  o.velocity_world_mps = {0.0, 0.0, -10.0};
+  o.start_world_m = {0.0, 0.0, start_altitude_m};
+  o.velocity_world_mps = {0.0, 0.0, -descent_rate_mps};
   o.rate_hz = rate_hz;
-  // 90 m at 10 m/s = 9 s; both ends included.
-  o.num_frames = static_cast<std::int32_t>(std::lround(9.0 * rate_hz)) + 1;
+  // 90 m at 10 m/s = 9 s; both ends included. A count beyond any trajectory's (or not a number)
+  // becomes 0 frames, which Configure refuses, instead of overflowing the conversion.
+  const double intervals = (start_altitude_m - end_altitude_m) / descent_rate_mps * rate_hz;
+  o.num_frames = intervals >= 0.0 && intervals < 1e9
+                     ? static_cast<std::int32_t>(std::lround(intervals)) + 1
+                     : 0;
   o.jitter_sigma_rad = 0.1 * std::numbers::pi / 180.0;
   return o;
 }
@@ -61,18 +67,38 @@ Eigen::Matrix3d NadirRotation(double heading_rad) {
   return rz * nadir;
 }
 
+Eigen::Matrix3d AttitudeOffset(const Eigen::Vector3d& roll_pitch_yaw_rad) {
+  const Eigen::Vector3d& a = roll_pitch_yaw_rad;
+  return (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Matrix3d SteeredAttitude(const TrajectoryOptions& options, double tau_s) {
+  const Eigen::Matrix3d base = NadirRotation(options.heading_rad);
+  // Without offset and rate the nadir attitude itself, not a product with identities that could
+  // flip the sign of a zero: the preset trajectories keep their bits.
+  if ((options.attitude_offset_rad.array() == 0.0).all() &&
+      (options.body_rate_radps.array() == 0.0).all()) {
+    return base;
+  }
+  return base * AttitudeOffset(options.attitude_offset_rad) *
+         estimator::ExpSO3<double>(Eigen::Vector3d(options.body_rate_radps * tau_s));
+}
+
 core::Status Trajectory::Configure(const TrajectoryOptions& options) {
   poses_.clear();
   if (!(options.rate_hz > 0.0) || !std::isfinite(options.rate_hz) || options.num_frames < 1 ||
       options.num_frames > 1000000 || !(options.jitter_correlation >= 0.0) ||
       !(options.jitter_correlation < 1.0) || !(options.jitter_sigma_rad >= 0.0) ||
       !options.start_world_m.allFinite() || !options.velocity_world_mps.allFinite() ||
-      !std::isfinite(options.heading_rad)) {
+      !std::isfinite(options.heading_rad) || !options.attitude_offset_rad.allFinite() ||
+      !options.body_rate_radps.allFinite()) {
     return core::Status::kInvalidArgument;
   }
   options_ = options;
   Rng rng(options.seed);
-  const Eigen::Matrix3d base = NadirRotation(options.heading_rad);
   const double a = options.jitter_correlation;
   const double innovation = std::sqrt(1.0 - a * a) * options.jitter_sigma_rad;
   Eigen::Vector3d phi = Eigen::Vector3d::Zero();
@@ -81,9 +107,10 @@ core::Status Trajectory::Configure(const TrajectoryOptions& options) {
     const Eigen::Vector3d n(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
     phi = (k == 0) ? Eigen::Vector3d(options.jitter_sigma_rad * n)
                    : Eigen::Vector3d(a * phi + innovation * n);
+    const double tau_s = k / options.rate_hz;
     estimator::Pose<double> pose;
-    pose.R = base * estimator::ExpSO3<double>(phi);
-    pose.t = options.start_world_m + options.velocity_world_mps * (k / options.rate_hz);
+    pose.R = SteeredAttitude(options, tau_s) * estimator::ExpSO3<double>(phi);
+    pose.t = options.start_world_m + options.velocity_world_mps * tau_s;
     poses_.push_back(pose);
   }
   return core::Status::kOk;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 
 #include "swf/sim/rng.hpp"
@@ -80,6 +81,39 @@ TEST(TrajectoryTest, NadirCameraLooksDownAndJitterIsBounded) {
   EXPECT_LT(max_angle, 0.08);
 }
 
+// GIVEN a dispersed descent (70 m -> 25 m at 5 m/s at 10 Hz, drifting sideways, the camera
+// offset from nadir and turning) THEN the frames follow from the geometry, the position moves at
+// the given velocity, and the attitude without jitter is the offset growing at the body rate: the
+// optical axis tilts as the offset says at the start and the rotation between two frames is the
+// body rate times their time.
+TEST(TrajectoryTest, DescentGeometryOffsetAndBodyRate) {
+  TrajectoryOptions o = DescentTrajectory(10.0, 70.0, 25.0, 5.0);
+  o.velocity_world_mps.x() = 2.0;
+  o.velocity_world_mps.y() = -1.0;
+  o.jitter_sigma_rad = 0.0;
+  const double deg = M_PI / 180.0;
+  o.attitude_offset_rad = Eigen::Vector3d(10.0, 0.0, 0.0) * deg;  // roll: about camera x
+  o.body_rate_radps = Eigen::Vector3d(0.0, 2.0, 0.0) * deg;       // pitching
+  Trajectory t;
+  ASSERT_EQ(t.Configure(o), core::Status::kOk);
+  ASSERT_EQ(t.NumFrames(), 91);  // 45 m at 5 m/s = 9 s
+  const Eigen::Vector3d end = t.WorldTCamera(90).t;
+  EXPECT_NEAR((end - Eigen::Vector3d(18.0, -9.0, 25.0)).norm(), 0.0, 1e-9);
+  // Rolling by 10 deg about camera x (world x for heading 0) tilts the optical axis 10 deg off
+  // nadir towards camera -y, which is world +y.
+  const Eigen::Vector3d axis0 = t.WorldTCamera(0).R.col(2);
+  EXPECT_NEAR(std::acos(-axis0.z()), 10.0 * deg, 1e-12);
+  EXPECT_NEAR(axis0.x(), 0.0, 1e-12);
+  EXPECT_GT(axis0.y(), 0.0);
+  const Eigen::Matrix3d relative = t.WorldTCamera(30).R.transpose() * t.WorldTCamera(80).R;
+  EXPECT_LT((estimator::LogSO3<double>(relative) - o.body_rate_radps * 5.0).norm(), 1e-12);
+  // Without offset and rate the steered attitude is the nadir rotation itself (bit for bit).
+  const TrajectoryOptions nominal = DescentTrajectory(10.0);
+  EXPECT_EQ(SteeredAttitude(nominal, 3.7), NadirRotation(0.0));
+  EXPECT_EQ(DescentTrajectory(10.0).num_frames, 91);
+  EXPECT_EQ(DescentTrajectory(10.0, 100.0, 10.0, 3.0).num_frames, 301);
+}
+
 TEST(TrajectoryTest, RejectsBadOptions) {
   Trajectory t;
   TrajectoryOptions o;
@@ -91,6 +125,12 @@ TEST(TrajectoryTest, RejectsBadOptions) {
   o = TrajectoryOptions{};
   o.jitter_correlation = 1.0;
   EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
+  o = TrajectoryOptions{};
+  o.body_rate_radps.x() = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
+  // A descent that never gets to its end altitude has no frame count.
+  EXPECT_EQ(t.Configure(DescentTrajectory(10.0, 10.0, 100.0, 10.0)),
+            core::Status::kInvalidArgument);
 }
 
 MeasurementOptions PaperFig14Options() {

@@ -3,17 +3,20 @@
 //
 // The continuous motion. Trajectory defines camera poses only at frames: position
 // p(t) = start + velocity (t - t_0) (exact between frames) and attitude
-// world_R_camera = B Exp(phi_k) (B = heading * nadir, phi_k the attitude jitter). Between frames
-// the attitude is B Exp(phi(t)) with phi(t) the natural cubic spline through the phi_k: it passes
-// through every frame's pose and its angular acceleration is continuous (a curve with kinks in
-// the acceleration, e.g. Catmull-Rom, puts steps into the specific force through the lever arm
-// that no sampled integration follows). Then, analytically,
-//     camera body rate       w_c = Jr(phi) phi'                       (Jr: right Jacobian, SO(3))
+// world_R_camera = S(t - t_0) Exp(phi_k) (S the steered attitude of trajectory.hpp: heading,
+// nadir, the constant offset and the constant body rate omega; phi_k the attitude jitter).
+// Between frames the attitude is S(t - t_0) Exp(phi(t)) with phi(t) the natural cubic spline
+// through the phi_k: it passes through every frame's pose and its angular acceleration is
+// continuous (a curve with kinks in the acceleration, e.g. Catmull-Rom, puts steps into the
+// specific force through the lever arm that no sampled integration follows). Then, analytically,
+//     camera body rate       w_c = Exp(phi)^T omega + Jr(phi) phi'    (Jr: right Jacobian, SO(3))
 //     IMU pose               world_T_imu = world_T_camera * camera_T_imu
 //     IMU rate               w = R_ci^T w_c
 //     IMU acceleration       a = R_c (w_c' x r + w_c x (w_c x r))   (r = camera_t_imu lever arm;
 //                                                                     the camera itself does not
-//                                                                     accelerate)
+//                                                                     accelerate: its velocity,
+//                                                                     vertical and horizontal, is
+//                                                                     constant)
 //     specific force         f = R_imu^T (a - g_world),  g_world = (0, 0, -gravity)
 // (w_c' by a central difference of the analytic w_c, 1e-5 s: only the small lever-arm term
 // uses it).
@@ -56,6 +59,9 @@ struct ImuModelOptions {
   ImuTriadErrors accel;
   estimator::Pose<double> camera_T_imu;  // the IMU in the left camera frame
   std::uint64_t seed = 1;
+  // Sampling goes on this long past the last frame (seconds, at most 10): a consumer whose frame
+  // stamps may come late (jittered exposure stamps) still finds samples up to them.
+  double tail_s = 0.0;
 };
 
 // Honeywell HG1700 (tactical grade, ring-laser gyros).
@@ -70,9 +76,9 @@ estimator::ImuNoise<double> NoiseModelOf(const ImuModelOptions& options);
 
 class ImuModel {
  public:
-  // Samples the whole trajectory, from its first frame to one sample past its last. Returns
-  // kInvalidArgument for a rate outside [10, 10000] Hz, negative error terms, a non-positive
-  // correlation time or an unconfigured trajectory.
+  // Samples the whole trajectory, from its first frame to one sample past its last (plus
+  // tail_s). Returns kInvalidArgument for a rate outside [10, 10000] Hz, negative error terms, a
+  // non-positive correlation time, a tail outside [0, 10] s or an unconfigured trajectory.
   core::Status Configure(const ImuModelOptions& options, const Trajectory& trajectory);
 
   const std::vector<estimator::ImuSample<double>>& Samples() const { return samples_; }
@@ -97,7 +103,6 @@ class ImuModel {
 
   ImuModelOptions options_;
   TrajectoryOptions trajectory_;
-  Eigen::Matrix3d base_ = Eigen::Matrix3d::Identity();
   std::vector<Eigen::Vector3d> knots_;       // phi_k per frame
   std::vector<Eigen::Vector3d> knot_rates_;  // d phi / dt at the knots (spline)
   std::vector<estimator::ImuSample<double>> samples_;
