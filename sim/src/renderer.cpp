@@ -37,7 +37,9 @@ core::Status Renderer::Configure(const RenderOptions& options) {
   if (ValidateRig(options.rig) != core::Status::kOk ||
       (options.samples_per_pixel != 1 && options.samples_per_pixel != 4) ||
       !(options.exposure_dn > 0.0) || !(options.electrons_per_dn > 0.0) ||
-      !(options.read_noise_e >= 0.0)) {
+      !(options.read_noise_e >= 0.0) || !std::isfinite(options.baseline_error_m) ||
+      !(options.rig.baseline_m + options.baseline_error_m > 0.0) ||
+      !options.right_rotation_error_rad.allFinite()) {
     return core::Status::kInvalidArgument;
   }
   for (const Fiducial& f : options.fiducials) {
@@ -82,19 +84,28 @@ core::Status Renderer::Render(const Terrain& terrain, const Appearance& appearan
     out->depth_m.assign(n, 0.0f);
     out->disparity_px.assign(n, 0.0f);
   }
-  RenderCamera(terrain, appearance, world_T_camera, 0, frame_index, out);
-  RenderCamera(terrain, appearance, world_T_camera, 1, frame_index, out);
+  RenderCamera(terrain, appearance, world_T_camera.R,
+               world_T_camera.Apply(Eigen::Vector3d(0.0, 0.0, 0.0)), 0, frame_index, out);
+  // The true right camera: the rig's, moved by the calibration error. Without a rotation error
+  // the left attitude itself (not a product with an identity, which could flip the sign of a
+  // zero entry): a rig without error renders bit-identically to the calibrated one.
+  const Eigen::Vector3d right_center = world_T_camera.Apply(
+      Eigen::Vector3d(camera_.baseline_m + options_.baseline_error_m, 0.0, 0.0));
+  if ((options_.right_rotation_error_rad.array() == 0.0).all()) {
+    RenderCamera(terrain, appearance, world_T_camera.R, right_center, 1, frame_index, out);
+  } else {
+    const Eigen::Matrix3d right_r =
+        world_T_camera.R * estimator::ExpSO3<double>(options_.right_rotation_error_rad);
+    RenderCamera(terrain, appearance, right_r, right_center, 1, frame_index, out);
+  }
   return core::Status::kOk;
 }
 
 void Renderer::RenderCamera(const Terrain& terrain, const Appearance& appearance,
-                            const estimator::Pose<double>& world_T_camera, int camera_index,
-                            std::uint64_t frame_index, StereoImages* out) const {
+                            const Eigen::Matrix3d& r, const Eigen::Vector3d& center,
+                            int camera_index, std::uint64_t frame_index, StereoImages* out) const {
   const std::int32_t w = options_.rig.width_px;
   const std::int32_t h = options_.rig.height_px;
-  const Eigen::Matrix3d& r = world_T_camera.R;
-  const Eigen::Vector3d center =
-      world_T_camera.Apply(Eigen::Vector3d(camera_index * camera_.baseline_m, 0.0, 0.0));
   const double inv_fx = 1.0 / camera_.fx;
   const double inv_fy = 1.0 / camera_.fy;
   const double read_sigma_dn = options_.read_noise_e / options_.electrons_per_dn;

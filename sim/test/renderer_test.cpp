@@ -42,6 +42,32 @@ estimator::Pose<double> NadirAt(double x, double y, double z) {
   return pose;
 }
 
+// The disparity in [lo, hi] (0.05 px steps, linear interpolation) whose 9x9 right patch has the
+// smallest SSD against the left patch at (u, v).
+double MatchedDisparity(const StereoImages& im, int u, int v, double lo, double hi) {
+  double best_d = 0.0;
+  double best_cost = 1e300;
+  for (double d = lo; d <= hi; d += 0.05) {
+    double cost = 0.0;
+    for (int dv = -4; dv <= 4; ++dv) {
+      for (int du = -4; du <= 4; ++du) {
+        const double x = u + du - d;
+        const int x0 = static_cast<int>(std::floor(x));
+        const double f = x - x0;
+        const double right = (1 - f) * im.right[(v + dv) * im.width + x0] +
+                             f * im.right[(v + dv) * im.width + x0 + 1];
+        const double diff = im.left[(v + dv) * im.width + u + du] - right;
+        cost += diff * diff;
+      }
+    }
+    if (cost < best_cost) {
+      best_cost = cost;
+      best_d = d;
+    }
+  }
+  return best_d;
+}
+
 TEST(RendererTest, TrueDisparityOfATiltedPlaneIsAnalytic) {
   // GIVEN a tilted plane z = a x + b y and a nadir camera at height H.
   TerrainOptions t;
@@ -86,37 +112,68 @@ TEST(RendererTest, RenderedImagesAgreeWithTheTrueDisparity) {
   StereoImages im;
   ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(1, 2, 15), 0, &im),
             core::Status::kOk);
-  // WHEN a 9x9 patch of the left image is matched along the right image row (SSD, linear
-  // interpolation, 0.05 px steps) THEN the best disparity is the true one at the patch centre.
+  // WHEN a 9x9 patch of the left image is matched along the right image row THEN the best
+  // disparity is the true one at the patch centre.
   int checked = 0;
   for (int v = 20; v < im.height - 20; v += 25) {
     for (int u = 40; u < im.width - 20; u += 25) {
       const double d_true = im.disparity_px[v * im.width + u];
-      double best_d = 0.0;
-      double best_cost = 1e300;
-      for (double d = d_true - 1.5; d <= d_true + 1.5; d += 0.05) {
-        double cost = 0.0;
-        for (int dv = -4; dv <= 4; ++dv) {
-          for (int du = -4; du <= 4; ++du) {
-            const double x = u + du - d;
-            const int x0 = static_cast<int>(std::floor(x));
-            const double f = x - x0;
-            const double right = (1 - f) * im.right[(v + dv) * im.width + x0] +
-                                 f * im.right[(v + dv) * im.width + x0 + 1];
-            const double diff = im.left[(v + dv) * im.width + u + du] - right;
-            cost += diff * diff;
-          }
-        }
-        if (cost < best_cost) {
-          best_cost = cost;
-          best_d = d;
-        }
-      }
-      EXPECT_NEAR(best_d, d_true, 0.3) << "at " << u << "," << v;
+      EXPECT_NEAR(MatchedDisparity(im, u, v, d_true - 1.5, d_true + 1.5), d_true, 0.3)
+          << "at " << u << "," << v;
       ++checked;
     }
   }
   EXPECT_GT(checked, 10);
+}
+
+// GIVEN the same scene rendered with the calibrated rig, with the true right camera 10 cm further
+// out (baseline error) and with it turned 5 mrad about its y axis (rotation error) WHEN the left
+// patches are matched in the right images THEN the left image and the calibration (Camera()) are
+// unchanged, the baseline error scales every disparity by (b + db) / b and the rotation about y
+// adds fx * angle to every disparity: the right image is the true camera's.
+TEST(RendererTest, TheTrueRightCameraCarriesTheCalibrationError) {
+  TerrainOptions t = TerrainPresetOptions(TerrainPreset::kCraterField, 5);
+  t.size = 512;
+  Scene scene;
+  ASSERT_NO_FATAL_FAILURE(MakeScene(t, DefaultImagery(SharedDir()), &scene));
+  RenderOptions nominal;
+  nominal.rig = SmallRig();
+  nominal.add_noise = false;
+  RenderOptions wide = nominal;
+  wide.baseline_error_m = 0.1;
+  RenderOptions turned = nominal;
+  turned.right_rotation_error_rad = Eigen::Vector3d(0.0, 0.005, 0.0);
+  StereoImages images[3];
+  const RenderOptions* options[3] = {&nominal, &wide, &turned};
+  for (int i = 0; i < 3; ++i) {
+    Renderer renderer;
+    ASSERT_EQ(renderer.Configure(*options[i]), core::Status::kOk);
+    EXPECT_EQ(renderer.Camera().baseline_m, 1.0);
+    ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(1, 2, 15), 0, &images[i]),
+              core::Status::kOk);
+  }
+  EXPECT_EQ(images[1].left, images[0].left);
+  EXPECT_EQ(images[2].left, images[0].left);
+  EXPECT_NE(images[1].right, images[0].right);
+  const double fx = MakeStereoCamera(nominal.rig).fx;
+  int checked = 0;
+  for (int v = 20; v < images[0].height - 20; v += 25) {
+    for (int u = 50; u < images[0].width - 20; u += 25) {
+      const double d_true = images[0].disparity_px[v * images[0].width + u];
+      const double d_wide = d_true * 1.1;
+      const double d_turned = d_true + fx * 0.005;
+      EXPECT_NEAR(MatchedDisparity(images[1], u, v, d_wide - 1.5, d_wide + 1.5), d_wide, 0.3)
+          << "at " << u << "," << v;
+      EXPECT_NEAR(MatchedDisparity(images[2], u, v, d_turned - 1.5, d_turned + 1.5), d_turned, 0.3)
+          << "at " << u << "," << v;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10);
+  RenderOptions bad = nominal;
+  bad.baseline_error_m = -1.0;  // no baseline left
+  Renderer renderer;
+  EXPECT_EQ(renderer.Configure(bad), core::Status::kInvalidArgument);
 }
 
 TEST(RendererTest, TrueLandmarkProjectsOntoItsPlantedFiducial) {
@@ -237,6 +294,9 @@ TEST(RendererTest, SameSeedGivesBitIdenticalImages) {
   EXPECT_NE(i1.left, i2.left);
 }
 
+// GIVEN flat, evenly lit ground WHEN rendered with the default camera and with a darker exposure,
+// more read noise and a lower gain (electrons per DN) THEN each image's mean is its exposure and
+// its spread the modelled read + shot noise (+ quantization).
 TEST(RendererTest, PhotometricNoiseHasTheModelledSigma) {
   TerrainOptions t;
   t.size = 256;
@@ -246,26 +306,31 @@ TEST(RendererTest, PhotometricNoiseHasTheModelledSigma) {
   a.sun_elevation_deg = 90.0;
   Scene scene;
   ASSERT_NO_FATAL_FAILURE(MakeScene(t, a, &scene));
-  RenderOptions r;
-  r.rig = SmallRig();
-  Renderer renderer;
-  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
-  StereoImages im;
-  ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(0, 0, 10), 0, &im),
-            core::Status::kOk);
-  double sum = 0.0;
-  double sum2 = 0.0;
-  for (std::uint8_t p : im.left) {
-    sum += p;
-    sum2 += static_cast<double>(p) * p;
+  RenderOptions dispersed;
+  dispersed.exposure_dn = 60.0;
+  dispersed.read_noise_e = 40.0;
+  dispersed.electrons_per_dn = 10.0;
+  for (RenderOptions r : {RenderOptions{}, dispersed}) {
+    r.rig = SmallRig();
+    Renderer renderer;
+    ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
+    StereoImages im;
+    ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(0, 0, 10), 0, &im),
+              core::Status::kOk);
+    double sum = 0.0;
+    double sum2 = 0.0;
+    for (std::uint8_t p : im.left) {
+      sum += p;
+      sum2 += static_cast<double>(p) * p;
+    }
+    const double n = static_cast<double>(im.left.size());
+    const double mean = sum / n;
+    const double sigma = std::sqrt(sum2 / n - mean * mean);
+    EXPECT_NEAR(mean, r.exposure_dn, 0.2);
+    const double expected = std::sqrt(std::pow(r.read_noise_e / r.electrons_per_dn, 2) +
+                                      r.exposure_dn / r.electrons_per_dn + 1.0 / 12.0);
+    EXPECT_NEAR(sigma, expected, 0.05 * expected) << r.exposure_dn;
   }
-  const double n = static_cast<double>(im.left.size());
-  const double mean = sum / n;
-  const double sigma = std::sqrt(sum2 / n - mean * mean);
-  EXPECT_NEAR(mean, r.exposure_dn, 0.2);
-  const double expected = std::sqrt(std::pow(r.read_noise_e / r.electrons_per_dn, 2) +
-                                    r.exposure_dn / r.electrons_per_dn + 1.0 / 12.0);
-  EXPECT_NEAR(sigma, expected, 0.05 * expected);
 }
 
 TEST(RendererTest, RejectsBadOptions) {
