@@ -211,10 +211,13 @@ void LogStereoSource::Admit(Frame frame) {
       ++stream_.out_of_order;
       return;
     }
-    // Both sequence numbers are non-negative: the gap cannot overflow.
+    // Both sequence numbers are non-negative: the gap cannot overflow. Frames the recorded
+    // dropped_before already accounts for (a source numbering its frames across the camera's
+    // losses, as the simulator does) were never in the log: only the rest of the gap is missing.
     const std::int64_t gap = frame.seq - last.seq - 1;
-    stream_.frames_missing += gap;
-    const std::int64_t dropped = std::int64_t{frame.dropped_before} + gap;
+    const std::int64_t missing = std::max<std::int64_t>(0, gap - frame.dropped_before);
+    stream_.frames_missing += missing;
+    const std::int64_t dropped = std::int64_t{frame.dropped_before} + missing;
     frame.dropped_before = static_cast<std::int32_t>(
         std::min<std::int64_t>(dropped, std::numeric_limits<std::int32_t>::max()));
   }

@@ -143,12 +143,14 @@ struct FrameSpec {
   std::int64_t seq = 0;
   std::int64_t utime = 0;  // exposure time of both images, microseconds
   const char* channel = "SWF_STEREO";
+  std::int32_t dropped_before = 0;  // as the recording loop saw it
 };
 
 std::vector<std::uint8_t> EncodeFrame(const FrameSpec& spec) {
   swf_msgs::stereo_frame_t f{};
   f.utime = spec.utime;
   f.seq = spec.seq;
+  f.dropped_before = spec.dropped_before;
   f.left_exposure_utime = spec.utime;
   f.right_exposure_utime = spec.utime;
   f.rectified = true;
@@ -226,6 +228,34 @@ TEST(LcmIoTest, AGapInTheSequenceIsCountedAsDroppedFrames) {
   EXPECT_EQ(source.StreamStats().frames_missing, 1);
   EXPECT_EQ(source.StreamStats().Refused(), 0);
   EXPECT_EQ(s.stats.frames_rejected, 0u);
+}
+
+// GIVEN a log of a source that numbers its frames across the camera's losses (the simulator): frame
+// 3 recorded with dropped_before 1 after frame 1, and frame 9 with dropped_before 2 after frame 4
+// WHEN replayed THEN the gap the camera lost is not missing from the log: only frames 5 and 6 are,
+// and each pair carries what was lost before it (camera and log), counted once.
+TEST(LcmIoTest, AGapTheCameraRecordedAsDroppedIsNotMissingFromTheLog) {
+  std::vector<FrameSpec> specs;
+  std::vector<std::vector<std::uint8_t>> payloads;
+  const std::int64_t seqs[] = {0, 1, 3, 4, 9};
+  const std::int32_t dropped[] = {0, 0, 1, 0, 2};
+  for (int i = 0; i < 5; ++i) {
+    FrameSpec spec;
+    spec.seq = seqs[i];
+    spec.utime = 100000 * (seqs[i] + 1);
+    spec.dropped_before = dropped[i];
+    specs.push_back(spec);
+    payloads.push_back(EncodeFrame(spec));
+  }
+  const std::string path = TempPath("camera_gap.lcmlog");
+  WriteRecords(path, specs, payloads);
+  LogStereoSource source;
+  std::string error;
+  ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error));
+  const Served s = ServeAll(&source);
+  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3, 4, 9}));
+  EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 0, 1, 0, 4}));
+  EXPECT_EQ(source.StreamStats().frames_missing, 2);
 }
 
 // GIVEN a frame recorded twice WHEN replayed THEN the second copy is refused, counted as a

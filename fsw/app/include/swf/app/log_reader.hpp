@@ -47,8 +47,10 @@ class LogReader {
 
 // The stereo stream of a log, as the sequence and time checks found it. Frames must come with
 // consecutive sequence numbers and advancing exposure times: a gap is frames missing from the log
-// (served as pair.dropped_before), a repeated number a duplicate and a number or time behind the
-// last one served a reordered frame; both of the latter are refused, never fused.
+// (served as pair.dropped_before) unless the frame after it recorded them as dropped by the camera
+// (its dropped_before: the gap of a source that numbers across its losses, the simulator), a
+// repeated number a duplicate and a number or time behind the last one served a reordered frame;
+// both of the latter are refused, never fused.
 struct LogStreamStats {
   std::int64_t frames_missing = 0;  // sequence gaps (lost, cut or misnamed records)
   std::int64_t duplicates = 0;      // refused: the sequence number of the frame before
