@@ -654,7 +654,7 @@ int OpenSimSource(FlightProcess* fp) {
   fp->po.camera = world.Camera();
   fp->po.width_px = world.Width();
   fp->po.height_px = world.Height();
-  fp->total_frames = world.NumFrames();
+  fp->total_frames = world.DeliveredFrames();
   fp->source = std::make_unique<PrerenderedSimSource>(fp->world.get());
   return kContinue;
 }

@@ -13,6 +13,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <sstream>
 
 #include "swf/app/sim_world.hpp"
@@ -177,6 +178,64 @@ Setter Vector3(Get get) {
   };
 }
 
+// "[lo, hi]", with "(" when the low end is excluded.
+std::string Interval(double lo, double hi, bool lo_open) {
+  std::ostringstream o;
+  o << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
+  return o.str();
+}
+
+bool InInterval(double d, double lo, double hi, bool lo_open) {
+  return (lo_open ? d > lo : d >= lo) && d <= hi;
+}
+
+// A finite number into a member of SimConfig, inside [lo, hi] (or (lo, hi]).
+Setter SimNumber(double SimConfig::*field, double lo, double hi, bool lo_open = false) {
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    double d = 0.0;
+    if (!ParseDouble(v, &d, why)) return false;
+    if (!InInterval(d, lo, hi, lo_open)) {
+      *why = Excerpt(v) + " is outside " + Interval(lo, hi, lo_open);
+      return false;
+    }
+    c->sim.*field = d;
+    return true;
+  };
+}
+
+// N finite numbers ("a b" or "a, b") into a member array of SimConfig, each inside [lo, hi];
+// `names` says what they are ("vx, vy").
+template <int N>
+Setter SimNumbers(double (SimConfig::*field)[N], double lo, double hi, const char* names) {
+  return [=](const std::string& v, FswConfig* c, std::string* why) {
+    std::string spaced = v;
+    for (char& ch : spaced) ch = ch == ',' ? ' ' : ch;
+    std::istringstream in(spaced);
+    double p[N];
+    for (double& x : p) {
+      if (!(in >> x) || !std::isfinite(x)) {
+        *why = Quoted(v) + " is not " + std::to_string(N) + " finite numbers (" + names + ")";
+        return false;
+      }
+    }
+    std::string rest;
+    if (in >> rest) {
+      *why = Quoted(v) + " is not " + std::to_string(N) + " finite numbers (" + names + ")";
+      return false;
+    }
+    for (const double x : p) {
+      if (!InInterval(x, lo, hi, false)) {
+        std::ostringstream o;
+        o << Excerpt(v) << ": " << x << " is outside " << Interval(lo, hi, false);
+        *why = o.str();
+        return false;
+      }
+    }
+    for (int i = 0; i < N; ++i) (c->sim.*field)[i] = p[i];
+    return true;
+  };
+}
+
 // A non-negative finite number into a member of ImuConfig, at most hi.
 Setter ImuNumber(double ImuConfig::*field, double hi) {
   return [=](const std::string& v, FswConfig* c, std::string* why) {
@@ -191,6 +250,43 @@ Setter ImuNumber(double ImuConfig::*field, double hi) {
     c->imu.*field = d;
     return true;
   };
+}
+
+// The dispersions of the simulated flight (SimConfig; their consistency is checked in
+// DispersionsHold).
+void AddDispersionFields(std::map<std::string, Setter>* fields) {
+  std::map<std::string, Setter>& f = *fields;
+  f["sim.start_altitude_m"] = SimNumber(&SimConfig::start_altitude_m, 0.0, 1000.0, true);
+  f["sim.end_altitude_m"] = SimNumber(&SimConfig::end_altitude_m, 0.0, 1000.0, true);
+  f["sim.descent_rate_mps"] = SimNumber(&SimConfig::descent_rate_mps, 0.0, 100.0, true);
+  f["sim.horizontal_velocity_mps"] =
+      SimNumbers<2>(&SimConfig::horizontal_velocity_mps, -100.0, 100.0, "vx, vy");
+  f["sim.attitude_deg"] =
+      SimNumbers<3>(&SimConfig::attitude_deg, -180.0, 180.0, "roll, pitch, yaw");
+  f["sim.attitude_rate_dps"] =
+      SimNumbers<3>(&SimConfig::attitude_rate_dps, -100.0, 100.0, "roll, pitch, yaw rates");
+  // The appearance's own limits (sim/appearance.hpp): a sun on or below the horizon lights
+  // nothing.
+  f["sim.sun_elevation_deg"] = SimNumber(&SimConfig::sun_elevation_deg, 0.0, 90.0, true);
+  f["sim.sun_azimuth_deg"] = SimNumber(&SimConfig::sun_azimuth_deg, -360.0, 360.0);
+  f["sim.read_noise_e"] = SimNumber(&SimConfig::read_noise_e, 0.0, 10000.0);
+  f["sim.e_per_dn"] = SimNumber(&SimConfig::e_per_dn, 0.0, 100000.0, true);
+  f["sim.exposure_dn"] = SimNumber(&SimConfig::exposure_dn, 0.0, 1000.0, true);
+  f["sim.baseline_error_m"] = SimNumber(&SimConfig::baseline_error_m, -100.0, 100.0);
+  // Small: a calibration error, not another rig (0.1 rad moves the right image by 10 % of f).
+  f["sim.relative_rotation_error_rad"] =
+      SimNumbers<3>(&SimConfig::relative_rotation_error_rad, -0.1, 0.1, "rx, ry, rz");
+  f["sim.frame_drop_probability"] = [](const std::string& v, FswConfig* c, std::string* why) {
+    double d = 0.0;
+    if (!ParseDouble(v, &d, why)) return false;
+    if (!(d >= 0.0 && d < 1.0)) {
+      *why = Excerpt(v) + " is outside [0, 1)";
+      return false;
+    }
+    c->sim.frame_drop_probability = d;
+    return true;
+  };
+  f["sim.timestamp_jitter_ms"] = SimNumber(&SimConfig::timestamp_jitter_ms, 0.0, 1000.0);
 }
 
 const std::map<std::string, Setter>& Fields() {
@@ -271,6 +367,7 @@ const std::map<std::string, Setter>& Fields() {
     };
     f["sim.imu_unit"] =
         OneOf([](FswConfig* c) { return &c->sim.imu_unit; }, {"none", "mems", "tactical"});
+    AddDispersionFields(&f);
     f["imu.enabled"] = Bool([](FswConfig* c) { return &c->imu.enabled; });
     f["imu.static_start"] = Bool([](FswConfig* c) { return &c->imu.static_start; });
     f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
@@ -541,12 +638,22 @@ std::string Fixed(double v, int decimals) {
   return text;
 }
 
-// The closest range the simulator flies: the lowest camera height of its trajectory above the datum
-// z = 0. The rig looks straight down (0.1 deg jitter), so that is the depth of level ground in
-// every pixel. Terrain relief is not included (building the terrain takes seconds): relief (0.5 m
-// rms) and rocks (up to 1.25 m) bring ground closer, so the check is necessary, not sufficient, and
-// max_disparity_px wants margin above it.
-bool SimClosestRange(const FswConfig& c, double* range_m, std::string* error) {
+// How the simulated camera sees the datum z = 0 over its trajectory (its attitude without the
+// 0.1 deg jitter: SteeredAttitude, sim/trajectory.hpp).
+struct SimView {
+  // The closest range: the smallest camera-frame depth of the datum anywhere in the image over
+  // the flight. For a nadir camera that is the lowest camera height above the datum; tilted, the
+  // image corner nearest the ground sees it closer: depth = height / max over the image of
+  // (camera-frame down . (xn, yn, 1)), a linear function of (xn, yn) whose maximum is at a corner.
+  double closest_depth_m = 0.0;
+  double max_tilt_rad = 0.0;  // of the optical axis from nadir
+  bool tilted = false;        // the attitude is not nadir (sim.attitude_*)
+};
+
+// Terrain relief (0.5 m rms) and rocks (up to 1.25 m) bring ground closer than the datum and are
+// not included (building the terrain takes seconds), so the check is necessary, not sufficient,
+// and max_disparity_px wants margin above it.
+bool SimViewOf(const FswConfig& c, SimView* view, std::string* error) {
   FswConfig nominal = c;
   // `sim.target: orbital` only moves the descent sideways (SimTrajectory adds the target's x and y
   // to the start) and needs the terrain to say where: its altitudes are the nominal ones.
@@ -554,11 +661,22 @@ bool SimClosestRange(const FswConfig& c, double* range_m, std::string* error) {
   sim::Trajectory trajectory;
   sim::RigOptions rig;
   if (!SimTrajectory(nominal, &trajectory, &rig, error)) return false;
-  double lowest = std::numeric_limits<double>::infinity();
+  const estimator::StereoCamera<double> camera = sim::MakeStereoCamera(rig);
+  const double corner_x = 0.5 * rig.width_px / camera.fx;  // pixel edges, not centres
+  const double corner_y = 0.5 * rig.height_px / camera.fy;
+  const sim::TrajectoryOptions& o = trajectory.Options();
+  view->closest_depth_m = std::numeric_limits<double>::infinity();
+  view->max_tilt_rad = 0.0;
+  view->tilted =
+      !((o.attitude_offset_rad.array() == 0.0).all() && (o.body_rate_radps.array() == 0.0).all());
   for (std::int32_t k = 0; k < trajectory.NumFrames(); ++k) {
-    lowest = std::min(lowest, trajectory.WorldTCamera(k).t.z());
+    const Eigen::Vector3d down =
+        sim::SteeredAttitude(o, k / o.rate_hz).transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
+    const double nearest = down.z() + std::abs(down.x()) * corner_x + std::abs(down.y()) * corner_y;
+    const double height_m = trajectory.WorldTCamera(k).t.z();
+    view->closest_depth_m = std::min(view->closest_depth_m, height_m / nearest);
+    view->max_tilt_rad = std::max(view->max_tilt_rad, std::acos(std::clamp(down.z(), -1.0, 1.0)));
   }
-  *range_m = lowest;
   return true;
 }
 
@@ -567,6 +685,7 @@ std::string SimRigFrom(const FswConfig& c) {
   std::ostringstream o;
   o << "sim.width_px " << c.sim.width_px << ", sim.hfov_deg " << c.sim.hfov_deg
     << ", sim.baseline_m " << c.sim.baseline_m;
+  if (c.sim.baseline_error_m != 0.0) o << " + sim.baseline_error_m " << c.sim.baseline_error_m;
   return o.str();
 }
 
@@ -575,9 +694,10 @@ std::string SimRigFrom(const FswConfig& c) {
 // disparity of the closest ground, f b / range, must stay at least 1 px inside. Beyond it every
 // close feature is matched to a wrong disparity or not at all, and the estimate diverges while
 // reporting ok (demo at 1024 px with max_disparity_px 160: 231 px at 10 m, landmark RMS 6570 m).
+// `shift_px`: a disparity the right image adds at every range (the simulator's rotation error).
 bool DisparityFits(const FswConfig& c, double fx_px, double baseline_m, int width_px,
                    double range_m, const std::string& range_from, const std::string& rig_from,
-                   const std::string& origin, std::string* error) {
+                   const std::string& origin, std::string* error, double shift_px = 0.0) {
   const std::string field = "max_disparity_px";
   const std::string at = Where(c, field, origin);
   if (!(range_m > 0.0)) {
@@ -585,11 +705,14 @@ bool DisparityFits(const FswConfig& c, double fx_px, double baseline_m, int widt
              range_from + ") is not above the ground";
     return false;
   }
-  const double need_px = fx_px * baseline_m / range_m;
-  const std::string need = std::string("the disparity at the closest range flown, ") +
-                           Fixed(need_px, 1) + " px at " + Fixed(range_m, 1) + " m (" + range_from +
-                           "; f " + Fixed(fx_px, 1) + " px x baseline " + Fixed(baseline_m, 3) +
-                           " m from " + rig_from + ")";
+  const double need_px = fx_px * baseline_m / range_m + shift_px;
+  const std::string need =
+      std::string("the disparity at the closest range flown, ") + Fixed(need_px, 1) + " px at " +
+      Fixed(range_m, 1) + " m (" + range_from + "; f " + Fixed(fx_px, 1) + " px x baseline " +
+      Fixed(baseline_m, 3) + " m from " + rig_from +
+      (shift_px > 0.0 ? " + " + Fixed(shift_px, 1) + " px of sim.relative_rotation_error_rad"
+                      : "") +
+      ")";
   if (need_px + 1.0 > c.max_disparity_px) {
     *error = at + ": " + field + ": " + std::to_string(c.max_disparity_px) +
              (c.origins.keys.count(field) ? "" : " (the default)") + " is below " + need +
@@ -604,6 +727,29 @@ bool DisparityFits(const FswConfig& c, double fx_px, double baseline_m, int widt
     return false;
   }
   return true;
+}
+
+// The simulator's flown envelope: the disparity the front end must find in the true images, at
+// the closest range over the trajectory (SimViewOf), with the true baseline (sim.baseline_m +
+// sim.baseline_error_m) and f of the calibration `fx_px`; a rotation error of the right camera
+// shifts the right image by up to f |ry| + |rz| (larger image side) / 2 px on top.
+bool SimEnvelopeFits(const FswConfig& c, double fx_px, const std::string& origin,
+                     std::string* error) {
+  SimView view;
+  std::string why;
+  if (!SimViewOf(c, &view, &why)) {
+    *error = Where(c, "sim.scenario", origin) + ": " + why;
+    return false;
+  }
+  const double* r = c.sim.relative_rotation_error_rad;
+  const double shift_px =
+      fx_px * std::abs(r[1]) + std::abs(r[2]) * 0.5 * std::max(c.sim.width_px, c.sim.height_px);
+  const std::string range_from =
+      view.tilted ? std::string("the closest datum depth in view over the tilted sim.") +
+                        c.sim.scenario + " trajectory"
+                  : std::string("the lowest altitude of the sim.") + c.sim.scenario + " trajectory";
+  return DisparityFits(c, fx_px, c.sim.baseline_m + c.sim.baseline_error_m, c.sim.width_px,
+                       view.closest_depth_m, range_from, SimRigFrom(c), origin, error, shift_px);
 }
 
 // Capacities compiled into the flight estimator (pipeline.hpp). The window holds window + 1 poses
@@ -622,6 +768,101 @@ bool CapacitiesHold(const FswConfig& c, const std::string& origin, std::string* 
     return false;
   }
   return true;
+}
+
+// The descent geometry keys other than the nominal flight's: they shape the descent preset only.
+const char* DescentKeyChanged(const SimConfig& s) {
+  const SimConfig nominal;
+  if (s.start_altitude_m != nominal.start_altitude_m) return "sim.start_altitude_m";
+  if (s.end_altitude_m != nominal.end_altitude_m) return "sim.end_altitude_m";
+  if (s.descent_rate_mps != nominal.descent_rate_mps) return "sim.descent_rate_mps";
+  for (const double v : s.horizontal_velocity_mps)
+    if (v != 0.0) return "sim.horizontal_velocity_mps";
+  for (const double a : s.attitude_deg)
+    if (a != 0.0) return "sim.attitude_deg";
+  for (const double w : s.attitude_rate_dps)
+    if (w != 0.0) return "sim.attitude_rate_dps";
+  return nullptr;
+}
+
+// "<where>: <field>: <why>" into `error`; false.
+bool Refuse(const FswConfig& c, const std::string& field, const std::string& origin,
+            const std::string& why, std::string* error) {
+  *error = Where(c, field, origin) + ": " + field + ": " + why;
+  return false;
+}
+
+// The descent geometry: for the descent only, ending below its start, a bounded frame count.
+bool DescentHolds(const FswConfig& c, const std::string& origin, std::string* error) {
+  const SimConfig& s = c.sim;
+  if (const char* key = DescentKeyChanged(s); key != nullptr && s.scenario != "descent") {
+    return Refuse(c, key, origin, "shapes the descent: needs sim.scenario descent", error);
+  }
+  if (!(s.end_altitude_m < s.start_altitude_m)) {
+    // Name the key that was given (the other one kept its default).
+    const bool end_given = c.origins.keys.count("sim.end_altitude_m") > 0;
+    return Refuse(c, end_given ? "sim.end_altitude_m" : "sim.start_altitude_m", origin,
+                  Fixed(s.end_altitude_m, 2) + " m end altitude is not below the " +
+                      Fixed(s.start_altitude_m, 2) + " m start altitude",
+                  error);
+  }
+  const double frames = (s.start_altitude_m - s.end_altitude_m) / s.descent_rate_mps * c.rate_hz;
+  if (s.scenario == "descent" && frames > 100000.0) {
+    return Refuse(c, "sim.descent_rate_mps", origin,
+                  Fixed(s.start_altitude_m - s.end_altitude_m, 1) + " m at " +
+                      Fixed(s.descent_rate_mps, 3) + " m/s and rate_hz " + Fixed(c.rate_hz, 1) +
+                      " is " + Fixed(frames, 0) +
+                      " frames, more than 100000 (all rendered before start)",
+                  error);
+  }
+  return true;
+}
+
+// The simulated camera's faults: a baseline left, stamps that stay in order.
+bool CameraFaultsHold(const FswConfig& c, const std::string& origin, std::string* error) {
+  const SimConfig& s = c.sim;
+  if (!(s.baseline_m + s.baseline_error_m > 0.0)) {
+    return Refuse(c, "sim.baseline_error_m", origin,
+                  "leaves no baseline (sim.baseline_m " + Fixed(s.baseline_m, 3) + " m)", error);
+  }
+  // Truncated at 4 sigma, a jitter of at most a tenth of the frame period keeps the stamps in
+  // order (at least 0.2 periods apart) and each frame's IMU interval positive.
+  const double max_jitter_ms = 100.0 / c.rate_hz;
+  if (s.timestamp_jitter_ms > max_jitter_ms) {
+    return Refuse(c, "sim.timestamp_jitter_ms", origin,
+                  Fixed(s.timestamp_jitter_ms, 3) + " ms is above a tenth of the frame period (" +
+                      Fixed(max_jitter_ms, 3) + " ms at rate_hz " + Fixed(c.rate_hz, 1) +
+                      "): the jittered stamps could reorder frames",
+                  error);
+  }
+  return true;
+}
+
+// The simulated camera keeps looking at the ground: at most 60 deg off nadir over the descent
+// (the optical axis's slant range within twice the altitude).
+bool AttitudeHolds(const FswConfig& c, const std::string& origin, std::string* error) {
+  if (c.source != SourceKind::kSim || c.sim.scenario != "descent") return true;
+  SimView view;
+  std::string why;
+  if (!SimViewOf(c, &view, &why)) {
+    *error = Where(c, "sim.scenario", origin) + ": " + why;  // `why` names its field
+    return false;
+  }
+  constexpr double kMaxTiltDeg = 60.0;
+  const double tilt_deg = view.max_tilt_rad * 180.0 / std::numbers::pi;
+  if (tilt_deg <= kMaxTiltDeg) return true;
+  const double* rate = c.sim.attitude_rate_dps;
+  const bool turning = rate[0] != 0.0 || rate[1] != 0.0 || rate[2] != 0.0;
+  return Refuse(c, turning ? "sim.attitude_rate_dps" : "sim.attitude_deg", origin,
+                "tilts the camera " + Fixed(tilt_deg, 1) +
+                    " deg off nadir during the descent (at most " + Fixed(kMaxTiltDeg, 0) + ")",
+                error);
+}
+
+// The simulated flight's dispersions hold together (each key's own range is its setter's).
+bool DispersionsHold(const FswConfig& c, const std::string& origin, std::string* error) {
+  return DescentHolds(c, origin, error) && CameraFaultsHold(c, origin, error) &&
+         AttitudeHolds(c, origin, error);
 }
 
 }  // namespace
@@ -702,21 +943,10 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   if (c.publish && c.lcm_url.empty()) return fail("lcm.url", "empty while lcm.publish is true");
   if (c.channel_prefix.size() > 32) return fail("lcm.channel_prefix", "longer than 32 characters");
   if (!CapacitiesHold(c, origin, error)) return false;
+  if (!DispersionsHold(c, origin, error)) return false;
   if (c.source == SourceKind::kSim) {
     // The simulator's rig and trajectory from the configuration, as sim_world.cpp builds them.
-    double range_m = 0.0;
-    std::string why;
-    if (!SimClosestRange(c, &range_m, &why)) {
-      *error = Where(c, "sim.scenario", origin) + ": " + why;
-      return false;
-    }
-    const estimator::StereoCamera<double> camera = sim::MakeStereoCamera(SimRig(c));
-    if (!DisparityFits(
-            c, camera.fx, camera.baseline_m, c.sim.width_px, range_m,
-            std::string("the lowest altitude of the sim.") + c.sim.scenario + " trajectory",
-            SimRigFrom(c), origin, error)) {
-      return false;
-    }
+    if (!SimEnvelopeFits(c, sim::MakeStereoCamera(SimRig(c)).fx, origin, error)) return false;
   }
   return true;
 }
@@ -727,13 +957,11 @@ bool CheckEnvelopeDisparity(const FswConfig& c, double fx_px, double baseline_m,
   double range_m = 0.0;
   std::string range_from;
   if (c.source == SourceKind::kSim) {
-    std::string why;
-    if (!SimClosestRange(c, &range_m, &why)) {
-      *error = Where(c, "sim.scenario", origin) + ": " + why;
-      return false;
-    }
-    range_from = std::string("the lowest altitude of the sim.") + c.sim.scenario + " trajectory";
-  } else if (c.envelope_min_range_m > 0.0) {
+    // The front end searches the true rig's images: their baseline is the configuration's (with
+    // sim.baseline_error_m), not the calibration's baseline_m.
+    return SimEnvelopeFits(c, fx_px, origin, error);
+  }
+  if (c.envelope_min_range_m > 0.0) {
     range_m = c.envelope_min_range_m;
     range_from = "envelope.min_range_m";
   } else if (c.source == SourceKind::kLog) {
@@ -745,10 +973,8 @@ bool CheckEnvelopeDisparity(const FswConfig& c, double fx_px, double baseline_m,
              Fixed(fx_px * baseline_m, 1) + " px m";
     return false;
   }
-  const std::string rig_from =
-      c.source == SourceKind::kSim ? SimRigFrom(c) : std::string("the rectified rig");
-  return DisparityFits(c, fx_px, baseline_m, width_px, range_m, range_from, rig_from, origin,
-                       error);
+  return DisparityFits(c, fx_px, baseline_m, width_px, range_m, range_from, "the rectified rig",
+                       origin, error);
 }
 
 namespace {

@@ -5,8 +5,11 @@
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
+#include <numbers>
 #include <random>
 #include <thread>
+
+#include "swf/sim/rng.hpp"
 
 namespace swf::app {
 
@@ -54,7 +57,17 @@ bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::Ri
   *rig = SimRig(config);
   sim::TrajectoryOptions t;
   if (config.sim.scenario == "descent") {
-    t = sim::DescentTrajectory(config.rate_hz);
+    const SimConfig& s = config.sim;
+    t = sim::DescentTrajectory(config.rate_hz, s.start_altitude_m, s.end_altitude_m,
+                               s.descent_rate_mps);
+    t.velocity_world_mps.x() = s.horizontal_velocity_mps[0];
+    t.velocity_world_mps.y() = s.horizontal_velocity_mps[1];
+    const double deg = std::numbers::pi / 180.0;
+    t.attitude_offset_rad =
+        Eigen::Vector3d(s.attitude_deg[0], s.attitude_deg[1], s.attitude_deg[2]) * deg;
+    t.body_rate_radps =
+        Eigen::Vector3d(s.attitude_rate_dps[0], s.attitude_rate_dps[1], s.attitude_rate_dps[2]) *
+        deg;
   } else if (config.sim.scenario == "hover") {
     t = sim::HoverTrajectory(50.0, 60);
     t.rate_hz = config.rate_hz;
@@ -101,6 +114,8 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
   sim::AppearanceOptions look = sim::DefaultImagery(SharedDir(config));
   look.image_pixel_m *= scale;
   look.seed = config.sim.seed;
+  look.sun_elevation_deg = config.sim.sun_elevation_deg;
+  look.sun_azimuth_deg = config.sim.sun_azimuth_deg;
   const Status a = appearance_.Configure(terrain_, look);
   if (a != Status::kOk) {
     *error = "sim.shared: the terrain imagery under '" + SharedDir(config) + "' cannot be read (" +
@@ -109,27 +124,13 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
   }
   black_from_ = config.inject_black_from;
   black_frames_ = config.inject_black_frames;
-  // The simulated IMU, drawn once from the seed: same configuration, same motion inputs.
-  imu_ = config.sim.imu;
-  motion_.assign(num_frames_, MotionInput{});
-  std::mt19937_64 rng(config.sim.seed * 7919u + 17u);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  for (std::int32_t k = 1; k < num_frames_; ++k) {
-    estimator::Pose<double> u =
-        trajectory_.WorldTCamera(k - 1).Inverse() * trajectory_.WorldTCamera(k);
-    Eigen::Vector3d dt;
-    Eigen::Vector3d dr;
-    for (int i = 0; i < 3; ++i) dt[i] = config.sim.imu_sigma_m * gauss(rng);
-    for (int i = 0; i < 3; ++i) dr[i] = config.sim.imu_sigma_rad * gauss(rng);
-    const Eigen::AngleAxisd aa(Eigen::Matrix3d(u.R * estimator::ExpSO3<double>(dr)));
-    const Eigen::Vector3d rv = aa.angle() * aa.axis();
-    for (int i = 0; i < 3; ++i) {
-      motion_[k].translation_m[i] = u.t[i] + dt[i];
-      motion_[k].rotation_rad[i] = rv[i];
-    }
-  }
+  DrawCameraTiming(config);
+  DrawMotionInputs(config);
   sim::ImuModelOptions unit;
   has_imu_unit_ = SimImuUnit(config, &unit);
+  // A jittered stamp may come up to 4 sigma after its frame: the unit samples that far past the
+  // last one, so the last frame's interval is covered like every other.
+  unit.tail_s = 4.0 * config.sim.timestamp_jitter_ms * 1e-3;
   if (has_imu_unit_ && imu_unit_.Configure(unit, trajectory_) != Status::kOk) {
     *error = "sim.imu_unit: the IMU model refused the unit or the trajectory";
     return false;
@@ -138,11 +139,64 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
   sim::RenderOptions ro;
   ro.rig = rig_;
   ro.seed = config.sim.seed;
+  ro.read_noise_e = config.sim.read_noise_e;
+  ro.electrons_per_dn = config.sim.e_per_dn;
+  ro.exposure_dn = config.sim.exposure_dn;
+  // The true right camera; Camera() (what the pipeline is told) stays the calibrated rig.
+  ro.baseline_error_m = config.sim.baseline_error_m;
+  const double* r = config.sim.relative_rotation_error_rad;
+  ro.right_rotation_error_rad = Eigen::Vector3d(r[0], r[1], r[2]);
   if (renderer_.Configure(ro) != Status::kOk) {
     *error = "sim.width_px: the renderer refused the rig";
     return false;
   }
   return true;
+}
+
+void SimWorld::DrawCameraTiming(const FswConfig& config) {
+  delivered_.assign(num_frames_, 1);
+  exposure_ns_.assign(num_frames_, 0);
+  delivered_frames_ = num_frames_ > 0 ? 1 : 0;
+  if (num_frames_ > 0) exposure_ns_[0] = trajectory_.FrameTimeNs(0);
+  // Its own stream of the seed, one drop and one jitter draw per frame whatever the settings:
+  // changing the drop probability does not move the jitter, nor anything else drawn.
+  sim::Rng rng(config.sim.seed * 6364136223846793005u + 1442695040888963407u);
+  const double sigma_ns = config.sim.timestamp_jitter_ms * 1e6;
+  for (std::int32_t k = 1; k < num_frames_; ++k) {
+    const double u = rng.Uniform();
+    const double g = std::clamp(rng.Gaussian(), -4.0, 4.0);  // stamps stay in order
+    delivered_[k] = u < config.sim.frame_drop_probability ? 0 : 1;
+    delivered_frames_ += delivered_[k];
+    exposure_ns_[k] = trajectory_.FrameTimeNs(k) + std::llround(g * sigma_ns);
+  }
+}
+
+void SimWorld::DrawMotionInputs(const FswConfig& config) {
+  // The simulated IMU, drawn once from the seed: same configuration, same motion inputs.
+  imu_ = config.sim.imu;
+  motion_.assign(num_frames_, MotionInput{});
+  std::mt19937_64 rng(config.sim.seed * 7919u + 17u);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  estimator::Pose<double> since_delivered;  // the measured motion since the last frame served
+  for (std::int32_t k = 1; k < num_frames_; ++k) {
+    const estimator::Pose<double> u =
+        trajectory_.WorldTCamera(k - 1).Inverse() * trajectory_.WorldTCamera(k);
+    Eigen::Vector3d dt;
+    Eigen::Vector3d dr;
+    for (int i = 0; i < 3; ++i) dt[i] = config.sim.imu_sigma_m * gauss(rng);
+    for (int i = 0; i < 3; ++i) dr[i] = config.sim.imu_sigma_rad * gauss(rng);
+    const estimator::Pose<double> measured{Eigen::Matrix3d(u.R * estimator::ExpSO3<double>(dr)),
+                                           Eigen::Vector3d(u.t + dt)};
+    // After a dropped frame the input spans every interval since the frame before the gap, as an
+    // IMU integrates through it.
+    since_delivered = delivered_[k - 1] != 0 ? measured : since_delivered * measured;
+    const Eigen::AngleAxisd aa(since_delivered.R);
+    const Eigen::Vector3d rv = aa.angle() * aa.axis();
+    for (int i = 0; i < 3; ++i) {
+      motion_[k].translation_m[i] = since_delivered.t[i];
+      motion_[k].rotation_rad[i] = rv[i];
+    }
+  }
 }
 
 bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std::string* error) {
@@ -209,6 +263,18 @@ bool SimImuUnit(const FswConfig& config, sim::ImuModelOptions* unit) {
   return true;
 }
 
+namespace {
+
+// The IMU's velocity at the first frame: the camera's plus the lever arm turning at the
+// trajectory's body rate (the jitter's own rate, 0.1 deg-sized, is left out).
+estimator::Vec3<double> TrueImuVelocityAtStart(const sim::Trajectory& truth,
+                                               const estimator::Vec3<double>& lever_m) {
+  const sim::TrajectoryOptions& o = truth.Options();
+  return o.velocity_world_mps + truth.WorldTCamera(0).R * o.body_rate_radps.cross(lever_m);
+}
+
+}  // namespace
+
 ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
   const ImuConfig& k = c.imu;
   ImuOptions o;
@@ -246,7 +312,7 @@ ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
   o.imu_T_camera = camera_T_imu.Inverse();
   o.initial_velocity_world_mps =
       truth != nullptr
-          ? truth->Options().velocity_world_mps
+          ? TrueImuVelocityAtStart(*truth, camera_T_imu.t)
           : estimator::Vec3<double>(k.initial_velocity_mps[0], k.initial_velocity_mps[1],
                                     k.initial_velocity_mps[2]);
   return o;
@@ -271,15 +337,27 @@ Status PrerenderedSimSource::Start() {
 
 Status PrerenderedSimSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoPair* pair) {
   if (!running_ || pair == nullptr) return Status::kNotConfigured;
-  if (next_ >= world_->NumFrames()) return Status::kEmpty;
+  // Frames the camera lost reach the loop as a gap before the next pair, as a camera's do.
+  std::uint32_t dropped = 0;
+  while (next_ < world_->NumFrames() && !world_->Delivered(next_)) {
+    ++next_;
+    ++dropped;
+  }
+  if (next_ >= world_->NumFrames()) {
+    // Lost at the very end, with no pair left to carry them: the source's own count.
+    stats_.frames_dropped += dropped;
+    return Status::kEmpty;
+  }
   const std::int32_t w = world_->Width();
   const std::int32_t h = world_->Height();
   pair->left = drivers::ImageView{world_->Left(next_), w, h, w};
   pair->right = drivers::ImageView{world_->Right(next_), w, h, w};
-  pair->left_exposure_ns = world_->Trajectory().FrameTimeNs(next_);
+  pair->left_exposure_ns = world_->ExposureNs(next_);
   pair->right_exposure_ns = pair->left_exposure_ns;
+  // The trajectory's frame number, gaps included: the outputs are matched to the truth of the
+  // frame actually taken (a camera numbering only the pairs it served would shift them).
   pair->seq = static_cast<std::uint64_t>(next_);
-  pair->dropped_before = 0;
+  pair->dropped_before = dropped;
   pair->handle = next_;
   ++next_;
   ++stats_.pairs_served;

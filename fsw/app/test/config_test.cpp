@@ -176,6 +176,129 @@ TEST(ConfigTest, ImuKeysParseAndBadOnesAreRefusedNamingTheField) {
           "imu.rate_hz: must be at least 10 Hz");
 }
 
+// The dispersions of the simulated flight (a Monte Carlo campaign's --set keys): every key parses,
+// its defaults are the simulator's own (the nominal flight, bit for bit), and a bad value or an
+// inconsistent combination is refused at the line that set it.
+TEST(ConfigTest, DispersionKeysParseAndBadOnesAreRefusedNamingTheField) {
+  FswConfig c;
+  ASSERT_TRUE(Accepted(
+      "source: sim\nsim.start_altitude_m: 80\nsim.end_altitude_m: 20\nsim.descent_rate_mps: 6\n"
+      "sim.horizontal_velocity_mps: 1.5, -2\nsim.attitude_deg: 3 -2 45\n"
+      "sim.attitude_rate_dps: 0.5, -0.25, 1\nsim.sun_elevation_deg: 12\nsim.sun_azimuth_deg: -30\n"
+      "sim.read_noise_e: 30\nsim.e_per_dn: 20\nsim.exposure_dn: 80\nsim.baseline_error_m: -0.01\n"
+      "sim.relative_rotation_error_rad: 0.001 -0.002 0.0005\nsim.frame_drop_probability: 0.05\n"
+      "sim.timestamp_jitter_ms: 2\n",
+      &c));
+  EXPECT_EQ(c.sim.start_altitude_m, 80.0);
+  EXPECT_EQ(c.sim.end_altitude_m, 20.0);
+  EXPECT_EQ(c.sim.descent_rate_mps, 6.0);
+  EXPECT_EQ(c.sim.horizontal_velocity_mps[1], -2.0);
+  EXPECT_EQ(c.sim.attitude_deg[2], 45.0);
+  EXPECT_EQ(c.sim.attitude_rate_dps[1], -0.25);
+  EXPECT_EQ(c.sim.sun_elevation_deg, 12.0);
+  EXPECT_EQ(c.sim.sun_azimuth_deg, -30.0);
+  EXPECT_EQ(c.sim.read_noise_e, 30.0);
+  EXPECT_EQ(c.sim.e_per_dn, 20.0);
+  EXPECT_EQ(c.sim.exposure_dn, 80.0);
+  EXPECT_EQ(c.sim.baseline_error_m, -0.01);
+  EXPECT_EQ(c.sim.relative_rotation_error_rad[1], -0.002);
+  EXPECT_EQ(c.sim.frame_drop_probability, 0.05);
+  EXPECT_EQ(c.sim.timestamp_jitter_ms, 2.0);
+  EXPECT_EQ(c.origins.keys.at("sim.timestamp_jitter_ms"), "t.cfg:16");
+
+  // The defaults are the simulator's own.
+  const SimConfig nominal;
+  const sim::AppearanceOptions look;
+  const sim::RenderOptions camera;
+  const sim::TrajectoryOptions descent = sim::DescentTrajectory(10.0);
+  EXPECT_EQ(nominal.sun_elevation_deg, look.sun_elevation_deg);
+  EXPECT_EQ(nominal.sun_azimuth_deg, look.sun_azimuth_deg);
+  EXPECT_EQ(nominal.read_noise_e, camera.read_noise_e);
+  EXPECT_EQ(nominal.e_per_dn, camera.electrons_per_dn);
+  EXPECT_EQ(nominal.exposure_dn, camera.exposure_dn);
+  EXPECT_EQ(nominal.start_altitude_m, descent.start_world_m.z());
+  EXPECT_EQ(-nominal.descent_rate_mps, descent.velocity_world_mps.z());
+
+  // Each value's own range.
+  Refused("source: sim\nsim.start_altitude_m: 0\n",
+          "t.cfg:2: sim.start_altitude_m: 0 is outside (0, 1000]");
+  Refused("source: sim\nsim.end_altitude_m: -5\n", "t.cfg:2: sim.end_altitude_m: -5 is outside");
+  Refused("source: sim\nsim.descent_rate_mps: fast\n",
+          "t.cfg:2: sim.descent_rate_mps: 'fast' is not a finite number");
+  Refused("source: sim\nsim.horizontal_velocity_mps: 1\n",
+          "t.cfg:2: sim.horizontal_velocity_mps: '1' is not 2 finite numbers (vx, vy)");
+  Refused("source: sim\nsim.attitude_deg: 1 2 3 4\n",
+          "t.cfg:2: sim.attitude_deg: '1 2 3 4' is not 3 finite numbers (roll, pitch, yaw)");
+  Refused("source: sim\nsim.attitude_rate_dps: 0 0 200\n",
+          "t.cfg:2: sim.attitude_rate_dps: 0 0 200: 200 is outside [-100, 100]");
+  Refused("source: sim\nsim.sun_elevation_deg: 0\n",
+          "t.cfg:2: sim.sun_elevation_deg: 0 is outside (0, 90]");
+  Refused("source: sim\nsim.sun_azimuth_deg: inf\n", "t.cfg:2: sim.sun_azimuth_deg: 'inf' is not");
+  Refused("source: sim\nsim.read_noise_e: -1\n", "t.cfg:2: sim.read_noise_e: -1 is outside [0, ");
+  Refused("source: sim\nsim.e_per_dn: 0\n", "t.cfg:2: sim.e_per_dn: 0 is outside (0, ");
+  Refused("source: sim\nsim.exposure_dn: 0\n", "t.cfg:2: sim.exposure_dn: 0 is outside (0, 1000]");
+  Refused("source: sim\nsim.baseline_error_m: 1e9\n",
+          "t.cfg:2: sim.baseline_error_m: 1e9 is outside");
+  Refused("source: sim\nsim.relative_rotation_error_rad: 0 0.2 0\n",
+          "t.cfg:2: sim.relative_rotation_error_rad: 0 0.2 0: 0.2 is outside [-0.1, 0.1]");
+  Refused("source: sim\nsim.frame_drop_probability: 1\n",
+          "t.cfg:2: sim.frame_drop_probability: 1 is outside [0, 1)");
+  Refused("source: sim\nsim.timestamp_jitter_ms: nan\n", "t.cfg:2: sim.timestamp_jitter_ms: 'nan'");
+
+  // Combinations, at the line of the key to change.
+  Refused("source: sim\nsim.end_altitude_m: 100\n",
+          "t.cfg:2: sim.end_altitude_m: 100.00 m end altitude is not below the 100.00 m start");
+  Refused("source: sim\nsim.start_altitude_m: 5\n",
+          "t.cfg:2: sim.start_altitude_m: 10.00 m end altitude is not below the 5.00 m start");
+  Refused("source: sim\nsim.scenario: hover\nsim.attitude_deg: 0 5 0\n",
+          "t.cfg:3: sim.attitude_deg: shapes the descent: needs sim.scenario descent");
+  Refused("source: sim\nsim.descent_rate_mps: 0.001\n",
+          "t.cfg:2: sim.descent_rate_mps: 90.0 m at 0.001 m/s and rate_hz 10.0 is 900000 frames");
+  Refused("source: sim\nsim.baseline_error_m: -1\n",
+          "t.cfg:2: sim.baseline_error_m: leaves no baseline (sim.baseline_m 1.000 m)");
+  Accepted("source: sim\nsim.timestamp_jitter_ms: 10\n");  // a tenth of 100 ms
+  Refused("source: sim\nsim.timestamp_jitter_ms: 10.5\n",
+          "t.cfg:2: sim.timestamp_jitter_ms: 10.500 ms is above a tenth of the frame period");
+  Refused("source: sim\nsim.attitude_deg: 70 0 0\n",
+          "t.cfg:2: sim.attitude_deg: tilts the camera 70.0 deg off nadir during the descent");
+  // 10 deg/s of pitch for the 9 s descent: 90 deg by the end.
+  Refused("source: sim\nsim.attitude_rate_dps: 0 10 0\n",
+          "t.cfg:2: sim.attitude_rate_dps: tilts the camera 90.0 deg off nadir");
+}
+
+// The flown envelope of a dispersed descent: the end altitude, the true baseline, the image
+// corner a tilted camera sees closest and the right image's shift by a rotation error all enter
+// the disparity the front end must find.
+TEST(ConfigTest, TheEnvelopeIsTheDispersedDescents) {
+  // The demo at 512 px: f 1154.7 px, 1 m, 10 m: 115.5 px.
+  const std::string demo512 =
+      "source: sim\nsim.width_px: 512\nsim.height_px: 384\nrate_hz: 10\nmax_disparity_px: ";
+  // Ending at 20 m halves it (57.7 px); ending at 5 m doubles it.
+  Accepted(demo512 + "60\nsim.end_altitude_m: 20\n");
+  Refused(
+      demo512 + "58\nsim.end_altitude_m: 20\n",
+      "t.cfg:5: max_disparity_px: 58 is below the disparity at the closest range flown, 57.7 px "
+      "at 20.0 m (the lowest altitude of the sim.descent trajectory");
+  Refused(demo512 + "160\nsim.end_altitude_m: 5\n", "230.9 px at 5.0 m");
+  // The true baseline is the rig's plus its error.
+  Refused(demo512 + "160\nsim.baseline_error_m: 0.5\n",
+          "173.2 px at 10.0 m (the lowest altitude of the sim.descent trajectory; f 1154.7 px x "
+          "baseline 1.500 m from sim.width_px 512, sim.hfov_deg 25, sim.baseline_m 1 + "
+          "sim.baseline_error_m 0.5)");
+  // Rolled 9.4 deg (about the half field of view along the image's height), the image's edge
+  // looks straight down from 10 m while the optical axis does not: 117.1 px, not 115.5.
+  Accepted(demo512 + "117\n");
+  Refused(
+      demo512 + "117\nsim.attitude_deg: 9.4, 0, 0\n",
+      "117.1 px at 9.9 m (the closest datum depth in view over the tilted sim.descent trajectory");
+  // 20 mrad about the right camera's y moves the right image by f x 0.02 = 23.1 px.
+  Accepted(demo512 + "160\nsim.relative_rotation_error_rad: 0 0.02 0\n");
+  Refused(demo512 + "130\nsim.relative_rotation_error_rad: 0 0.02 0\n",
+          "138.6 px at 10.0 m (the lowest altitude of the sim.descent trajectory; f 1154.7 px x "
+          "baseline 1.000 m from sim.width_px 512, sim.hfov_deg 25, sim.baseline_m 1 + 23.1 px of "
+          "sim.relative_rotation_error_rad)");
+}
+
 // ---- A: files that must not fly --------------------------------------------------------------
 
 TEST(ConfigTest, RefusesAnEmptyOrCommentsOnlyFile) {

@@ -47,6 +47,37 @@ struct SimConfig {
   // Devices ADIS16448), "tactical" (Honeywell HG1700) or "none". Its samples feed the
   // stereo-inertial estimator (imu.enabled), which then takes the unit's parameters.
   std::string imu_unit = "none";
+
+  // Dispersions of the simulated flight (a Monte Carlo campaign sets them with --set). Every
+  // default is the nominal flight, bit for bit.
+  // Descent geometry (sim.scenario descent; sim/trajectory.hpp): from start to end altitude at
+  // the descent rate, (start - end) / rate * rate_hz + 1 frames (both ends); a constant
+  // horizontal velocity (world x east, y north); a constant attitude offset of the camera from
+  // nadir, roll / pitch / yaw about the camera's x / y / z (optical) axes, and a constant body
+  // rate in the camera frame that makes the offset grow linearly with time.
+  double start_altitude_m = 100.0;
+  double end_altitude_m = 10.0;
+  double descent_rate_mps = 10.0;
+  double horizontal_velocity_mps[2] = {0.0, 0.0};
+  double attitude_deg[3] = {0.0, 0.0, 0.0};
+  double attitude_rate_dps[3] = {0.0, 0.0, 0.0};
+  // Illumination (sim::AppearanceOptions's defaults).
+  double sun_elevation_deg = 30.0;
+  double sun_azimuth_deg = 135.0;  // from +x (east) towards +y (north)
+  // Camera photometry (sim::RenderOptions's defaults): read noise, gain, mean exposure.
+  double read_noise_e = 15.0;
+  double e_per_dn = 40.0;
+  double exposure_dn = 110.0;
+  // Calibration errors the estimator does not know (sim::RenderOptions): the true baseline is
+  // baseline_m + baseline_error_m, the true right camera turned by this rotation vector in its
+  // own frame; the pipeline keeps the calibrated rig (baseline_m, rectified).
+  double baseline_error_m = 0.0;
+  double relative_rotation_error_rad[3] = {0.0, 0.0, 0.0};
+  // Camera timing faults of the simulated source (PrerenderedSimSource): each frame after the
+  // first independently not delivered (a gap, pair.dropped_before), and Gaussian jitter of the
+  // exposure stamps (1 sigma, truncated at 4 sigma); the images stay those of the true time.
+  double frame_drop_probability = 0.0;
+  double timestamp_jitter_ms = 0.0;
 };
 
 // The stereo-inertial estimator (PipelineOptions::imu) and its IMU. With the simulator's unit

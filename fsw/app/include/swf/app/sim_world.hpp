@@ -55,14 +55,21 @@ class SimWorld : public MotionProvider, public ImuProvider {
   std::int32_t Width() const { return rig_.width_px; }
   std::int32_t Height() const { return rig_.height_px; }
   std::int32_t NumFrames() const { return num_frames_; }
+  // Camera timing faults (sim.frame_drop_probability, sim.timestamp_jitter_ms), drawn once from
+  // the seed: whether frame k reaches the flight loop, and its exposure stamp (the trajectory's
+  // frame time plus the jitter; the image and the truth stay those of the frame time). Frame 0,
+  // the hand-over whose true state starts the filter, is always delivered on time.
+  bool Delivered(std::int32_t k) const { return delivered_[k] != 0; }
+  core::TimeNs ExposureNs(std::int32_t k) const { return exposure_ns_[k]; }
+  std::int32_t DeliveredFrames() const { return delivered_frames_; }
 
   // Renders frames [0, NumFrames()) with `threads` threads; progress(done, total) is called from
   // the calling thread.
   bool RenderAll(int threads, void (*progress)(int done, int total), std::string* error);
   const std::uint8_t* Left(std::int32_t k) const { return left_[k].data(); }
   const std::uint8_t* Right(std::int32_t k) const { return right_[k].data(); }
-  // The simulated IMU: noisy true relative motion into frame seq (none for frame 0 or when
-  // sim.imu is false).
+  // The simulated IMU: noisy true relative motion into frame seq from the frame served before it
+  // (across dropped frames; none for frame 0 or when sim.imu is false).
   bool Motion(std::uint64_t seq, MotionInput* input) override;
   // The simulated IMU unit's samples (sim.imu_unit), in time order.
   bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override;
@@ -70,6 +77,9 @@ class SimWorld : public MotionProvider, public ImuProvider {
   const sim::ImuModel* ImuUnit() const { return has_imu_unit_ ? &imu_unit_ : nullptr; }
 
  private:
+  void DrawCameraTiming(const FswConfig& config);
+  void DrawMotionInputs(const FswConfig& config);  // after DrawCameraTiming
+
   sim::RigOptions rig_;
   sim::Terrain terrain_;
   sim::Appearance appearance_;
@@ -77,6 +87,9 @@ class SimWorld : public MotionProvider, public ImuProvider {
   sim::Trajectory trajectory_;
   sim::OrbitalTarget target_;
   std::int32_t num_frames_ = 0;
+  std::vector<std::uint8_t> delivered_;
+  std::vector<core::TimeNs> exposure_ns_;
+  std::int32_t delivered_frames_ = 0;
   std::vector<MotionInput> motion_;
   bool imu_ = false;
   bool has_imu_unit_ = false;
@@ -89,7 +102,10 @@ class SimWorld : public MotionProvider, public ImuProvider {
   std::vector<std::vector<std::uint8_t>> right_;
 };
 
-// Serves the pre-rendered pairs in order; finite (kEmpty after the last). Never allocates.
+// Serves the pre-rendered pairs in order; finite (kEmpty after the last). Never allocates. Frames
+// the world says were not delivered are skipped and counted in the next pair's dropped_before
+// (pair.seq stays the trajectory's frame number, so it jumps over them), or in Stats().
+// frames_dropped when no pair follows; stamps are the world's (jittered) exposure times.
 class PrerenderedSimSource final : public drivers::StereoSource {
  public:
   explicit PrerenderedSimSource(const SimWorld* world) : world_(world) {}
