@@ -52,7 +52,10 @@ int Usage(bool replay) {
                  "usage: swf-replay --config FILE --log IN.lcmlog [--record OUT.lcmlog] "
                  "[--set 'key: value']... [--progress]\n");
   } else {
-    std::fprintf(stderr, "usage: swf-fsw --config FILE [--set 'key: value']... [--progress]\n");
+    std::fprintf(stderr,
+                 "usage: swf-fsw --config FILE [--set 'key: value']... [--progress] [--check]\n"
+                 "  --check  validate the configuration (the file, every --set, the output paths) "
+                 "and exit 0 without running (2: refused)\n");
   }
   return 2;
 }
@@ -470,6 +473,7 @@ struct CommandLine {
   std::string record_override;
   bool record_given = false;
   bool progress = false;
+  bool check = false;  // swf-fsw --check: validate, run nothing
   std::vector<std::string> sets;
 };
 
@@ -488,6 +492,8 @@ bool ParseCommandLine(int argc, char** argv, bool replay, CommandLine* cl) {
       cl->record_given = true;
     } else if (arg == "--progress") {
       cl->progress = true;
+    } else if (!replay && arg == "--check") {
+      cl->check = true;
     } else {
       return false;
     }
@@ -1121,6 +1127,12 @@ int RunFlightProcess(int argc, char** argv, bool replay) {
   fp->replay = replay;
   fp->progress = command_line.progress;
   if (const int code = Configure(command_line, fp.get()); code != kContinue) return code;
+  if (command_line.check) {
+    // Everything a run refuses before it builds anything has been said: the file and every --set
+    // as a whole (the simulator's envelope included) and the output paths.
+    std::fprintf(stderr, "%s: configuration accepted (--check: nothing run)\n", fp->tool);
+    return 0;
+  }
   // Each phase either continues or gives the exit code: nothing runs before all are done.
   using Phase = int (*)(FlightProcess*);
   for (const Phase phase :

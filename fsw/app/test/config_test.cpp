@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/app/app.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/sim_world.hpp"
 #include "swf/sim/rig.hpp"
@@ -433,6 +434,31 @@ TEST(ConfigTest, CommittedConfigurationsLoadAndFitTheirEnvelope) {
   EXPECT_TRUE(LoadConfig(AppDir() + "/config/fake_gv.cfg", &c, &error)) << error;
   // fake_gv_{left,right}.yaml: ideal pinholes, f 300 px, 0.2 m apart, 320 px wide.
   EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;
+}
+
+// swf-fsw --check: the configuration is validated as a run would (the file, every --set, the
+// output paths) and the process exits 0 without running (no summary written), or 2 with the
+// refusal.
+TEST(ConfigTest, CheckValidatesAsARunWouldAndRunsNothing) {
+  ScratchDir dir;
+  const std::string config = AppDir() + "/config/test.cfg";
+  const std::string summary = dir.Path() + "/summary.json";
+  auto run = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), "swf-fsw");
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    return RunFlightProcess(static_cast<int>(argv.size()), argv.data(), false);
+  };
+  EXPECT_EQ(run({"--config", config, "--set", "summary.path: " + summary, "--set",
+                 "sim.frame_drop_probability: 0.1", "--check"}),
+            0);
+  EXPECT_FALSE(Exists(summary));  // a run writes it at its end
+  EXPECT_EQ(run({"--check", "--config", config, "--set", "sim.attitude_deg: 80 0 0"}), 2);
+  EXPECT_EQ(
+      run({"--config", config, "--set", "summary.path: " + dir.Path() + "/no/s.json", "--check"}),
+      2);
+  EXPECT_EQ(run({"--config", dir.Path() + "/missing.cfg", "--check"}), 2);
+  EXPECT_FALSE(Exists(summary));
 }
 
 // ---- output paths ------------------------------------------------------------------------------
