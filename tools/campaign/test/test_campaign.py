@@ -27,6 +27,11 @@ def campaign(*args, fsw=None):
                           check=False)
 
 
+def read_json(path):
+    with open(path, encoding='utf-8') as f:
+        return json.load(f)
+
+
 def write_wrapper(path, body):
     """An swf-fsw stand-in: runs `body` (sh) and then the real swf-fsw with the same arguments."""
     with open(path, 'w', encoding='utf-8') as f:
@@ -100,10 +105,10 @@ class SpecErrors(unittest.TestCase):
         path = os.path.join(self.dir, 'spec.yaml')
         with open(path, 'w', encoding='utf-8') as f:
             f.write(self.HEAD.replace('CONFIG', DEMO_CFG) +
-                    'dispersions:\n  sim.hfov_deg: {uniform: [20, 400]}\n')
+                    'dispersions:\n  sim.hfov_deg: {uniform: [20, 171]}\n')
         r = campaign('run', path, '--out', os.path.join(self.dir, 'out'))
         self.assertEqual(r.returncode, 2, r.stderr)
-        self.assertIn('%s:6: dispersions.sim.hfov_deg: swf-fsw refuses 400.0' % path, r.stderr)
+        self.assertIn('%s:6: dispersions.sim.hfov_deg: swf-fsw refuses 171.0' % path, r.stderr)
 
 
 class Seeds(unittest.TestCase):
@@ -149,7 +154,7 @@ class LocalEngine(unittest.TestCase):
         r = campaign('run', TINY, '--out', self.out, '--jobs', '2', fsw=killer)
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
         self.assertIn('run 2: killed by signal 9 (SIGKILL)', r.stderr)
-        report = json.load(open(os.path.join(self.out, 'report', 'report.json')))
+        report = read_json(os.path.join(self.out, 'report', 'report.json'))
         self.assertEqual(report['completed'], 5)
         [lost] = report['not_completed']
         self.assertEqual((lost['run'], lost['signal']), (2, 9))
@@ -164,7 +169,7 @@ class LocalEngine(unittest.TestCase):
         for i, t in before.items():
             self.assertEqual(os.stat(os.path.join(self.out, 'runs', '%05d' % i,
                                                   'status.json')).st_mtime_ns, t)
-        report = json.load(open(os.path.join(self.out, 'report', 'report.json')))
+        report = read_json(os.path.join(self.out, 'report', 'report.json'))
         self.assertEqual((report['completed'], report['not_completed']), (6, []))
         self.check_report(report)
 
@@ -188,7 +193,8 @@ class LocalEngine(unittest.TestCase):
         self.assertEqual(report['worst_reproduced'], {str(worst['run']): True})
         self.assertTrue(os.path.getsize(os.path.join(
             self.out, 'runs', '%05d' % worst['run'], 'reproduce', 'descent.lcmlog')) > 0)
-        md = open(os.path.join(self.out, 'report', 'report.md')).read()
+        with open(os.path.join(self.out, 'report', 'report.md'), encoding='utf-8') as f:
+            md = f.read()
         self.assertIn('tools/campaign/swf_campaign.py reproduce %s %d' % (self.out, worst['run']),
                       md)
         for png in ('final_error_cdf.png', 'error_by_altitude.png', 'attitude_by_altitude.png',

@@ -15,6 +15,11 @@ FSW = os.environ.get('SWF_FSW', '')
 RUNS = 20
 
 
+def read_json(path):
+    with open(path, encoding='utf-8') as f:
+        return json.load(f)
+
+
 class EnginesAgree(unittest.TestCase):
     def setUp(self):
         self.assertTrue(os.access(FSW, os.X_OK), 'SWF_FSW must name the swf-fsw binary')
@@ -50,8 +55,8 @@ class EnginesAgree(unittest.TestCase):
                                                                               'slurm.conf')))
         self.assertIn('submitted array job', r.stdout)
         for i in range(RUNS):
-            a = json.load(open(os.path.join(local, 'runs', '%05d' % i, 'summary.json')))
-            b = json.load(open(os.path.join(slurm, 'runs', '%05d' % i, 'summary.json')))
+            a = read_json(os.path.join(local, 'runs', '%05d' % i, 'summary.json'))
+            b = read_json(os.path.join(slurm, 'runs', '%05d' % i, 'summary.json'))
             self.assertEqual(a['result'], b['result'])
             for key in ('stages', 'mlockall', 'sched_fifo', 'overruns'):
                 a.pop(key, None)
