@@ -150,6 +150,13 @@ def pending(out, runs):
     return [i for i in range(runs) if not (status_of(out, i) or {}).get('completed')]
 
 
+def _dying_with_parent(cmd):
+    """cmd, SIGKILLed when the thread that started it ends (PR_SET_PDEATHSIG through util-linux's
+    setpriv; preexec_fn is unsafe with threads): a killed campaign leaves no run flying behind it
+    into a directory a resumed campaign is about to use."""
+    return ['setpriv', '--pdeathsig', 'KILL', '--'] + cmd if shutil.which('setpriv') else cmd
+
+
 def fly(out, index, fsw, spec, timeout_s, dest=None, keep_log=False):
     """Flies run `index` in its run directory (or in `dest`); returns its status (also written to
     status.json when the disk lets it). Never raises for the run's own failures: they are its
@@ -172,8 +179,8 @@ def fly(out, index, fsw, spec, timeout_s, dest=None, keep_log=False):
              'overrides': overrides, 'command': cmd}, indent=1) + '\n')
         with open(os.path.join(d, 'stderr.txt'), 'w', encoding='utf-8') as err:
             try:
-                proc = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=err,
-                                      timeout=timeout_s, check=False)
+                proc = subprocess.run(_dying_with_parent(cmd), stdout=subprocess.DEVNULL,
+                                      stderr=err, timeout=timeout_s, check=False)
                 code = proc.returncode
             except subprocess.TimeoutExpired:
                 code = None

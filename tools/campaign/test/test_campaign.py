@@ -9,6 +9,7 @@ import subprocess
 import sys
 import tempfile
 import textwrap
+import time
 import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -179,6 +180,27 @@ class LocalEngine(unittest.TestCase):
         self.assertIn('summary identical to', r.stdout)
         self.assertTrue(os.path.getsize(os.path.join(self.out, 'runs', '00004', 'reproduce',
                                                      'descent.lcmlog')) > 0)
+
+    def test_a_killed_campaign_resumes_where_it_stopped(self):
+        proc = subprocess.Popen(['/usr/bin/python3', TOOL, 'run', TINY, '--out', self.out,
+                                 '--jobs', '1', '--fsw', FSW], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        second = os.path.join(self.out, 'runs', '00001', 'status.json')
+        for _ in range(600):
+            if os.path.exists(second) or proc.poll() is not None:
+                break
+            time.sleep(0.1)
+        proc.kill()  # SIGKILL: no cleanup; the run in flight dies with it
+        proc.wait()
+        done = sum(os.path.exists(os.path.join(self.out, 'runs', '%05d' % i, 'status.json'))
+                   for i in range(6))
+        self.assertGreaterEqual(done, 2)
+        self.assertLess(done, 6)
+        r = campaign('run', TINY, '--out', self.out, '--jobs', '2', '--no-refly')
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertIn('6 runs, %d done, %d to fly' % (done, 6 - done), r.stdout)
+        self.assertEqual(read_json(os.path.join(self.out, 'report', 'report.json'))['completed'],
+                         6)
 
     def check_report(self, report):
         nav = report['navigation']
