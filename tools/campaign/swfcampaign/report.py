@@ -8,6 +8,7 @@ import math
 import os
 
 from . import engine
+from . import spec as specmod
 
 # Position NEES of a consistent estimator is chi-square with 3 degrees of freedom: 95 % of the
 # outputs fall in its central interval.
@@ -158,6 +159,7 @@ def aggregate(out, spec):
         'runs_with_restarts': sum(1 for r in done if integrity(r, 'restarts') > 0),
         'degraded_frames': sum(integrity(r, 'frames_degraded') for r in done)}
 
+    report['sensitivity'] = sensitivity(spec, done)
     report['hazard'] = hazard_by_altitude(done)
     report['timing'] = timing(done)
     worst = sorted((r for r in done if r['summary'].get('final_pose_error_m') is not None),
@@ -198,6 +200,63 @@ def hazard_by_altitude(done):
             'runs_with_safe_site': len(with_site),
             'safe_site_clear_of_truth_hazards': clear,
             'safe_site_success_rate': clear / len(done) if done else None}
+
+
+def ranks(values):
+    """Ranks 1..n, ties sharing their mean rank."""
+    order = sorted(range(len(values)), key=lambda k: values[k])
+    r = [0.0] * len(values)
+    k = 0
+    while k < len(order):
+        m = k
+        while m + 1 < len(order) and values[order[m + 1]] == values[order[k]]:
+            m += 1
+        for j in range(k, m + 1):
+            r[order[j]] = (k + m) / 2.0 + 1.0
+        k = m + 1
+    return r
+
+
+def spearman(x, y):
+    if len(x) < 3:
+        return None
+    rx, ry = ranks(x), ranks(y)
+    mx, my = sum(rx) / len(rx), sum(ry) / len(ry)
+    sxy = sum((a - mx) * (b - my) for a, b in zip(rx, ry))
+    sxx = sum((a - mx) ** 2 for a in rx)
+    syy = sum((b - my) ** 2 for b in ry)
+    return sxy / math.sqrt(sxx * syy) if sxx > 0 and syy > 0 else None
+
+
+def sensitivity(spec, done):
+    """Which dispersion goes with a larger pose RMS error: Spearman's rank correlation of each
+    numeric dispersion's distance from its nominal (the mean of a normal, the value of a uniform;
+    vectors by their norm) with the run's pose RMS error, and for a choice the median error per
+    value. A screening aid, not a cause: with N runs |rho| below about 2 / sqrt(N) is noise."""
+    runs = [r for r in done if r['summary'].get('pose_rms_error_m') is not None]
+    err = [r['summary']['pose_rms_error_m'] for r in runs]
+    numeric, choices = [], []
+    for key, d in sorted(spec.dispersions.items()):
+        values = [r['run'].get('overrides', {}).get(key) for r in runs]
+        if d.kind == specmod.RUN_SEED or any(v is None for v in values):
+            continue
+        if d.kind == 'choice':
+            groups = {}
+            for v, e in zip(values, err):
+                groups.setdefault(v, []).append(e)
+            choices.append({'key': key, 'values': {v: {'runs': len(g), 'pose_rms_p50_m':
+                                                       percentile(g, 50)}
+                                                   for v, g in sorted(groups.items())}})
+            continue
+        nominal = d.params[0] if d.kind == 'normal' else [0.0] * len(d.params[0])
+        x = [math.sqrt(sum((float(c) - m) ** 2 for c, m in zip(v.split(','), nominal)))
+             for v in values]
+        numeric.append({'key': key, 'measure': 'abs(value - mean)' if d.kind == 'normal'
+                        else ('norm(value)' if len(nominal) > 1 else 'value'),
+                        'spearman_rho': spearman(x, err)})
+    numeric.sort(key=lambda row: -abs(row['spearman_rho'] or 0.0))
+    return {'runs': len(runs), 'numeric': numeric, 'choices': choices,
+            'noise_level': 2.0 / math.sqrt(len(runs)) if runs else None}
 
 
 def timing(done):
@@ -402,6 +461,20 @@ def markdown(report, pngs, reproduced):
                 ' / '.join(fmt(p) for p in b['detection_probability_by_height']),
                 ' / '.join(str(x) for x in b['rocks_resolved_by_height']),
                 fmt(b['false_alarm_rate'])))
+    sens = report['sensitivity']
+    if sens['numeric'] or sens['choices']:
+        lines += ['', '## Which dispersions go with the error', '',
+                  'Spearman rank correlation of each dispersion with the run\'s pose RMS error '
+                  'over %d runs (a screening aid, not a cause; |rho| below about %s is noise at '
+                  'this size).' % (sens['runs'], fmt(sens['noise_level'], 2)), '',
+                  '| dispersion | measured as | rho |', '|---|---|---|']
+        for row in sens['numeric']:
+            lines.append('| %s | %s | %s |' % (row['key'], row['measure'],
+                                             fmt(row['spearman_rho'], 2)))
+        for row in sens['choices']:
+            lines.append('| %s | median pose RMS by value | %s |' % (row['key'], ', '.join(
+                '%s: %s m (%d runs)' % (v, fmt(g['pose_rms_p50_m']), g['runs'])
+                for v, g in row['values'].items())))
     lines += ['', '## Worst runs', '',
               'By final position error; each line is the one command that flies it again '
               '(it keeps the LCM log and checks the summary against the campaign\'s).', '']

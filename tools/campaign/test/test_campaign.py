@@ -19,6 +19,7 @@ DEMO_CFG = os.path.abspath(os.path.join(HERE, '..', '..', '..', 'fsw', 'app', 'c
 TINY = os.path.join(HERE, 'tiny.yaml')
 FSW = os.environ.get('SWF_FSW', '')
 sys.path.insert(0, os.path.join(HERE, '..'))
+from swfcampaign import report as reportmod  # noqa: E402
 from swfcampaign import spec as specmod  # noqa: E402
 
 
@@ -140,6 +141,24 @@ class Seeds(unittest.TestCase):
         sd = (sum((x - mean) ** 2 for x in a) / len(a)) ** 0.5
         self.assertAlmostEqual(mean, 10.0, delta=0.15)
         self.assertAlmostEqual(sd, 2.0, delta=0.15)
+
+
+class Statistics(unittest.TestCase):
+    def test_percentiles_interpolate_between_ranks(self):
+        self.assertEqual(reportmod.percentile([3.0, 1.0, 2.0, 4.0], 50), 2.5)
+        self.assertEqual(reportmod.percentile([1.0, 2.0], 100), 2.0)
+        self.assertIsNone(reportmod.percentile([float('nan'), None], 50))
+
+    def test_rank_correlation(self):
+        self.assertAlmostEqual(reportmod.spearman([1, 2, 3, 4], [10, 20, 30, 45]), 1.0)
+        self.assertAlmostEqual(reportmod.spearman([1, 2, 3, 4], [9, 7, 5, 1]), -1.0)
+        self.assertEqual(reportmod.ranks([5, 1, 5, 2]), [3.5, 1.0, 3.5, 2.0])
+        self.assertIsNone(reportmod.spearman([1, 1, 1], [1, 2, 3]))
+
+    def test_altitude_bins_are_round(self):
+        self.assertEqual(reportmod.altitude_bins(95.0)[:3], [0.0, 10.0, 20.0])
+        self.assertEqual(reportmod.altitude_bins(95.0)[-1], 100.0)
+        self.assertEqual(reportmod.altitude_bins(9.0)[-1], 9.0)
 
 
 class LocalEngine(unittest.TestCase):
