@@ -59,6 +59,36 @@ struct Rig : FlightParts {
   }
 };
 
+// A run of the loop, cycle by cycle until its source is empty, the output thread's work done
+// after each cycle outside the counted scope.
+struct SteppedRun {
+  std::uint64_t allocations = 0;  // heap allocations inside Step()
+  int frames = 0;                 // cycles that returned kOk
+  // The first status other than kOk, kEmpty and (when timeouts are expected) kTimeout.
+  core::Status unexpected = core::Status::kOk;
+};
+
+SteppedRun StepUntilEmpty(FlightLoop* loop, Rig* rig, bool timeouts_expected,
+                          int max_cycles = 1000) {
+  SteppedRun run;
+  for (int cycle = 0; cycle < max_cycles; ++cycle) {
+    core::Status s;
+    {
+      testing::AllocationScope scope;
+      s = loop->Step();
+      run.allocations += scope.Count();
+    }
+    rig->output.DrainOnce();
+    if (s == core::Status::kEmpty) break;
+    run.frames += s == core::Status::kOk;
+    if (s != core::Status::kOk && !(timeouts_expected && s == core::Status::kTimeout)) {
+      run.unexpected = s;
+      break;
+    }
+  }
+  return run;
+}
+
 // Copies of the published hazard maps (output thread).
 class HazardCollector : public OutputObserver {
  public:
@@ -123,22 +153,10 @@ TEST_P(FlightLoopAllocations, NoAllocationOnTheRealTimePathOverAWholeDescent) {
       loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(), rig.channels.get(),
                      rig.world.get(), rig.hazard.get(), inertial ? rig.world.get() : nullptr),
       core::Status::kOk);
-  std::uint64_t allocations = 0;
-  int frames = 0;
-  for (;;) {
-    core::Status s;
-    {
-      testing::AllocationScope scope;
-      s = loop.Step();
-      allocations += scope.Count();
-    }
-    rig.output.DrainOnce();  // the output thread's work, outside the counted scope
-    if (s == core::Status::kEmpty) break;
-    ASSERT_EQ(s, core::Status::kOk);
-    ++frames;
-  }
-  EXPECT_EQ(frames, 91);
-  EXPECT_EQ(allocations, 0u);
+  const SteppedRun run = StepUntilEmpty(&loop, &rig, false);
+  ASSERT_EQ(run.unexpected, core::Status::kOk) << core::ToString(run.unexpected);
+  EXPECT_EQ(run.frames, 91);
+  EXPECT_EQ(run.allocations, 0u);
   EXPECT_EQ(loop.Counters().stage_errors, 0);
   EXPECT_EQ(loop.Counters().outputs_dropped, 0);
   EXPECT_EQ(loop.Counters().hazard_skipped, 0);
@@ -314,18 +332,8 @@ TEST(FlightLoopTest, CameraOutageIsCoastedOnTheMotionInputAndRecovered) {
   ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), &source, rig.channels.get(),
                            rig.world.get(), rig.hazard.get()),
             core::Status::kOk);
-  std::uint64_t allocations = 0;
-  for (int cycle = 0; cycle < 200; ++cycle) {
-    core::Status s;
-    {
-      testing::AllocationScope scope;
-      s = loop.Step();
-      allocations += scope.Count();
-    }
-    rig.output.DrainOnce();
-    if (s == core::Status::kEmpty) break;
-    ASSERT_TRUE(s == core::Status::kOk || s == core::Status::kTimeout) << core::ToString(s);
-  }
+  const SteppedRun run = StepUntilEmpty(&loop, &rig, true, 200);
+  ASSERT_EQ(run.unexpected, core::Status::kOk) << core::ToString(run.unexpected);
   const LoopCounters& c = loop.Counters();
   EXPECT_EQ(c.frames, 81);
   EXPECT_EQ(c.cycles_missed, 10);
@@ -334,7 +342,7 @@ TEST(FlightLoopTest, CameraOutageIsCoastedOnTheMotionInputAndRecovered) {
   EXPECT_EQ(c.source_recoveries, 1);
   EXPECT_EQ(c.longest_outage_cycles, 10);
   EXPECT_EQ(c.source_restarts, 1);  // silent for restart_after (1 s = 10 cycles): one restart
-  EXPECT_EQ(allocations, 0u);       // the scripted restart allocates nothing either
+  EXPECT_EQ(run.allocations, 0u);   // the scripted restart allocates nothing either
   EXPECT_STREQ(loop.SourceFault(), "outage camera-7: no frame (scripted)");
   ASSERT_EQ(navs.navs.size(), 91u);
   for (std::size_t i = 0; i < navs.navs.size(); ++i) {
@@ -518,21 +526,11 @@ TEST(FlightLoopTest, DroppedFramesAreGapsCountedOnceAndEvaluatedAgainstTheirOwnT
   ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
                            rig.channels.get(), rig.world.get(), rig.hazard.get()),
             core::Status::kOk);
-  std::uint64_t allocations = 0;
-  for (;;) {
-    core::Status s;
-    {
-      testing::AllocationScope scope;
-      s = loop.Step();
-      allocations += scope.Count();
-    }
-    rig.output.DrainOnce();
-    if (s == core::Status::kEmpty) break;
-    ASSERT_EQ(s, core::Status::kOk);
-  }
+  const SteppedRun run = StepUntilEmpty(&loop, &rig, false);
+  ASSERT_EQ(run.unexpected, core::Status::kOk) << core::ToString(run.unexpected);
   loop.PublishHealth();
   rig.output.DrainOnce();
-  EXPECT_EQ(allocations, 0u);
+  EXPECT_EQ(run.allocations, 0u);
   EXPECT_EQ(loop.Counters().frames, world.DeliveredFrames());
   EXPECT_EQ(loop.Counters().cycles_missed, 0);  // a gap, not an outage of the frame group
   EXPECT_EQ(health.last.frames, world.DeliveredFrames());

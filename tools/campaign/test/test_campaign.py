@@ -93,24 +93,24 @@ class SpecErrors(unittest.TestCase):
             with self.subTest(expected=expected):
                 self.assertTrue(self.error(body).startswith(expected), self.error(body))
 
-    def test_unknown_config_key_is_refused_by_swf_fsw_at_its_line(self):
+    def refused_by_swf_fsw(self, dispersions):
+        """The campaign's stderr for a spec with these dispersions, which must be refused
+        (exit 2) before anything is written."""
         path = os.path.join(self.dir, 'spec.yaml')
         with open(path, 'w', encoding='utf-8') as f:
-            f.write(self.HEAD.replace('CONFIG', DEMO_CFG) +
-                    'dispersions:\n  sim.seed: run_seed\n  sim.wobble_m: {uniform: [0, 1]}\n')
+            f.write(self.HEAD.replace('CONFIG', DEMO_CFG) + 'dispersions:\n' + dispersions)
         r = campaign('run', path, '--out', os.path.join(self.dir, 'out'))
         self.assertEqual(r.returncode, 2, r.stderr)
-        self.assertIn('%s:7: sim.wobble_m: swf-fsw refuses it' % path, r.stderr)
         self.assertFalse(os.path.exists(os.path.join(self.dir, 'out')))
+        return r.stderr.replace(path, 'spec.yaml')
+
+    def test_unknown_config_key_is_refused_by_swf_fsw_at_its_line(self):
+        self.assertIn('spec.yaml:7: sim.wobble_m: swf-fsw refuses it', self.refused_by_swf_fsw(
+            '  sim.seed: run_seed\n  sim.wobble_m: {uniform: [0, 1]}\n'))
 
     def test_a_value_swf_fsw_refuses_at_the_distribution_edge(self):
-        path = os.path.join(self.dir, 'spec.yaml')
-        with open(path, 'w', encoding='utf-8') as f:
-            f.write(self.HEAD.replace('CONFIG', DEMO_CFG) +
-                    'dispersions:\n  sim.hfov_deg: {uniform: [20, 171]}\n')
-        r = campaign('run', path, '--out', os.path.join(self.dir, 'out'))
-        self.assertEqual(r.returncode, 2, r.stderr)
-        self.assertIn('%s:6: dispersions.sim.hfov_deg: swf-fsw refuses 171.0' % path, r.stderr)
+        self.assertIn('spec.yaml:6: dispersions.sim.hfov_deg: swf-fsw refuses 171.0',
+                      self.refused_by_swf_fsw('  sim.hfov_deg: {uniform: [20, 171]}\n'))
 
 
 class Seeds(unittest.TestCase):
