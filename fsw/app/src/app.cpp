@@ -1077,6 +1077,8 @@ void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int
   po->min_quality = static_cast<float>(config.min_quality);
   po->process_sigma_m = config.process_sigma_m;
   po->process_sigma_rad = config.process_sigma_rad;
+  po->calibration_baseline_sigma_m = config.calibration_baseline_sigma_m;
+  po->calibration_disparity_sigma_px = config.calibration_disparity_sigma_px;
 }
 
 core::Status AssembleFlightParts(const PipelineOptions& po,

@@ -426,6 +426,9 @@ const std::map<std::string, Setter>& Fields() {
     f["min_quality"] = Double(&FswConfig::min_quality, -1.0, 1.0);
     f["process_sigma_m"] = Double(&FswConfig::process_sigma_m, 1e-6, 1e3);
     f["process_sigma_rad"] = Double(&FswConfig::process_sigma_rad, 1e-8, 3.0);
+    f["calibration.baseline_sigma_m"] = Double(&FswConfig::calibration_baseline_sigma_m, 0.0, 1.0);
+    f["calibration.disparity_sigma_px"] =
+        Double(&FswConfig::calibration_disparity_sigma_px, 0.0, 10.0);
     f["max_tracks"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_tracks; }, 8,
                                         static_cast<std::int64_t>(frontend::kMaxTracks),
                                         " (frontend::kMaxTracks, the compiled track capacity)");

@@ -202,7 +202,10 @@ Status Pipeline::Estimate(const Pose<double>* motion_input) {
                           ? Vec3<double>((newest.t - previous_pose_.t) / dt_s)
                           : Vec3<double>::Zero();
     if (dt_s > 0.0 && !after_outage) last_dt_s_ = dt_s;
-    if (has_previous_pose_) distance_m_ += (newest.t - previous_pose_.t).norm();
+    if (has_previous_pose_) {
+      distance_m_ += (newest.t - previous_pose_.t).norm();
+      AccumulateCalibrationSensitivity(newest.t - previous_pose_.t);
+    }
     const bool overruled =
         Visit([](const auto& filter) { return filter.Summary().motion_overruled; });
     if (overruled && (motion != nullptr || inertial_)) {
@@ -844,7 +847,37 @@ Status Pipeline::ComputeCovariances() {
   camera_covariance_ = inertial_ ? inertial_model_.CameraPoseCovariance(
                                        inertial_->NewestPose(), inertial_->NewestPoseCovariance())
                                  : swf_->NewestPoseCovariance();
+  // The calibration's share: each consider parameter adds sigma^2 s s^T.
+  const double sb = options_.calibration_baseline_sigma_m;
+  const double sd = options_.calibration_disparity_sigma_px;
+  camera_covariance_.topLeftCorner<3, 3>() +=
+      sb * sb * baseline_sensitivity_ * baseline_sensitivity_.transpose() +
+      sd * sd * disparity_sensitivity_ * disparity_sensitivity_.transpose();
   return Status::kOk;
+}
+
+void Pipeline::AccumulateCalibrationSensitivity(const Vec3<double>& step_m) {
+  if (options_.calibration_baseline_sigma_m <= 0.0 &&
+      options_.calibration_disparity_sigma_px <= 0.0)
+    return;
+  const estimator::StereoCamera<double>& cam = options_.camera;
+  // The range the motion was measured across: the mean depth of the window's landmarks from
+  // where the step began.
+  double depth_sum = 0.0;
+  int count = 0;
+  Visit([&](const auto& filter) {
+    filter.ForEachLandmark([&](std::int64_t, const Vec3<double>& p, int) {
+      const double z = previous_pose_.ApplyInverse(p).z();
+      if (z > 0.0) {
+        depth_sum += z;
+        ++count;
+      }
+    });
+  });
+  baseline_sensitivity_ += step_m / cam.baseline_m;
+  if (count > 0) {
+    disparity_sensitivity_ += (depth_sum / count) / (cam.fx * cam.baseline_m) * step_m;
+  }
 }
 
 }  // namespace swf::app

@@ -1,10 +1,13 @@
-// The pipeline's motion-input gating over a simulated descent: glitches outside the envelope
+// The pipeline over a simulated descent: the motion-input gating (glitches outside the envelope
 // (a 1 km jump, -1e300, a 3 rad turn) are refused before the filter and a subtler one (0.5 m,
 // 25 sigma) is overruled by the images; each is counted and flagged MOTION_REJECTED, never
-// published VALID, and the estimate stays with the truth.
+// published VALID, and the estimate stays with the truth), and the stated calibration
+// uncertainty's share of the published covariance.
 #include "swf/app/pipeline.hpp"
 
 #include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
 
 #include <cstdio>
 #include <memory>
@@ -25,7 +28,7 @@ struct Descent {
   std::unique_ptr<SimWorld> world = std::make_unique<SimWorld>();
   std::unique_ptr<Pipeline> pipeline = std::make_unique<Pipeline>();
 
-  Descent() {
+  explicit Descent(double baseline_sigma_m = 0.0, double disparity_sigma_px = 0.0) {
     std::string error;
     EXPECT_TRUE(
         ParseConfig("source: sim\nsim.frames: 60\nsim.width_px: 256\nsim.height_px: 192\n"
@@ -47,6 +50,8 @@ struct Descent {
     po.process_sigma_rad = 0.0005;
     po.integrity.max_speed_mps = 50.0;
     po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
+    po.calibration_baseline_sigma_m = baseline_sigma_m;
+    po.calibration_disparity_sigma_px = disparity_sigma_px;
     EXPECT_EQ(pipeline->Configure(po), core::Status::kOk);
   }
 
@@ -72,7 +77,6 @@ struct Descent {
       ASSERT_EQ(pipeline->Rectify(frame), core::Status::kOk);
       ASSERT_EQ(pipeline->Track(), core::Status::kOk);
       ASSERT_EQ(pipeline->Estimate(has_motion ? &motion : nullptr), core::Status::kOk);
-      NavOutput nav;
       pipeline->MakeNav(&nav);
       const Vec3<double> truth = world->Trajectory().WorldTCamera(k).t;
       status[k] = nav.status;
@@ -84,6 +88,7 @@ struct Descent {
     }
   }
 
+  NavOutput nav;  // the last frame's
   std::int8_t status[60] = {};
   std::uint32_t flags[60] = {};
   double error_m[60] = {};
@@ -122,6 +127,54 @@ TEST(PipelineTest, MotionGlitchesAreRefusedOrOverruledAndNeverPublishedValid) {
   EXPECT_LT(worst_glitched_m, worst_clean_m + 0.3);
   std::printf("worst position error: clean %.3f m, with four glitches %.3f m\n", worst_clean_m,
               worst_glitched_m);
+}
+
+Eigen::Matrix3d PositionCovariance(const NavOutput& nav) {
+  Eigen::Matrix3d c;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) c(i, j) = nav.covariance[6 * i + j];
+  return c;
+}
+
+// GIVEN the same descent flown with a perfect calibration stated and with a baseline 1-sigma of
+// 1 cm (then a disparity bias of 0.1 px) WHEN the last output is compared THEN the estimates are
+// identical (a consider parameter changes no estimate), and the baseline's share of the position
+// covariance is exactly sigma^2 d d^T / b^2 with d the estimated displacement (its sensitivity
+// telescopes), while the disparity bias's is rank one, along d within 3 deg, its size between
+// what the nearest and the farthest range of the descent (41-100 m) give.
+TEST(PipelineTest, StatedCalibrationUncertaintyWidensTheCovarianceAlongThePath) {
+  const auto fly = [](double baseline_sigma_m, double disparity_sigma_px) {
+    Descent d(baseline_sigma_m, disparity_sigma_px);
+    d.Run([](std::int32_t, Pose<double>*) {});
+    return d.nav;
+  };
+  const NavOutput perfect = fly(0.0, 0.0);
+  const NavOutput baseline = fly(0.01, 0.0);
+  const NavOutput disparity = fly(0.0, 0.1);
+  const Descent reference;
+  const Vec3<double> start = reference.world->Trajectory().WorldTCamera(0).t;
+  const double fx_b = reference.world->Camera().fx * reference.world->Camera().baseline_m;
+  const Vec3<double> d = Vec3<double>(perfect.position_world_m[0], perfect.position_world_m[1],
+                                      perfect.position_world_m[2]) -
+                         start;
+  ASSERT_GT(d.norm(), 50.0);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(baseline.position_world_m[i], perfect.position_world_m[i]);
+    EXPECT_EQ(disparity.position_world_m[i], perfect.position_world_m[i]);
+  }
+  const Eigen::Matrix3d from_baseline = PositionCovariance(baseline) - PositionCovariance(perfect);
+  EXPECT_LT((from_baseline - 1e-4 * d * d.transpose()).norm(), 1e-9 * d.squaredNorm());
+  EXPECT_GT(baseline.vertical_protection_m, perfect.vertical_protection_m + 0.01 * d.norm());
+
+  // sigma^2 s s^T: one non-zero eigenvalue, its axis along the path (every step weighs by its
+  // range, so not exactly along d).
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> bias(PositionCovariance(disparity) -
+                                                            PositionCovariance(perfect));
+  const double along = std::sqrt(bias.eigenvalues()(2));
+  EXPECT_LT(std::abs(bias.eigenvalues()(1)), 1e-6 * along * along);
+  EXPECT_GT(std::abs(bias.eigenvectors().col(2).dot(d.normalized())), std::cos(0.05));
+  EXPECT_GT(along, 0.1 * 30.0 * d.norm() / fx_b);
+  EXPECT_LT(along, 0.1 * 110.0 * d.norm() / fx_b);
 }
 
 }  // namespace

@@ -149,6 +149,10 @@ struct FswConfig {
   double min_quality = 0.7;
   double process_sigma_m = 0.5;
   double process_sigma_rad = 0.01;
+  // The stereo calibration's uncertainty, 1-sigma (PipelineOptions::calibration_*): baseline
+  // error and disparity bias (fx times a relative rotation about the camera y axis).
+  double calibration_baseline_sigma_m = 0.0;
+  double calibration_disparity_sigma_px = 0.0;
   std::int32_t max_tracks = 150;
   std::int32_t max_disparity_px = 128;
 

@@ -83,6 +83,14 @@ struct PipelineOptions {
   // gate, SwfOptions::gate_probability, catches the subtler ones against the images).
   double max_turn_rate_radps = 3.0;
   estimator::Pose<double> initial_world_T_camera;
+  // Stereo calibration errors the filter does not estimate ("consider" parameters, 1-sigma): the
+  // baseline's, and a disparity bias (a relative rotation of the cameras about their y axis by
+  // an angle a shifts every disparity by fx * a). Either one scales every range, so the motion
+  // estimated from the images, and the position error it leaves grows along the path. That
+  // error is added to the published covariance and so to the protection levels. 0 states a
+  // perfect calibration.
+  double calibration_baseline_sigma_m = 0.0;
+  double calibration_disparity_sigma_px = 0.0;
   estimator::IntegrityOptions integrity;
   ImuOptions imu;  // enabled: the stereo-inertial estimator (see the file comment)
 };
@@ -326,6 +334,12 @@ class Pipeline {
   double dr_distance_m_ = 0.0;
   double last_dt_s_ = 0.0;
   double distance_m_ = 0.0;  // flown since the start (the protection levels' drift bound)
+  // Position error per unit of each calibration error (calibration_*_sigma), summed along the
+  // path: a baseline error db scales a range by -db / b, a disparity bias dd by -z dd / (fx b),
+  // and the motion estimated across that range by the same factor.
+  void AccumulateCalibrationSensitivity(const estimator::Vec3<double>& step_m);
+  estimator::Vec3<double> baseline_sensitivity_ = estimator::Vec3<double>::Zero();   // m / m
+  estimator::Vec3<double> disparity_sensitivity_ = estimator::Vec3<double>::Zero();  // m / px
   // Evidence of the newest frame's measurements (image spread, disparities).
   std::unique_ptr<float[]> disparities_;
   int num_disparities_ = 0;
