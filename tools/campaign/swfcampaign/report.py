@@ -373,7 +373,9 @@ def plots(report, outputs, edges, done, report_dir):
     if stages:
         fig, ax = plt.subplots(figsize=(7.2, 4.2))
         names = sorted(stages)
-        ax.boxplot([stages[n] for n in names], labels=names)
+        box = ax.boxplot([stages[n] for n in names], labels=names)
+        ax.legend([box['boxes'][0], box['medians'][0], box['whiskers'][0]],
+                  ['quartiles of the runs', 'median run', 'range (1.5 IQR)'], fontsize=8)
         ax.set_yscale('log')
         ax.set_ylabel('per-run p99 (ms)')
         ax.set_xlabel('stage')
