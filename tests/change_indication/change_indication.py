@@ -136,14 +136,14 @@ def compare(reference, current):
             break
     else:
         print('changed: %d lines in the reference, %d now' % (len(ref_lines), len(cur_lines)))
-    print('if the change is intended: %s update <swf-fsw>' % os.path.relpath(__file__, ROOT))
+    print('if the change is intended: %s update <swf-sil>' % os.path.relpath(__file__, ROOT))
     return False
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('action', choices=('check', 'update'))
-    parser.add_argument('fsw', help='the swf-fsw executable')
+    parser.add_argument('fsw', help='the swf-sil executable')
     parser.add_argument('--reference', default=DEFAULT_REFERENCE)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as workdir:

@@ -1,5 +1,5 @@
 #!/bin/sh
-# End to end over the network stack: swf-fsw and swf-guidance as separate processes talking LCM
+# End to end over the network stack: swf-sil and swf-guidance as separate processes talking LCM
 # over UDP multicast inside a private network namespace whose only interface is loopback (with a
 # multicast route), so nothing ever reaches a real network (RECIPES.md). The flight process flies
 # the 30-frame test descent; the consumer must receive every output (sequence numbers checked:

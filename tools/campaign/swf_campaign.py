@@ -1,17 +1,17 @@
 #!/usr/bin/python3
-"""Monte Carlo dispersion campaigns of the simulated descent, flown by swf-fsw in lockstep.
+"""Monte Carlo dispersion campaigns of the simulated descent, flown by swf-sil in lockstep.
 
-  swf_campaign.py run SPEC [--out DIR] [--engine local|slurm] [--jobs N] [--fsw PATH]
+  swf_campaign.py run SPEC [--out DIR] [--engine local|slurm] [--jobs N] [--sil PATH]
       validate the spec, fly every run not yet done (resumable), write the report
   swf_campaign.py report OUT          aggregate OUT's runs again into OUT/report/
   swf_campaign.py reproduce OUT RUN   fly one run again alone, keep its LCM log, compare
-  swf_campaign.py show SPEC RUN       print the swf-fsw command of one run
+  swf_campaign.py show SPEC RUN       print the swf-sil command of one run
   swf_campaign.py worker OUT ...      one Slurm array task (used by the slurm engine)
 
 Exit status: 0 every run completed (whatever its navigation verdict, which the report gives);
 1 some runs did not complete (crashed, killed, timed out, a write failed: listed, their inputs
 kept; rerun the same command to fly only those) or a reproduced run differs; 2 refused (a bad
-spec, a missing swf-fsw, OUT holding another campaign). tools/campaign/README.md has the spec
+spec, a missing swf-sil, OUT holding another campaign). tools/campaign/README.md has the spec
 format and the cluster setup.
 """
 import argparse
@@ -22,15 +22,15 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from swfcampaign import engine, report, spec as specmod  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
-DEFAULT_FSW = os.path.join(ROOT, 'build', 'release', 'bin', 'swf-fsw')
+DEFAULT_SIL = os.path.join(ROOT, 'build', 'release', 'bin', 'swf-sil')
 
 
-def refly_worst(out, spec, fsw, rep):
+def refly_worst(out, spec, sil, rep):
     """The worst runs' LCM logs: fly each again with its log kept (lockstep runs are
     deterministic) and check that it gives the same summary."""
     reproduced = {}
     for w in rep['worst_runs'][:spec.keep_worst]:
-        status, same = engine.reproduce(out, w['run'], fsw, spec)
+        status, same = engine.reproduce(out, w['run'], sil, spec)
         reproduced[w['run']] = bool(same)
         print('  worst run %d re-flown with its log: %s' % (
             w['run'], 'summary identical' if same else 'SUMMARY DIFFERS: ' +
@@ -38,9 +38,9 @@ def refly_worst(out, spec, fsw, rep):
     return reproduced
 
 
-def write_report(out, spec, fsw, refly, plots):
+def write_report(out, spec, sil, refly, plots):
     rep = report.write(out, spec, with_plots=False)
-    reproduced = refly_worst(out, spec, fsw, rep) if refly and spec.keep_worst > 0 else {}
+    reproduced = refly_worst(out, spec, sil, rep) if refly and spec.keep_worst > 0 else {}
     rep = report.write(out, spec, reproduced, with_plots=plots)
     n = rep['navigation']['final_position_error_m']
     print('campaign %s: %d/%d runs completed %s; final position error p50 %s m, p95 %s m, max '
@@ -61,15 +61,15 @@ def cmd_run(a):
     spec = specmod.load(a.spec)
     if a.runs is not None:
         spec.runs = a.runs
-    engine.check_fsw(a.fsw)
-    engine.check_against_fsw(spec, a.fsw)
+    engine.check_sil(a.sil)
+    engine.check_against_sil(spec, a.sil)
     out = a.out or os.path.join(ROOT, 'out', 'campaign', spec.name)
     engine.prepare(spec, out)
     spec = engine.load_campaign(out)
     if a.engine == 'local':
-        statuses = engine.run_local(spec, out, a.fsw, a.jobs)
+        statuses = engine.run_local(spec, out, a.sil, a.jobs)
     else:
-        statuses = engine.run_slurm(spec, out, a.fsw, partition=a.partition,
+        statuses = engine.run_slurm(spec, out, a.sil, partition=a.partition,
                                     time_limit_min=a.time_limit, max_parallel=a.max_parallel,
                                     wait=not a.no_wait)
         if a.no_wait:
@@ -81,7 +81,7 @@ def cmd_run(a):
         for s in lost:
             print('  run %d: %s' % (s['index'], engine.describe(s)), file=sys.stderr)
     try:
-        code = write_report(out, spec, a.fsw, refly=not a.no_refly, plots=True)
+        code = write_report(out, spec, a.sil, refly=not a.no_refly, plots=True)
     except OSError as e:
         print('campaign %s: cannot write the report: %s: %s (the runs are kept; '
               '`swf_campaign.py report %s` retries)' % (spec.name, e.filename, e.strerror, out),
@@ -92,19 +92,19 @@ def cmd_run(a):
 
 def cmd_report(a):
     spec = engine.load_campaign(a.out)
-    return write_report(a.out, spec, a.fsw, refly=not a.no_refly, plots=not a.no_plots)
+    return write_report(a.out, spec, a.sil, refly=not a.no_refly, plots=not a.no_plots)
 
 
 def cmd_reproduce(a):
     spec = engine.load_campaign(a.out)
-    engine.check_fsw(a.fsw)
+    engine.check_sil(a.sil)
     if not 0 <= a.run < spec.runs:
         raise engine.CampaignError('run %d: the campaign has runs 0 .. %d' % (a.run,
                                                                             spec.runs - 1))
     dest = os.path.join(engine.run_dir(a.out, a.run), 'reproduce')
     if os.path.exists(os.path.join(dest, 'status.json')):
         os.remove(os.path.join(dest, 'status.json'))
-    status, same = engine.reproduce(a.out, a.run, a.fsw, spec)
+    status, same = engine.reproduce(a.out, a.run, a.sil, spec)
     run = engine.read_json(os.path.join(dest, 'run.json')) or {}
     print('run %d: %s; flown again in %s (LCM log %s)' % (
         a.run, engine.describe(status), dest, engine.LOG_NAME))
@@ -125,7 +125,7 @@ def cmd_show(a):
                                                                             spec.runs - 1))
     out = os.path.join(ROOT, 'out', 'campaign', spec.name)
     d = engine.run_dir(out, a.run)
-    cmd = engine.fsw_command(a.fsw, out, a.run, specmod.overrides(spec, a.run),
+    cmd = engine.sil_command(a.sil, out, a.run, specmod.overrides(spec, a.run),
                              os.path.join(d, 'summary.json'), os.path.join(d, engine.LOG_NAME))
     cmd[2] = spec.config
     print(engine.command_line(cmd))
@@ -141,7 +141,7 @@ def cmd_worker(a):
         with open(a.list, encoding='utf-8') as f:
             lines = f.read().split()
         indices.append(int(lines[int(task)]))
-    return engine.worker(a.out, a.fsw, indices)
+    return engine.worker(a.out, a.sil, indices)
 
 
 def parse(argv):
@@ -172,7 +172,7 @@ def parse(argv):
     rp = sub.add_parser('reproduce', help='fly one run again, keep its log, compare')
     rp.add_argument('out')
     rp.add_argument('run', type=int)
-    s = sub.add_parser('show', help='print one run\'s swf-fsw command')
+    s = sub.add_parser('show', help='print one run\'s swf-sil command')
     s.add_argument('spec')
     s.add_argument('run', type=int)
     w = sub.add_parser('worker', help='one Slurm array task (internal)')
@@ -180,8 +180,8 @@ def parse(argv):
     w.add_argument('--index', type=int)
     w.add_argument('--list')
     for q in (r, rep, rp, s, w):
-        q.add_argument('--fsw', default=DEFAULT_FSW,
-                       help='the swf-fsw binary (default build/release/bin/swf-fsw)')
+        q.add_argument('--sil', default=DEFAULT_SIL,
+                       help='the swf-sil binary (default build/release/bin/swf-sil)')
     a = p.parse_args(argv)
     if getattr(a, 'jobs', 1) < 1:
         p.error('--jobs must be at least 1')

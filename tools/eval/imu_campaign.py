@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The simulated descent of the demo (fsw/app/config/demo.cfg) over many seeds, flown by swf-fsw
+"""The simulated descent of the demo (fsw/app/config/demo.cfg) over many seeds, flown by swf-sil
 with four process inputs, to compare what the IMU brings:
 
   ideal      stereo with the demo's idealized motion input (the true relative motion plus white
@@ -8,7 +8,7 @@ with four process inputs, to compare what the IMU brings:
   mems       stereo-inertial with the simulated ADIS16448 (sim.imu_unit: mems)
   tactical   stereo-inertial with the simulated HG1700 (sim.imu_unit: tactical)
 
-Each run's summary (swf-fsw summary.path) gives the pose RMS error over the descent, the last
+Each run's summary (swf-sil summary.path) gives the pose RMS error over the descent, the last
 landmark map's RMS error, the position NEES of every output, the integrity counts, and for the
 inertial runs the biases against the unit's truth and the RMS error of the unit alone from the
 same start (IMU-only dead reckoning). Writes OUT/runs.json (every run) and OUT/summary.md.
@@ -122,7 +122,7 @@ def summarize(records, seeds):
             inside, counted, valid, degraded, invalid, violations))
     text = ['## Stereo-inertial descent campaign (`tools/eval/imu_campaign.py`)', '',
             'Seeds %d-%d of the demo descent (fsw/app/config/demo.cfg, 512 x 384 px, 100 m to '
-            '10 m at 10 m/s, lockstep), each flown by swf-fsw with four process inputs. NEES band '
+            '10 m at 10 m/s, lockstep), each flown by swf-sil with four process inputs. NEES band '
             '(95 %%, mean over %d seeds at a frame): [%.2f, %.2f].' % (
                 seeds[0], seeds[-1], len(seeds), lo, hi), ''] + lines + ['']
     for unit in ('mems', 'tactical'):

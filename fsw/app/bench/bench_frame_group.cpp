@@ -17,14 +17,14 @@
 #include "swf/app/app.hpp"
 #include "swf/app/config.hpp"
 #include "swf/app/pipeline.hpp"
-#include "swf/app/sim_world.hpp"
+#include "swf/sil/sil.hpp"
 
 namespace swf::app {
 namespace {
 
 struct Descent {
   FswConfig config;
-  std::unique_ptr<SimWorld> world = std::make_unique<SimWorld>();
+  std::unique_ptr<sil::SimWorld> world = std::make_unique<sil::SimWorld>();
   PipelineOptions options;
 };
 
@@ -41,7 +41,7 @@ const Descent* RenderedDescent(int width, int height, bool inertial) {
       "sim.height_px: " + std::to_string(height),
       // The disparity at the lowest altitude grows with the image (configuration check).
       "max_disparity_px: " + std::to_string(width > 512 ? 240 : 160)};
-  if (!LoadConfig(SWF_DEMO_CONFIG, overrides, &d->config, &error) ||
+  if (!LoadConfig(SWF_DEMO_CONFIG, overrides, &d->config, &error, sil::SimConfigExtension()) ||
       !d->world->Build(d->config, &error) || !d->world->RenderAll(2, nullptr, &error)) {
     std::fprintf(stderr, "bench_frame_group: %s\n", error.c_str());
     return nullptr;
@@ -51,7 +51,7 @@ const Descent* RenderedDescent(int width, int height, bool inertial) {
   po.width_px = d->world->Width();
   po.height_px = d->world->Height();
   po.initial_world_T_camera = d->world->Trajectory().WorldTCamera(0);
-  if (inertial) po.imu = ImuOptionsFor(d->config, &d->world->Trajectory());
+  if (inertial) po.imu = sil::SimImuOptions(d->config, &d->world->Trajectory());
   std::int8_t nav_mode = 0;
   ApplyEstimatorConfig(d->config, &po, &nav_mode);
   slot = std::move(d);
@@ -72,7 +72,7 @@ void BM_FrameGroup(benchmark::State& state) {
     state.SkipWithError("the descent could not be built (SWF_SHARED_DIR?)");
     return;
   }
-  SimWorld& world = *d->world;
+  sil::SimWorld& world = *d->world;
   static const std::vector<estimator::ImuSample<double>> kNoSamples;
   const std::vector<estimator::ImuSample<double>>& samples =
       inertial ? world.ImuUnit()->Samples() : kNoSamples;

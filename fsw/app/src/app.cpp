@@ -17,13 +17,11 @@
 #include <vector>
 
 #include "swf/app/config.hpp"
-#include "swf/app/evaluation.hpp"
 #include "swf/app/flight_loop.hpp"
 #include "swf/app/hazard_stage.hpp"
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/realtime.hpp"
-#include "swf/app/sim_world.hpp"
 #if SWF_APP_HAVE_ARAVIS
 #include <arv.h>
 
@@ -32,9 +30,7 @@
 #if SWF_APP_HAVE_V4L2
 #include "swf/app/v4l2_source.hpp"
 #endif
-#include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/image_io/image_io.hpp"
-#include "swf/sim/rig.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 
 namespace swf::app {
@@ -46,16 +42,18 @@ void OnSignal(int /*sig*/) {
   if (g_loop != nullptr) g_loop->RequestStop();
 }
 
-int Usage(bool replay) {
-  if (replay) {
+int Usage(const Program& program) {
+  if (program.replay) {
     std::fprintf(stderr,
-                 "usage: swf-replay --config FILE --log IN.lcmlog [--record OUT.lcmlog] "
-                 "[--set 'key: value']... [--progress]\n");
+                 "usage: %s --config FILE --log IN.lcmlog [--record OUT.lcmlog] "
+                 "[--set 'key: value']... [--progress]\n",
+                 program.tool);
   } else {
     std::fprintf(stderr,
-                 "usage: swf-fsw --config FILE [--set 'key: value']... [--progress] [--check]\n"
+                 "usage: %s --config FILE [--set 'key: value']... [--progress] [--check]\n"
                  "  --check  validate the configuration (the file, every --set, the output paths) "
-                 "and exit 0 without running (2: refused)\n");
+                 "and exit 0 without running (2: refused)\n",
+                 program.tool);
   }
   return 2;
 }
@@ -63,7 +61,8 @@ int Usage(bool replay) {
 // Progress on stderr: one line rewritten in place (a terminal) or every 10th frame (a file).
 class Progress : public OutputObserver {
  public:
-  void Reset(std::int64_t total, bool enabled, bool tty) {
+  void Reset(const char* tool, std::int64_t total, bool enabled, bool tty) {
+    tool_ = tool;
     total_ = total;
     enabled_ = enabled;
     tty_ = tty;
@@ -74,8 +73,8 @@ class Progress : public OutputObserver {
     if (!enabled_) return;
     ++navs_;
     if (!tty_ && navs_ % 10 != 0 && navs_ != total_) return;
-    std::fprintf(stderr, "%sswf-fsw: frame %lld/%lld  altitude %.1f m  landmarks in map %d%s",
-                 tty_ ? "\r" : "", static_cast<long long>(r.nav.frame_seq + 1),
+    std::fprintf(stderr, "%s%s: frame %lld/%lld  altitude %.1f m  landmarks in map %d%s",
+                 tty_ ? "\r" : "", tool_, static_cast<long long>(r.nav.frame_seq + 1),
                  static_cast<long long>(total_), r.nav.position_world_m[2], landmarks_,
                  tty_ ? "   " : "\n");
   }
@@ -85,6 +84,7 @@ class Progress : public OutputObserver {
   }
 
  private:
+  const char* tool_ = "";
   std::int64_t total_ = 0;
   bool enabled_ = false;
   bool tty_ = false;
@@ -135,50 +135,14 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
   return o;
 }
 
-// The run's verdict, computed from the numbers (fsw/app/README.md "Results and exit codes"):
-//   failed   (exit 1) the run could not do its job: the loop or the source failed, the log was
-//            damaged, outputs were lost, the final estimate is INVALID, or (with truth) a VALID
-//            output's true error exceeded its protection level
-//   degraded (exit 3) it did, with reservations: an INVALID frame, a restart of the filter,
-//            more than kMaxDegradedFraction of the frames DEGRADED, an output lost to a full
-//            publisher queue, more than kMaxLostFraction of the frames dropped, refused by the
-//            source or failed in a stage, or (a replayed log) any frame missing from the log or
-//            refused as duplicated or out of order: a log is a record, and a record with a hole
-//            or a swapped frame does not replay the run it recorded
-//   ok       (exit 0) none of those
-struct Verdict {
-  const char* result = "ok";
-  int exit_code = 0;
-  std::string reasons;  // comma-separated, for the summary and the log
-};
-constexpr double kMaxLostFraction = 0.01;
-constexpr double kMaxDegradedFraction = 0.10;
-
-void Fail(Verdict* v, const std::string& reason) {
-  v->result = "failed";
-  v->exit_code = 1;
-  v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
-}
-void Degrade(Verdict* v, const std::string& reason) {
-  if (v->exit_code == 0) {
-    v->result = "degraded";
-    v->exit_code = 3;
-  }
-  v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
-}
-
 Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
                  const IntegrityCounters& integrity, estimator::NavIntegrity final_status,
-                 const EvaluationResult* eval, const LogStreamStats* log) {
+                 const LogStreamStats* log) {
   Verdict v;
   const double frames = static_cast<double>(std::max<std::int64_t>(1, counters.frames));
   if (counters.frames == 0) Fail(&v, "no frame was processed");
   if (counters.frames > 0 && final_status == estimator::NavIntegrity::kInvalid)
     Fail(&v, "the final estimate is INVALID");
-  if (eval != nullptr && eval->protection_violations > 0) {
-    Fail(&v, std::to_string(eval->protection_violations) +
-                 " VALID outputs erred beyond their protection level");
-  }
   if (integrity.frames_invalid > 0)
     Degrade(&v, std::to_string(integrity.frames_invalid) + " INVALID frames");
   if (integrity.restarts > 0) Degrade(&v, std::to_string(integrity.restarts) + " filter restarts");
@@ -198,7 +162,7 @@ Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
   return v;
 }
 
-void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const EvaluationResult* eval) {
+void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const ProcessExtension* truth) {
   std::fprintf(f,
                "  \"integrity\": {\"frames_valid\": %lld, \"frames_degraded\": %lld, "
                "\"frames_invalid\": %lld, \"restarts\": %lld, \"last_recovery_frames\": %d, "
@@ -219,37 +183,9 @@ void WriteIntegrity(std::FILE* f, const IntegrityCounters& c, const EvaluationRe
   for (int b = 0; b < estimator::kNumIntegrityFlags; ++b)
     std::fprintf(f, "%s%lld", b > 0 ? ", " : "", static_cast<long long>(c.flag_counts[b]));
   std::fprintf(f, "]");
-  if (eval != nullptr) {
-    std::fprintf(f,
-                 ", \"valid_outputs_vs_truth\": %lld, \"protection_violations\": %lld, "
-                 "\"max_error_over_protection\": %.4f",
-                 static_cast<long long>(eval->valid_navs),
-                 static_cast<long long>(eval->protection_violations),
-                 eval->max_error_over_protection);
-  }
+  if (truth != nullptr) truth->WriteIntegrityTruth(f);
   std::fprintf(f, "},\n");
 }
-
-// A JSON number, or null when not finite (JSON has no inf/nan).
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
-}
-
-// The IMU of a stereo-inertial run: its stream's counts and, in the simulator, the biases the
-// filter ended with against the unit's true ones.
-struct ImuReport {
-  ImuCounts counts;
-  bool has_biases = false;
-  estimator::ImuBiases<double> estimated;
-  bool has_truth = false;
-  estimator::ImuBiases<double> truth;
-  double imu_only_pose_rms_m = NAN;  // the unit alone from the same start (simulator)
-  bool has_lcm = false;              // the IMU came over LCM: what the subscription lost
-  LcmImuCounters lcm;
-};
 
 void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
   const estimator::ImuStreamCounts& s = r.counts.stream;
@@ -295,84 +231,20 @@ void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
   std::fprintf(f, "},\n");
 }
 
-// Per output, as columns: frame, true altitude, errors, status and protection levels.
-void WriteOutputs(std::FILE* f, const EvaluationResult& eval) {
-  bool first = true;
-  const auto column = [&](const char* key, auto&& value) {
-    std::fprintf(f, "%s\"%s\": [", first ? "" : ", ", key);
-    first = false;
-    for (std::size_t k = 0; k < eval.outputs.size(); ++k)
-      std::fprintf(f, "%s%s", k > 0 ? ", " : "", value(eval.outputs[k]).c_str());
-    std::fprintf(f, "]");
-  };
-  using Output = EvaluationResult::Output;
-  std::fprintf(f, "  \"outputs\": {");
-  column("frame", [](const Output& o) { return std::to_string(o.frame_seq); });
-  column("altitude_m", [](const Output& o) { return JsonNumber(o.altitude_m); });
-  column("horizontal_error_m", [](const Output& o) { return JsonNumber(o.horizontal_error_m); });
-  column("vertical_error_m", [](const Output& o) { return JsonNumber(o.vertical_error_m); });
-  column("attitude_error_deg", [](const Output& o) { return JsonNumber(o.attitude_error_deg); });
-  column("status", [](const Output& o) { return std::to_string(o.status); });
-  column("hpl_m", [](const Output& o) { return JsonNumber(o.hpl_m); });
-  column("vpl_m", [](const Output& o) { return JsonNumber(o.vpl_m); });
-  std::fprintf(f, "},\n");
-}
-
-// One hazard map's evaluation as a JSON object (without the safe site of the final map).
-void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& h) {
-  std::fprintf(
-      f,
-      "{\"frame\": %lld, \"altitude_m\": %s, \"known_cells\": %d, "
-      "\"rocks_resolved\": %d, \"rocks_detected\": %d, \"detection_probability\": %s, "
-      "\"rocks_resolved_by_height\": [%d, %d, %d], "
-      "\"rocks_detected_by_height\": [%d, %d, %d], \"rock_free_cells\": %d, "
-      "\"false_rock_cells\": %d, \"false_alarm_rate\": %.5f, \"site_on_truth_hazard\": %s}",
-      static_cast<long long>(h.frame_seq), JsonNumber(h.altitude_m).c_str(), h.known_cells,
-      h.rocks_resolved, h.rocks_detected,
-      h.detection_probability >= 0.0 ? JsonNumber(h.detection_probability).c_str() : "null",
-      h.rocks_resolved_by_height[0], h.rocks_resolved_by_height[1], h.rocks_resolved_by_height[2],
-      h.rocks_detected_by_height[0], h.rocks_detected_by_height[1], h.rocks_detected_by_height[2],
-      h.rock_free_cells, h.false_rock_cells, h.false_alarm_rate,
-      !h.site_valid ? "null" : (h.site_on_hazard ? "true" : "false"));
-}
-
-// The hazard maps: the final one with its safe site, and every one by altitude. The height
-// classes are [1, 2), [2, 4), [4, inf) times the rock threshold (hazard.max_rock_height_m).
-void WriteHazard(std::FILE* f, const std::vector<HazardEvaluation>& evals,
-                 std::int64_t hazard_maps) {
+// The hazard maps the run published; against truth when an extension has it.
+void WriteHazard(std::FILE* f, std::int64_t hazard_maps, const ProcessExtension* truth) {
   std::fprintf(f, "  \"hazard_maps\": %lld,\n", static_cast<long long>(hazard_maps));
-  if (evals.empty()) {
+  if (truth == nullptr || !truth->WriteHazardTruth(f))
     std::fprintf(f, "  \"hazard\": null,\n  \"hazard_by_map\": [],\n  \"safe_site\": null\n");
-    return;
-  }
-  const HazardEvaluation& h = evals.back();
-  std::fprintf(f, "  \"hazard\": ");
-  WriteHazardEvaluation(f, h);
-  std::fprintf(f, ",\n  \"hazard_by_map\": [");
-  for (std::size_t k = 0; k < evals.size(); ++k) {
-    std::fprintf(f, "%s\n    ", k > 0 ? "," : "");
-    WriteHazardEvaluation(f, evals[k]);
-  }
-  std::fprintf(f, "],\n");
-  if (h.site_valid) {
-    std::fprintf(f,
-                 "  \"safe_site\": {\"x_m\": %.3f, \"y_m\": %.3f, \"score\": %.4f, "
-                 "\"clearance_to_truth_hazard_m\": %.3f, \"on_truth_hazard\": %s}\n",
-                 h.site_x_m, h.site_y_m, h.site_score, h.site_clearance_m,
-                 h.site_on_hazard ? "true" : "false");
-  } else {
-    std::fprintf(f, "  \"safe_site\": null\n");
-  }
 }
 
-// False when the file could not be written whole (a full disk, an I/O error).
+// False when the file could not be written whole (a full disk, an I/O error). `truth`: the
+// extension that evaluated the run (or nullptr).
 bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
                   const OutputCounters& output, const HealthRecord& health,
-                  const EvaluationResult* eval, const std::vector<HazardEvaluation>& hazard,
                   std::int64_t hazard_maps, bool locked, bool fifo, const Verdict& verdict,
-                  const IntegrityCounters& integrity, const sim::Trajectory* trajectory,
-                  const sim::OrbitalTarget* target, const LogStreamStats* log,
-                  const ImuReport* imu) {
+                  const IntegrityCounters& integrity, const ProcessExtension* truth,
+                  const LogStreamStats* log, const ImuReport* imu) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
   std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"result_reasons\": \"%s\",\n", verdict.result,
@@ -381,52 +253,9 @@ bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
   std::fprintf(f, "  \"frames\": %lld,\n", static_cast<long long>(counters.frames));
   std::fprintf(f, "  \"rate_hz\": %.3f,\n  \"window\": %d,\n  \"mode\": \"%s\",\n", c.rate_hz,
                c.window, c.mode.c_str());
-  if (c.source == SourceKind::kSim) {
-    std::fprintf(f, "  \"image_width_px\": %d,\n  \"image_height_px\": %d,\n", c.sim.width_px,
-                 c.sim.height_px);
-    std::fprintf(f, "  \"terrain\": \"%s\",\n  \"seed\": %llu,\n", c.sim.terrain.c_str(),
-                 static_cast<unsigned long long>(c.sim.seed));
-  }
-  // Where the simulated descent went: the nadir of the first frame, and for `sim.target:
-  // orbital` the pre-selection's clearance from orbit-visible hazards.
   if (imu != nullptr) WriteImu(f, c, *imu);
-  if (trajectory != nullptr && trajectory->NumFrames() > 0) {
-    const Eigen::Vector3d& p = trajectory->WorldTCamera(0).t;
-    std::fprintf(f, "  \"descent_target\": {\"mode\": \"%s\", \"x_m\": %.3f, \"y_m\": %.3f",
-                 c.sim.target.c_str(), p.x(), p.y());
-    if (target != nullptr && c.sim.target == "orbital") {
-      std::fprintf(f,
-                   ", \"search_radius_m\": %.1f, \"orbital_clearance_m\": %.3f, "
-                   "\"distance_from_nominal_m\": %.3f",
-                   c.sim.target_search_m, target->clearance_m, target->distance_m);
-    }
-    std::fprintf(f, "},\n");
-  }
-  if (eval != nullptr) {
-    // Landmark errors come from the published landmark maps; with none evaluated they are null,
-    // not a perfect 0.
-    if (eval->landmarks_evaluated > 0) {
-      std::fprintf(f, "  \"landmark_rms_error_m\": %.6f,\n  \"landmark_median_error_m\": %.6f,\n",
-                   eval->landmark_rms_error_m, eval->landmark_median_error_m);
-    } else {
-      std::fprintf(f, "  \"landmark_rms_error_m\": null,\n  \"landmark_median_error_m\": null,\n");
-    }
-    std::fprintf(f,
-                 "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %.6f,\n"
-                 "  \"final_pose_error_m\": %.6f,\n  \"nav_outputs\": %lld,\n"
-                 "  \"landmark_maps\": %lld,\n",
-                 static_cast<long long>(eval->landmarks_evaluated), eval->pose_rms_error_m,
-                 eval->final_pose_error_m, static_cast<long long>(eval->navs),
-                 static_cast<long long>(eval->maps));
-    std::fprintf(f, "  \"mean_position_nees\": %s,\n  \"position_nees\": [",
-                 JsonNumber(eval->mean_position_nees).c_str());
-    for (std::size_t k = 0; k < eval->position_nees.size(); ++k)
-      std::fprintf(f, "%s%s", k > 0 ? ", " : "", JsonNumber(eval->position_nees[k]).c_str());
-    std::fprintf(f, "],\n  \"final_attitude_error_deg\": %s,\n",
-                 JsonNumber(eval->final_attitude_error_deg).c_str());
-    WriteOutputs(f, *eval);
-  }
-  WriteIntegrity(f, integrity, eval);
+  if (truth != nullptr) truth->WriteSummaryHead(f);
+  WriteIntegrity(f, integrity, truth);
   std::fprintf(f, "  \"stages\": {\n");
   for (int i = 0; i < kNumStages; ++i) {
     std::fprintf(f, "    \"%s\": {\"p50_ms\": %.3f, \"p99_ms\": %.3f, \"max_ms\": %.3f}%s\n",
@@ -456,15 +285,10 @@ bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                  static_cast<long long>(log->duplicates),
                  static_cast<long long>(log->out_of_order));
   }
-  WriteHazard(f, hazard, hazard_maps);
+  WriteHazard(f, hazard_maps, truth);
   std::fprintf(f, "}\n");
   const bool written = std::ferror(f) == 0;
   return std::fclose(f) == 0 && written;
-}
-
-void PrintRenderProgress(int done, int total) {
-  std::fprintf(stderr, "\rswf-fsw: rendering the descent %d/%d", done, total);
-  if (done == total) std::fprintf(stderr, "\n");
 }
 
 struct CommandLine {
@@ -511,6 +335,8 @@ constexpr int kRunError = 1;
 struct FlightProcess {
   const char* tool = "swf-fsw";
   bool replay = false;
+  ProcessExtension* extension = nullptr;
+  bool extension_source = false;  // the extension opened the source: it has the run's truth
   bool progress = false;
   FswConfig config;
   std::string error;
@@ -519,7 +345,6 @@ struct FlightProcess {
   std::int8_t nav_mode = 0;
   std::int64_t total_frames = 0;
   std::string imu_channel;
-  std::unique_ptr<SimWorld> world;
 #if SWF_APP_HAVE_ARAVIS
   // Aravis's GigE Vision fake cameras served by this process (camera.fake); they outlive the
   // source that talks to them.
@@ -545,8 +370,6 @@ struct FlightProcess {
   ImuProvider* imu = nullptr;
   LcmImuInput lcm_imu;
   // Output observers.
-  Evaluation evaluation;
-  bool evaluate = false;
   Progress progress_display;
   LastHealth last_health;
   HazardCounter hazard_counter;
@@ -574,7 +397,8 @@ struct FlightProcess {
 // whole descent.
 int Configure(const CommandLine& cl, FlightProcess* fp) {
   FswConfig& config = fp->config;
-  if (!LoadConfig(cl.config_path, cl.sets, &config, &fp->error)) return fp->Refuse();
+  const ConfigExtension* keys = fp->extension != nullptr ? fp->extension->Config() : nullptr;
+  if (!LoadConfig(cl.config_path, cl.sets, &config, &fp->error, keys)) return fp->Refuse();
   if (fp->replay) {
     config.source = SourceKind::kLog;
     config.log_path = cl.log_path;
@@ -593,23 +417,25 @@ int Configure(const CommandLine& cl, FlightProcess* fp) {
   return kContinue;
 }
 
-// The first pose: the simulated descent's own (initial: truth) or the configured one. The
-// simulator's orbital target needs the terrain: that start is taken from the world once built.
+// The first pose: the configured hand-over (initial: position, camera pointing straight down,
+// image x along world x) or, initial: truth, the extension's simulated descent. The extension's
+// own source sets its start when it opens (a descent to an orbital target needs its terrain).
 int SetInitialState(FlightProcess* fp) {
   const FswConfig& config = fp->config;
   PipelineOptions& po = fp->po;
-  if (config.initial == "truth" &&
-      (config.source != SourceKind::kSim || config.sim.target != "orbital")) {
-    sim::Trajectory trajectory;
-    sim::RigOptions rig;
-    if (!SimTrajectory(config, &trajectory, &rig, &fp->error)) return fp->Refuse();
-    po.initial_world_T_camera = trajectory.WorldTCamera(0);
-    po.imu = ImuOptionsFor(config, &trajectory);
-  } else if (config.initial != "truth") {
-    po.initial_world_T_camera.R = sim::NadirRotation(0.0);
+  if (config.initial != "truth") {
+    Eigen::Matrix3d nadir;
+    nadir << 1.0, 0.0, 0.0,  //
+        0.0, -1.0, 0.0,      //
+        0.0, 0.0, -1.0;
+    po.initial_world_T_camera.R = nadir;
     po.initial_world_T_camera.t = Eigen::Vector3d(
         config.initial_position_m[0], config.initial_position_m[1], config.initial_position_m[2]);
-    po.imu = ImuOptionsFor(config, nullptr);
+    po.imu = ImuOptionsFor(config);
+  }
+  if (fp->extension != nullptr && config.source != SourceKind::kSim &&
+      !fp->extension->Start(config, &po, &fp->error)) {
+    return fp->Refuse();
   }
   return kContinue;
 }
@@ -635,33 +461,13 @@ int UseCameraCalibrations(FlightProcess* fp) {
   return kContinue;
 }
 
-int OpenSimSource(FlightProcess* fp) {
-  const FswConfig& config = fp->config;
-  fp->world = std::make_unique<SimWorld>();
-  SimWorld& world = *fp->world;
-  std::fprintf(stderr, "%s: building the simulated world (terrain %s, %dx%d px) ...\n", fp->tool,
-               config.sim.terrain.c_str(), config.sim.width_px, config.sim.height_px);
-  if (!world.Build(config, &fp->error) ||
-      !world.RenderAll(config.sim.render_threads, fp->progress ? PrintRenderProgress : nullptr,
-                       &fp->error)) {
+// The extension's own source (source sim: swf-sil's simulated descent).
+int OpenExtensionSource(FlightProcess* fp) {
+  if (!fp->extension->OpenSource(fp->config, fp->progress, &fp->po, &fp->source, &fp->total_frames,
+                                 &fp->error)) {
     return fp->RunError();
   }
-  if (config.initial == "truth") {
-    fp->po.initial_world_T_camera = world.Trajectory().WorldTCamera(0);
-    fp->po.imu = ImuOptionsFor(config, &world.Trajectory());
-  }
-  if (config.sim.target == "orbital") {
-    const sim::OrbitalTarget& t = world.Target();
-    std::fprintf(stderr,
-                 "%s: orbital target (%.1f, %.1f) m, %.1f m from the nominal, orbital "
-                 "clearance %.1f m\n",
-                 fp->tool, t.target_m.x(), t.target_m.y(), t.distance_m, t.clearance_m);
-  }
-  fp->po.camera = world.Camera();
-  fp->po.width_px = world.Width();
-  fp->po.height_px = world.Height();
-  fp->total_frames = world.DeliveredFrames();
-  fp->source = std::make_unique<PrerenderedSimSource>(fp->world.get());
+  fp->extension_source = true;
   return kContinue;
 }
 
@@ -684,10 +490,15 @@ int OpenLogSource(FlightProcess* fp) {
   po.width_px = log->Width();
   po.height_px = log->Height();
   if (log->Rectified()) {
-    sim::RigOptions rig = SimRig(config);
-    rig.width_px = log->Width();
-    rig.height_px = log->Height();
-    po.camera = sim::MakeStereoCamera(rig);
+    // A rectified log's frames carry no camera model: only its recorder's rig fits them.
+    if (fp->extension == nullptr) {
+      std::fprintf(stderr,
+                   "%s: %s: the frames are rectified and carry no camera model (a simulated "
+                   "descent's log): replay it with swf-replay\n",
+                   fp->tool, config.log_path.c_str());
+      return kRefused;
+    }
+    po.camera = fp->extension->RectifiedRig(config, log->Width(), log->Height());
   } else {
     if (const int code = UseCameraCalibrations(fp); code != kContinue) return code;
     if (po.width_px != log->Width() || po.height_px != log->Height()) {
@@ -774,7 +585,7 @@ int OpenV4l2Source(FlightProcess* fp) {
 
 int OpenSource(FlightProcess* fp) {
   switch (fp->config.source) {
-    case SourceKind::kSim: return OpenSimSource(fp);
+    case SourceKind::kSim: return OpenExtensionSource(fp);
     case SourceKind::kLog: return OpenLogSource(fp);
     case SourceKind::kAravis: return OpenAravisSource(fp);
     case SourceKind::kV4l2: return OpenV4l2Source(fp);
@@ -804,9 +615,9 @@ int Preallocate(FlightProcess* fp) {
                               po.width_px, &fp->error)) {
     return fp->Refuse();
   }
-  fp->evaluate = config.source == SourceKind::kSim && fp->world != nullptr;
-  if (fp->evaluate) fp->parts.output.AddObserver(&fp->evaluation);
+  if (fp->extension_source) fp->extension->Observe(&fp->parts.output);
   fp->progress_display.Reset(
+      fp->tool,
       config.max_frames > 0 ? std::min(config.max_frames, fp->total_frames) : fp->total_frames,
       fp->progress, isatty(2) != 0);
   fp->parts.output.AddObserver(&fp->progress_display);
@@ -818,8 +629,8 @@ int Preallocate(FlightProcess* fp) {
 // The IMU: the simulator's unit, the log's recording, or (cameras) imu_t over LCM.
 int ConnectImu(FlightProcess* fp) {
   if (!fp->config.imu.enabled) return kContinue;
-  if (fp->world != nullptr) {
-    fp->imu = fp->world.get();
+  if (fp->extension_source) {
+    fp->imu = fp->extension->Imu();
   } else if (fp->log_source != nullptr) {
     if (fp->log_source->NumImuSamples() == 0) {
       std::fprintf(stderr, "%s: %s: imu.enabled but no %s records in the log\n", fp->tool,
@@ -850,8 +661,8 @@ int ConfigureLoop(FlightProcess* fp) {
   lo.inject_first_frame = config.inject_frame;
   lo.inject_frames = config.inject_frames;
   lo.inject_ms = config.inject_ms;
-  MotionProvider* motion = fp->world != nullptr ? static_cast<MotionProvider*>(fp->world.get())
-                                                : static_cast<MotionProvider*>(fp->log_source);
+  MotionProvider* motion =
+      fp->extension_source ? fp->extension->Motion() : static_cast<MotionProvider*>(fp->log_source);
   if (fp->loop.Configure(lo, fp->parts.pipeline.get(), fp->source.get(), fp->parts.channels.get(),
                          motion, fp->parts.hazard.get(), fp->imu) != core::Status::kOk) {
     std::fprintf(stderr,
@@ -934,16 +745,6 @@ ImuReport ReportImu(FlightProcess* fp) {
     report.has_biases = true;
     report.estimated = x->biases;
   }
-  // The unit's true bias at the last sample the pipeline took.
-  const sim::ImuModel* unit = fp->world ? fp->world->ImuUnit() : nullptr;
-  const std::int64_t taken = fp->loop.Counters().imu_samples;
-  if (unit != nullptr && taken > 0 &&
-      taken <= static_cast<std::int64_t>(unit->TrueBiases().size())) {
-    report.has_truth = true;
-    report.truth = unit->TrueBiases()[static_cast<std::size_t>(taken - 1)];
-    report.imu_only_pose_rms_m =
-        ImuOnlyPoseRms(*unit, fp->world->Trajectory(), fp->po.imu, fp->po.initial_world_T_camera);
-  }
   const estimator::ImuStreamCounts& s = report.counts.stream;
   std::fprintf(stderr, "%s: imu: %lld samples integrated, %lld dropped, %lld intervals bridged\n",
                fp->tool, static_cast<long long>(s.accepted),
@@ -952,24 +753,17 @@ ImuReport ReportImu(FlightProcess* fp) {
   return report;
 }
 
-void PrintRunLine(const FlightProcess& fp, const EvaluationResult& eval) {
+void PrintRunLine(const FlightProcess& fp) {
   const LoopCounters& counters = fp.loop.Counters();
   const HealthRecord& h = fp.last_health.last;
   std::fprintf(stderr,
                "%s: %lld frames, %lld overruns, %lld outputs dropped, %lld allocations after "
-               "start, cycle p50 %.1f ms p99 %.1f ms max %.1f ms",
+               "start, cycle p50 %.1f ms p99 %.1f ms max %.1f ms%s",
                fp.tool, static_cast<long long>(counters.frames),
                static_cast<long long>(counters.overruns), static_cast<long long>(h.outputs_dropped),
                static_cast<long long>(h.allocations_after_start), h.stages[kStageCycle].p50_ms,
-               h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms);
-  if (fp.evaluate) {
-    if (eval.landmarks_evaluated > 0) {
-      std::fprintf(stderr, ", landmark RMS error %.3f m", eval.landmark_rms_error_m);
-    } else {
-      std::fprintf(stderr, ", no landmark map to evaluate");
-    }
-    std::fprintf(stderr, ", pose RMS error %.3f m", eval.pose_rms_error_m);
-  }
+               h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms,
+               fp.extension_source ? fp.extension->RunLine().c_str() : "");
   std::fprintf(stderr, ", %lld hazard maps (%lld skipped, %lld failed), hazard p50 %.1f ms\n",
                static_cast<long long>(fp.hazard_counter.maps),
                static_cast<long long>(counters.hazard_skipped),
@@ -992,54 +786,45 @@ void PrintIntegrityLine(const FlightProcess& fp, const Verdict& verdict) {
                verdict.reasons.empty() ? "" : ": ", verdict.reasons.c_str());
 }
 
-// After the run: the evaluation against the simulator's truth, the verdict from the numbers,
-// the lines on stderr and the summary file. Returns the exit code.
-int Report(FlightProcess* fp) {
-  const FswConfig& config = fp->config;
-  const LoopCounters& counters = fp->loop.Counters();
-  const LogStereoSource* log_source = fp->log_source;
+// What the source said went wrong: a damaged log, a failed camera. True when the log was damaged.
+bool ReportSourceTrouble(const FlightProcess& fp) {
+  const LogStereoSource* log_source = fp.log_source;
   const bool damaged_log = log_source != nullptr && !log_source->LoadError().empty();
   if (damaged_log) {
     std::fprintf(stderr,
                  "%s: stopped at a damaged log: %s (the %zu frames before it were "
                  "replayed)\n",
-                 fp->tool, log_source->LoadError().c_str(), log_source->NumFrames());
+                 fp.tool, log_source->LoadError().c_str(), log_source->NumFrames());
   }
 #if SWF_APP_HAVE_V4L2
-  if (fp->v4l2_source != nullptr && fp->run_status != core::Status::kOk) {
-    std::fprintf(stderr, "%s: the v4l2 source failed: %s\n", fp->tool,
-                 fp->v4l2_source->LastError());
+  if (fp.v4l2_source != nullptr && fp.run_status != core::Status::kOk) {
+    std::fprintf(stderr, "%s: the v4l2 source failed: %s\n", fp.tool, fp.v4l2_source->LastError());
   }
 #endif
-  EvaluationResult eval;
-  std::vector<HazardEvaluation> hazard_evals;
-  const std::int64_t hazard_maps = fp->hazard_counter.maps;
-  if (fp->evaluate) {
-    const SimWorld& world = *fp->world;
-    eval = fp->evaluation.Evaluate(*fp->parts.pipeline, world.Trajectory(), world.Terrain(),
-                                   config.plot_dir);
-    hazard_evals = fp->evaluation.EvaluateHazard(fp->parts.hazard->Mapper().Options(),
-                                                 world.Trajectory(), world.Terrain());
-  }
-  if (!config.plot_dir.empty() && hazard_maps > 0) {
-    const std::string png = config.plot_dir + "/hazard.png";
-    if (hazard_eval::WriteHazardMapPng(fp->parts.hazard->Mapper(), png) != core::Status::kOk)
-      std::fprintf(stderr, "%s: cannot write %s\n", fp->tool, png.c_str());
-  }
-  PrintRunLine(*fp, eval);
-  const HealthRecord& h = fp->last_health.last;
-  const IntegrityCounters& integrity = fp->parts.pipeline->Integrity();
   const LogStreamStats* log_stream = log_source != nullptr ? &log_source->StreamStats() : nullptr;
   if (log_stream != nullptr && (log_stream->frames_missing > 0 || log_stream->Refused() > 0)) {
     std::fprintf(stderr,
                  "%s: log: %lld frames missing (sequence gaps), %lld duplicated and %lld "
                  "out-of-order frames refused\n",
-                 fp->tool, static_cast<long long>(log_stream->frames_missing),
+                 fp.tool, static_cast<long long>(log_stream->frames_missing),
                  static_cast<long long>(log_stream->duplicates),
                  static_cast<long long>(log_stream->out_of_order));
   }
-  Verdict verdict = JudgeRun(counters, h, integrity, fp->parts.pipeline->LastIntegrity().status,
-                             fp->evaluate ? &eval : nullptr, log_stream);
+  return damaged_log;
+}
+
+// After the run: the verdict from the numbers (and, with the extension's source, its truth), the
+// lines on stderr and the summary file. Returns the exit code.
+int Report(FlightProcess* fp) {
+  const FswConfig& config = fp->config;
+  const LoopCounters& counters = fp->loop.Counters();
+  const bool damaged_log = ReportSourceTrouble(*fp);
+  const LogStreamStats* log_stream =
+      fp->log_source != nullptr ? &fp->log_source->StreamStats() : nullptr;
+  const HealthRecord& h = fp->last_health.last;
+  const IntegrityCounters& integrity = fp->parts.pipeline->Integrity();
+  Verdict verdict =
+      JudgeRun(counters, h, integrity, fp->parts.pipeline->LastIntegrity().status, log_stream);
   if (fp->run_status != core::Status::kOk)
     Fail(&verdict, std::string("the frame group stopped: ") + core::ToString(fp->run_status));
   if (damaged_log) Fail(&verdict, "damaged log");
@@ -1050,25 +835,75 @@ int Report(FlightProcess* fp) {
                  static_cast<long long>(out.encode_errors));
     Fail(&verdict, "records lost");
   }
-  PrintIntegrityLine(*fp, verdict);
+  const bool inertial = fp->parts.pipeline->Inertial();
   ImuReport imu_report;
-  if (fp->parts.pipeline->Inertial()) imu_report = ReportImu(fp);
-  if (!config.summary_path.empty()) {
-    const SimWorld* world = fp->world.get();
-    if (!WriteSummary(config.summary_path, config, counters, out, h, fp->evaluate ? &eval : nullptr,
-                      hazard_evals, hazard_maps, fp->locked, fp->fifo, verdict, integrity,
-                      world != nullptr ? &world->Trajectory() : nullptr,
-                      world != nullptr ? &world->Target() : nullptr, log_stream,
-                      fp->parts.pipeline->Inertial() ? &imu_report : nullptr)) {
-      std::fprintf(stderr, "%s: cannot write the summary %s: %s; exit 1\n", fp->tool,
-                   config.summary_path.c_str(), std::strerror(errno));
-      return kRunError;
-    }
+  if (inertial) imu_report = ReportImu(fp);
+  const ProcessExtension* truth = fp->extension_source ? fp->extension : nullptr;
+  if (fp->extension_source) {
+    fp->extension->Evaluate(config, fp->parts, fp->po, counters.imu_samples, &verdict,
+                            inertial ? &imu_report : nullptr);
+  }
+  PrintRunLine(*fp);
+  PrintIntegrityLine(*fp, verdict);
+  if (!config.summary_path.empty() &&
+      !WriteSummary(config.summary_path, config, counters, out, h, fp->hazard_counter.maps,
+                    fp->locked, fp->fifo, verdict, integrity, truth, log_stream,
+                    inertial ? &imu_report : nullptr)) {
+    std::fprintf(stderr, "%s: cannot write the summary %s: %s; exit 1\n", fp->tool,
+                 config.summary_path.c_str(), std::strerror(errno));
+    return kRunError;
   }
   return verdict.exit_code;
 }
 
 }  // namespace
+
+void Fail(Verdict* v, const std::string& reason) {
+  v->result = "failed";
+  v->exit_code = 1;
+  v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
+}
+
+void Degrade(Verdict* v, const std::string& reason) {
+  if (v->exit_code == 0) {
+    v->result = "degraded";
+    v->exit_code = 3;
+  }
+  v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v);
+  return text;
+}
+
+ImuOptions ImuOptionsFor(const FswConfig& c) {
+  const ImuConfig& k = c.imu;
+  ImuOptions o;
+  o.enabled = k.enabled;
+  o.noise.gyro_noise_density = k.gyro_noise_density;
+  o.noise.gyro_random_walk = k.gyro_random_walk;
+  o.noise.accel_noise_density = k.accel_noise_density;
+  o.noise.accel_random_walk = k.accel_random_walk;
+  o.stream.gyro_range_radps = k.gyro_range_radps;
+  o.stream.accel_range_mps2 = k.accel_range_mps2;
+  o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -k.gravity_mps2);
+  o.first_gyro_bias_sigma_radps = k.gyro_bias_sigma_radps;
+  o.first_accel_bias_sigma_mps2 = k.accel_bias_sigma_mps2;
+  o.static_start = k.static_start;
+  o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / k.rate_hz));
+  estimator::Pose<double> camera_T_imu;
+  camera_T_imu.t =
+      estimator::Vec3<double>(k.camera_t_imu_m[0], k.camera_t_imu_m[1], k.camera_t_imu_m[2]);
+  camera_T_imu.R = estimator::ExpSO3<double>(
+      estimator::Vec3<double>(k.camera_r_imu_rad[0], k.camera_r_imu_rad[1], k.camera_r_imu_rad[2]));
+  o.imu_T_camera = camera_T_imu.Inverse();
+  o.initial_velocity_world_mps = estimator::Vec3<double>(
+      k.initial_velocity_mps[0], k.initial_velocity_mps[1], k.initial_velocity_mps[2]);
+  return o;
+}
 
 void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int8_t* nav_mode) {
   po->frontend = FrontendFor(config, po->width_px, po->height_px);
@@ -1121,12 +956,13 @@ core::Status AssembleFlightParts(const PipelineOptions& po,
   return core::Status::kOk;
 }
 
-int RunFlightProcess(int argc, char** argv, bool replay) {
+int RunFlightProcess(int argc, char** argv, const Program& program) {
   CommandLine command_line;
-  if (!ParseCommandLine(argc, argv, replay, &command_line)) return Usage(replay);
+  if (!ParseCommandLine(argc, argv, program.replay, &command_line)) return Usage(program);
   auto fp = std::make_unique<FlightProcess>();
-  fp->tool = replay ? "swf-replay" : "swf-fsw";
-  fp->replay = replay;
+  fp->tool = program.tool;
+  fp->replay = program.replay;
+  fp->extension = program.extension;
   fp->progress = command_line.progress;
   if (const int code = Configure(command_line, fp.get()); code != kContinue) return code;
   if (command_line.check) {

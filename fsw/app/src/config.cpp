@@ -16,9 +16,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "swf/app/sim_world.hpp"
-#include "swf/sim/rig.hpp"
-#include "swf/sim/trajectory.hpp"
+#include "swf/app/config_fields.hpp"
 
 namespace swf::app {
 
@@ -30,6 +28,8 @@ std::string Trim(const std::string& s) {
   const auto e = s.find_last_not_of(" \t\r");
   return s.substr(b, e - b + 1);
 }
+
+}  // namespace
 
 // At most this many bytes of anything read are quoted back in an error: a 10 MB value must not
 // become 10 MB on stderr, and bytes outside printable ASCII are shown as \xNN so that an error
@@ -62,9 +62,6 @@ std::string Quoted(const std::string& v) {
   return out;
 }
 
-// Each field: a setter that parses the text value or writes why not.
-using Setter = std::function<bool(const std::string& value, FswConfig* c, std::string* why)>;
-
 bool ParseDouble(const std::string& v, double* out, std::string* why) {
   char* end = nullptr;
   errno = 0;
@@ -89,7 +86,9 @@ bool ParseInt(const std::string& v, std::int64_t* out, std::string* why) {
   return true;
 }
 
-Setter Double(double FswConfig::*field, double lo, double hi) {
+namespace {
+
+ConfigSetter Double(double FswConfig::*field, double lo, double hi) {
   return [=](const std::string& v, FswConfig* c, std::string* why) {
     double d = 0.0;
     if (!ParseDouble(v, &d, why)) return false;
@@ -104,64 +103,9 @@ Setter Double(double FswConfig::*field, double lo, double hi) {
   };
 }
 
-// `limit_note` says where a compiled limit comes from.
-template <typename T, typename Get>
-Setter Int(Get get, std::int64_t lo, std::int64_t hi, const char* limit_note = "") {
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    std::int64_t i = 0;
-    if (!ParseInt(v, &i, why)) return false;
-    if (i < lo || i > hi) {
-      *why = Excerpt(v) + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]" +
-             limit_note;
-      return false;
-    }
-    *get(c) = static_cast<T>(i);
-    return true;
-  };
-}
-
-template <typename Get>
-Setter Bool(Get get) {
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    if (v == "true" || v == "yes" || v == "1") {
-      *get(c) = true;
-    } else if (v == "false" || v == "no" || v == "0") {
-      *get(c) = false;
-    } else {
-      *why = Quoted(v) + " is not true/false";
-      return false;
-    }
-    return true;
-  };
-}
-
-template <typename Get>
-Setter Text(Get get) {
-  return [=](const std::string& v, FswConfig* c, std::string*) {
-    *get(c) = v;
-    return true;
-  };
-}
-
-template <typename Get>
-Setter OneOf(Get get, std::initializer_list<const char*> allowed) {
-  std::vector<std::string> options(allowed.begin(), allowed.end());
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    for (const std::string& o : options) {
-      if (v == o) {
-        *get(c) = v;
-        return true;
-      }
-    }
-    *why = Quoted(v) + " is not one of";
-    for (const std::string& o : options) *why += " " + o;
-    return false;
-  };
-}
-
 // Three finite numbers ("x y z" or "x, y, z") into field[3].
 template <typename Get>
-Setter Vector3(Get get) {
+ConfigSetter Vector3(Get get) {
   return [=](const std::string& v, FswConfig* c, std::string* why) {
     std::string spaced = v;
     for (char& ch : spaced) ch = ch == ',' ? ' ' : ch;
@@ -178,6 +122,8 @@ Setter Vector3(Get get) {
   };
 }
 
+}  // namespace
+
 // "[lo, hi]", with "(" when the low end is excluded.
 std::string Interval(double lo, double hi, bool lo_open) {
   std::ostringstream o;
@@ -189,55 +135,10 @@ bool InInterval(double d, double lo, double hi, bool lo_open) {
   return (lo_open ? d > lo : d >= lo) && d <= hi;
 }
 
-// A finite number into a member of SimConfig, inside [lo, hi] (or (lo, hi]).
-Setter SimNumber(double SimConfig::*field, double lo, double hi, bool lo_open = false) {
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0.0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (!InInterval(d, lo, hi, lo_open)) {
-      *why = Excerpt(v) + " is outside " + Interval(lo, hi, lo_open);
-      return false;
-    }
-    c->sim.*field = d;
-    return true;
-  };
-}
-
-// N finite numbers ("a b" or "a, b") into a member array of SimConfig, each inside [lo, hi];
-// `names` says what they are ("vx, vy").
-template <int N>
-Setter SimNumbers(double (SimConfig::*field)[N], double lo, double hi, const char* names) {
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    std::string spaced = v;
-    for (char& ch : spaced) ch = ch == ',' ? ' ' : ch;
-    std::istringstream in(spaced);
-    double p[N];
-    for (double& x : p) {
-      if (!(in >> x) || !std::isfinite(x)) {
-        *why = Quoted(v) + " is not " + std::to_string(N) + " finite numbers (" + names + ")";
-        return false;
-      }
-    }
-    std::string rest;
-    if (in >> rest) {
-      *why = Quoted(v) + " is not " + std::to_string(N) + " finite numbers (" + names + ")";
-      return false;
-    }
-    for (const double x : p) {
-      if (!InInterval(x, lo, hi, false)) {
-        std::ostringstream o;
-        o << Excerpt(v) << ": " << x << " is outside " << Interval(lo, hi, false);
-        *why = o.str();
-        return false;
-      }
-    }
-    for (int i = 0; i < N; ++i) (c->sim.*field)[i] = p[i];
-    return true;
-  };
-}
+namespace {
 
 // A non-negative finite number into a member of ImuConfig, at most hi.
-Setter ImuNumber(double ImuConfig::*field, double hi) {
+ConfigSetter ImuNumber(double ImuConfig::*field, double hi) {
   return [=](const std::string& v, FswConfig* c, std::string* why) {
     double d = 0.0;
     if (!ParseDouble(v, &d, why)) return false;
@@ -252,46 +153,9 @@ Setter ImuNumber(double ImuConfig::*field, double hi) {
   };
 }
 
-// The dispersions of the simulated flight (SimConfig; their consistency is checked in
-// DispersionsHold).
-void AddDispersionFields(std::map<std::string, Setter>* fields) {
-  std::map<std::string, Setter>& f = *fields;
-  f["sim.start_altitude_m"] = SimNumber(&SimConfig::start_altitude_m, 0.0, 1000.0, true);
-  f["sim.end_altitude_m"] = SimNumber(&SimConfig::end_altitude_m, 0.0, 1000.0, true);
-  f["sim.descent_rate_mps"] = SimNumber(&SimConfig::descent_rate_mps, 0.0, 100.0, true);
-  f["sim.horizontal_velocity_mps"] =
-      SimNumbers<2>(&SimConfig::horizontal_velocity_mps, -100.0, 100.0, "vx, vy");
-  f["sim.attitude_deg"] =
-      SimNumbers<3>(&SimConfig::attitude_deg, -180.0, 180.0, "roll, pitch, yaw");
-  f["sim.attitude_rate_dps"] =
-      SimNumbers<3>(&SimConfig::attitude_rate_dps, -100.0, 100.0, "roll, pitch, yaw rates");
-  // The appearance's own limits (sim/appearance.hpp): a sun on or below the horizon lights
-  // nothing.
-  f["sim.sun_elevation_deg"] = SimNumber(&SimConfig::sun_elevation_deg, 0.0, 90.0, true);
-  f["sim.sun_azimuth_deg"] = SimNumber(&SimConfig::sun_azimuth_deg, -360.0, 360.0);
-  f["sim.read_noise_e"] = SimNumber(&SimConfig::read_noise_e, 0.0, 10000.0);
-  f["sim.e_per_dn"] = SimNumber(&SimConfig::e_per_dn, 0.0, 100000.0, true);
-  f["sim.exposure_dn"] = SimNumber(&SimConfig::exposure_dn, 0.0, 1000.0, true);
-  f["sim.baseline_error_m"] = SimNumber(&SimConfig::baseline_error_m, -100.0, 100.0);
-  // Small: a calibration error, not another rig (0.1 rad moves the right image by 10 % of f).
-  f["sim.relative_rotation_error_rad"] =
-      SimNumbers<3>(&SimConfig::relative_rotation_error_rad, -0.1, 0.1, "rx, ry, rz");
-  f["sim.frame_drop_probability"] = [](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0.0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (!(d >= 0.0 && d < 1.0)) {
-      *why = Excerpt(v) + " is outside [0, 1)";
-      return false;
-    }
-    c->sim.frame_drop_probability = d;
-    return true;
-  };
-  f["sim.timestamp_jitter_ms"] = SimNumber(&SimConfig::timestamp_jitter_ms, 0.0, 1000.0);
-}
-
-const std::map<std::string, Setter>& Fields() {
-  static const std::map<std::string, Setter> kFields = [] {
-    std::map<std::string, Setter> f;
+const std::map<std::string, ConfigSetter>& Fields() {
+  static const std::map<std::string, ConfigSetter> kFields = [] {
+    std::map<std::string, ConfigSetter> f;
     f["source"] = [](const std::string& v, FswConfig* c, std::string* why) {
       if (v == "sim")
         c->source = SourceKind::kSim;
@@ -308,66 +172,6 @@ const std::map<std::string, Setter>& Fields() {
       return true;
     };
     f["log.path"] = Text([](FswConfig* c) { return &c->log_path; });
-    f["sim.scenario"] = OneOf([](FswConfig* c) { return &c->sim.scenario; },
-                              {"descent", "hover", "sideways", "lab"});
-    f["sim.terrain"] =
-        OneOf([](FswConfig* c) { return &c->sim.terrain; }, {"plains", "craters", "rocks"});
-    f["sim.width_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.width_px; }, 32,
-                                          frontend::kMaxImageWidth);
-    f["sim.height_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.height_px; }, 32,
-                                           frontend::kMaxImageHeight);
-    f["sim.hfov_deg"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      double d = 0;
-      if (!ParseDouble(v, &d, why)) return false;
-      if (!(d > 1.0 && d < 170.0)) {
-        *why = Excerpt(v) + " is outside (1, 170)";
-        return false;
-      }
-      c->sim.hfov_deg = d;
-      return true;
-    };
-    f["sim.baseline_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      double d = 0;
-      if (!ParseDouble(v, &d, why)) return false;
-      if (!(d > 0.0 && d <= 100.0)) {
-        *why = Excerpt(v) + " is outside (0, 100]";
-        return false;
-      }
-      c->sim.baseline_m = d;
-      return true;
-    };
-    f["sim.frames"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.frames; }, 0, 100000);
-    f["sim.terrain_size"] =
-        Int<std::int32_t>([](FswConfig* c) { return &c->sim.terrain_size; }, 64, 8192);
-    f["sim.seed"] =
-        Int<std::uint64_t>([](FswConfig* c) { return &c->sim.seed; }, 0, std::int64_t{1} << 62);
-    f["sim.shared"] = Text([](FswConfig* c) { return &c->sim.shared_dir; });
-    f["sim.render_threads"] =
-        Int<std::int32_t>([](FswConfig* c) { return &c->sim.render_threads; }, 1, 64);
-    f["sim.imu"] = Bool([](FswConfig* c) { return &c->sim.imu; });
-    f["sim.imu_sigma_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      double d = 0;
-      if (!ParseDouble(v, &d, why)) return false;
-      if (d < 0.0 || d > 10.0) {
-        *why = Excerpt(v) + " is outside [0, 10]";
-        return false;
-      }
-      c->sim.imu_sigma_m = d;
-      return true;
-    };
-    f["sim.imu_sigma_rad"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      double d = 0;
-      if (!ParseDouble(v, &d, why)) return false;
-      if (d < 0.0 || d > 0.5) {
-        *why = Excerpt(v) + " is outside [0, 0.5]";
-        return false;
-      }
-      c->sim.imu_sigma_rad = d;
-      return true;
-    };
-    f["sim.imu_unit"] =
-        OneOf([](FswConfig* c) { return &c->sim.imu_unit; }, {"none", "mems", "tactical"});
-    AddDispersionFields(&f);
     f["imu.enabled"] = Bool([](FswConfig* c) { return &c->imu.enabled; });
     f["imu.static_start"] = Bool([](FswConfig* c) { return &c->imu.static_start; });
     f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
@@ -385,19 +189,6 @@ const std::map<std::string, Setter>& Fields() {
     f["imu.camera_r_imu_rad"] = Vector3([](FswConfig* c) { return c->imu.camera_r_imu_rad; });
     f["imu.initial_velocity_mps"] =
         Vector3([](FswConfig* c) { return c->imu.initial_velocity_mps; });
-    f["sim.target"] = OneOf([](FswConfig* c) { return &c->sim.target; }, {"nominal", "orbital"});
-    f["sim.target_search_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      double d = 0.0;
-      if (!ParseDouble(v, &d, why)) return false;
-      // 60 m keeps the search square (plus the 10 m clearance cap) and the 100 m view inside the
-      // 204.8 m terrain.
-      if (d < 0.0 || d > 60.0) {
-        *why = Excerpt(v) + " is outside [0, 60]";
-        return false;
-      }
-      c->sim.target_search_m = d;
-      return true;
-    };
     f["camera.left"] = Text([](FswConfig* c) { return &c->camera.left; });
     f["camera.right"] = Text([](FswConfig* c) { return &c->camera.right; });
     f["camera.left_calibration"] = Text([](FswConfig* c) { return &c->camera.left_calibration; });
@@ -485,10 +276,6 @@ const std::map<std::string, Setter>& Fields() {
     f["inject.frames"] =
         Int<std::int64_t>([](FswConfig* c) { return &c->inject_frames; }, 1, std::int64_t{1} << 40);
     f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
-    f["inject.black_from"] = Int<std::int64_t>([](FswConfig* c) { return &c->inject_black_from; },
-                                               -1, std::int64_t{1} << 40);
-    f["inject.black_frames"] = Int<std::int64_t>(
-        [](FswConfig* c) { return &c->inject_black_frames; }, 1, std::int64_t{1} << 40);
     f["envelope.min_range_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
       double d = 0.0;
       if (!ParseDouble(v, &d, why)) return false;
@@ -544,16 +331,31 @@ bool SplitLine(const std::string& raw, const std::string& where, std::string* ke
   return true;
 }
 
+// A key of the program's extension (c->extension) when the flight process has no such key; a
+// simulator key in a program without the simulator says where it belongs.
+const ConfigSetter* FindField(const std::string& key, const FswConfig& c) {
+  const auto& fields = Fields();
+  if (const auto it = fields.find(key); it != fields.end()) return &it->second;
+  if (c.extension != nullptr) {
+    const auto& more = *c.extension->fields;
+    if (const auto it = more.find(key); it != more.end()) return &it->second;
+  }
+  return nullptr;
+}
+
 bool SetField(const std::string& key, const std::string& value, const std::string& where,
               FswConfig* config, std::string* error) {
-  const auto& fields = Fields();
-  const auto it = fields.find(key);
-  if (it == fields.end()) {
-    *error = where + ": " + Excerpt(key) + ": unknown field";
+  const ConfigSetter* setter = FindField(key, *config);
+  if (setter == nullptr) {
+    const bool simulator = key.rfind("sim.", 0) == 0 || key.rfind("inject.black_", 0) == 0;
+    *error = where + ": " + Excerpt(key) + ": unknown field" +
+             (simulator && config->extension == nullptr
+                  ? " (a simulator key: swf-sil flies the simulated descent)"
+                  : "");
     return false;
   }
   std::string why;
-  if (!it->second(value, config, &why)) {
+  if (!(*setter)(value, config, &why)) {
     *error = where + ": " + key + ": " + why;
     return false;
   }
@@ -627,69 +429,24 @@ bool ApplyOverride(const std::string& key_value, FswConfig* c, std::string* erro
   return true;
 }
 
-// Where the error about `field` points: the line (or --set) that set it; the file when the field
-// kept its default.
-std::string Where(const FswConfig& c, const std::string& field, const std::string& origin) {
+}  // namespace
+
+std::string ConfigWhere(const FswConfig& c, const std::string& field, const std::string& origin) {
   const auto it = c.origins.keys.find(field);
   if (it != c.origins.keys.end()) return it->second;
   return c.origins.file.empty() ? origin : c.origins.file;
+}
+
+bool RefuseField(const FswConfig& c, const std::string& field, const std::string& origin,
+                 const std::string& why, std::string* error) {
+  *error = ConfigWhere(c, field, origin) + ": " + field + ": " + why;
+  return false;
 }
 
 std::string Fixed(double v, int decimals) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*f", decimals, v);
   return text;
-}
-
-// How the simulated camera sees the datum z = 0 over its trajectory (its attitude without the
-// 0.1 deg jitter: SteeredAttitude, sim/trajectory.hpp).
-struct SimView {
-  // The closest range: the smallest camera-frame depth of the datum anywhere in the image over
-  // the flight. For a nadir camera that is the lowest camera height above the datum; tilted, the
-  // image corner nearest the ground sees it closer: depth = height / max over the image of
-  // (camera-frame down . (xn, yn, 1)), a linear function of (xn, yn) whose maximum is at a corner.
-  double closest_depth_m = 0.0;
-  double max_tilt_rad = 0.0;  // of the optical axis from nadir
-  bool tilted = false;        // the attitude is not nadir (sim.attitude_*)
-};
-
-// Terrain relief (0.5 m rms) and rocks (up to 1.25 m) bring ground closer than the datum and are
-// not included (building the terrain takes seconds), so the check is necessary, not sufficient,
-// and max_disparity_px wants margin above it.
-bool SimViewOf(const FswConfig& c, SimView* view, std::string* error) {
-  FswConfig nominal = c;
-  // `sim.target: orbital` only moves the descent sideways (SimTrajectory adds the target's x and y
-  // to the start) and needs the terrain to say where: its altitudes are the nominal ones.
-  nominal.sim.target = "nominal";
-  sim::Trajectory trajectory;
-  sim::RigOptions rig;
-  if (!SimTrajectory(nominal, &trajectory, &rig, error)) return false;
-  const estimator::StereoCamera<double> camera = sim::MakeStereoCamera(rig);
-  const double corner_x = 0.5 * rig.width_px / camera.fx;  // pixel edges, not centres
-  const double corner_y = 0.5 * rig.height_px / camera.fy;
-  const sim::TrajectoryOptions& o = trajectory.Options();
-  view->closest_depth_m = std::numeric_limits<double>::infinity();
-  view->max_tilt_rad = 0.0;
-  view->tilted =
-      !((o.attitude_offset_rad.array() == 0.0).all() && (o.body_rate_radps.array() == 0.0).all());
-  for (std::int32_t k = 0; k < trajectory.NumFrames(); ++k) {
-    const Eigen::Vector3d down =
-        sim::SteeredAttitude(o, k / o.rate_hz).transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
-    const double nearest = down.z() + std::abs(down.x()) * corner_x + std::abs(down.y()) * corner_y;
-    const double height_m = trajectory.WorldTCamera(k).t.z();
-    view->closest_depth_m = std::min(view->closest_depth_m, height_m / nearest);
-    view->max_tilt_rad = std::max(view->max_tilt_rad, std::acos(std::clamp(down.z(), -1.0, 1.0)));
-  }
-  return true;
-}
-
-// The settings the simulated rig comes from (an override changing one shows up here).
-std::string SimRigFrom(const FswConfig& c) {
-  std::ostringstream o;
-  o << "sim.width_px " << c.sim.width_px << ", sim.hfov_deg " << c.sim.hfov_deg
-    << ", sim.baseline_m " << c.sim.baseline_m;
-  if (c.sim.baseline_error_m != 0.0) o << " + sim.baseline_error_m " << c.sim.baseline_error_m;
-  return o.str();
 }
 
 // The front end finds a feature's match only within its search, min(max_disparity_px, width / 2)
@@ -700,9 +457,9 @@ std::string SimRigFrom(const FswConfig& c) {
 // `shift_px`: a disparity the right image adds at every range (the simulator's rotation error).
 bool DisparityFits(const FswConfig& c, double fx_px, double baseline_m, int width_px,
                    double range_m, const std::string& range_from, const std::string& rig_from,
-                   const std::string& origin, std::string* error, double shift_px = 0.0) {
+                   const std::string& origin, std::string* error, double shift_px) {
   const std::string field = "max_disparity_px";
-  const std::string at = Where(c, field, origin);
+  const std::string at = ConfigWhere(c, field, origin);
   if (!(range_m > 0.0)) {
     *error = at + ": " + field + ": the closest range flown (" + Fixed(range_m, 2) + " m, " +
              range_from + ") is not above the ground";
@@ -732,27 +489,10 @@ bool DisparityFits(const FswConfig& c, double fx_px, double baseline_m, int widt
   return true;
 }
 
-// The simulator's flown envelope: the disparity the front end must find in the true images, at
-// the closest range over the trajectory (SimViewOf), with the true baseline (sim.baseline_m +
-// sim.baseline_error_m) and f of the calibration `fx_px`; a rotation error of the right camera
-// shifts the right image by up to f |ry| + |rz| (larger image side) / 2 px on top.
-bool SimEnvelopeFits(const FswConfig& c, double fx_px, const std::string& origin,
-                     std::string* error) {
-  SimView view;
-  std::string why;
-  if (!SimViewOf(c, &view, &why)) {
-    *error = Where(c, "sim.scenario", origin) + ": " + why;
-    return false;
-  }
-  const double* r = c.sim.relative_rotation_error_rad;
-  const double shift_px =
-      fx_px * std::abs(r[1]) + std::abs(r[2]) * 0.5 * std::max(c.sim.width_px, c.sim.height_px);
-  const std::string range_from =
-      view.tilted ? std::string("the closest datum depth in view over the tilted sim.") +
-                        c.sim.scenario + " trajectory"
-                  : std::string("the lowest altitude of the sim.") + c.sim.scenario + " trajectory";
-  return DisparityFits(c, fx_px, c.sim.baseline_m + c.sim.baseline_error_m, c.sim.width_px,
-                       view.closest_depth_m, range_from, SimRigFrom(c), origin, error, shift_px);
+namespace {
+
+bool Extends(const FswConfig& c, const char* source) {
+  return c.extension != nullptr && std::strcmp(c.extension->source, source) == 0;
 }
 
 // Capacities compiled into the flight estimator (pipeline.hpp). The window holds window + 1 poses
@@ -762,110 +502,16 @@ bool CapacitiesHold(const FswConfig& c, const std::string& origin, std::string* 
   const std::int64_t poses = static_cast<std::int64_t>(c.window) + 1;
   const std::int64_t worst = poses * c.max_tracks;
   if (worst > kMaxLandmarks) {
-    *error = Where(c, "max_tracks", origin) + ": max_tracks: " + std::to_string(c.max_tracks) +
-             " with window " + std::to_string(c.window) + " can keep (" + std::to_string(c.window) +
-             " + 1) x " + std::to_string(c.max_tracks) + " = " + std::to_string(worst) +
+    *error = ConfigWhere(c, "max_tracks", origin) +
+             ": max_tracks: " + std::to_string(c.max_tracks) + " with window " +
+             std::to_string(c.window) + " can keep (" + std::to_string(c.window) + " + 1) x " +
+             std::to_string(c.max_tracks) + " = " + std::to_string(worst) +
              " landmarks active, above the compiled capacity kMaxLandmarks = " +
              std::to_string(kMaxLandmarks) + " (at most " + std::to_string(kMaxLandmarks / poses) +
              " tracks at window " + std::to_string(c.window) + ")";
     return false;
   }
   return true;
-}
-
-// The descent geometry keys other than the nominal flight's: they shape the descent preset only.
-const char* DescentKeyChanged(const SimConfig& s) {
-  const SimConfig nominal;
-  if (s.start_altitude_m != nominal.start_altitude_m) return "sim.start_altitude_m";
-  if (s.end_altitude_m != nominal.end_altitude_m) return "sim.end_altitude_m";
-  if (s.descent_rate_mps != nominal.descent_rate_mps) return "sim.descent_rate_mps";
-  for (const double v : s.horizontal_velocity_mps)
-    if (v != 0.0) return "sim.horizontal_velocity_mps";
-  for (const double a : s.attitude_deg)
-    if (a != 0.0) return "sim.attitude_deg";
-  for (const double w : s.attitude_rate_dps)
-    if (w != 0.0) return "sim.attitude_rate_dps";
-  return nullptr;
-}
-
-// "<where>: <field>: <why>" into `error`; false.
-bool Refuse(const FswConfig& c, const std::string& field, const std::string& origin,
-            const std::string& why, std::string* error) {
-  *error = Where(c, field, origin) + ": " + field + ": " + why;
-  return false;
-}
-
-// The descent geometry: for the descent only, ending below its start, a bounded frame count.
-bool DescentHolds(const FswConfig& c, const std::string& origin, std::string* error) {
-  const SimConfig& s = c.sim;
-  if (const char* key = DescentKeyChanged(s); key != nullptr && s.scenario != "descent") {
-    return Refuse(c, key, origin, "shapes the descent: needs sim.scenario descent", error);
-  }
-  if (!(s.end_altitude_m < s.start_altitude_m)) {
-    // Name the key that was given (the other one kept its default).
-    const bool end_given = c.origins.keys.count("sim.end_altitude_m") > 0;
-    return Refuse(c, end_given ? "sim.end_altitude_m" : "sim.start_altitude_m", origin,
-                  Fixed(s.end_altitude_m, 2) + " m end altitude is not below the " +
-                      Fixed(s.start_altitude_m, 2) + " m start altitude",
-                  error);
-  }
-  const double frames = (s.start_altitude_m - s.end_altitude_m) / s.descent_rate_mps * c.rate_hz;
-  if (s.scenario == "descent" && frames > 100000.0) {
-    return Refuse(c, "sim.descent_rate_mps", origin,
-                  Fixed(s.start_altitude_m - s.end_altitude_m, 1) + " m at " +
-                      Fixed(s.descent_rate_mps, 3) + " m/s and rate_hz " + Fixed(c.rate_hz, 1) +
-                      " is " + Fixed(frames, 0) +
-                      " frames, more than 100000 (all rendered before start)",
-                  error);
-  }
-  return true;
-}
-
-// The simulated camera's faults: a baseline left, stamps that stay in order.
-bool CameraFaultsHold(const FswConfig& c, const std::string& origin, std::string* error) {
-  const SimConfig& s = c.sim;
-  if (!(s.baseline_m + s.baseline_error_m > 0.0)) {
-    return Refuse(c, "sim.baseline_error_m", origin,
-                  "leaves no baseline (sim.baseline_m " + Fixed(s.baseline_m, 3) + " m)", error);
-  }
-  // Truncated at 4 sigma, a jitter of at most a tenth of the frame period keeps the stamps in
-  // order (at least 0.2 periods apart) and each frame's IMU interval positive.
-  const double max_jitter_ms = 100.0 / c.rate_hz;
-  if (s.timestamp_jitter_ms > max_jitter_ms) {
-    return Refuse(c, "sim.timestamp_jitter_ms", origin,
-                  Fixed(s.timestamp_jitter_ms, 3) + " ms is above a tenth of the frame period (" +
-                      Fixed(max_jitter_ms, 3) + " ms at rate_hz " + Fixed(c.rate_hz, 1) +
-                      "): the jittered stamps could reorder frames",
-                  error);
-  }
-  return true;
-}
-
-// The simulated camera keeps looking at the ground: at most 60 deg off nadir over the descent
-// (the optical axis's slant range within twice the altitude).
-bool AttitudeHolds(const FswConfig& c, const std::string& origin, std::string* error) {
-  if (c.source != SourceKind::kSim || c.sim.scenario != "descent") return true;
-  SimView view;
-  std::string why;
-  if (!SimViewOf(c, &view, &why)) {
-    *error = Where(c, "sim.scenario", origin) + ": " + why;  // `why` names its field
-    return false;
-  }
-  constexpr double kMaxTiltDeg = 60.0;
-  const double tilt_deg = view.max_tilt_rad * 180.0 / std::numbers::pi;
-  if (tilt_deg <= kMaxTiltDeg) return true;
-  const double* rate = c.sim.attitude_rate_dps;
-  const bool turning = rate[0] != 0.0 || rate[1] != 0.0 || rate[2] != 0.0;
-  return Refuse(c, turning ? "sim.attitude_rate_dps" : "sim.attitude_deg", origin,
-                "tilts the camera " + Fixed(tilt_deg, 1) +
-                    " deg off nadir during the descent (at most " + Fixed(kMaxTiltDeg, 0) + ")",
-                error);
-}
-
-// The simulated flight's dispersions hold together (each key's own range is its setter's).
-bool DispersionsHold(const FswConfig& c, const std::string& origin, std::string* error) {
-  return DescentHolds(c, origin, error) && CameraFaultsHold(c, origin, error) &&
-         AttitudeHolds(c, origin, error);
 }
 
 }  // namespace
@@ -889,7 +535,7 @@ int StageIndex(const std::string& name) {
 
 bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* error) {
   auto fail = [&](const std::string& field, const std::string& why) {
-    *error = Where(c, field, origin) + ": " + field + ": " + why;
+    *error = ConfigWhere(c, field, origin) + ": " + field + ": " + why;
     return false;
   };
   if (c.source == SourceKind::kLog && c.log_path.empty()) {
@@ -914,31 +560,21 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
     return fail("camera.right", "the same device as camera.left");
   }
   if (c.mode == "ekf" && c.window != 1) return fail("window", "must be 1 in mode ekf");
-  if (c.source == SourceKind::kSim && c.sim.width_px % 2 != 0) {
-    return fail("sim.width_px", "must be even (principal point on a pixel boundary)");
-  }
-  if (c.sim.target == "orbital" && c.sim.scenario != "descent") {
-    return fail("sim.target", "'orbital' selects a descent target: needs sim.scenario descent");
-  }
-  if (c.max_disparity_px >= c.sim.width_px && c.source == SourceKind::kSim) {
-    return fail("max_disparity_px", "must be smaller than sim.width_px");
-  }
-  if (c.source == SourceKind::kSim && c.envelope_min_range_m > 0.0) {
-    return fail(
-        "envelope.min_range_m",
-        "only for camera and log sources (the simulator's closest range is its trajectory)");
+  if (c.source == SourceKind::kSim && !Extends(c, "sim")) {
+    return fail("source",
+                "'sim' is the simulated descent, flown by swf-sil (this program flies "
+                "v4l2, aravis and log)");
   }
   if (c.initial == "truth" && c.source != SourceKind::kSim && c.source != SourceKind::kLog) {
     return fail("initial", "'truth' needs the simulator (source sim, or a log of a sim run)");
   }
-  if (c.imu.enabled && c.source == SourceKind::kSim && c.sim.imu_unit == "none") {
-    return fail("imu.enabled", "the simulator carries no IMU: set sim.imu_unit (mems, tactical)");
+  if (c.initial == "truth" && !Extends(c, "sim")) {
+    return fail("initial",
+                "'truth' is the simulator's: swf-sil, or swf-replay for a log of a "
+                "simulated descent (the flight process starts from initial.position_m)");
   }
   if (c.imu.enabled && c.sim.imu_unit == "none" && !(c.imu.rate_hz >= 10.0)) {
     return fail("imu.rate_hz", "must be at least 10 Hz for the stereo-inertial estimator");
-  }
-  if (c.inject_black_from >= 0 && c.source != SourceKind::kSim) {
-    return fail("inject.black_from", "blinds the simulated camera: needs source sim");
   }
   if (c.inject_ms > 0.0 && c.inject_stage.empty()) {
     return fail("inject.stage", "required when inject.ms is set");
@@ -946,12 +582,7 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   if (c.publish && c.lcm_url.empty()) return fail("lcm.url", "empty while lcm.publish is true");
   if (c.channel_prefix.size() > 32) return fail("lcm.channel_prefix", "longer than 32 characters");
   if (!CapacitiesHold(c, origin, error)) return false;
-  if (!DispersionsHold(c, origin, error)) return false;
-  if (c.source == SourceKind::kSim) {
-    // The simulator's rig and trajectory from the configuration, as sim_world.cpp builds them.
-    if (!SimEnvelopeFits(c, sim::MakeStereoCamera(SimRig(c)).fx, origin, error)) return false;
-  }
-  return true;
+  return c.extension == nullptr || c.extension->validate(c, origin, error);
 }
 
 bool CheckEnvelopeDisparity(const FswConfig& c, double fx_px, double baseline_m, int width_px,
@@ -959,18 +590,14 @@ bool CheckEnvelopeDisparity(const FswConfig& c, double fx_px, double baseline_m,
   const std::string origin = c.origins.file.empty() ? "configuration" : c.origins.file;
   double range_m = 0.0;
   std::string range_from;
-  if (c.source == SourceKind::kSim) {
-    // The front end searches the true rig's images: their baseline is the configuration's (with
-    // sim.baseline_error_m), not the calibration's baseline_m.
-    return SimEnvelopeFits(c, fx_px, origin, error);
-  }
+  if (c.source == SourceKind::kSim) return c.extension->envelope_fits(c, fx_px, origin, error);
   if (c.envelope_min_range_m > 0.0) {
     range_m = c.envelope_min_range_m;
     range_from = "envelope.min_range_m";
   } else if (c.source == SourceKind::kLog) {
     return true;  // a replay re-runs recorded frames; the flight was checked when it flew
   } else {
-    *error = Where(c, "envelope.min_range_m", origin) +
+    *error = ConfigWhere(c, "envelope.min_range_m", origin) +
              ": envelope.min_range_m: required for a camera source: the closest range (m) the "
              "flight reaches, to check max_disparity_px against f x baseline = " +
              Fixed(fx_px * baseline_m, 1) + " px m";
@@ -1067,7 +694,7 @@ bool ReadConfigFile(const std::string& path, std::string* text, std::string* err
 bool CheckOutputPaths(const FswConfig& c, std::string* error) {
   const std::string origin = c.origins.file.empty() ? "configuration" : c.origins.file;
   auto fail = [&](const char* field, const std::string& path, const std::string& why) {
-    *error = Where(c, field, origin) + ": " + field + ": " + Quoted(path) + " " + why;
+    *error = ConfigWhere(c, field, origin) + ": " + field + ": " + Quoted(path) + " " + why;
     return false;
   };
   if (!c.summary_path.empty()) {
@@ -1089,25 +716,28 @@ bool CheckOutputPaths(const FswConfig& c, std::string* error) {
 }
 
 bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,
-                 std::string* error) {
+                 std::string* error, const ConfigExtension* extension) {
   FswConfig c;
+  c.extension = extension;
   if (!ApplyFileText(text, origin, &c, error)) return false;
   if (!ValidateConfig(c, origin, error)) return false;
   *config = c;
   return true;
 }
 
-bool LoadConfig(const std::string& path, FswConfig* config, std::string* error) {
+bool LoadConfig(const std::string& path, FswConfig* config, std::string* error,
+                const ConfigExtension* extension) {
   std::string text;
   if (!ReadConfigFile(path, &text, error)) return false;
-  return ParseConfig(text, path, config, error);
+  return ParseConfig(text, path, config, error, extension);
 }
 
 bool LoadConfig(const std::string& path, const std::vector<std::string>& overrides,
-                FswConfig* config, std::string* error) {
+                FswConfig* config, std::string* error, const ConfigExtension* extension) {
   std::string text;
   if (!ReadConfigFile(path, &text, error)) return false;
   FswConfig c;
+  c.extension = extension;
   if (!ApplyFileText(text, path, &c, error)) return false;
   for (const std::string& o : overrides) {
     if (!ApplyOverride(o, &c, error)) return false;

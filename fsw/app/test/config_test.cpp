@@ -15,7 +15,7 @@
 
 #include "swf/app/app.hpp"
 #include "swf/app/pipeline.hpp"
-#include "swf/app/sim_world.hpp"
+#include "swf/sil/sil.hpp"
 #include "swf/sim/rig.hpp"
 
 namespace swf::app {
@@ -24,7 +24,7 @@ namespace {
 bool Refused(const std::string& text, const std::string& expect_in_error) {
   FswConfig c;
   std::string error;
-  const bool ok = ParseConfig(text, "t.cfg", &c, &error);
+  const bool ok = ParseConfig(text, "t.cfg", &c, &error, sil::SimConfigExtension());
   EXPECT_FALSE(ok) << text.substr(0, 200);
   EXPECT_NE(error.find(expect_in_error), std::string::npos) << "error was: " << error;
   return !ok;
@@ -33,7 +33,8 @@ bool Refused(const std::string& text, const std::string& expect_in_error) {
 bool Accepted(const std::string& text, FswConfig* c = nullptr) {
   FswConfig local;
   std::string error;
-  const bool ok = ParseConfig(text, "t.cfg", c != nullptr ? c : &local, &error);
+  const bool ok =
+      ParseConfig(text, "t.cfg", c != nullptr ? c : &local, &error, sil::SimConfigExtension());
   EXPECT_TRUE(ok) << error;
   return ok;
 }
@@ -92,7 +93,7 @@ TEST(ConfigTest, ParsesEveryKindOfField) {
       ParseConfig("# comment\nsource: sim\nwindow: 4   # K\nrate_hz: 12.5\n"
                   "pacing: lockstep\nrt.mlockall: false\ninitial.position_m: 1 2 3\n"
                   "sim.width_px: 320\nrecord.path: /tmp/x.lcmlog\n",
-                  "t.cfg", &c, &error))
+                  "t.cfg", &c, &error, sil::SimConfigExtension()))
       << error;
   EXPECT_EQ(c.window, 4);
   EXPECT_DOUBLE_EQ(c.rate_hz, 12.5);
@@ -308,7 +309,7 @@ TEST(ConfigTest, RefusesAnEmptyOrCommentsOnlyFile) {
   ScratchDir dir;
   FswConfig c;
   std::string error;
-  EXPECT_FALSE(LoadConfig(dir.Write("empty.cfg", ""), &c, &error));
+  EXPECT_FALSE(LoadConfig(dir.Write("empty.cfg", ""), &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("empty.cfg: no settings"), std::string::npos) << error;
 }
 
@@ -316,14 +317,14 @@ TEST(ConfigTest, RefusesADirectoryADeviceAndAHugeFile) {
   ScratchDir dir;
   FswConfig c;
   std::string error;
-  EXPECT_FALSE(LoadConfig(dir.Path(), &c, &error));
+  EXPECT_FALSE(LoadConfig(dir.Path(), &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find(dir.Path() + ": is a directory"), std::string::npos) << error;
-  EXPECT_FALSE(LoadConfig("/dev/null", &c, &error));
+  EXPECT_FALSE(LoadConfig("/dev/null", &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("/dev/null: is not a regular file"), std::string::npos) << error;
   const std::string big = dir.Write("big.cfg", "source: sim\n" + std::string(kMaxConfigBytes, '#'));
-  EXPECT_FALSE(LoadConfig(big, &c, &error));
+  EXPECT_FALSE(LoadConfig(big, &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("larger than the 1048576"), std::string::npos) << error;
-  EXPECT_FALSE(LoadConfig("/nonexistent/x.cfg", &c, &error));
+  EXPECT_FALSE(LoadConfig("/nonexistent/x.cfg", &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("/nonexistent/x.cfg: cannot open"), std::string::npos) << error;
 }
 
@@ -356,7 +357,7 @@ TEST(ConfigTest, QuotesOnlyABoundedExcerptOfABadLine) {
         "source: sim\n" + huge + "\n", "source: sim\nwindow: " + huge + "\n"}) {
     FswConfig c;
     std::string error;
-    EXPECT_FALSE(ParseConfig(text, "t.cfg", &c, &error));
+    EXPECT_FALSE(ParseConfig(text, "t.cfg", &c, &error, sil::SimConfigExtension()));
     EXPECT_LT(error.size(), 200u) << error.substr(0, 300);
     EXPECT_NE(error.find("t.cfg:2: "), std::string::npos) << error.substr(0, 300);
     EXPECT_NE(error.find("... (10000"), std::string::npos) << error.substr(0, 300);
@@ -368,7 +369,9 @@ TEST(ConfigTest, QuotesOnlyABoundedExcerptOfABadLine) {
 TEST(ConfigTest, OverridesAreCheckedLikeTheFile) {
   FswConfig c;
   std::string error;
-  ASSERT_TRUE(ParseConfig("source: sim\nwindow: 5\n", "t.cfg", &c, &error)) << error;
+  ASSERT_TRUE(
+      ParseConfig("source: sim\nwindow: 5\n", "t.cfg", &c, &error, sil::SimConfigExtension()))
+      << error;
   // Overriding a key the file sets is what --set is for: not a duplicate.
   EXPECT_TRUE(OverrideConfig("window: 3", &c, &error)) << error;
   EXPECT_EQ(c.window, 3);
@@ -395,7 +398,8 @@ TEST(ConfigTest, LoadWithOverridesValidatesTheWholeOnceInAnyOrder) {
   FswConfig c;
   std::string error;
   // The file's own keys may be overridden; together the overrides are consistent.
-  ASSERT_TRUE(LoadConfig(file, {"mode: ekf", "window: 1", "summary.path: b.json"}, &c, &error))
+  ASSERT_TRUE(LoadConfig(file, {"mode: ekf", "window: 1", "summary.path: b.json"}, &c, &error,
+                         sil::SimConfigExtension()))
       << error;
   EXPECT_EQ(c.mode, "ekf");
   EXPECT_EQ(c.window, 1);
@@ -403,20 +407,20 @@ TEST(ConfigTest, LoadWithOverridesValidatesTheWholeOnceInAnyOrder) {
   EXPECT_EQ(c.origins.keys.at("window"), "--set");
   EXPECT_EQ(c.origins.keys.at("source"), file + ":1");
   // One override at a time validates each step: the first of the same pair is refused.
-  ASSERT_TRUE(LoadConfig(file, &c, &error)) << error;
+  ASSERT_TRUE(LoadConfig(file, &c, &error, sil::SimConfigExtension())) << error;
   EXPECT_FALSE(OverrideConfig("mode: ekf", &c, &error));
   EXPECT_NE(error.find("f.cfg:3: window: must be 1 in mode ekf"), std::string::npos) << error;
   // Refusals from an override name --set; the same key twice on the command line is refused.
-  EXPECT_FALSE(LoadConfig(file, {"window: 1", "window: 2"}, &c, &error));
+  EXPECT_FALSE(LoadConfig(file, {"window: 1", "window: 2"}, &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("--set: window: given twice on the command line"), std::string::npos)
       << error;
-  EXPECT_FALSE(LoadConfig(file, {"mode: ekf", "window: 2"}, &c, &error));
+  EXPECT_FALSE(LoadConfig(file, {"mode: ekf", "window: 2"}, &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("--set: window: must be 1 in mode ekf"), std::string::npos) << error;
-  EXPECT_FALSE(LoadConfig(file, {"rate_hz: -3"}, &c, &error));
+  EXPECT_FALSE(LoadConfig(file, {"rate_hz: -3"}, &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("--set: rate_hz: -3 is outside"), std::string::npos) << error;
   // The file is still checked like a file.
   const std::string dup = dir.Write("dup.cfg", "source: aravis\nsource: sim\n");
-  EXPECT_FALSE(LoadConfig(dup, {"source: sim"}, &c, &error));
+  EXPECT_FALSE(LoadConfig(dup, {"source: sim"}, &c, &error, sil::SimConfigExtension()));
   EXPECT_NE(error.find("dup.cfg:2: source: set again"), std::string::npos) << error;
 }
 
@@ -424,30 +428,37 @@ TEST(ConfigTest, CommittedConfigurationsLoadAndFitTheirEnvelope) {
   for (const char* name : {"demo.cfg", "test.cfg"}) {
     FswConfig c;
     std::string error;
-    EXPECT_TRUE(LoadConfig(AppDir() + "/config/" + name, &c, &error)) << name << ": " << error;
-    const estimator::StereoCamera<double> camera = sim::MakeStereoCamera(SimRig(c));
+    EXPECT_TRUE(LoadConfig(AppDir() + "/config/" + name, &c, &error, sil::SimConfigExtension()))
+        << name << ": " << error;
+    const estimator::StereoCamera<double> camera = sim::MakeStereoCamera(sil::SimRig(c));
     EXPECT_TRUE(CheckEnvelopeDisparity(c, camera.fx, camera.baseline_m, c.sim.width_px, &error))
         << name << ": " << error;
   }
   FswConfig c;
   std::string error;
-  EXPECT_TRUE(LoadConfig(AppDir() + "/config/fake_gv.cfg", &c, &error)) << error;
+  EXPECT_TRUE(LoadConfig(AppDir() + "/config/fake_gv.cfg", &c, &error, sil::SimConfigExtension()))
+      << error;
   // fake_gv_{left,right}.yaml: ideal pinholes, f 300 px, 0.2 m apart, 320 px wide.
   EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;
 }
 
-// swf-fsw --check: the configuration is validated as a run would (the file, every --set, the
-// output paths) and the process exits 0 without running (no summary written), or 2 with the
-// refusal.
+// Runs the flight process as `program` with these arguments; returns its exit code.
+int RunProgram(const Program& program, std::vector<std::string> args) {
+  args.insert(args.begin(), program.tool);
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  return RunFlightProcess(static_cast<int>(argv.size()), argv.data(), program);
+}
+
+// --check: the configuration is validated as a run would (the file, every --set, the output
+// paths) and the process exits 0 without running (no summary written), or 2 with the refusal.
 TEST(ConfigTest, CheckValidatesAsARunWouldAndRunsNothing) {
   ScratchDir dir;
   const std::string config = AppDir() + "/config/test.cfg";
   const std::string summary = dir.Path() + "/summary.json";
+  sil::SimulatedDescent descent;
   auto run = [&](std::vector<std::string> args) {
-    args.insert(args.begin(), "swf-fsw");
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    return RunFlightProcess(static_cast<int>(argv.size()), argv.data(), false);
+    return RunProgram({"swf-sil", false, &descent}, std::move(args));
   };
   EXPECT_EQ(run({"--config", config, "--set", "summary.path: " + summary, "--set",
                  "sim.frame_drop_probability: 0.1", "--check"}),
@@ -461,6 +472,32 @@ TEST(ConfigTest, CheckValidatesAsARunWouldAndRunsNothing) {
   EXPECT_FALSE(Exists(summary));
 }
 
+// The flight binary (no extension) knows no simulator: source sim, a sim.* key and initial: truth
+// are refused naming the line and the program that flies them.
+TEST(ConfigTest, TheFlightBinaryRefusesTheSimulator) {
+  FswConfig c;
+  std::string error;
+  EXPECT_FALSE(ParseConfig("source: sim\n", "f.cfg", &c, &error));
+  EXPECT_NE(error.find("f.cfg:1: source: 'sim' is the simulated descent, flown by swf-sil"),
+            std::string::npos)
+      << error;
+  EXPECT_FALSE(ParseConfig("source: log\nlog.path: x.lcmlog\nsim.seed: 3\n", "f.cfg", &c, &error));
+  EXPECT_NE(error.find("f.cfg:3: sim.seed: unknown field (a simulator key: swf-sil flies"),
+            std::string::npos)
+      << error;
+  EXPECT_FALSE(ParseConfig("source: log\nlog.path: x.lcmlog\n", "f.cfg", &c, &error));
+  EXPECT_NE(error.find("f.cfg: initial: 'truth' is the simulator's"), std::string::npos) << error;
+  EXPECT_TRUE(
+      ParseConfig("source: log\nlog.path: x.lcmlog\ninitial: position\n", "f.cfg", &c, &error))
+      << error;
+  // The same file with the simulator's keys is swf-sil's.
+  EXPECT_TRUE(
+      ParseConfig("source: sim\nsim.seed: 3\n", "f.cfg", &c, &error, sil::SimConfigExtension()))
+      << error;
+  // And the flight binary says so when run.
+  EXPECT_EQ(RunProgram({}, {"--config", AppDir() + "/config/test.cfg", "--check"}), 2);
+}
+
 // ---- output paths ------------------------------------------------------------------------------
 
 TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
@@ -471,7 +508,7 @@ TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
   std::string error;
   ASSERT_TRUE(ParseConfig("source: sim\nsummary.path: " + d + "/s.json\nrecord.path: " + d +
                               "/r.lcmlog\nsummary.plot_dir: " + d + "\n",
-                          "t.cfg", &c, &error))
+                          "t.cfg", &c, &error, sil::SimConfigExtension()))
       << error;
   EXPECT_TRUE(CheckOutputPaths(c, &error)) << error;
   // Nothing is created by the check.
@@ -581,21 +618,25 @@ TEST(ConfigTest, RefusesADisparitySearchBelowTheLowestAltitude) {
   const std::string file = dir.Write("demo.cfg", kDemo1024);
   FswConfig loaded;
   std::string why;
-  EXPECT_FALSE(LoadConfig(file, &loaded, &why));
+  EXPECT_FALSE(LoadConfig(file, &loaded, &why, sil::SimConfigExtension()));
   EXPECT_NE(why.find("demo.cfg:8: max_disparity_px: 160 is below"), std::string::npos) << why;
-  EXPECT_TRUE(LoadConfig(file, {"max_disparity_px: 240"}, &loaded, &why)) << why;
+  EXPECT_TRUE(LoadConfig(file, {"max_disparity_px: 240"}, &loaded, &why, sil::SimConfigExtension()))
+      << why;
   const std::string small = dir.Write(
       "small.cfg", "source: sim\nsim.width_px: 512\nsim.height_px: 384\nmax_disparity_px: 160\n");
-  EXPECT_TRUE(LoadConfig(
-      small, {"sim.width_px: 1024", "sim.height_px: 768", "max_disparity_px: 240"}, &loaded, &why))
+  EXPECT_TRUE(LoadConfig(small,
+                         {"sim.width_px: 1024", "sim.height_px: 768", "max_disparity_px: 240"},
+                         &loaded, &why, sil::SimConfigExtension()))
       << why;
-  EXPECT_FALSE(LoadConfig(small, {"sim.width_px: 1024", "max_disparity_px: 200"}, &loaded, &why));
+  EXPECT_FALSE(LoadConfig(small, {"sim.width_px: 1024", "max_disparity_px: 200"}, &loaded, &why,
+                          sil::SimConfigExtension()));
   EXPECT_NE(why.find("--set: max_disparity_px: 200 is below the disparity"), std::string::npos)
       << why;
   // Overrides: named as --set.
   FswConfig c;
   std::string error;
-  ASSERT_TRUE(ParseConfig(demo512 + "160\n", "t.cfg", &c, &error)) << error;
+  ASSERT_TRUE(ParseConfig(demo512 + "160\n", "t.cfg", &c, &error, sil::SimConfigExtension()))
+      << error;
   EXPECT_FALSE(OverrideConfig("max_disparity_px: 100", &c, &error));
   EXPECT_NE(error.find("--set: max_disparity_px: 100 is below the disparity"), std::string::npos)
       << error;
@@ -608,23 +649,29 @@ TEST(ConfigTest, CameraSourcesNeedTheirClosestRangeToCheckTheSearch) {
   FswConfig c;
   std::string error;
   // The fake rig: f 300 px, baseline 0.2 m, 320 px wide.
-  ASSERT_TRUE(ParseConfig(cameras, "cam.cfg", &c, &error)) << error;
+  ASSERT_TRUE(ParseConfig(cameras, "cam.cfg", &c, &error, sil::SimConfigExtension())) << error;
   EXPECT_FALSE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error));
   EXPECT_NE(error.find("cam.cfg: envelope.min_range_m: required for a camera source"),
             std::string::npos)
       << error;
   EXPECT_NE(error.find("f x baseline = 60.0 px m"), std::string::npos) << error;
 
-  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 10\n", "cam.cfg", &c, &error)) << error;
+  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 10\n", "cam.cfg", &c, &error,
+                          sil::SimConfigExtension()))
+      << error;
   EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;  // 6 px
-  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 0.5\n", "cam.cfg", &c, &error)) << error;
+  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 0.5\n", "cam.cfg", &c, &error,
+                          sil::SimConfigExtension()))
+      << error;
   EXPECT_FALSE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error));  // 120 px
   EXPECT_NE(error.find("cam.cfg:6: max_disparity_px: 64 is below the disparity at the closest "
                        "range flown, 120.0 px at 0.5 m (envelope.min_range_m; f 300.0 px x "
                        "baseline 0.200 m from the rectified rig)"),
             std::string::npos)
       << error;
-  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 2\n", "cam.cfg", &c, &error)) << error;
+  ASSERT_TRUE(ParseConfig(cameras + "envelope.min_range_m: 2\n", "cam.cfg", &c, &error,
+                          sil::SimConfigExtension()))
+      << error;
   EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;  // 30 px
   EXPECT_FALSE(CheckEnvelopeDisparity(c, 300.0, 0.2, 50, &error));
   EXPECT_NE(error.find("at most half the image width (25 px), below the disparity at the closest "
@@ -644,7 +691,7 @@ TEST(ConfigTest, CameraSourcesNeedTheirClosestRangeToCheckTheSearch) {
   ASSERT_TRUE(
       ParseConfig("source: sim\nsim.width_px: 512\nsim.height_px: 384\n"
                   "max_disparity_px: 160\n",
-                  "sim.cfg", &c, &error))
+                  "sim.cfg", &c, &error, sil::SimConfigExtension()))
       << error;
   EXPECT_TRUE(CheckEnvelopeDisparity(c, 1154.7, 1.0, 512, &error)) << error;
   EXPECT_FALSE(CheckEnvelopeDisparity(c, 2309.5, 1.0, 1024, &error));

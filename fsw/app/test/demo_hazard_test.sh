@@ -1,5 +1,5 @@
 #!/bin/sh
-# The flight demo's hazard results (issue 8): swf-fsw on config/demo.cfg (full size: the rock
+# The flight demo's hazard results (issue 8): swf-sil on config/demo.cfg (full size: the rock
 # field, the orbital target, 512x384, 100 -> 10 m) under lockstep pacing, without LCM, must write
 # a summary whose final hazard map has a detection probability over resolved truth rocks and a
 # safe site outside the footprint of every truth hazard, and whose per-map and per-output columns
@@ -15,7 +15,7 @@ dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 "$fsw" --config "$cfg" --set "lcm.publish: false" --set "pacing: lockstep" \
   --set "rt.mlockall: false" --set "rt.priority: 0" --set "summary.path: $dir/summary.json" ||
-  { echo "FAIL: swf-fsw failed" >&2; exit 1; }
+  { echo "FAIL: swf-sil failed" >&2; exit 1; }
 /usr/bin/python3 - "$dir/summary.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -15,10 +15,10 @@
 
 #include "swf/app/app.hpp"
 #include "swf/app/config.hpp"
-#include "swf/app/evaluation.hpp"
 #include "swf/app/hazard_stage.hpp"
 #include "swf/app/lcm_io.hpp"
-#include "swf/app/sim_world.hpp"
+#include "swf/sil/evaluation.hpp"
+#include "swf/sil/sil.hpp"
 #include "swf/testing/allocation_counter.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 
@@ -28,16 +28,16 @@ namespace {
 // The flight parts as swf-fsw assembles them, around the simulated descent.
 struct Rig : FlightParts {
   FswConfig config;
-  std::unique_ptr<SimWorld> world = std::make_unique<SimWorld>();
-  std::unique_ptr<PrerenderedSimSource> source;
+  std::unique_ptr<sil::SimWorld> world = std::make_unique<sil::SimWorld>();
+  std::unique_ptr<sil::PrerenderedSimSource> source;
   LoopOptions loop_options;
 
   explicit Rig(const std::string& text) {
     std::string error;
-    EXPECT_TRUE(ParseConfig(text, "test", &config, &error)) << error;
+    EXPECT_TRUE(ParseConfig(text, "test", &config, &error, sil::SimConfigExtension())) << error;
     EXPECT_TRUE(world->Build(config, &error)) << error;
     EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
-    source = std::make_unique<PrerenderedSimSource>(world.get());
+    source = std::make_unique<sil::PrerenderedSimSource>(world.get());
     PipelineOptions po;
     po.camera = world->Camera();
     po.width_px = world->Width();
@@ -50,7 +50,7 @@ struct Rig : FlightParts {
     po.process_sigma_m = 0.05;
     po.process_sigma_rad = 0.001;
     po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
-    po.imu = ImuOptionsFor(config, &world->Trajectory());
+    po.imu = sil::SimImuOptions(config, &world->Trajectory());
     hazard::HazardMapperOptions ho;
     ho.max_disparities = 64;
     EXPECT_EQ(AssembleFlightParts(po, ho, OutputOptions{}, this, &error), core::Status::kOk)
@@ -414,21 +414,22 @@ TEST(SimWorldTest, IlluminationPhotometryAndCalibrationErrorReachTheImages) {
   const std::string base =
       "source: sim\nsim.frames: 2\nsim.width_px: 128\nsim.height_px: 96\nsim.terrain_size: 512\n"
       "max_disparity_px: 40\nsim.end_altitude_m: 60\n";
-  auto build = [&](const std::string& extra, SimWorld* world) {
+  auto build = [&](const std::string& extra, sil::SimWorld* world) {
     FswConfig config;
     std::string error;
-    ASSERT_TRUE(ParseConfig(base + extra, "test", &config, &error)) << error;
+    ASSERT_TRUE(ParseConfig(base + extra, "test", &config, &error, sil::SimConfigExtension()))
+        << error;
     ASSERT_TRUE(world->Build(config, &error)) << error;
     ASSERT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
   };
   const std::size_t n = 128 * 96;
-  auto left = [&](const SimWorld& w) {
+  auto left = [&](const sil::SimWorld& w) {
     return std::vector<std::uint8_t>(w.Left(1), w.Left(1) + n);
   };
-  auto right = [&](const SimWorld& w) {
+  auto right = [&](const sil::SimWorld& w) {
     return std::vector<std::uint8_t>(w.Right(1), w.Right(1) + n);
   };
-  SimWorld nominal;
+  sil::SimWorld nominal;
   ASSERT_NO_FATAL_FAILURE(build("", &nominal));
   struct Case {
     const char* set;
@@ -439,7 +440,7 @@ TEST(SimWorldTest, IlluminationPhotometryAndCalibrationErrorReachTheImages) {
         Case{"sim.exposure_dn: 60\n", true}, Case{"sim.read_noise_e: 80\n", true},
         Case{"sim.e_per_dn: 4\n", true}, Case{"sim.baseline_error_m: 0.05\n", false},
         Case{"sim.relative_rotation_error_rad: 0.003, 0, 0\n", false}}) {
-    SimWorld world;
+    sil::SimWorld world;
     ASSERT_NO_FATAL_FAILURE(build(c.set, &world));
     EXPECT_EQ(left(world) != left(nominal), c.left_changes) << c.set;
     EXPECT_NE(right(world), right(nominal)) << c.set;
@@ -447,7 +448,7 @@ TEST(SimWorldTest, IlluminationPhotometryAndCalibrationErrorReachTheImages) {
     EXPECT_EQ(world.Camera().fx, nominal.Camera().fx) << c.set;
   }
   // The exposure sets the image level: 60 DN against 110 (the scene's radiance is the same).
-  SimWorld dark;
+  sil::SimWorld dark;
   ASSERT_NO_FATAL_FAILURE(build("sim.exposure_dn: 55\n", &dark));
   EXPECT_NEAR(Mean(left(dark)) / Mean(left(nominal)), 0.5, 0.03);
 }
@@ -508,7 +509,7 @@ TEST(FlightLoopTest, DroppedFramesAreGapsCountedOnceAndEvaluatedAgainstTheirOwnT
   Rig rig(
       "source: sim\nsim.frames: 40\nsim.width_px: 256\nsim.height_px: 192\n"
       "sim.terrain_size: 1024\nrate_hz: 10\nsim.frame_drop_probability: 0.2\n");
-  const SimWorld& world = *rig.world;
+  const sil::SimWorld& world = *rig.world;
   std::vector<std::int64_t> delivered;
   for (std::int32_t k = 0; k < world.NumFrames(); ++k) {
     if (world.Delivered(k)) delivered.push_back(k);
@@ -570,7 +571,7 @@ TEST(FlightLoopTest, JitteredStampsReachTheEstimatorWhileTheImagesKeepTheTrueTim
       "source: sim\nsim.frames: 40\nsim.width_px: 256\nsim.height_px: 192\n"
       "sim.terrain_size: 1024\nrate_hz: 10\nsim.timestamp_jitter_ms: 5\n"
       "sim.imu_unit: tactical\nimu.enabled: true\n");
-  const SimWorld& world = *rig.world;
+  const sil::SimWorld& world = *rig.world;
   EXPECT_EQ(world.ExposureNs(0), world.Trajectory().FrameTimeNs(0));
   double sum2 = 0.0;
   for (std::int32_t k = 1; k < world.NumFrames(); ++k) {
@@ -644,11 +645,11 @@ TEST(FlightLoopTest, TheInertialEstimatorTracksADispersedDescent) {
     r.frames = static_cast<std::int64_t>(navs.navs.size());
     r.pose_rms_m = r.frames > 0 ? std::sqrt(error2 / r.frames) : 1e9;
     sim::ImuModelOptions unit;
-    EXPECT_TRUE(SimImuUnit(rig.config, &unit));
+    EXPECT_TRUE(sil::SimImuUnit(rig.config, &unit));
     sim::ImuModel ideal;
     EXPECT_EQ(ideal.Configure(sim::Noiseless(unit), truth), core::Status::kOk);
-    r.ideal_imu_rms_m =
-        ImuOnlyPoseRms(ideal, truth, ImuOptionsFor(rig.config, &truth), truth.WorldTCamera(0));
+    r.ideal_imu_rms_m = sil::ImuOnlyPoseRms(ideal, truth, sil::SimImuOptions(rig.config, &truth),
+                                            truth.WorldTCamera(0));
     return r;
   };
   const Result nominal = fly("");

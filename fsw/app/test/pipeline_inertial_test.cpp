@@ -12,7 +12,7 @@
 
 #include "swf/app/config.hpp"
 #include "swf/app/pipeline.hpp"
-#include "swf/app/sim_world.hpp"
+#include "swf/sil/sil.hpp"
 #include "swf/sim/imu_model.hpp"
 
 namespace swf::app {
@@ -37,7 +37,7 @@ class InertialDescent {
     EXPECT_TRUE(
         ParseConfig("source: sim\nsim.frames: 80\nsim.width_px: 256\nsim.height_px: 192\n"
                     "sim.terrain_size: 1024\nrate_hz: 10\n",
-                    "test", &config_, &error))
+                    "test", &config_, &error, sil::SimConfigExtension()))
         << error;
     EXPECT_TRUE(world_->Build(config_, &error)) << error;
     EXPECT_TRUE(world_->RenderAll(2, nullptr, &error)) << error;
@@ -122,7 +122,7 @@ class InertialDescent {
 
  private:
   FswConfig config_;
-  std::unique_ptr<SimWorld> world_ = std::make_unique<SimWorld>();
+  std::unique_ptr<sil::SimWorld> world_ = std::make_unique<sil::SimWorld>();
   sim::ImuModel imu_;
   estimator::Pose<double> camera_t_imu_;
   std::unique_ptr<Pipeline> pipeline_;
@@ -222,9 +222,9 @@ TEST(PipelineInertialTest, StaticStartLevelsTheAttitudeAndReadsTheGyroBias) {
       ParseConfig("source: sim\nsim.scenario: hover\nsim.frames: 20\nsim.width_px: 256\n"
                   "sim.height_px: 192\nsim.terrain_size: 1024\nrate_hz: 10\n"
                   "sim.imu_unit: tactical\nimu.enabled: true\nimu.static_start: true\n",
-                  "test", &config, &error))
+                  "test", &config, &error, sil::SimConfigExtension()))
       << error;
-  SimWorld world;
+  sil::SimWorld world;
   ASSERT_TRUE(world.Build(config, &error)) << error;
   ASSERT_TRUE(world.RenderAll(2, nullptr, &error)) << error;
   const sim::ImuModel& unit = *world.ImuUnit();
@@ -238,7 +238,7 @@ TEST(PipelineInertialTest, StaticStartLevelsTheAttitudeAndReadsTheGyroBias) {
     po.frontend.harris.bucket_cols = po.width_px / 40;
     po.frontend.harris.bucket_rows = po.height_px / 40;
     po.swf.window_size = 5;
-    po.imu = ImuOptionsFor(config, &world.Trajectory());
+    po.imu = sil::SimImuOptions(config, &world.Trajectory());
     po.imu.static_start = static_start;
     po.initial_world_T_camera = truth;
     po.initial_world_T_camera.R = estimator::ExpSO3<double>(Vec3<double>(0.1, 0.0, 0.0)) * truth.R;

@@ -14,7 +14,7 @@
 #include <string>
 
 #include "swf/app/config.hpp"
-#include "swf/app/sim_world.hpp"
+#include "swf/sil/sil.hpp"
 
 namespace swf::app {
 namespace {
@@ -25,7 +25,7 @@ using estimator::Vec3;
 
 struct Descent {
   FswConfig config;
-  std::unique_ptr<SimWorld> world = std::make_unique<SimWorld>();
+  std::unique_ptr<sil::SimWorld> world = std::make_unique<sil::SimWorld>();
   std::unique_ptr<Pipeline> pipeline = std::make_unique<Pipeline>();
 
   explicit Descent(double baseline_sigma_m = 0.0, double disparity_sigma_px = 0.0) {
@@ -33,7 +33,7 @@ struct Descent {
     EXPECT_TRUE(
         ParseConfig("source: sim\nsim.frames: 60\nsim.width_px: 256\nsim.height_px: 192\n"
                     "sim.terrain_size: 1024\nrate_hz: 10\n",
-                    "test", &config, &error))
+                    "test", &config, &error, sil::SimConfigExtension()))
         << error;
     EXPECT_TRUE(world->Build(config, &error)) << error;
     EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;

@@ -22,7 +22,7 @@ trap 'rm -rf "$dir"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
 echo "== live run"
-"$fsw" --config "$cfg" --set "record.path: $dir/live.lcmlog" || fail "swf-fsw failed"
+"$fsw" --config "$cfg" --set "record.path: $dir/live.lcmlog" || fail "swf-sil failed"
 echo "== replays"
 "$replay" --config "$cfg" --log "$dir/live.lcmlog" --record "$dir/r1.lcmlog" || fail "replay 1"
 "$replay" --config "$cfg" --log "$dir/live.lcmlog" --record "$dir/r2.lcmlog" || fail "replay 2"
@@ -37,7 +37,7 @@ hazards=$($cmp --count SWF_HAZARD "$dir/live.lcmlog")
 echo "== stereo-inertial: live and replay with the simulated MEMS IMU"
 "$fsw" --config "$cfg" --set "sim.imu_unit: mems" --set "imu.enabled: true" \
   --set "record.path: $dir/imu.lcmlog" --set "summary.path: $dir/imu.json" ||
-  fail "swf-fsw with the IMU failed"
+  fail "swf-sil with the IMU failed"
 "$replay" --config "$cfg" --set "sim.imu_unit: mems" --set "imu.enabled: true" \
   --log "$dir/imu.lcmlog" --record "$dir/imu_r.lcmlog" || fail "replay with the IMU failed"
 $cmp SWF_NAV,SWF_LANDMARKS,SWF_HAZARD "$dir/imu.lcmlog" "$dir/imu_r.lcmlog" ||

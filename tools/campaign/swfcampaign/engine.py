@@ -4,10 +4,10 @@
     OUT/spec.yaml       the spec, copied (the directory is self-contained: workers and
     OUT/nominal.cfg     `reproduce` read these, not the originals)
     OUT/runs/NNNNN/     one run: run.json (seed, overrides, command) first, then stderr.txt,
-                        summary.json (swf-fsw), descent.lcmlog (kept when the run failed or
+                        summary.json (swf-sil), descent.lcmlog (kept when the run failed or
                         crashed) and status.json last, written atomically
 
-A run is done when its status.json says completed: swf-fsw wrote a whole summary and exited with
+A run is done when its status.json says completed: swf-sil wrote a whole summary and exited with
 the code of the verdict in it (0 ok, 3 degraded, 1 failed). Anything else (killed, crashed,
 refused, timed out, a write that failed) is not done, and a rerun of the campaign flies it again;
 done runs are never flown twice.
@@ -58,8 +58,8 @@ def read_json(path):
         return None
 
 
-def fsw_command(fsw, out, index, overrides, summary, record):
-    cmd = [fsw, '--config', os.path.join(out, 'nominal.cfg')]
+def sil_command(sil, out, index, overrides, summary, record):
+    cmd = [sil, '--config', os.path.join(out, 'nominal.cfg')]
     sets = list(CAMPAIGN_SETS) + [('summary.path', summary), ('record.path', record)]
     sets += sorted(overrides.items())
     for key, value in sets:
@@ -67,30 +67,30 @@ def fsw_command(fsw, out, index, overrides, summary, record):
     return cmd
 
 
-def check_fsw(fsw):
-    if not (os.path.isfile(fsw) and os.access(fsw, os.X_OK)):
-        raise CampaignError('swf-fsw not found or not executable: %s (build it: cmake --build '
-                            '--preset release --target swf-fsw, or pass --fsw)' % fsw)
+def check_sil(sil):
+    if not (os.path.isfile(sil) and os.access(sil, os.X_OK)):
+        raise CampaignError('swf-sil not found or not executable: %s (build it: cmake --build '
+                            '--preset release --target swf-sil, or pass --sil)' % sil)
 
 
-def check_against_fsw(spec, fsw):
-    """swf-fsw --check on run 0 and on every dispersion's edge values: a key swf-fsw does not know
+def check_against_sil(spec, sil):
+    """swf-sil --check on run 0 and on every dispersion's edge values: a key swf-sil does not know
     or a value it refuses is a spec error at that key's line."""
     def refused(sets):
-        cmd = [fsw, '--check', '--config', spec.config]
+        cmd = [sil, '--check', '--config', spec.config]
         for key, value in list(CAMPAIGN_SETS) + sorted(sets.items()):
             cmd += ['--set', '%s: %s' % (key, value)]
         proc = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                               check=False)
         return None if proc.returncode == 0 else (proc.stderr.strip() or
-                                                  'swf-fsw --check exited %d' % proc.returncode)
+                                                  'swf-sil --check exited %d' % proc.returncode)
 
     def blame(message, keys):
         for key in keys:
             if key in message:
-                return '%s:%d: %s: swf-fsw refuses it: %s' % (spec.path, spec.lines[key], key,
+                return '%s:%d: %s: swf-sil refuses it: %s' % (spec.path, spec.lines[key], key,
                                                               message)
-        return '%s: swf-fsw refuses the configuration: %s' % (spec.path, message)
+        return '%s: swf-sil refuses the configuration: %s' % (spec.path, message)
 
     base = specmod.overrides(spec, 0)
     problem = refused(base)
@@ -100,7 +100,7 @@ def check_against_fsw(spec, fsw):
         for value in dispersion.extremes():
             problem = refused(dict(base, **{key: value}))
             if problem:
-                raise specmod.SpecError('%s:%d: dispersions.%s: swf-fsw refuses %s: %s' % (
+                raise specmod.SpecError('%s:%d: dispersions.%s: swf-sil refuses %s: %s' % (
                     spec.path, spec.lines[key], key, value, problem))
 
 
@@ -157,7 +157,7 @@ def _dying_with_parent(cmd):
     return ['setpriv', '--pdeathsig', 'KILL', '--'] + cmd if shutil.which('setpriv') else cmd
 
 
-def fly(out, index, fsw, spec, timeout_s, dest=None, keep_log=False):
+def fly(out, index, sil, spec, timeout_s, dest=None, keep_log=False):
     """Flies run `index` in its run directory (or in `dest`); returns its status (also written to
     status.json when the disk lets it). Never raises for the run's own failures: they are its
     status."""
@@ -173,7 +173,7 @@ def fly(out, index, fsw, spec, timeout_s, dest=None, keep_log=False):
         overrides = specmod.overrides(spec, index)
         summary_path = os.path.join(d, 'summary.json')
         log_path = os.path.join(d, LOG_NAME)
-        cmd = fsw_command(fsw, out, index, overrides, summary_path, log_path)
+        cmd = sil_command(sil, out, index, overrides, summary_path, log_path)
         write_atomically(os.path.join(d, 'run.json'), json.dumps(
             {'index': index, 'seed': specmod.run_seed(spec.seed, index),
              'overrides': overrides, 'command': cmd}, indent=1) + '\n')
@@ -217,14 +217,14 @@ def fly(out, index, fsw, spec, timeout_s, dest=None, keep_log=False):
     return status
 
 
-def reproduce(out, index, fsw, spec):
+def reproduce(out, index, sil, spec):
     """Flies run `index` again into its reproduce/ directory, keeping the LCM log, unless that was
     done before. Returns (status, identical): whether the summary equals the campaign's apart from
     the measured times (None when either summary is missing)."""
     dest = os.path.join(run_dir(out, index), 'reproduce')
     status = read_json(os.path.join(dest, 'status.json'))
     if not (status or {}).get('completed'):
-        status = fly(out, index, fsw, spec, spec.timeout_s, dest=dest, keep_log=True)
+        status = fly(out, index, sil, spec, spec.timeout_s, dest=dest, keep_log=True)
     original = read_json(os.path.join(run_dir(out, index), 'summary.json'))
     again = read_json(os.path.join(dest, 'summary.json'))
     if original is None or again is None:
@@ -238,15 +238,15 @@ def describe(status):
     return status['error'] or 'not completed'
 
 
-def run_local(spec, out, fsw, jobs, progress=True):
-    """Flies the pending runs with `jobs` worker threads (each one swf-fsw process at a time).
+def run_local(spec, out, sil, jobs, progress=True):
+    """Flies the pending runs with `jobs` worker threads (each one swf-sil process at a time).
     Returns the statuses of the runs flown now."""
     todo = pending(out, spec.runs)
     print('campaign %s: %d runs, %d done, %d to fly with %d local workers' % (
         spec.name, spec.runs, spec.runs - len(todo), len(todo), jobs), flush=True)
     statuses = []
     with ThreadPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(fly, out, i, fsw, spec, spec.timeout_s) for i in todo]
+        futures = [pool.submit(fly, out, i, sil, spec, spec.timeout_s) for i in todo]
         try:
             for n, fut in enumerate(futures, 1):
                 s = fut.result()
@@ -261,7 +261,7 @@ def run_local(spec, out, fsw, jobs, progress=True):
     return statuses
 
 
-def run_slurm(spec, out, fsw, partition=None, time_limit_min=None, max_parallel=None,
+def run_slurm(spec, out, sil, partition=None, time_limit_min=None, max_parallel=None,
               wait=True, poll_s=2.0, chunk=1000):
     """Submits the pending runs as Slurm array jobs (at most `chunk` tasks each; every task flies
     one run through `swf_campaign.py worker`), and with wait=True waits until they left the
@@ -284,9 +284,9 @@ def run_slurm(spec, out, fsw, partition=None, time_limit_min=None, max_parallel=
         part = todo[start:start + chunk]
         list_path = os.path.join(slurm_dir, 'chunk_%05d.txt' % (start // chunk))
         write_atomically(list_path, ''.join('%d\n' % i for i in part))
-        wrap = '%s %s worker %s --list %s --fsw %s' % (
+        wrap = '%s %s worker %s --list %s --sil %s' % (
             shlex.quote(sys.executable), shlex.quote(script), shlex.quote(os.path.abspath(out)),
-            shlex.quote(os.path.abspath(list_path)), shlex.quote(os.path.abspath(fsw)))
+            shlex.quote(os.path.abspath(list_path)), shlex.quote(os.path.abspath(sil)))
         array = '0-%d' % (len(part) - 1) + ('%%%d' % max_parallel if max_parallel else '')
         cmd = ['sbatch', '--parsable', '--job-name', 'swf-' + spec.name, '--array', array,
                '--cpus-per-task', '1', '--time', str(minutes),
@@ -332,12 +332,12 @@ def run_slurm(spec, out, fsw, partition=None, time_limit_min=None, max_parallel=
     return statuses
 
 
-def worker(out, fsw, indices):
+def worker(out, sil, indices):
     """A Slurm task: flies the runs given (normally one). Exit 0 when each completed."""
     spec = load_campaign(out)
     failed = 0
     for i in indices:
-        s = fly(out, i, fsw, spec, spec.timeout_s)
+        s = fly(out, i, sil, spec, spec.timeout_s)
         print('run %d: %s' % (i, describe(s)), flush=True)
         failed += not s['completed']
     return 1 if failed else 0

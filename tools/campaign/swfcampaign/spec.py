@@ -1,4 +1,4 @@
-"""The campaign spec: a YAML file naming the nominal swf-fsw configuration, fixed overrides and the
+"""The campaign spec: a YAML file naming the nominal swf-sil configuration, fixed overrides and the
 dispersions, validated with `file:line: field: problem` errors.
 
     name: default                      # a word: [A-Za-z0-9_-]+
@@ -87,7 +87,7 @@ class Dispersion:
         return ', '.join(format_value(v) for v in values)
 
     def extremes(self):
-        """Values a run may take at the edges of the distribution (checked against swf-fsw)."""
+        """Values a run may take at the edges of the distribution (checked against swf-sil)."""
         if self.kind == RUN_SEED:
             return ['1']
         if self.kind == 'choice':
@@ -231,7 +231,7 @@ def _dispersion(path, key, node):
 
 def load(spec_path, config=None):
     """Reads and validates a spec; raises SpecError. The config keys themselves are checked by
-    swf-fsw (engine.check_against_fsw). `config` replaces the nominal config the spec names (a
+    swf-sil (engine.check_against_sil). `config` replaces the nominal config the spec names (a
     campaign directory's own copy)."""
     try:
         with open(spec_path, encoding='utf-8') as f:
@@ -294,7 +294,7 @@ def load(spec_path, config=None):
             key = _scalar(knode)
             field = '%s.%s' % (section, key)
             if not isinstance(key, str) or not CONFIG_KEY.match(key):
-                raise _error(spec_path, knode, field, 'not a swf-fsw config key')
+                raise _error(spec_path, knode, field, 'not a swf-sil config key')
             if key in RESERVED:
                 raise _error(spec_path, knode, field, 'set by the campaign itself')
             if key in spec.fixed or key in spec.dispersions:

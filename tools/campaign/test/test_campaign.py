@@ -1,4 +1,4 @@
-"""The campaign tool against the real swf-fsw ($SWF_FSW): spec errors, run seeds, the local engine
+"""The campaign tool against the real swf-sil ($SWF_SIL): spec errors, run seeds, the local engine
 and its faults (a killed run, a missing binary, a full disk, another campaign's directory),
 resumption and the report."""
 import json
@@ -17,14 +17,14 @@ TOOL = os.path.join(HERE, '..', 'swf_campaign.py')
 DEMO_CFG = os.path.abspath(os.path.join(HERE, '..', '..', '..', 'fsw', 'app', 'config',
                                         'demo.cfg'))
 TINY = os.path.join(HERE, 'tiny.yaml')
-FSW = os.environ.get('SWF_FSW', '')
+SIL = os.environ.get('SWF_SIL', '')
 sys.path.insert(0, os.path.join(HERE, '..'))
 from swfcampaign import report as reportmod  # noqa: E402
 from swfcampaign import spec as specmod  # noqa: E402
 
 
-def campaign(*args, fsw=None):
-    cmd = ['/usr/bin/python3', TOOL] + list(args) + ['--fsw', fsw or FSW]
+def campaign(*args, sil=None):
+    cmd = ['/usr/bin/python3', TOOL] + list(args) + ['--sil', sil or SIL]
     return subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                           check=False)
 
@@ -35,9 +35,9 @@ def read_json(path):
 
 
 def write_wrapper(path, body):
-    """An swf-fsw stand-in: runs `body` (sh) and then the real swf-fsw with the same arguments."""
+    """An swf-sil stand-in: runs `body` (sh) and then the real swf-sil with the same arguments."""
     with open(path, 'w', encoding='utf-8') as f:
-        f.write('#!/bin/sh\n%s\nexec "%s" "$@"\n' % (body, FSW))
+        f.write('#!/bin/sh\n%s\nexec "%s" "$@"\n' % (body, SIL))
     os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
 
 
@@ -82,7 +82,7 @@ class SpecErrors(unittest.TestCase):
             (self.HEAD + 'fixed:\n  sim.frames: 3\ndispersions:\n  sim.frames: {uniform: [1, 2]}\n',
              'spec.yaml:8: dispersions.sim.frames: given twice'),
             (self.HEAD + 'fixed:\n  Sim Frames: 3\n',
-             'spec.yaml:6: fixed.Sim Frames: not a swf-fsw config key'),
+             'spec.yaml:6: fixed.Sim Frames: not a swf-sil config key'),
             ('name: t\nseed: 1\nruns: 4\nconfig: nowhere.cfg\n',
              'spec.yaml:4: config: no such file'),
             (self.HEAD + 'fixed: [\n', 'spec.yaml:6: (syntax)'),
@@ -93,7 +93,7 @@ class SpecErrors(unittest.TestCase):
             with self.subTest(expected=expected):
                 self.assertTrue(self.error(body).startswith(expected), self.error(body))
 
-    def refused_by_swf_fsw(self, dispersions):
+    def refused_by_swf_sil(self, dispersions):
         """The campaign's stderr for a spec with these dispersions, which must be refused
         (exit 2) before anything is written."""
         path = os.path.join(self.dir, 'spec.yaml')
@@ -104,13 +104,13 @@ class SpecErrors(unittest.TestCase):
         self.assertFalse(os.path.exists(os.path.join(self.dir, 'out')))
         return r.stderr.replace(path, 'spec.yaml')
 
-    def test_unknown_config_key_is_refused_by_swf_fsw_at_its_line(self):
-        self.assertIn('spec.yaml:7: sim.wobble_m: swf-fsw refuses it', self.refused_by_swf_fsw(
+    def test_unknown_config_key_is_refused_by_swf_sil_at_its_line(self):
+        self.assertIn('spec.yaml:7: sim.wobble_m: swf-sil refuses it', self.refused_by_swf_sil(
             '  sim.seed: run_seed\n  sim.wobble_m: {uniform: [0, 1]}\n'))
 
-    def test_a_value_swf_fsw_refuses_at_the_distribution_edge(self):
-        self.assertIn('spec.yaml:6: dispersions.sim.hfov_deg: swf-fsw refuses 171.0',
-                      self.refused_by_swf_fsw('  sim.hfov_deg: {uniform: [20, 171]}\n'))
+    def test_a_value_swf_sil_refuses_at_the_distribution_edge(self):
+        self.assertIn('spec.yaml:6: dispersions.sim.hfov_deg: swf-sil refuses 171.0',
+                      self.refused_by_swf_sil('  sim.hfov_deg: {uniform: [20, 171]}\n'))
 
 
 class Seeds(unittest.TestCase):
@@ -163,15 +163,15 @@ class Statistics(unittest.TestCase):
 
 class LocalEngine(unittest.TestCase):
     def setUp(self):
-        self.assertTrue(os.access(FSW, os.X_OK), 'SWF_FSW must name the swf-fsw binary')
+        self.assertTrue(os.access(SIL, os.X_OK), 'SWF_SIL must name the swf-sil binary')
         self.dir = tempfile.mkdtemp()
         self.addCleanup(shutil.rmtree, self.dir)
         self.out = os.path.join(self.dir, 'tiny')
 
     def test_a_killed_run_is_listed_kept_and_flown_again_alone(self):
-        killer = os.path.join(self.dir, 'fsw-killed-at-run-2')
+        killer = os.path.join(self.dir, 'sil-killed-at-run-2')
         write_wrapper(killer, 'case "$*" in *runs/00002/summary.json*) kill -KILL $$ ;; esac')
-        r = campaign('run', TINY, '--out', self.out, '--jobs', '2', fsw=killer)
+        r = campaign('run', TINY, '--out', self.out, '--jobs', '2', sil=killer)
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
         self.assertIn('run 2: killed by signal 9 (SIGKILL)', r.stderr)
         report = read_json(os.path.join(self.out, 'report', 'report.json'))
@@ -203,10 +203,10 @@ class LocalEngine(unittest.TestCase):
     def test_a_killed_campaign_resumes_where_it_stopped(self):
         # Run 3 hangs, so the campaign is surely mid-run when it is killed, however loaded the
         # machine is.
-        stalling = os.path.join(self.dir, 'fsw-stalls-at-run-3')
+        stalling = os.path.join(self.dir, 'sil-stalls-at-run-3')
         write_wrapper(stalling, 'case "$*" in *runs/00003/summary.json*) sleep 60 ;; esac')
         proc = subprocess.Popen(['/usr/bin/python3', TOOL, 'run', TINY, '--out', self.out,
-                                 '--jobs', '1', '--fsw', stalling], stdout=subprocess.DEVNULL,
+                                 '--jobs', '1', '--sil', stalling], stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)
         third = os.path.join(self.out, 'runs', '00002', 'status.json')
         for _ in range(1200):
@@ -248,9 +248,9 @@ class LocalEngine(unittest.TestCase):
             self.assertIn('](%s)' % png, md)
 
     def test_a_missing_binary_is_refused_before_anything_is_written(self):
-        r = campaign('run', TINY, '--out', self.out, fsw=os.path.join(self.dir, 'no-swf-fsw'))
+        r = campaign('run', TINY, '--out', self.out, sil=os.path.join(self.dir, 'no-swf-sil'))
         self.assertEqual(r.returncode, 2)
-        self.assertIn('swf-fsw not found or not executable', r.stderr)
+        self.assertIn('swf-sil not found or not executable', r.stderr)
         self.assertFalse(os.path.exists(self.out))
 
     def test_a_directory_of_another_campaign_is_refused(self):
@@ -271,24 +271,24 @@ class LocalEngine(unittest.TestCase):
         disk = os.path.join(self.dir, 'disk')
         os.makedirs(disk)
         filler = os.path.join(disk, 'filler')
-        eater = os.path.join(self.dir, 'fsw-disk-full-from-run-3')
+        eater = os.path.join(self.dir, 'sil-disk-full-from-run-3')
         write_wrapper(eater, 'case "$*" in *runs/00003/summary.json*) '
                       'dd if=/dev/zero of=%s bs=1M 2>/dev/null ;; esac' % filler)
         out = os.path.join(disk, 'tiny')
         script = textwrap.dedent('''\
             set -u
             mount -t tmpfs -o size=48m tmpfs {disk} || exit 99
-            /usr/bin/python3 {tool} run {spec} --out {out} --jobs 1 --no-refly --fsw {eater} \\
+            /usr/bin/python3 {tool} run {spec} --out {out} --jobs 1 --no-refly --sil {eater} \\
               > {d}/first.out 2> {d}/first.err
             echo $? > {d}/first.rc
             ls {out}/runs > {d}/first.runs
             rm -f {filler}
-            /usr/bin/python3 {tool} run {spec} --out {out} --jobs 1 --no-refly --fsw {fsw} \\
+            /usr/bin/python3 {tool} run {spec} --out {out} --jobs 1 --no-refly --sil {sil} \\
               > {d}/second.out 2> {d}/second.err
             echo $? > {d}/second.rc
             cp {out}/report/report.json {d}/report.json
             ''').format(disk=disk, tool=TOOL, spec=TINY, out=out, eater=eater, d=self.dir,
-                        filler=filler, fsw=FSW)
+                        filler=filler, sil=SIL)
         r = subprocess.run(['unshare', '--mount', '--propagation', 'private', 'sh', '-c', script],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, check=False)
         self.assertEqual(r.returncode, 0, r.stderr)

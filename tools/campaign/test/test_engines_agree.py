@@ -12,7 +12,7 @@ import unittest
 HERE = os.path.dirname(os.path.abspath(__file__))
 TOOL = os.path.join(HERE, '..', 'swf_campaign.py')
 CLUSTER = os.path.join(HERE, 'slurm_cluster.sh')
-FSW = os.environ.get('SWF_FSW', '')
+SIL = os.environ.get('SWF_SIL', '')
 RUNS = 20
 sys.path.insert(0, os.path.join(HERE, '..'))
 from swfcampaign import engine  # noqa: E402
@@ -25,7 +25,7 @@ def read_json(path):
 
 class EnginesAgree(unittest.TestCase):
     def setUp(self):
-        self.assertTrue(os.access(FSW, os.X_OK), 'SWF_FSW must name the swf-fsw binary')
+        self.assertTrue(os.access(SIL, os.X_OK), 'SWF_SIL must name the swf-sil binary')
         self.dir = tempfile.mkdtemp(dir=os.environ.get('TMPDIR', '/tmp'))
         os.chmod(self.dir, 0o755)
         self.addCleanup(shutil.rmtree, self.dir, True)
@@ -38,7 +38,7 @@ class EnginesAgree(unittest.TestCase):
 
     def fly(self, out, engine, env):
         r = subprocess.run(['/usr/bin/python3', TOOL, 'run', self.spec, '--out', out,
-                            '--engine', engine, '--fsw', FSW, '--jobs', '2'],
+                            '--engine', engine, '--sil', SIL, '--jobs', '2'],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                            check=False, timeout=500)
         self.assertEqual(r.returncode, 0, r.stdout + r.stderr)

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/app/config_fields.hpp"
 #include "swf/app/flight_loop.hpp"
 #include "swf/app/pipeline.hpp"
 
@@ -134,9 +135,24 @@ struct ConfigOrigins {
   std::map<std::string, std::string> keys;
 };
 
+// What a program built on the flight process adds to its configuration: tools/sil's simulator
+// (source sim, the sim.* and inject.black_* keys, the checks between them, and the closest range
+// its trajectory flies). swf-fsw has none: its configuration refuses source sim and every sim.*
+// key, and its SimConfig stays at the defaults.
+struct ConfigExtension {
+  const char* source = "";                                      // the source it serves ("sim")
+  const std::map<std::string, ConfigSetter>* fields = nullptr;  // its keys
+  // Checks across keys, after the flight process's own (ValidateConfig).
+  bool (*validate)(const FswConfig& c, const std::string& origin, std::string* error) = nullptr;
+  // CheckEnvelopeDisparity for its source: the disparity at the closest range it flies.
+  bool (*envelope_fits)(const FswConfig& c, double fx_px, const std::string& origin,
+                        std::string* error) = nullptr;
+};
+
 struct FswConfig {
-  SourceKind source = SourceKind::kSim;  // required in every file
-  std::string log_path;                  // source: log
+  const ConfigExtension* extension = nullptr;  // the program's keys beyond the flight's (or none)
+  SourceKind source = SourceKind::kSim;        // required in every file
+  std::string log_path;                        // source: log
   SimConfig sim;
   CameraConfig camera;
   ImuConfig imu;
@@ -205,17 +221,19 @@ struct FswConfig {
 // Parses and validates. False with `error` = "<origin>:<line>: <field>: <problem>"; a problem
 // between fields names the line of the field to change ("<origin>: <field>: ..." when that field
 // was left at its default). `config` is untouched on refusal.
+// `extension`: the program's keys and checks beyond the flight process's (nullptr: swf-fsw).
 bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,
-                 std::string* error);
+                 std::string* error, const ConfigExtension* extension = nullptr);
 // Reads `path` (a regular file of at most kMaxConfigBytes; a directory, a device or a larger file
 // is refused) and parses it.
-bool LoadConfig(const std::string& path, FswConfig* config, std::string* error);
+bool LoadConfig(const std::string& path, FswConfig* config, std::string* error,
+                const ConfigExtension* extension = nullptr);
 // The flown configuration: the file, then each `key: value` override in order (a key the file sets
 // may be overridden; the same key twice among the overrides is refused), validated once as a whole,
 // so that the order of the overrides does not matter and an override may repair a combination the
 // file alone fails. Errors in an override read "--set: <field>: <problem>".
 bool LoadConfig(const std::string& path, const std::vector<std::string>& overrides,
-                FswConfig* config, std::string* error);
+                FswConfig* config, std::string* error, const ConfigExtension* extension = nullptr);
 // Applies one `key: value` override (command line) with the same checks, then re-validates the
 // whole configuration (so a pair of overrides that only holds together must come in the order that
 // keeps every step valid; LoadConfig with overrides has no such order).

@@ -18,7 +18,7 @@
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
 
-namespace swf::app {
+namespace swf::sil {
 
 struct EvaluationResult {
   std::int64_t navs = 0;
@@ -58,7 +58,8 @@ struct EvaluationResult {
 // biases): each frame interval preintegrated and propagated, no camera. Returns the RMS of the
 // camera position error over the frames, the yardstick stereo-inertial estimation is against.
 double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajectory,
-                      const ImuOptions& imu, const estimator::Pose<double>& initial_world_T_camera);
+                      const app::ImuOptions& imu,
+                      const estimator::Pose<double>& initial_world_T_camera);
 
 // A published hazard map against the simulator's hazard truth (sim/hazard.hpp, same thresholds).
 // Rocks are counted in height classes [1, 2), [2, 4) and [4, inf) times the rock threshold.
@@ -85,14 +86,14 @@ struct HazardEvaluation {
 };
 
 // Keeps copies of the outputs (output thread) for the evaluation after the run.
-class Evaluation : public OutputObserver {
+class Evaluation : public app::OutputObserver {
  public:
-  void OnNav(const NavRecord& r) override;
-  void OnMap(const MapRecord& r) override;
-  void OnHazard(const HazardRecord& r) override;
+  void OnNav(const app::NavRecord& r) override;
+  void OnMap(const app::MapRecord& r) override;
+  void OnHazard(const app::HazardRecord& r) override;
 
   // After the run (the pipeline is idle). Writes gnuplot data into plot_dir when not empty.
-  EvaluationResult Evaluate(const Pipeline& pipeline, const sim::Trajectory& trajectory,
+  EvaluationResult Evaluate(const app::Pipeline& pipeline, const sim::Trajectory& trajectory,
                             const sim::Terrain& terrain, const std::string& plot_dir) const;
   // Every published hazard map, in order, against the truth of the mapper's thresholds.
   std::vector<HazardEvaluation> EvaluateHazard(const hazard::HazardMapperOptions& thresholds,
@@ -139,4 +140,4 @@ class Evaluation : public OutputObserver {
   std::vector<PublishedHazardMap> hazard_maps_;
 };
 
-}  // namespace swf::app
+}  // namespace swf::sil

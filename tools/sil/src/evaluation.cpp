@@ -1,4 +1,4 @@
-#include "swf/app/evaluation.hpp"
+#include "swf/sil/evaluation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,9 @@
 
 #include "swf/app/hazard_stage.hpp"
 
-namespace swf::app {
+namespace swf::sil {
 
-void Evaluation::OnNav(const NavRecord& r) {
+void Evaluation::OnNav(const app::NavRecord& r) {
   Nav n{r.nav.frame_seq,
         {r.nav.position_world_m[0], r.nav.position_world_m[1], r.nav.position_world_m[2]},
         {r.nav.orientation_world_q[0], r.nav.orientation_world_q[1], r.nav.orientation_world_q[2],
@@ -42,7 +42,7 @@ double AttitudeErrorDeg(const double* q, const Eigen::Matrix3d& true_rotation) {
 }  // namespace
 
 double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajectory,
-                      const ImuOptions& imu,
+                      const app::ImuOptions& imu,
                       const estimator::Pose<double>& initial_world_T_camera) {
   estimator::InertialStereoModel<double> model;
   model.imu_T_camera = imu.imu_T_camera;
@@ -67,19 +67,20 @@ double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajecto
   return trajectory.NumFrames() > 1 ? std::sqrt(sum2 / trajectory.NumFrames()) : 0.0;
 }
 
-void Evaluation::OnMap(const MapRecord& r) {
+void Evaluation::OnMap(const app::MapRecord& r) {
   Map m;
   m.frame_seq = r.map.frame_seq;
   m.landmarks.reserve(r.map.num_landmarks);
   for (int i = 0; i < r.map.num_landmarks; ++i) {
-    const MapLandmark& l = r.map.landmarks[i];
+    const app::MapLandmark& l = r.map.landmarks[i];
     m.landmarks.push_back(
         Landmark{l.id, {l.position_world_m[0], l.position_world_m[1], l.position_world_m[2]}});
   }
   maps_.push_back(std::move(m));
 }
 
-EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Trajectory& trajectory,
+EvaluationResult Evaluation::Evaluate(const app::Pipeline& pipeline,
+                                      const sim::Trajectory& trajectory,
                                       const sim::Terrain& terrain,
                                       const std::string& plot_dir) const {
   EvaluationResult result;
@@ -144,7 +145,7 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
       *p = it->second;
       return std::isfinite(p->x());
     }
-    const FirstSighting& s = pipeline.Sighting(id);
+    const app::FirstSighting& s = pipeline.Sighting(id);
     Eigen::Vector3d value = Eigen::Vector3d::Constant(NAN);
     if (s.frame_seq >= 0 && s.frame_seq < trajectory.NumFrames()) {
       const estimator::Pose<double>& pose =
@@ -204,11 +205,11 @@ EvaluationResult Evaluation::Evaluate(const Pipeline& pipeline, const sim::Traje
   return result;
 }
 
-}  // namespace swf::app
+}  // namespace swf::sil
 
-namespace swf::app {
+namespace swf::sil {
 
-void Evaluation::OnHazard(const HazardRecord& r) {
+void Evaluation::OnHazard(const app::HazardRecord& r) {
   PublishedHazardMap m;
   m.frame_seq = r.frame_seq;
   m.origin_m[0] = r.origin_world_m[0];
@@ -264,7 +265,7 @@ HazardEvaluation Evaluation::EvaluateHazardMap(const PublishedHazardMap& m,
   const int n = m.cells_per_side;
   const double cell = m.cell_m;
   if (n <= 0 || !(cell > 0.0)) return r;
-  const std::int8_t rock_code = HazardClassCode(hazard::HazardClass::kRock);
+  const std::int8_t rock_code = app::HazardClassCode(hazard::HazardClass::kRock);
   const int tn = truth.size;
   const double tcell = terrain.CellM();
   const auto cell_of = [&](double x, double y, int* i, int* j) {
@@ -350,4 +351,4 @@ HazardEvaluation Evaluation::EvaluateHazardMap(const PublishedHazardMap& m,
   return r;
 }
 
-}  // namespace swf::app
+}  // namespace swf::sil

@@ -1,4 +1,6 @@
-#include "swf/app/sim_world.hpp"
+#include "swf/sil/sim_world.hpp"
+
+#include "swf/app/app.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -11,13 +13,13 @@
 
 #include "swf/sim/rng.hpp"
 
-namespace swf::app {
+namespace swf::sil {
 
 using core::Status;
 
 namespace {
 
-std::string SharedDir(const FswConfig& config) {
+std::string SharedDir(const app::FswConfig& config) {
   if (!config.sim.shared_dir.empty()) return config.sim.shared_dir;
   if (const char* env = std::getenv("SWF_SHARED_DIR")) return env;
   return "../shared";
@@ -25,7 +27,7 @@ std::string SharedDir(const FswConfig& config) {
 
 }  // namespace
 
-bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* error) {
+bool SimTerrain(const app::FswConfig& config, sim::Terrain* terrain, std::string* error) {
   sim::TerrainPreset preset;
   if (!sim::ParseTerrainPreset(config.sim.terrain.c_str(), &preset)) {
     *error = "sim.terrain: unknown preset";
@@ -43,7 +45,7 @@ bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* err
   return true;
 }
 
-sim::RigOptions SimRig(const FswConfig& config) {
+sim::RigOptions SimRig(const app::FswConfig& config) {
   sim::RigOptions rig = config.sim.scenario == "lab" ? sim::LabRig() : sim::EdlRig();
   rig.width_px = config.sim.width_px;
   rig.height_px = config.sim.height_px;
@@ -52,12 +54,12 @@ sim::RigOptions SimRig(const FswConfig& config) {
   return rig;
 }
 
-bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
+bool SimTrajectory(const app::FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
                    std::string* error, const sim::Terrain* terrain, sim::OrbitalTarget* chosen) {
   *rig = SimRig(config);
   sim::TrajectoryOptions t;
   if (config.sim.scenario == "descent") {
-    const SimConfig& s = config.sim;
+    const app::SimConfig& s = config.sim;
     t = sim::DescentTrajectory(config.rate_hz, s.start_altitude_m, s.end_altitude_m,
                                s.descent_rate_mps);
     t.velocity_world_mps.x() = s.horizontal_velocity_mps[0];
@@ -106,7 +108,7 @@ bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::Ri
   return true;
 }
 
-bool SimWorld::Build(const FswConfig& config, std::string* error) {
+bool SimWorld::Build(const app::FswConfig& config, std::string* error) {
   if (!SimTerrain(config, &terrain_, error)) return false;
   if (!SimTrajectory(config, &trajectory_, &rig_, error, &terrain_, &target_)) return false;
   num_frames_ = trajectory_.NumFrames();
@@ -153,7 +155,7 @@ bool SimWorld::Build(const FswConfig& config, std::string* error) {
   return true;
 }
 
-void SimWorld::DrawCameraTiming(const FswConfig& config) {
+void SimWorld::DrawCameraTiming(const app::FswConfig& config) {
   delivered_.assign(num_frames_, 1);
   exposure_ns_.assign(num_frames_, 0);
   delivered_frames_ = num_frames_ > 0 ? 1 : 0;
@@ -171,10 +173,10 @@ void SimWorld::DrawCameraTiming(const FswConfig& config) {
   }
 }
 
-void SimWorld::DrawMotionInputs(const FswConfig& config) {
+void SimWorld::DrawMotionInputs(const app::FswConfig& config) {
   // The simulated IMU, drawn once from the seed: same configuration, same motion inputs.
   imu_ = config.sim.imu;
-  motion_.assign(num_frames_, MotionInput{});
+  motion_.assign(num_frames_, app::MotionInput{});
   std::mt19937_64 rng(config.sim.seed * 7919u + 17u);
   std::normal_distribution<double> gauss(0.0, 1.0);
   estimator::Pose<double> since_delivered;  // the measured motion since the last frame served
@@ -250,12 +252,12 @@ bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std
   return true;
 }
 
-bool SimImuUnit(const FswConfig& config, sim::ImuModelOptions* unit) {
+bool SimImuUnit(const app::FswConfig& config, sim::ImuModelOptions* unit) {
   if (config.sim.imu_unit == "none") return false;
   *unit = config.sim.imu_unit == "tactical" ? sim::TacticalImu() : sim::MemsImu();
   // Its own stream of the seed: the unit's errors do not change when the scene does.
   unit->seed = config.sim.seed * 104729u + 3u;
-  const ImuConfig& c = config.imu;
+  const app::ImuConfig& c = config.imu;
   unit->camera_T_imu.t =
       Eigen::Vector3d(c.camera_t_imu_m[0], c.camera_t_imu_m[1], c.camera_t_imu_m[2]);
   unit->camera_T_imu.R = estimator::ExpSO3<double>(
@@ -275,24 +277,10 @@ estimator::Vec3<double> TrueImuVelocityAtStart(const sim::Trajectory& truth,
 
 }  // namespace
 
-ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
-  const ImuConfig& k = c.imu;
-  ImuOptions o;
-  o.enabled = k.enabled;
-  double rate_hz = k.rate_hz;
-  o.noise.gyro_noise_density = k.gyro_noise_density;
-  o.noise.gyro_random_walk = k.gyro_random_walk;
-  o.noise.accel_noise_density = k.accel_noise_density;
-  o.noise.accel_random_walk = k.accel_random_walk;
-  o.stream.gyro_range_radps = k.gyro_range_radps;
-  o.stream.accel_range_mps2 = k.accel_range_mps2;
-  o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -k.gravity_mps2);
-  o.first_gyro_bias_sigma_radps = k.gyro_bias_sigma_radps;
-  o.first_accel_bias_sigma_mps2 = k.accel_bias_sigma_mps2;
-  o.static_start = k.static_start;
+app::ImuOptions SimImuOptions(const app::FswConfig& c, const sim::Trajectory* truth) {
+  app::ImuOptions o = app::ImuOptionsFor(c);
   sim::ImuModelOptions unit;
   if (SimImuUnit(c, &unit)) {
-    rate_hz = unit.rate_hz;
     o.noise = sim::NoiseModelOf(unit);
     o.stream.gyro_range_radps = unit.gyro.range;
     o.stream.accel_range_mps2 = unit.accel.range;
@@ -302,19 +290,13 @@ ImuOptions ImuOptionsFor(const FswConfig& c, const sim::Trajectory* truth) {
         std::hypot(unit.gyro.turn_on_bias_sigma, unit.gyro.bias_instability);
     o.first_accel_bias_sigma_mps2 =
         std::hypot(unit.accel.turn_on_bias_sigma, unit.accel.bias_instability);
+    o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / unit.rate_hz));
   }
-  o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / rate_hz));
-  estimator::Pose<double> camera_T_imu;
-  camera_T_imu.t =
-      estimator::Vec3<double>(k.camera_t_imu_m[0], k.camera_t_imu_m[1], k.camera_t_imu_m[2]);
-  camera_T_imu.R = estimator::ExpSO3<double>(
-      estimator::Vec3<double>(k.camera_r_imu_rad[0], k.camera_r_imu_rad[1], k.camera_r_imu_rad[2]));
-  o.imu_T_camera = camera_T_imu.Inverse();
-  o.initial_velocity_world_mps =
-      truth != nullptr
-          ? TrueImuVelocityAtStart(*truth, camera_T_imu.t)
-          : estimator::Vec3<double>(k.initial_velocity_mps[0], k.initial_velocity_mps[1],
-                                    k.initial_velocity_mps[2]);
+  if (truth != nullptr) {
+    const double* lever = c.imu.camera_t_imu_m;
+    o.initial_velocity_world_mps =
+        TrueImuVelocityAtStart(*truth, estimator::Vec3<double>(lever[0], lever[1], lever[2]));
+  }
   return o;
 }
 
@@ -322,7 +304,7 @@ bool SimWorld::NextImu(std::int64_t until_utime, estimator::ImuSample<double>* s
   return imu_samples_.NextImu(until_utime, sample);
 }
 
-bool SimWorld::Motion(std::uint64_t seq, MotionInput* input) {
+bool SimWorld::Motion(std::uint64_t seq, app::MotionInput* input) {
   if (!imu_ || seq == 0 || seq >= motion_.size()) return false;
   *input = motion_[seq];
   return true;
@@ -366,4 +348,4 @@ Status PrerenderedSimSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoPa
 
 void PrerenderedSimSource::Release(const drivers::StereoPair& /*pair*/) {}
 
-}  // namespace swf::app
+}  // namespace swf::sil

@@ -19,34 +19,34 @@
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
 
-namespace swf::app {
+namespace swf::sil {
 
 // The terrain of a sim configuration (seconds for 2048^2 nodes).
-bool SimTerrain(const FswConfig& config, sim::Terrain* terrain, std::string* error);
+bool SimTerrain(const app::FswConfig& config, sim::Terrain* terrain, std::string* error);
 
 // The camera rig of a sim configuration.
-sim::RigOptions SimRig(const FswConfig& config);
+sim::RigOptions SimRig(const app::FswConfig& config);
 
 // The simulated IMU unit of a sim configuration (sim.imu_unit, mounted at imu.camera_*_imu);
 // false for "none".
-bool SimImuUnit(const FswConfig& config, sim::ImuModelOptions* unit);
+bool SimImuUnit(const app::FswConfig& config, sim::ImuModelOptions* unit);
 
-// The stereo-inertial estimator's IMU (imu.enabled; config.hpp ImuConfig): the simulator's unit
-// when sim.imu_unit names one, else imu.* as given. The velocity at start: the truth's
-// (`truth`: the simulated trajectory with initial: truth) or imu.initial_velocity_mps.
-ImuOptions ImuOptionsFor(const FswConfig& config, const sim::Trajectory* truth);
+// The stereo-inertial estimator's IMU (imu.enabled): the flight process's imu.* options
+// (app::ImuOptionsFor), with the simulator's unit's rate, noise, ranges, gravity and bias sigmas
+// when sim.imu_unit names one, and with `truth` (initial: truth) the true velocity at start.
+app::ImuOptions SimImuOptions(const app::FswConfig& config, const sim::Trajectory* truth);
 
 // The trajectory (and rig) of a sim configuration. Cheap (no terrain) unless `sim.target:
 // orbital`: the descent target then comes from `terrain` (built here when null), and `chosen`
 // (optional) receives the selection.
-bool SimTrajectory(const FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
+bool SimTrajectory(const app::FswConfig& config, sim::Trajectory* trajectory, sim::RigOptions* rig,
                    std::string* error, const sim::Terrain* terrain = nullptr,
                    sim::OrbitalTarget* chosen = nullptr);
 
-class SimWorld : public MotionProvider, public ImuProvider {
+class SimWorld : public app::MotionProvider, public app::ImuProvider {
  public:
   // Builds terrain, appearance and renderer (seconds for a 2048^2 terrain).
-  bool Build(const FswConfig& config, std::string* error);
+  bool Build(const app::FswConfig& config, std::string* error);
   const sim::Terrain& Terrain() const { return terrain_; }
   const sim::Trajectory& Trajectory() const { return trajectory_; }
   // The orbital pre-selection (`sim.target: orbital`; default-constructed otherwise).
@@ -70,15 +70,15 @@ class SimWorld : public MotionProvider, public ImuProvider {
   const std::uint8_t* Right(std::int32_t k) const { return right_[k].data(); }
   // The simulated IMU: noisy true relative motion into frame seq from the frame served before it
   // (across dropped frames; none for frame 0 or when sim.imu is false).
-  bool Motion(std::uint64_t seq, MotionInput* input) override;
+  bool Motion(std::uint64_t seq, app::MotionInput* input) override;
   // The simulated IMU unit's samples (sim.imu_unit), in time order.
   bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override;
   // The unit (nullptr for sim.imu_unit none): its samples, true biases and noise model.
   const sim::ImuModel* ImuUnit() const { return has_imu_unit_ ? &imu_unit_ : nullptr; }
 
  private:
-  void DrawCameraTiming(const FswConfig& config);
-  void DrawMotionInputs(const FswConfig& config);  // after DrawCameraTiming
+  void DrawCameraTiming(const app::FswConfig& config);
+  void DrawMotionInputs(const app::FswConfig& config);  // after DrawCameraTiming
 
   sim::RigOptions rig_;
   sim::Terrain terrain_;
@@ -90,10 +90,10 @@ class SimWorld : public MotionProvider, public ImuProvider {
   std::vector<std::uint8_t> delivered_;
   std::vector<core::TimeNs> exposure_ns_;
   std::int32_t delivered_frames_ = 0;
-  std::vector<MotionInput> motion_;
+  std::vector<app::MotionInput> motion_;
   bool imu_ = false;
   bool has_imu_unit_ = false;
-  StoredImuProvider imu_samples_;
+  app::StoredImuProvider imu_samples_;
   std::int64_t black_from_ = -1;  // inject.black_from / black_frames
   std::int64_t black_frames_ = 0;
   sim::ImuModel imu_unit_;
@@ -123,4 +123,4 @@ class PrerenderedSimSource final : public drivers::StereoSource {
   drivers::SourceStats stats_;
 };
 
-}  // namespace swf::app
+}  // namespace swf::sil

@@ -1,0 +1,254 @@
+#include "swf/sil/sil.hpp"
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "swf/app/config.hpp"
+#include "swf/hazard_eval/hazard_eval.hpp"
+#include "swf/sim/rig.hpp"
+
+namespace swf::sil {
+
+namespace {
+
+void PrintRenderProgress(int done, int total) {
+  std::fprintf(stderr, "\rswf-sil: rendering the descent %d/%d", done, total);
+  if (done == total) std::fprintf(stderr, "\n");
+}
+
+// Per output, as columns: frame, true altitude, errors, status and protection levels.
+void WriteOutputs(std::FILE* f, const EvaluationResult& eval) {
+  bool first = true;
+  const auto column = [&](const char* key, auto&& value) {
+    std::fprintf(f, "%s\"%s\": [", first ? "" : ", ", key);
+    first = false;
+    for (std::size_t k = 0; k < eval.outputs.size(); ++k)
+      std::fprintf(f, "%s%s", k > 0 ? ", " : "", value(eval.outputs[k]).c_str());
+    std::fprintf(f, "]");
+  };
+  using Output = EvaluationResult::Output;
+  std::fprintf(f, "  \"outputs\": {");
+  column("frame", [](const Output& o) { return std::to_string(o.frame_seq); });
+  column("altitude_m", [](const Output& o) { return app::JsonNumber(o.altitude_m); });
+  column("horizontal_error_m",
+         [](const Output& o) { return app::JsonNumber(o.horizontal_error_m); });
+  column("vertical_error_m", [](const Output& o) { return app::JsonNumber(o.vertical_error_m); });
+  column("attitude_error_deg",
+         [](const Output& o) { return app::JsonNumber(o.attitude_error_deg); });
+  column("status", [](const Output& o) { return std::to_string(o.status); });
+  column("hpl_m", [](const Output& o) { return app::JsonNumber(o.hpl_m); });
+  column("vpl_m", [](const Output& o) { return app::JsonNumber(o.vpl_m); });
+  std::fprintf(f, "},\n");
+}
+
+// One hazard map's evaluation as a JSON object (without the safe site of the final map).
+void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& h) {
+  std::fprintf(
+      f,
+      "{\"frame\": %lld, \"altitude_m\": %s, \"known_cells\": %d, "
+      "\"rocks_resolved\": %d, \"rocks_detected\": %d, \"detection_probability\": %s, "
+      "\"rocks_resolved_by_height\": [%d, %d, %d], "
+      "\"rocks_detected_by_height\": [%d, %d, %d], \"rock_free_cells\": %d, "
+      "\"false_rock_cells\": %d, \"false_alarm_rate\": %.5f, \"site_on_truth_hazard\": %s}",
+      static_cast<long long>(h.frame_seq), app::JsonNumber(h.altitude_m).c_str(), h.known_cells,
+      h.rocks_resolved, h.rocks_detected,
+      h.detection_probability >= 0.0 ? app::JsonNumber(h.detection_probability).c_str() : "null",
+      h.rocks_resolved_by_height[0], h.rocks_resolved_by_height[1], h.rocks_resolved_by_height[2],
+      h.rocks_detected_by_height[0], h.rocks_detected_by_height[1], h.rocks_detected_by_height[2],
+      h.rock_free_cells, h.false_rock_cells, h.false_alarm_rate,
+      !h.site_valid ? "null" : (h.site_on_hazard ? "true" : "false"));
+}
+
+// The hazard maps: the final one with its safe site, and every one by altitude. The height
+// classes are [1, 2), [2, 4), [4, inf) times the rock threshold (hazard.max_rock_height_m).
+void WriteHazardMaps(std::FILE* f, const std::vector<HazardEvaluation>& evals) {
+  const HazardEvaluation& h = evals.back();
+  std::fprintf(f, "  \"hazard\": ");
+  WriteHazardEvaluation(f, h);
+  std::fprintf(f, ",\n  \"hazard_by_map\": [");
+  for (std::size_t k = 0; k < evals.size(); ++k) {
+    std::fprintf(f, "%s\n    ", k > 0 ? "," : "");
+    WriteHazardEvaluation(f, evals[k]);
+  }
+  std::fprintf(f, "],\n");
+  if (h.site_valid) {
+    std::fprintf(f,
+                 "  \"safe_site\": {\"x_m\": %.3f, \"y_m\": %.3f, \"score\": %.4f, "
+                 "\"clearance_to_truth_hazard_m\": %.3f, \"on_truth_hazard\": %s}\n",
+                 h.site_x_m, h.site_y_m, h.site_score, h.site_clearance_m,
+                 h.site_on_hazard ? "true" : "false");
+  } else {
+    std::fprintf(f, "  \"safe_site\": null\n");
+  }
+}
+
+}  // namespace
+
+const app::ConfigExtension* SimulatedDescent::Config() const { return SimConfigExtension(); }
+
+bool SimulatedDescent::OpenSource(const app::FswConfig& config, bool progress,
+                                  app::PipelineOptions* po,
+                                  std::unique_ptr<drivers::StereoSource>* source,
+                                  std::int64_t* total_frames, std::string* error) {
+  config_ = &config;
+  world_ = std::make_unique<SimWorld>();
+  SimWorld& world = *world_;
+  std::fprintf(stderr, "swf-sil: building the simulated world (terrain %s, %dx%d px) ...\n",
+               config.sim.terrain.c_str(), config.sim.width_px, config.sim.height_px);
+  if (!world.Build(config, error) ||
+      !world.RenderAll(config.sim.render_threads, progress ? PrintRenderProgress : nullptr,
+                       error)) {
+    return false;
+  }
+  if (config.initial == "truth") {
+    po->initial_world_T_camera = world.Trajectory().WorldTCamera(0);
+    po->imu = SimImuOptions(config, &world.Trajectory());
+  } else {
+    po->imu = SimImuOptions(config, nullptr);
+  }
+  if (config.sim.target == "orbital") {
+    const sim::OrbitalTarget& t = world.Target();
+    std::fprintf(stderr,
+                 "swf-sil: orbital target (%.1f, %.1f) m, %.1f m from the nominal, orbital "
+                 "clearance %.1f m\n",
+                 t.target_m.x(), t.target_m.y(), t.distance_m, t.clearance_m);
+  }
+  po->camera = world.Camera();
+  po->width_px = world.Width();
+  po->height_px = world.Height();
+  *total_frames = world.DeliveredFrames();
+  *source = std::make_unique<PrerenderedSimSource>(world_.get());
+  return true;
+}
+
+bool SimulatedDescent::Start(const app::FswConfig& config, app::PipelineOptions* po,
+                             std::string* error) {
+  if (config.initial != "truth") {
+    po->imu = SimImuOptions(config, nullptr);
+    return true;
+  }
+  sim::Trajectory trajectory;
+  sim::RigOptions rig;
+  if (!SimTrajectory(config, &trajectory, &rig, error)) return false;
+  po->initial_world_T_camera = trajectory.WorldTCamera(0);
+  po->imu = SimImuOptions(config, &trajectory);
+  return true;
+}
+
+estimator::StereoCamera<double> SimulatedDescent::RectifiedRig(const app::FswConfig& config,
+                                                               int width_px, int height_px) {
+  sim::RigOptions rig = SimRig(config);
+  rig.width_px = width_px;
+  rig.height_px = height_px;
+  return sim::MakeStereoCamera(rig);
+}
+
+app::MotionProvider* SimulatedDescent::Motion() { return world_.get(); }
+app::ImuProvider* SimulatedDescent::Imu() { return world_.get(); }
+
+void SimulatedDescent::Observe(app::OutputThread* output) { output->AddObserver(&evaluation_); }
+
+void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightParts& parts,
+                                const app::PipelineOptions& po, std::int64_t imu_samples_taken,
+                                app::Verdict* verdict, app::ImuReport* imu) {
+  const SimWorld& world = *world_;
+  eval_ =
+      evaluation_.Evaluate(*parts.pipeline, world.Trajectory(), world.Terrain(), config.plot_dir);
+  hazard_evals_ = evaluation_.EvaluateHazard(parts.hazard->Mapper().Options(), world.Trajectory(),
+                                             world.Terrain());
+  if (!config.plot_dir.empty() && !hazard_evals_.empty()) {
+    const std::string png = config.plot_dir + "/hazard.png";
+    if (hazard_eval::WriteHazardMapPng(parts.hazard->Mapper(), png) != core::Status::kOk)
+      std::fprintf(stderr, "swf-sil: cannot write %s\n", png.c_str());
+  }
+  if (eval_.protection_violations > 0) {
+    app::Fail(verdict, std::to_string(eval_.protection_violations) +
+                           " VALID outputs erred beyond their protection level");
+  }
+  // The unit's true bias at the last sample the pipeline took.
+  const sim::ImuModel* unit = world.ImuUnit();
+  if (imu != nullptr && unit != nullptr && imu_samples_taken > 0 &&
+      imu_samples_taken <= static_cast<std::int64_t>(unit->TrueBiases().size())) {
+    imu->has_truth = true;
+    imu->truth = unit->TrueBiases()[static_cast<std::size_t>(imu_samples_taken - 1)];
+    imu->imu_only_pose_rms_m =
+        ImuOnlyPoseRms(*unit, world.Trajectory(), po.imu, po.initial_world_T_camera);
+  }
+}
+
+std::string SimulatedDescent::RunLine() const {
+  char text[160];
+  if (eval_.landmarks_evaluated > 0) {
+    std::snprintf(text, sizeof text, ", landmark RMS error %.3f m, pose RMS error %.3f m",
+                  eval_.landmark_rms_error_m, eval_.pose_rms_error_m);
+  } else {
+    std::snprintf(text, sizeof text, ", no landmark map to evaluate, pose RMS error %.3f m",
+                  eval_.pose_rms_error_m);
+  }
+  return text;
+}
+
+void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
+  const app::FswConfig& c = *config_;
+  std::fprintf(f, "  \"image_width_px\": %d,\n  \"image_height_px\": %d,\n", c.sim.width_px,
+               c.sim.height_px);
+  std::fprintf(f, "  \"terrain\": \"%s\",\n  \"seed\": %llu,\n", c.sim.terrain.c_str(),
+               static_cast<unsigned long long>(c.sim.seed));
+  // Where the simulated descent went: the nadir of the first frame, and for `sim.target:
+  // orbital` the pre-selection's clearance from orbit-visible hazards.
+  const sim::Trajectory& trajectory = world_->Trajectory();
+  if (trajectory.NumFrames() > 0) {
+    const Eigen::Vector3d& p = trajectory.WorldTCamera(0).t;
+    std::fprintf(f, "  \"descent_target\": {\"mode\": \"%s\", \"x_m\": %.3f, \"y_m\": %.3f",
+                 c.sim.target.c_str(), p.x(), p.y());
+    if (c.sim.target == "orbital") {
+      const sim::OrbitalTarget& target = world_->Target();
+      std::fprintf(f,
+                   ", \"search_radius_m\": %.1f, \"orbital_clearance_m\": %.3f, "
+                   "\"distance_from_nominal_m\": %.3f",
+                   c.sim.target_search_m, target.clearance_m, target.distance_m);
+    }
+    std::fprintf(f, "},\n");
+  }
+  const EvaluationResult* eval = &eval_;
+  // Landmark errors come from the published landmark maps; with none evaluated they are null,
+  // not a perfect 0.
+  if (eval->landmarks_evaluated > 0) {
+    std::fprintf(f, "  \"landmark_rms_error_m\": %.6f,\n  \"landmark_median_error_m\": %.6f,\n",
+                 eval->landmark_rms_error_m, eval->landmark_median_error_m);
+  } else {
+    std::fprintf(f, "  \"landmark_rms_error_m\": null,\n  \"landmark_median_error_m\": null,\n");
+  }
+  std::fprintf(f,
+               "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %.6f,\n"
+               "  \"final_pose_error_m\": %.6f,\n  \"nav_outputs\": %lld,\n"
+               "  \"landmark_maps\": %lld,\n",
+               static_cast<long long>(eval->landmarks_evaluated), eval->pose_rms_error_m,
+               eval->final_pose_error_m, static_cast<long long>(eval->navs),
+               static_cast<long long>(eval->maps));
+  std::fprintf(f, "  \"mean_position_nees\": %s,\n  \"position_nees\": [",
+               app::JsonNumber(eval->mean_position_nees).c_str());
+  for (std::size_t k = 0; k < eval->position_nees.size(); ++k)
+    std::fprintf(f, "%s%s", k > 0 ? ", " : "", app::JsonNumber(eval->position_nees[k]).c_str());
+  std::fprintf(f, "],\n  \"final_attitude_error_deg\": %s,\n",
+               app::JsonNumber(eval->final_attitude_error_deg).c_str());
+  WriteOutputs(f, *eval);
+}
+
+void SimulatedDescent::WriteIntegrityTruth(std::FILE* f) const {
+  std::fprintf(f,
+               ", \"valid_outputs_vs_truth\": %lld, \"protection_violations\": %lld, "
+               "\"max_error_over_protection\": %.4f",
+               static_cast<long long>(eval_.valid_navs),
+               static_cast<long long>(eval_.protection_violations),
+               eval_.max_error_over_protection);
+}
+
+bool SimulatedDescent::WriteHazardTruth(std::FILE* f) const {
+  if (hazard_evals_.empty()) return false;
+  WriteHazardMaps(f, hazard_evals_);
+  return true;
+}
+
+}  // namespace swf::sil
