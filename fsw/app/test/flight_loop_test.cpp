@@ -29,7 +29,7 @@ namespace {
 struct Rig : FlightParts {
   FswConfig config;
   std::unique_ptr<sil::SimWorld> world = std::make_unique<sil::SimWorld>();
-  std::unique_ptr<sil::PrerenderedSimSource> source;
+  std::unique_ptr<sim::PrerenderedStereoSource> source;
   LoopOptions loop_options;
 
   explicit Rig(const std::string& text) {
@@ -37,7 +37,7 @@ struct Rig : FlightParts {
     EXPECT_TRUE(ParseConfig(text, "test", &config, &error, sil::SimConfigExtension())) << error;
     EXPECT_TRUE(world->Build(config, &error)) << error;
     EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
-    source = std::make_unique<sil::PrerenderedSimSource>(world.get());
+    source = std::make_unique<sim::PrerenderedStereoSource>(&world->Frames());
     PipelineOptions po;
     po.camera = world->Camera();
     po.width_px = world->Width();

@@ -156,10 +156,14 @@ bool SimWorld::Build(const app::FswConfig& config, std::string* error) {
 }
 
 void SimWorld::DrawCameraTiming(const app::FswConfig& config) {
-  delivered_.assign(num_frames_, 1);
-  exposure_ns_.assign(num_frames_, 0);
+  frames_.width_px = rig_.width_px;
+  frames_.height_px = rig_.height_px;
+  std::vector<std::uint8_t>& delivered = frames_.delivered;
+  std::vector<core::TimeNs>& exposure_ns = frames_.exposure_ns;
+  delivered.assign(num_frames_, 1);
+  exposure_ns.assign(num_frames_, 0);
   delivered_frames_ = num_frames_ > 0 ? 1 : 0;
-  if (num_frames_ > 0) exposure_ns_[0] = trajectory_.FrameTimeNs(0);
+  if (num_frames_ > 0) exposure_ns[0] = trajectory_.FrameTimeNs(0);
   // Its own stream of the seed, one drop and one jitter draw per frame whatever the settings:
   // changing the drop probability does not move the jitter, nor anything else drawn.
   sim::Rng rng(config.sim.seed * 6364136223846793005u + 1442695040888963407u);
@@ -167,9 +171,9 @@ void SimWorld::DrawCameraTiming(const app::FswConfig& config) {
   for (std::int32_t k = 1; k < num_frames_; ++k) {
     const double u = rng.Uniform();
     const double g = std::clamp(rng.Gaussian(), -4.0, 4.0);  // stamps stay in order
-    delivered_[k] = u < config.sim.frame_drop_probability ? 0 : 1;
-    delivered_frames_ += delivered_[k];
-    exposure_ns_[k] = trajectory_.FrameTimeNs(k) + std::llround(g * sigma_ns);
+    delivered[k] = u < config.sim.frame_drop_probability ? 0 : 1;
+    delivered_frames_ += delivered[k];
+    exposure_ns[k] = trajectory_.FrameTimeNs(k) + std::llround(g * sigma_ns);
   }
 }
 
@@ -191,7 +195,7 @@ void SimWorld::DrawMotionInputs(const app::FswConfig& config) {
                                            Eigen::Vector3d(u.t + dt)};
     // After a dropped frame the input spans every interval since the frame before the gap, as an
     // IMU integrates through it.
-    since_delivered = delivered_[k - 1] != 0 ? measured : since_delivered * measured;
+    since_delivered = frames_.delivered[k - 1] != 0 ? measured : since_delivered * measured;
     const Eigen::AngleAxisd aa(since_delivered.R);
     const Eigen::Vector3d rv = aa.angle() * aa.axis();
     for (int i = 0; i < 3; ++i) {
@@ -202,52 +206,16 @@ void SimWorld::DrawMotionInputs(const app::FswConfig& config) {
 }
 
 bool SimWorld::RenderAll(int threads, void (*progress)(int done, int total), std::string* error) {
-  const std::size_t n = static_cast<std::size_t>(rig_.width_px) * rig_.height_px;
-  left_.assign(num_frames_, std::vector<std::uint8_t>(n));
-  right_.assign(num_frames_, std::vector<std::uint8_t>(n));
-  std::atomic<int> next{0};
-  std::atomic<int> done{0};
-  std::atomic<bool> failed{false};
-  // Renders frame k into the stores; false (and `failed`) when the renderer refuses it.
-  auto render_frame = [&](int k, sim::StereoImages* images) {
-    if (renderer_.Render(terrain_, appearance_, trajectory_.WorldTCamera(k),
-                         static_cast<std::uint64_t>(k), images) != Status::kOk ||
-        images->left.size() != n) {
-      failed = true;
-      return false;
-    }
-    left_[k] = images->left;
-    right_[k] = images->right;
-    ++done;
-    return true;
-  };
-  auto worker = [&] {
-    sim::StereoImages images;
-    for (int k = next++; k < num_frames_; k = next++) {
-      if (!render_frame(k, &images)) return;
-    }
-  };
-  std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
-  // The calling thread renders too and reports progress between its frames.
-  {
-    sim::StereoImages images;
-    for (int k = next++; k < num_frames_; k = next++) {
-      if (!render_frame(k, &images)) break;
-      if (progress != nullptr) progress(done.load(), num_frames_);
-    }
-  }
-  for (std::thread& t : pool) t.join();
-  if (progress != nullptr) progress(done.load(), num_frames_);
-  if (failed) {
+  if (sim::RenderDescent(terrain_, appearance_, renderer_, trajectory_, threads, progress,
+                         &frames_) != Status::kOk) {
     *error = "sim: rendering failed";
     return false;
   }
   // Fault injection: the camera blinded (black pairs) over inject.black_*.
   for (std::int64_t k = black_from_; k >= 0 && k < black_from_ + black_frames_ && k < num_frames_;
        ++k) {
-    std::fill(left_[k].begin(), left_[k].end(), std::uint8_t{0});
-    std::fill(right_[k].begin(), right_[k].end(), std::uint8_t{0});
+    std::fill(frames_.left[k].begin(), frames_.left[k].end(), std::uint8_t{0});
+    std::fill(frames_.right[k].begin(), frames_.right[k].end(), std::uint8_t{0});
   }
   return true;
 }
@@ -309,43 +277,5 @@ bool SimWorld::Motion(std::uint64_t seq, app::MotionInput* input) {
   *input = motion_[seq];
   return true;
 }
-
-Status PrerenderedSimSource::Start() {
-  next_ = 0;
-  stats_ = drivers::SourceStats{};
-  running_ = true;
-  return Status::kOk;
-}
-
-Status PrerenderedSimSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoPair* pair) {
-  if (!running_ || pair == nullptr) return Status::kNotConfigured;
-  // Frames the camera lost reach the loop as a gap before the next pair, as a camera's do.
-  std::uint32_t dropped = 0;
-  while (next_ < world_->NumFrames() && !world_->Delivered(next_)) {
-    ++next_;
-    ++dropped;
-  }
-  if (next_ >= world_->NumFrames()) {
-    // Lost at the very end, with no pair left to carry them: the source's own count.
-    stats_.frames_dropped += dropped;
-    return Status::kEmpty;
-  }
-  const std::int32_t w = world_->Width();
-  const std::int32_t h = world_->Height();
-  pair->left = drivers::ImageView{world_->Left(next_), w, h, w};
-  pair->right = drivers::ImageView{world_->Right(next_), w, h, w};
-  pair->left_exposure_ns = world_->ExposureNs(next_);
-  pair->right_exposure_ns = pair->left_exposure_ns;
-  // The trajectory's frame number, gaps included: the outputs are matched to the truth of the
-  // frame actually taken (a camera numbering only the pairs it served would shift them).
-  pair->seq = static_cast<std::uint64_t>(next_);
-  pair->dropped_before = dropped;
-  pair->handle = next_;
-  ++next_;
-  ++stats_.pairs_served;
-  return Status::kOk;
-}
-
-void PrerenderedSimSource::Release(const drivers::StereoPair& /*pair*/) {}
 
 }  // namespace swf::sil

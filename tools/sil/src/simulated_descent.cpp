@@ -118,7 +118,7 @@ bool SimulatedDescent::OpenSource(const app::FswConfig& config, bool progress,
   po->width_px = world.Width();
   po->height_px = world.Height();
   *total_frames = world.DeliveredFrames();
-  *source = std::make_unique<PrerenderedSimSource>(world_.get());
+  *source = std::make_unique<sim::PrerenderedStereoSource>(&world.Frames());
   return true;
 }
 

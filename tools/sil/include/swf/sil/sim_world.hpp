@@ -1,8 +1,7 @@
-// The simulated world behind `source: sim`: terrain, appearance, rig and trajectory built from
-// the configuration, and a StereoSource that renders the whole descent before start (rendering
-// is ~0.1-0.5 s per pair, far slower than the camera rate; a real camera delivers pairs at its
-// own rate, which the pre-rendered source emulates under the frame group's pacing). Truth
-// (poses, terrain) stays available for the evaluation after the run.
+// The simulated world behind `source: sim`: terrain, appearance, rig, trajectory, camera timing
+// faults, motion input and IMU unit built from the configuration, and the descent rendered
+// before start for sim::PrerenderedStereoSource. Truth (poses, terrain) stays available for the
+// evaluation after the run.
 #pragma once
 
 #include <memory>
@@ -15,6 +14,7 @@
 #include "swf/sim/appearance.hpp"
 #include "swf/sim/imu_model.hpp"
 #include "swf/sim/orbital.hpp"
+#include "swf/sim/prerendered_source.hpp"
 #include "swf/sim/renderer.hpp"
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
@@ -59,15 +59,17 @@ class SimWorld : public app::MotionProvider, public app::ImuProvider {
   // the seed: whether frame k reaches the flight loop, and its exposure stamp (the trajectory's
   // frame time plus the jitter; the image and the truth stay those of the frame time). Frame 0,
   // the hand-over whose true state starts the filter, is always delivered on time.
-  bool Delivered(std::int32_t k) const { return delivered_[k] != 0; }
-  core::TimeNs ExposureNs(std::int32_t k) const { return exposure_ns_[k]; }
+  bool Delivered(std::int32_t k) const { return frames_.delivered[k] != 0; }
+  core::TimeNs ExposureNs(std::int32_t k) const { return frames_.exposure_ns[k]; }
   std::int32_t DeliveredFrames() const { return delivered_frames_; }
 
   // Renders frames [0, NumFrames()) with `threads` threads; progress(done, total) is called from
   // the calling thread.
   bool RenderAll(int threads, void (*progress)(int done, int total), std::string* error);
-  const std::uint8_t* Left(std::int32_t k) const { return left_[k].data(); }
-  const std::uint8_t* Right(std::int32_t k) const { return right_[k].data(); }
+  const std::uint8_t* Left(std::int32_t k) const { return frames_.left[k].data(); }
+  const std::uint8_t* Right(std::int32_t k) const { return frames_.right[k].data(); }
+  // The rendered frames as the camera delivers them (sim::PrerenderedStereoSource serves them).
+  const sim::RenderedDescent& Frames() const { return frames_; }
   // The simulated IMU: noisy true relative motion into frame seq from the frame served before it
   // (across dropped frames; none for frame 0 or when sim.imu is false).
   bool Motion(std::uint64_t seq, app::MotionInput* input) override;
@@ -87,8 +89,6 @@ class SimWorld : public app::MotionProvider, public app::ImuProvider {
   sim::Trajectory trajectory_;
   sim::OrbitalTarget target_;
   std::int32_t num_frames_ = 0;
-  std::vector<std::uint8_t> delivered_;
-  std::vector<core::TimeNs> exposure_ns_;
   std::int32_t delivered_frames_ = 0;
   std::vector<app::MotionInput> motion_;
   bool imu_ = false;
@@ -97,30 +97,7 @@ class SimWorld : public app::MotionProvider, public app::ImuProvider {
   std::int64_t black_from_ = -1;  // inject.black_from / black_frames
   std::int64_t black_frames_ = 0;
   sim::ImuModel imu_unit_;
-
-  std::vector<std::vector<std::uint8_t>> left_;
-  std::vector<std::vector<std::uint8_t>> right_;
-};
-
-// Serves the pre-rendered pairs in order; finite (kEmpty after the last). Never allocates. Frames
-// the world says were not delivered are skipped and counted in the next pair's dropped_before
-// (pair.seq stays the trajectory's frame number, so it jumps over them), or in Stats().
-// frames_dropped when no pair follows; stamps are the world's (jittered) exposure times.
-class PrerenderedSimSource final : public drivers::StereoSource {
- public:
-  explicit PrerenderedSimSource(const SimWorld* world) : world_(world) {}
-  core::Status Start() override;
-  core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override;
-  void Release(const drivers::StereoPair& pair) override;
-  void Stop() override { running_ = false; }
-  drivers::SourceStats Stats() const override { return stats_; }
-  const char* Name() const override { return "sim"; }
-
- private:
-  const SimWorld* world_;
-  std::int32_t next_ = 0;
-  bool running_ = false;
-  drivers::SourceStats stats_;
+  sim::RenderedDescent frames_;
 };
 
 }  // namespace swf::sil
