@@ -11,8 +11,8 @@
 
 #include "euroc_imu.hpp"
 #include "report.hpp"
-#include "swf/app/motion.hpp"
 #include "swf/app/pipeline.hpp"
+#include "swf/drivers/process_input.hpp"
 #include "swf/image_io/image_io.hpp"
 
 namespace swf::eval {
@@ -102,7 +102,7 @@ void RecordNav(const app::NavOutput& nav, FrameRecord* record) {
 // Runs the pipeline stages of frame j; false (with the run's verdict set) when the pipeline
 // refuses the input, after which nothing later can be scored.
 bool ProcessFrame(const StereoSequence& s, std::size_t j, ImageStore* images,
-                  app::StoredImuProvider* imu, app::Pipeline* pipeline, RunRecord* run,
+                  drivers::StoredImuProvider* imu, app::Pipeline* pipeline, RunRecord* run,
                   FrameRecord* record) {
   const SequenceFrame& f = s.frames[j];
   std::string error;
@@ -280,7 +280,7 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
   ImageStore images(sequence);
   const auto start = std::chrono::steady_clock::now();
   double tracked = 0.0;
-  app::StoredImuProvider imu;
+  drivers::StoredImuProvider imu;
   imu.Reset(&sequence.imu);
   for (std::size_t j = 0; j < sequence.frames.size(); ++j) {
     FrameRecord record;

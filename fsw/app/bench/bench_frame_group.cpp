@@ -92,7 +92,7 @@ void BM_FrameGroup(benchmark::State& state) {
           frontend::GrayView{world.Right(k), world.Width(), world.Height(), world.Width()};
       frame.utime = world.Trajectory().FrameTimeNs(k) / 1000;
       frame.seq = k;
-      MotionInput m;
+      drivers::MotionInput m;
       const bool has_motion = world.Motion(static_cast<std::uint64_t>(k), &m);
       estimator::Pose<double> motion;
       motion.t =

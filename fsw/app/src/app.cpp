@@ -137,7 +137,7 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
 
 Verdict JudgeRun(const LoopCounters& counters, const HealthRecord& health,
                  const IntegrityCounters& integrity, estimator::NavIntegrity final_status,
-                 const LogStreamStats* log) {
+                 const drivers::LogStreamStats* log) {
   Verdict v;
   const double frames = static_cast<double>(std::max<std::int64_t>(1, counters.frames));
   if (counters.frames == 0) Fail(&v, "no frame was processed");
@@ -244,7 +244,7 @@ bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
                   const OutputCounters& output, const HealthRecord& health,
                   std::int64_t hazard_maps, bool locked, bool fifo, const Verdict& verdict,
                   const IntegrityCounters& integrity, const ProcessExtension* truth,
-                  const LogStreamStats* log, const ImuReport* imu) {
+                  const drivers::LogStreamStats* log, const ImuReport* imu) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
   std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"result_reasons\": \"%s\",\n", verdict.result,
@@ -356,7 +356,7 @@ struct FlightProcess {
   } fake_cameras;
 #endif
   std::unique_ptr<drivers::StereoSource> source;
-  LogStereoSource* log_source = nullptr;
+  drivers::LogStereoSource* log_source = nullptr;
 #if SWF_APP_HAVE_ARAVIS
   drivers::AravisStereoSource* aravis_source = nullptr;
   std::string aravis_left_id;  // the source keeps pointers to these
@@ -367,7 +367,7 @@ struct FlightProcess {
 #endif
   FlightParts parts;  // the preallocated flight process
   FlightLoop loop;
-  ImuProvider* imu = nullptr;
+  drivers::ImuProvider* imu = nullptr;
   LcmImuInput lcm_imu;
   // Output observers.
   Progress progress_display;
@@ -474,7 +474,7 @@ int OpenExtensionSource(FlightProcess* fp) {
 int OpenLogSource(FlightProcess* fp) {
   const FswConfig& config = fp->config;
   PipelineOptions& po = fp->po;
-  auto log = std::make_unique<LogStereoSource>();
+  auto log = std::make_unique<drivers::LogStereoSource>();
   if (config.imu.enabled) log->SetImuChannel(fp->imu_channel);
   if (!log->Load(config.log_path, config.channel_prefix + kStereoSuffix, &fp->error))
     return fp->RunError();
@@ -661,8 +661,9 @@ int ConfigureLoop(FlightProcess* fp) {
   lo.inject_first_frame = config.inject_frame;
   lo.inject_frames = config.inject_frames;
   lo.inject_ms = config.inject_ms;
-  MotionProvider* motion =
-      fp->extension_source ? fp->extension->Motion() : static_cast<MotionProvider*>(fp->log_source);
+  drivers::MotionProvider* motion = fp->extension_source
+                                        ? fp->extension->Motion()
+                                        : static_cast<drivers::MotionProvider*>(fp->log_source);
   if (fp->loop.Configure(lo, fp->parts.pipeline.get(), fp->source.get(), fp->parts.channels.get(),
                          motion, fp->parts.hazard.get(), fp->imu) != core::Status::kOk) {
     std::fprintf(stderr,
@@ -788,7 +789,7 @@ void PrintIntegrityLine(const FlightProcess& fp, const Verdict& verdict) {
 
 // What the source said went wrong: a damaged log, a failed camera. True when the log was damaged.
 bool ReportSourceTrouble(const FlightProcess& fp) {
-  const LogStereoSource* log_source = fp.log_source;
+  const drivers::LogStereoSource* log_source = fp.log_source;
   const bool damaged_log = log_source != nullptr && !log_source->LoadError().empty();
   if (damaged_log) {
     std::fprintf(stderr,
@@ -801,7 +802,8 @@ bool ReportSourceTrouble(const FlightProcess& fp) {
     std::fprintf(stderr, "%s: the v4l2 source failed: %s\n", fp.tool, fp.v4l2_source->LastError());
   }
 #endif
-  const LogStreamStats* log_stream = log_source != nullptr ? &log_source->StreamStats() : nullptr;
+  const drivers::LogStreamStats* log_stream =
+      log_source != nullptr ? &log_source->StreamStats() : nullptr;
   if (log_stream != nullptr && (log_stream->frames_missing > 0 || log_stream->Refused() > 0)) {
     std::fprintf(stderr,
                  "%s: log: %lld frames missing (sequence gaps), %lld duplicated and %lld "
@@ -819,7 +821,7 @@ int Report(FlightProcess* fp) {
   const FswConfig& config = fp->config;
   const LoopCounters& counters = fp->loop.Counters();
   const bool damaged_log = ReportSourceTrouble(*fp);
-  const LogStreamStats* log_stream =
+  const drivers::LogStreamStats* log_stream =
       fp->log_source != nullptr ? &fp->log_source->StreamStats() : nullptr;
   const HealthRecord& h = fp->last_health.last;
   const IntegrityCounters& integrity = fp->parts.pipeline->Integrity();

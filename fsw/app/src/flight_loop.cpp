@@ -54,7 +54,8 @@ FlightLoop::~FlightLoop() {
 
 Status FlightLoop::Configure(const LoopOptions& options, Pipeline* pipeline,
                              drivers::StereoSource* source, OutputChannels* outputs,
-                             MotionProvider* motion, HazardStage* hazard, ImuProvider* imu) {
+                             drivers::MotionProvider* motion, HazardStage* hazard,
+                             drivers::ImuProvider* imu) {
   if (pipeline == nullptr || source == nullptr || outputs == nullptr ||
       !(options.rate_hz > 0.0 && options.rate_hz <= 1000.0) || options.hazard_every < 1 ||
       options.health_every < 1 || options.max_frames < 0 || options.acquire_timeout_ns <= 0 ||
@@ -164,7 +165,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   expected_seq_ = frame.seq + 1;
   last_frame_utime_ = frame.utime;
   FeedImu(frame.utime);
-  MotionInput motion;
+  drivers::MotionInput motion;
   frame.has_motion =
       motion_ != nullptr && motion_->Motion(static_cast<std::uint64_t>(frame.seq), &motion);
   if (frame.has_motion) {
@@ -291,7 +292,7 @@ Status FlightLoop::MissCycle(Status source_status, bool synchronous) {
 
   // The cycle the missing frame would have had: its motion input, a coasted state, its output.
   const TimeNs t1 = core::MonotonicNs();
-  MotionInput motion;
+  drivers::MotionInput motion;
   estimator::Pose<double> camera_prev_T_camera;
   const bool has_motion =
       motion_ != nullptr && motion_->Motion(static_cast<std::uint64_t>(expected_seq_), &motion);

@@ -10,7 +10,7 @@
 #include <cstring>
 #include <lcm/lcm-cpp.hpp>
 
-#include "swf/app/imu_message.hpp"
+#include "swf/drivers/imu_message.hpp"
 #include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
@@ -293,7 +293,7 @@ void OutputThread::Handle(const RecordRef& ref) {
       const ImuRecord& r = channels_->imus[ref.slot];
       swf_msgs::imu_t& m = impl_->imu;
       for (std::int32_t k = 0; k < r.count; ++k) {
-        ImuMessageOf(r.samples[k], &m);
+        drivers::ImuMessageOf(r.samples[k], &m);
         const int n = m.encode(buf, 0, max);
         if (n < 0) {
           ++counters_.encode_errors;
@@ -359,7 +359,7 @@ bool LcmImuInput::Start(const std::string& lcm_url, const std::string& channel,
           self->undecodable_.fetch_add(1, std::memory_order_relaxed);
           return;
         }
-        if (self->queue_.TryPush(ImuSampleOf(m)) != core::Status::kOk)
+        if (self->queue_.TryPush(drivers::ImuSampleOf(m)) != core::Status::kOk)
           self->queue_full_.fetch_add(1, std::memory_order_relaxed);
       },
       this);

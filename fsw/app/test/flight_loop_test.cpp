@@ -550,7 +550,7 @@ TEST(FlightLoopTest, DroppedFramesAreGapsCountedOnceAndEvaluatedAgainstTheirOwnT
   }
   // The motion input into a frame after a gap is the motion since the frame before the gap.
   for (std::size_t i = 1; i < delivered.size(); ++i) {
-    MotionInput m;
+    drivers::MotionInput m;
     ASSERT_TRUE(rig.world->Motion(static_cast<std::uint64_t>(delivered[i]), &m));
     const double truth =
         (world.Trajectory().WorldTCamera(static_cast<std::int32_t>(delivered[i])).t -

@@ -72,7 +72,7 @@ void Spit(const std::string& path, const std::string& bytes) {
 TEST(LcmIoTest, ReadsEveryRecordOfAGoodLog) {
   const std::string path = TempPath("good.lcmlog");
   WriteLog(path, 5);
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error)) << error;
   EXPECT_TRUE(source.LoadError().empty()) << source.LoadError();
@@ -83,7 +83,7 @@ TEST(LcmIoTest, ReadsEveryRecordOfAGoodLog) {
     ASSERT_EQ(source.Next(0, &pair), core::Status::kOk);
     EXPECT_EQ(pair.seq, static_cast<std::uint64_t>(i));
     EXPECT_EQ(pair.left.data[7], i);
-    MotionInput u;
+    drivers::MotionInput u;
     EXPECT_EQ(source.Motion(pair.seq, &u), i > 0);
     if (i > 0) EXPECT_DOUBLE_EQ(u.translation_m[2], 1.0);
   }
@@ -96,7 +96,7 @@ TEST(LcmIoTest, TruncatedLogNamesTheRecordAndKeepsWhatCameBefore) {
   const std::string bytes = Slurp(path);
   // Cut record 6 (the 4th stereo frame) in the middle.
   Spit(path, bytes.substr(0, RecordOffset(bytes.size(), 5, 6) + 40));
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error));
   EXPECT_EQ(source.NumFrames(), 3u);
@@ -111,7 +111,7 @@ TEST(LcmIoTest, CorruptRecordIsNamedNotSkipped) {
   // Break the sync word of record 4 (the 3rd stereo frame).
   bytes[RecordOffset(bytes.size(), 5, 4)] = 0x00;
   Spit(path, bytes);
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error));
   EXPECT_EQ(source.NumFrames(), 2u);
@@ -123,7 +123,7 @@ TEST(LcmIoTest, CorruptRecordIsNamedNotSkipped) {
   bytes = Slurp(path);
   bytes[RecordOffset(bytes.size(), 3, 2) + 28 + 10 + 3] ^= 0x5A;  // record 2's fingerprint
   Spit(path, bytes);
-  LogStereoSource second;
+  drivers::LogStereoSource second;
   ASSERT_TRUE(second.Load(path, "SWF_STEREO", &error));
   EXPECT_EQ(second.NumFrames(), 1u);
   EXPECT_NE(second.LoadError().find("record 2"), std::string::npos) << second.LoadError();
@@ -131,7 +131,7 @@ TEST(LcmIoTest, CorruptRecordIsNamedNotSkipped) {
 }
 
 TEST(LcmIoTest, MissingLogIsAnError) {
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   EXPECT_FALSE(source.Load("/nonexistent/x.lcmlog", "SWF_STEREO", &error));
   EXPECT_NE(error.find("/nonexistent/x.lcmlog"), std::string::npos);
@@ -203,7 +203,7 @@ struct Served {
   drivers::SourceStats stats;
 };
 
-Served ServeAll(LogStereoSource* source) {
+Served ServeAll(drivers::LogStereoSource* source) {
   Served out;
   EXPECT_EQ(source->Start(), core::Status::kOk);
   drivers::StereoPair pair;
@@ -218,7 +218,7 @@ Served ServeAll(LogStereoSource* source) {
 // GIVEN a log whose frame 2 is missing WHEN replayed THEN the gap reaches the flight loop as
 // dropped_before on the next frame and is counted as missing (it replayed as 0 dropped frames).
 TEST(LcmIoTest, AGapInTheSequenceIsCountedAsDroppedFrames) {
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(WriteSequence("gap.lcmlog", {0, 1, 3, 4}), "SWF_STEREO", &error));
   EXPECT_TRUE(source.LoadError().empty()) << source.LoadError();
@@ -249,7 +249,7 @@ TEST(LcmIoTest, AGapTheCameraRecordedAsDroppedIsNotMissingFromTheLog) {
   }
   const std::string path = TempPath("camera_gap.lcmlog");
   WriteRecords(path, specs, payloads);
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error));
   const Served s = ServeAll(&source);
@@ -261,7 +261,7 @@ TEST(LcmIoTest, AGapTheCameraRecordedAsDroppedIsNotMissingFromTheLog) {
 // GIVEN a frame recorded twice WHEN replayed THEN the second copy is refused, counted as a
 // duplicate and as a frame the source rejected.
 TEST(LcmIoTest, ADuplicatedFrameIsRefused) {
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(WriteSequence("dup.lcmlog", {0, 1, 1, 2}), "SWF_STEREO", &error));
   const Served s = ServeAll(&source);
@@ -274,7 +274,7 @@ TEST(LcmIoTest, ADuplicatedFrameIsRefused) {
 // GIVEN frames 1 and 2 swapped WHEN replayed THEN frame 2 is served with one frame missing before
 // it and frame 1, now behind, is refused, never fused out of order.
 TEST(LcmIoTest, ASwappedPairIsAGapAndARefusal) {
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(WriteSequence("swap.lcmlog", {0, 2, 1, 3}), "SWF_STEREO", &error));
   const Served s = ServeAll(&source);
@@ -288,7 +288,7 @@ TEST(LcmIoTest, ASwappedPairIsAGapAndARefusal) {
 // GIVEN consecutive sequence numbers whose exposure times go back (frames renumbered after a
 // swap) WHEN replayed THEN the frame behind in time is refused as out of order.
 TEST(LcmIoTest, AnExposureTimeGoingBackIsRefused) {
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(WriteSequence("time.lcmlog", {0, 1, 2, 3}, {100, 300, 200, 400}),
                           "SWF_STEREO", &error));
@@ -312,7 +312,7 @@ TEST(LcmIoTest, AFrameOnAMisnamedChannelLeavesACountedGap) {
   for (const FrameSpec& spec : specs) payloads.push_back(EncodeFrame(spec));
   const std::string path = TempPath("misnamed.lcmlog");
   WriteRecords(path, specs, payloads);
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error));
   EXPECT_EQ(source.NumFrames(), 2u);
@@ -339,7 +339,7 @@ std::string LoadWithCorruptSecondFrame(const char* name, Corrupt corrupt, std::s
   corrupt(&payloads[1]);
   const std::string path = TempPath(name);
   WriteRecords(path, specs, payloads);
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   EXPECT_TRUE(source.Load(path, "SWF_STEREO", &error));
   *frames = source.NumFrames();
@@ -426,7 +426,7 @@ TEST(LcmIoTest, ReplayServesTheImuSamplesRecordedBeforeEachFrame) {
   imu(1);
   const std::string path = TempPath("imu.lcmlog");
   WriteRecords(path, specs, payloads);
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   source.SetImuChannel("SWF_IMU");
   std::string error;
   ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error)) << error;
@@ -456,7 +456,7 @@ TEST(LcmIoTest, AnUndecodableImuRecordStopsTheLoadNamingIt) {
   payloads[1].resize(payloads[1].size() / 2);  // truncated message
   const std::string path = TempPath("bad_imu.lcmlog");
   WriteRecords(path, specs, payloads);
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   source.SetImuChannel("SWF_IMU");
   std::string error;
   ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error)) << error;
@@ -472,9 +472,9 @@ TEST(LcmIoTest, RecordLengthsAreCheckedBeforeAllocating) {
   for (const std::uint32_t len : {0xffffffffu, 0x7fffffffu}) {
     std::string bad = bytes;
     for (int i = 0; i < 4; ++i) bad[second + 24 + i] = static_cast<char>(len >> (24 - 8 * i));
-    LogReader reader;
+    drivers::LogReader reader;
     reader.OpenBytes(bad, "mem.lcmlog");
-    LogStereoSource source;
+    drivers::LogStereoSource source;
     source.Load(&reader, "SWF_STEREO");
     EXPECT_EQ(source.NumFrames(), 1u);
     EXPECT_NE(source.LoadError().find("mem.lcmlog: record 1 at byte"), std::string::npos)
@@ -487,7 +487,7 @@ TEST(LcmIoTest, RecordLengthsAreCheckedBeforeAllocating) {
 }
 
 TEST(LcmIoTest, ADirectoryIsNotALog) {
-  LogStereoSource source;
+  drivers::LogStereoSource source;
   std::string error;
   EXPECT_FALSE(source.Load(::testing::TempDir(), "SWF_STEREO", &error));
   EXPECT_NE(error.find("cannot open the log"), std::string::npos) << error;

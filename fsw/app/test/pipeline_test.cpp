@@ -67,7 +67,7 @@ struct Descent {
           frontend::GrayView{world->Right(k), world->Width(), world->Height(), world->Width()};
       frame.utime = 100000 * static_cast<std::int64_t>(k);
       frame.seq = k;
-      MotionInput m;
+      drivers::MotionInput m;
       const bool has_motion = world->Motion(static_cast<std::uint64_t>(k), &m);
       Pose<double> motion;
       motion.t = Vec3<double>(m.translation_m[0], m.translation_m[1], m.translation_m[2]);

@@ -180,7 +180,7 @@ void SimWorld::DrawCameraTiming(const app::FswConfig& config) {
 void SimWorld::DrawMotionInputs(const app::FswConfig& config) {
   // The simulated IMU, drawn once from the seed: same configuration, same motion inputs.
   imu_ = config.sim.imu;
-  motion_.assign(num_frames_, app::MotionInput{});
+  motion_.assign(num_frames_, drivers::MotionInput{});
   std::mt19937_64 rng(config.sim.seed * 7919u + 17u);
   std::normal_distribution<double> gauss(0.0, 1.0);
   estimator::Pose<double> since_delivered;  // the measured motion since the last frame served
@@ -272,7 +272,7 @@ bool SimWorld::NextImu(std::int64_t until_utime, estimator::ImuSample<double>* s
   return imu_samples_.NextImu(until_utime, sample);
 }
 
-bool SimWorld::Motion(std::uint64_t seq, app::MotionInput* input) {
+bool SimWorld::Motion(std::uint64_t seq, drivers::MotionInput* input) {
   if (!imu_ || seq == 0 || seq >= motion_.size()) return false;
   *input = motion_[seq];
   return true;

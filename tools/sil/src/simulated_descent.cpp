@@ -144,8 +144,8 @@ estimator::StereoCamera<double> SimulatedDescent::RectifiedRig(const app::FswCon
   return sim::MakeStereoCamera(rig);
 }
 
-app::MotionProvider* SimulatedDescent::Motion() { return world_.get(); }
-app::ImuProvider* SimulatedDescent::Imu() { return world_.get(); }
+drivers::MotionProvider* SimulatedDescent::Motion() { return world_.get(); }
+drivers::ImuProvider* SimulatedDescent::Imu() { return world_.get(); }
 
 void SimulatedDescent::Observe(app::OutputThread* output) { output->AddObserver(&evaluation_); }
 

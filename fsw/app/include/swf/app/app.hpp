@@ -12,9 +12,9 @@
 #include "swf/app/hazard_stage.hpp"
 #include "swf/app/imu_input.hpp"
 #include "swf/app/lcm_io.hpp"
-#include "swf/app/motion.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/core/status.hpp"
+#include "swf/drivers/process_input.hpp"
 #include "swf/drivers/stereo_source.hpp"
 
 namespace swf::app {
@@ -110,8 +110,8 @@ class ProcessExtension {
   virtual estimator::StereoCamera<double> RectifiedRig(const FswConfig& config, int width_px,
                                                        int height_px) = 0;
   // Its motion input and IMU samples, when it opened the source (nullptr otherwise).
-  virtual MotionProvider* Motion() = 0;
-  virtual ImuProvider* Imu() = 0;
+  virtual drivers::MotionProvider* Motion() = 0;
+  virtual drivers::ImuProvider* Imu() = 0;
   // Observers of the published outputs it needs during the run.
   virtual void Observe(OutputThread* output) = 0;
   // After the run (the pipeline idle, the outputs drained): the run against its truth. Adds its

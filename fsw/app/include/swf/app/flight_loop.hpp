@@ -38,11 +38,11 @@
 #include <semaphore>
 #include <thread>
 
-#include "swf/app/motion.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/records.hpp"
 #include "swf/app/stage_timer.hpp"
 #include "swf/core/status.hpp"
+#include "swf/drivers/process_input.hpp"
 #include "swf/drivers/stereo_source.hpp"
 
 namespace swf::app {
@@ -112,8 +112,8 @@ class FlightLoop {
   // The pointed-to objects must outlive the loop. kInvalidArgument for bad options.
   core::Status Configure(const LoopOptions& options, Pipeline* pipeline,
                          drivers::StereoSource* source, OutputChannels* outputs,
-                         MotionProvider* motion = nullptr, HazardStage* hazard = nullptr,
-                         ImuProvider* imu = nullptr);
+                         drivers::MotionProvider* motion = nullptr, HazardStage* hazard = nullptr,
+                         drivers::ImuProvider* imu = nullptr);
 
   // Starts the hazard group, runs the frame group on this thread until the source ends, fails
   // or RequestStop(); publishes a final health message; stops the hazard group. Returns kOk at
@@ -164,8 +164,8 @@ class FlightLoop {
   drivers::StereoSource* source_ = nullptr;
   OutputChannels* out_ = nullptr;
   HazardStage* hazard_ = nullptr;
-  MotionProvider* motion_ = nullptr;
-  ImuProvider* imu_ = nullptr;
+  drivers::MotionProvider* motion_ = nullptr;
+  drivers::ImuProvider* imu_ = nullptr;
   bool configured_ = false;
   core::TimeNs period_ns_ = 0;
 

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "swf/app/flight_loop.hpp"
-#include "swf/app/log_reader.hpp"
 #include "swf/app/records.hpp"
 #include "swf/core/spsc_queue.hpp"
+#include "swf/drivers/log_stereo_source.hpp"
 #include "swf/drivers/stereo_source.hpp"
 
 namespace swf::app {
@@ -89,7 +89,7 @@ class OutputThread {
 
 // The IMU over LCM for a flight process on cameras: a normal-priority thread receives imu_t on
 // one channel, checks each message (swf/messages/checked_decode.hpp: lengths and flags) and
-// queues the sample for the frame group, which takes them as an ImuProvider (stamped at or
+// queues the sample for the frame group, which takes them as an drivers::ImuProvider (stamped at or
 // before each exposure, in arrival order). What cannot be used is counted, never fatal: a
 // message that does not decode, a full queue (the frame group fell behind), a sample stamped
 // more than kMaxImuLeadUs after the exposure asked for (a corrupt stamp that would otherwise
@@ -104,7 +104,7 @@ struct LcmImuCounters {
   std::int64_t future_dropped = 0;
 };
 
-class LcmImuInput final : public ImuProvider {
+class LcmImuInput final : public drivers::ImuProvider {
  public:
   LcmImuInput();
   ~LcmImuInput() override;

@@ -8,7 +8,7 @@
 //
 // Two estimators, chosen by PipelineOptions::imu.enabled:
 //   stereo-only      pose states; the process factor is the navigation system's relative motion
-//                    (MotionInput) or, without one, a bounded constant-velocity model
+//                    (drivers::MotionInput) or, without one, a bounded constant-velocity model
 //   stereo-inertial  pose, velocity and IMU biases (InertialStereoModel); the process factor is
 //                    the IMU preintegrated between exposures (ImuInput, fed by AddImu), which
 //                    also predicts the front end's search, carries the state through a camera

@@ -9,12 +9,12 @@
 #include <memory>
 #include <new>
 
-#include "swf/app/motion.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/stage_timer.hpp"
 #include "swf/core/slot_pool.hpp"
 #include "swf/core/spsc_queue.hpp"
 #include "swf/core/status.hpp"
+#include "swf/drivers/process_input.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
 
 namespace swf::app {
@@ -42,7 +42,7 @@ struct FrameRecord {
   std::int32_t dropped_before = 0;
   bool rectified = true;
   bool has_motion = false;
-  MotionInput motion;  // camera_prev_T_camera from the navigation system
+  drivers::MotionInput motion;  // camera_prev_T_camera from the navigation system
   std::int32_t width = 0;
   std::int32_t height = 0;
   std::unique_ptr<std::uint8_t[]> left;  // capacity fixed at start (FramePoolCapacity)

@@ -32,8 +32,8 @@ class SimulatedDescent final : public app::ProcessExtension {
   bool Start(const app::FswConfig& config, app::PipelineOptions* po, std::string* error) override;
   estimator::StereoCamera<double> RectifiedRig(const app::FswConfig& config, int width_px,
                                                int height_px) override;
-  app::MotionProvider* Motion() override;
-  app::ImuProvider* Imu() override;
+  drivers::MotionProvider* Motion() override;
+  drivers::ImuProvider* Imu() override;
   void Observe(app::OutputThread* output) override;
   void Evaluate(const app::FswConfig& config, const app::FlightParts& parts,
                 const app::PipelineOptions& po, std::int64_t imu_samples_taken,

@@ -43,7 +43,7 @@ bool SimTrajectory(const app::FswConfig& config, sim::Trajectory* trajectory, si
                    std::string* error, const sim::Terrain* terrain = nullptr,
                    sim::OrbitalTarget* chosen = nullptr);
 
-class SimWorld : public app::MotionProvider, public app::ImuProvider {
+class SimWorld : public drivers::MotionProvider, public drivers::ImuProvider {
  public:
   // Builds terrain, appearance and renderer (seconds for a 2048^2 terrain).
   bool Build(const app::FswConfig& config, std::string* error);
@@ -72,7 +72,7 @@ class SimWorld : public app::MotionProvider, public app::ImuProvider {
   const sim::RenderedDescent& Frames() const { return frames_; }
   // The simulated IMU: noisy true relative motion into frame seq from the frame served before it
   // (across dropped frames; none for frame 0 or when sim.imu is false).
-  bool Motion(std::uint64_t seq, app::MotionInput* input) override;
+  bool Motion(std::uint64_t seq, drivers::MotionInput* input) override;
   // The simulated IMU unit's samples (sim.imu_unit), in time order.
   bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override;
   // The unit (nullptr for sim.imu_unit none): its samples, true biases and noise model.
@@ -90,10 +90,10 @@ class SimWorld : public app::MotionProvider, public app::ImuProvider {
   sim::OrbitalTarget target_;
   std::int32_t num_frames_ = 0;
   std::int32_t delivered_frames_ = 0;
-  std::vector<app::MotionInput> motion_;
+  std::vector<drivers::MotionInput> motion_;
   bool imu_ = false;
   bool has_imu_unit_ = false;
-  app::StoredImuProvider imu_samples_;
+  drivers::StoredImuProvider imu_samples_;
   std::int64_t black_from_ = -1;  // inject.black_from / black_frames
   std::int64_t black_frames_ = 0;
   sim::ImuModel imu_unit_;

@@ -1,12 +1,12 @@
-// Fuzz entry point for reading LCM logs (swf/app/log_reader.hpp): the input is the whole log
-// file. No input may crash, throw or allocate past the stated limits; the frames loaded are served
-// with strictly increasing sequence numbers and advancing exposure times, each image the size the
-// log states; a load that stops early names the record.
+// Fuzz entry point for reading LCM logs (swf/drivers/log_stereo_source.hpp): the input is the whole
+// log file. No input may crash, throw or allocate past the stated limits; the frames loaded are
+// served with strictly increasing sequence numbers and advancing exposure times, each image the
+// size the log states; a load that stops early names the record.
 #include <cstddef>
 #include <cstdint>
 #include <string>
 
-#include "swf/app/log_reader.hpp"
+#include "swf/drivers/log_stereo_source.hpp"
 
 namespace {
 
@@ -19,9 +19,9 @@ void Expect(bool condition) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace swf;
   const std::string bytes(reinterpret_cast<const char*>(data), size);
-  app::LogReader reader;
+  drivers::LogReader reader;
   reader.OpenBytes(bytes, "fuzz.lcmlog");
-  app::LogStereoSource source;
+  drivers::LogStereoSource source;
   source.Load(&reader, "SWF_STEREO");
   Expect(source.LoadError().empty() || source.LoadError().rfind("fuzz.lcmlog: record ", 0) == 0);
   Expect(source.Start() == core::Status::kOk);
@@ -38,7 +38,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // Both images readable to their last byte (AddressSanitizer checks the reads).
     const volatile std::uint8_t last_bytes = pair.left.data[n - 1] ^ pair.right.data[n - 1];
     (void)last_bytes;
-    app::MotionInput motion;
+    drivers::MotionInput motion;
     (void)source.Motion(pair.seq, &motion);
     last_seq = static_cast<std::int64_t>(pair.seq);
     last_ns = pair.left_exposure_ns;

@@ -8,7 +8,7 @@
 
 #include "swf/estimator/imu_preintegration.hpp"
 
-namespace swf::app {
+namespace swf::drivers {
 
 // The navigation system's relative motion camera_prev_T_camera for a frame (an IMU / navigation
 // filter; the simulator; a log). Called on the real-time thread: must not allocate or block.
@@ -56,4 +56,4 @@ class StoredImuProvider final : public ImuProvider {
   std::size_t next_ = 0;
 };
 
-}  // namespace swf::app
+}  // namespace swf::drivers

@@ -1,4 +1,4 @@
-#include "swf/app/log_reader.hpp"
+#include "swf/drivers/log_stereo_source.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -6,11 +6,11 @@
 #include <limits>
 #include <sstream>
 
-#include "swf/app/imu_message.hpp"
+#include "swf/drivers/imu_message.hpp"
 #include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
-namespace swf::app {
+namespace swf::drivers {
 
 namespace {
 constexpr std::uint32_t kLogMagic = 0xEDA1DA01u;
@@ -248,17 +248,17 @@ bool LogStereoSource::Motion(std::uint64_t seq, MotionInput* input) {
 core::Status LogStereoSource::Start() {
   next_ = 0;
   imu_next_ = 0;
-  stats_ = drivers::SourceStats{};
+  stats_ = SourceStats{};
   // Refused while loading; gaps are counted through each pair's dropped_before instead.
   stats_.frames_rejected = static_cast<std::uint64_t>(stream_.Refused());
   return core::Status::kOk;
 }
 
-core::Status LogStereoSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoPair* pair) {
+core::Status LogStereoSource::Next(core::TimeNs /*timeout_ns*/, StereoPair* pair) {
   if (next_ >= frames_.size()) return core::Status::kEmpty;
   const Frame& f = frames_[next_];
-  pair->left = drivers::ImageView{f.left.data(), width_, height_, width_};
-  pair->right = drivers::ImageView{f.right.data(), width_, height_, width_};
+  pair->left = ImageView{f.left.data(), width_, height_, width_};
+  pair->right = ImageView{f.right.data(), width_, height_, width_};
   pair->left_exposure_ns = f.left_ns;
   pair->right_exposure_ns = f.right_ns;
   pair->seq = static_cast<std::uint64_t>(f.seq);
@@ -269,4 +269,4 @@ core::Status LogStereoSource::Next(core::TimeNs /*timeout_ns*/, drivers::StereoP
   return core::Status::kOk;
 }
 
-}  // namespace swf::app
+}  // namespace swf::drivers

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "swf/app/motion.hpp"
+#include "swf/drivers/process_input.hpp"
 #include "swf/drivers/stereo_source.hpp"
 
-namespace swf::app {
+namespace swf::drivers {
 
 // One event of an LCM log.
 struct LogEvent {
@@ -66,9 +66,7 @@ struct LogStreamStats {
 // pair.dropped_before. With an IMU channel set, the imu_t samples recorded between two frames
 // are served (ImuProvider) with the later frame, as the live run handed them over; a refused
 // frame's samples go with the next one served.
-class LogStereoSource final : public drivers::StereoSource,
-                              public MotionProvider,
-                              public ImuProvider {
+class LogStereoSource final : public StereoSource, public MotionProvider, public ImuProvider {
  public:
   // Before Load: the channel of the recorded IMU ("" = none).
   void SetImuChannel(const std::string& channel) { imu_channel_ = channel; }
@@ -85,10 +83,10 @@ class LogStereoSource final : public drivers::StereoSource,
   std::size_t NumImuSamples() const { return imu_.size(); }
 
   core::Status Start() override;
-  core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override;
-  void Release(const drivers::StereoPair& /*pair*/) override {}
+  core::Status Next(core::TimeNs timeout_ns, StereoPair* pair) override;
+  void Release(const StereoPair& /*pair*/) override {}
   void Stop() override {}
-  drivers::SourceStats Stats() const override { return stats_; }
+  SourceStats Stats() const override { return stats_; }
   const char* Name() const override { return "log"; }
   bool Motion(std::uint64_t seq, MotionInput* input) override;
   bool NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) override;
@@ -116,11 +114,11 @@ class LogStereoSource final : public drivers::StereoSource,
   std::int32_t height_ = 0;
   bool rectified_ = true;
   std::size_t next_ = 0;
-  drivers::SourceStats stats_;
+  SourceStats stats_;
   std::string imu_channel_;
   std::vector<estimator::ImuSample<double>> imu_;
   std::size_t imu_pending_ = 0;  // first sample not yet given to a frame (loading)
   std::size_t imu_next_ = 0;     // next sample to serve
 };
 
-}  // namespace swf::app
+}  // namespace swf::drivers

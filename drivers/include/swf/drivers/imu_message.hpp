@@ -7,7 +7,7 @@
 #include "swf/estimator/imu_preintegration.hpp"
 #include "swf_msgs/imu_t.hpp"
 
-namespace swf::app {
+namespace swf::drivers {
 
 inline estimator::ImuSample<double> ImuSampleOf(const swf_msgs::imu_t& m) {
   estimator::ImuSample<double> s;
@@ -31,4 +31,4 @@ inline void ImuMessageOf(const estimator::ImuSample<double>& s, swf_msgs::imu_t*
   m->flags = static_cast<std::int32_t>(s.flags);
 }
 
-}  // namespace swf::app
+}  // namespace swf::drivers
