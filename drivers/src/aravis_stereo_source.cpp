@@ -468,7 +468,7 @@ core::Status AravisStereoSource::Emit(std::int32_t slot_index, StereoPair* pair)
                            options_.side_by_side ? held_[0].buffer : held_[1].buffer};
   const core::TimeNs times[2] = {held_[0].arrival_ns,
                                  options_.side_by_side ? held_[0].arrival_ns : held_[1].arrival_ns};
-  ImageView* views[2] = {&pair->left, &pair->right};
+  core::ImageView<const std::uint8_t>* views[2] = {&pair->left, &pair->right};
   std::uint8_t* grays[2] = {slot.left_gray.get(), slot.right_gray.get()};
   core::Status result = core::Status::kOk;
   for (int side = 0; side < 2; ++side) {
@@ -484,11 +484,11 @@ core::Status AravisStereoSource::Emit(std::int32_t slot_index, StereoPair* pair)
       size -= offset;
     }
     if (d.format == PixelFormat::kGray8) {
-      *views[side] = ImageView{data, d.width, d.height, d.stride_bytes};
+      *views[side] = {data, d.width, d.height, d.stride_bytes};
     } else {
       const core::Status s = ConvertToGray8(d, data, size, grays[side], d.width);
       if (!core::IsOk(s)) result = s;
-      *views[side] = ImageView{grays[side], d.width, d.height, d.width};
+      *views[side] = {grays[side], d.width, d.height, d.width};
     }
   }
   const bool in_place = cameras_[0]->desc.format == PixelFormat::kGray8;

@@ -257,8 +257,8 @@ core::Status LogStereoSource::Start() {
 core::Status LogStereoSource::Next(core::TimeNs /*timeout_ns*/, StereoPair* pair) {
   if (next_ >= frames_.size()) return core::Status::kEmpty;
   const Frame& f = frames_[next_];
-  pair->left = ImageView{f.left.data(), width_, height_, width_};
-  pair->right = ImageView{f.right.data(), width_, height_, width_};
+  pair->left = core::ImageView<const std::uint8_t>{f.left.data(), width_, height_, width_};
+  pair->right = core::ImageView<const std::uint8_t>{f.right.data(), width_, height_, width_};
   pair->left_exposure_ns = f.left_ns;
   pair->right_exposure_ns = f.right_ns;
   pair->seq = static_cast<std::uint64_t>(f.seq);

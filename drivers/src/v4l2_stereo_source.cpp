@@ -178,8 +178,8 @@ core::Status V4l2StereoSource::Emit(Slot& slot, std::int32_t slot_index, StereoP
     const std::size_t right_offset =
         static_cast<std::size_t>(half.width) * static_cast<std::size_t>(BytesPerPixel(ld.format));
     if (ld.format == PixelFormat::kGray8) {
-      pair->left = ImageView{lf.data, half.width, half.height, half.stride_bytes};
-      pair->right = ImageView{lf.data + right_offset, half.width, half.height, half.stride_bytes};
+      pair->left = {lf.data, half.width, half.height, half.stride_bytes};
+      pair->right = {lf.data + right_offset, half.width, half.height, half.stride_bytes};
       slot.left_index = lf.index;
       held_[kLeft].valid = false;
     } else {
@@ -191,20 +191,20 @@ core::Status V4l2StereoSource::Emit(Slot& slot, std::int32_t slot_index, StereoP
       }
       Discard(kLeft);
       if (!core::IsOk(s)) return s;
-      pair->left = ImageView{slot.left_gray.get(), half.width, half.height, half.width};
-      pair->right = ImageView{slot.right_gray.get(), half.width, half.height, half.width};
+      pair->left = {slot.left_gray.get(), half.width, half.height, half.width};
+      pair->right = {slot.right_gray.get(), half.width, half.height, half.width};
     }
   } else {
     const V4l2Frame* frames[2] = {&lf, &rf};
     const SourceImageDesc* descs[2] = {&ld, &rd};
-    ImageView* views[2] = {&pair->left, &pair->right};
+    core::ImageView<const std::uint8_t>* views[2] = {&pair->left, &pair->right};
     std::int32_t* indices[2] = {&slot.left_index, &slot.right_index};
     std::uint8_t* grays[2] = {slot.left_gray.get(), slot.right_gray.get()};
     core::Status result = core::Status::kOk;
     for (int side = 0; side < 2; ++side) {
       const SourceImageDesc& d = *descs[side];
       if (d.format == PixelFormat::kGray8) {
-        *views[side] = ImageView{frames[side]->data, d.width, d.height, d.stride_bytes};
+        *views[side] = {frames[side]->data, d.width, d.height, d.stride_bytes};
         *indices[side] = frames[side]->index;
         held_[side].valid = false;
       } else {
@@ -212,7 +212,7 @@ core::Status V4l2StereoSource::Emit(Slot& slot, std::int32_t slot_index, StereoP
             ConvertToGray8(d, frames[side]->data, frames[side]->bytes_used, grays[side], d.width);
         Discard(side);
         if (!core::IsOk(s)) result = s;
-        *views[side] = ImageView{grays[side], d.width, d.height, d.width};
+        *views[side] = {grays[side], d.width, d.height, d.width};
       }
     }
     if (!core::IsOk(result)) {

@@ -342,7 +342,7 @@ TEST_F(AravisSource, StereoHeadSideBySideIsSplitInPlace) {
   ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
   EXPECT_EQ(pair.left.width, 64);
   EXPECT_EQ(pair.right.width, 64);
-  EXPECT_EQ(pair.left.stride_bytes, 128);
+  EXPECT_EQ(pair.left.stride, 128);
   EXPECT_EQ(pair.right.data, pair.left.data + 64);
   EXPECT_EQ(pair.left_exposure_ns, pair.right_exposure_ns);
   source_.Release(pair);
@@ -357,7 +357,7 @@ TEST_F(AravisSource, DeepPixelFormatIsConvertedIntoThePairSlot) {
   StereoPair pair;
   ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
   EXPECT_EQ(pair.left.width, 64);
-  EXPECT_EQ(pair.left.stride_bytes, 64);  // 8-bit copy, not the 16-bit camera buffer
+  EXPECT_EQ(pair.left.stride, 64);  // 8-bit copy, not the 16-bit camera buffer
   source_.Release(pair);
   options_.pixel_format = "RGB8Packed";
   EXPECT_EQ(source_.Configure(options_), core::Status::kInvalidArgument);

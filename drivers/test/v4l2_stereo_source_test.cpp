@@ -42,10 +42,10 @@ V4l2StereoOptions Options(PixelFormat format = PixelFormat::kGray8) {
 }
 
 // Every pixel the scripted kernel writes equals the frame's sequence number & 0xFF.
-bool ImageIs(const ImageView& v, std::uint8_t value) {
+bool ImageIs(const core::ImageView<const std::uint8_t>& v, std::uint8_t value) {
   for (std::int32_t r = 0; r < v.height; ++r) {
     for (std::int32_t c = 0; c < v.width; ++c) {
-      if (v.data[static_cast<std::size_t>(r) * v.stride_bytes + c] != value) return false;
+      if (v.data[static_cast<std::size_t>(r) * v.stride + c] != value) return false;
     }
   }
   return true;
@@ -265,7 +265,7 @@ TEST_F(V4l2Source, CamerasOfDifferentSizesAndFormats) {
   EXPECT_EQ(pair.left.width, 64);
   EXPECT_EQ(pair.right.width, 32);
   EXPECT_EQ(pair.right.height, 24);
-  EXPECT_EQ(pair.right.stride_bytes, 32);
+  EXPECT_EQ(pair.right.stride, 32);
   EXPECT_TRUE(ImageIs(pair.right, 0));
   source_.Release(pair);
   ExpectNoLeaks();
@@ -399,7 +399,7 @@ TEST_F(V4l2Source, SideBySideDeviceIsSplitInPlace) {
   EXPECT_EQ(pair.left.width, 64);
   EXPECT_EQ(pair.right.width, 64);
   EXPECT_EQ(pair.right.data, pair.left.data + 64);
-  EXPECT_EQ(pair.left.stride_bytes, 128);
+  EXPECT_EQ(pair.left.stride, 128);
   EXPECT_EQ(source_.BuffersOutstanding(), 1);
   source_.Release(pair);
   EXPECT_EQ(source_.BuffersOutstanding(), 0);

@@ -31,7 +31,8 @@ std::uint32_t Crc32(const std::uint8_t* data, std::size_t size, std::uint32_t cr
   return ~crc;
 }
 
-void EncodeGrayPng(const ImageView& image, std::vector<std::uint8_t>* out) {
+void EncodeGrayPng(const core::ImageView<const std::uint8_t>& image,
+                   std::vector<std::uint8_t>* out) {
   out->clear();
   const std::uint8_t signature[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   out->insert(out->end(), signature, signature + 8);
@@ -47,7 +48,7 @@ void EncodeGrayPng(const ImageView& image, std::vector<std::uint8_t>* out) {
   raw.reserve(static_cast<std::size_t>(image.width + 1) * image.height);
   for (std::int32_t r = 0; r < image.height; ++r) {
     raw.push_back(0);
-    const std::uint8_t* row = image.data + static_cast<std::size_t>(r) * image.stride_bytes;
+    const std::uint8_t* row = image.data + static_cast<std::size_t>(r) * image.stride;
     raw.insert(raw.end(), row, row + image.width);
   }
   // zlib stream of stored blocks (at most 65535 bytes each) and the Adler-32 of the raw data.
@@ -75,7 +76,7 @@ void EncodeGrayPng(const ImageView& image, std::vector<std::uint8_t>* out) {
   Chunk(out, "IEND", {});
 }
 
-bool WriteGrayPng(const char* path, const ImageView& image) {
+bool WriteGrayPng(const char* path, const core::ImageView<const std::uint8_t>& image) {
   std::vector<std::uint8_t> bytes;
   EncodeGrayPng(image, &bytes);
   std::FILE* f = std::fopen(path, "wb");

@@ -10,10 +10,11 @@
 namespace swf::drivers {
 
 // Encodes the view as a PNG file image (appended to *out after clearing it).
-void EncodeGrayPng(const ImageView& image, std::vector<std::uint8_t>* out);
+void EncodeGrayPng(const core::ImageView<const std::uint8_t>& image,
+                   std::vector<std::uint8_t>* out);
 
 // Writes the view to path; false if the file cannot be written.
-bool WriteGrayPng(const char* path, const ImageView& image);
+bool WriteGrayPng(const char* path, const core::ImageView<const std::uint8_t>& image);
 
 std::uint32_t Crc32(const std::uint8_t* data, std::size_t size, std::uint32_t crc = 0);
 

@@ -20,7 +20,7 @@ TEST(PngWriter, Crc32MatchesTheStandardCheckValue) {
 TEST(PngWriter, WritesHeaderStoredPixelsAndEnd) {
   // GIVEN a 3x2 view with a padded stride
   const std::uint8_t pixels[] = {1, 2, 3, 0, 4, 5, 6, 0};
-  const ImageView view{pixels, 3, 2, 4};
+  const core::ImageView<const std::uint8_t> view{pixels, 3, 2, 4};
   std::vector<std::uint8_t> png;
   EncodeGrayPng(view, &png);
   ASSERT_GT(png.size(), 8u + 25u + 12u);

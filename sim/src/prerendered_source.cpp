@@ -73,8 +73,8 @@ Status PrerenderedStereoSource::Next(core::TimeNs /*timeout_ns*/, drivers::Stere
   }
   const std::int32_t w = d.width_px;
   const std::int32_t h = d.height_px;
-  pair->left = drivers::ImageView{d.left[next_].data(), w, h, w};
-  pair->right = drivers::ImageView{d.right[next_].data(), w, h, w};
+  pair->left = core::ImageView<const std::uint8_t>{d.left[next_].data(), w, h, w};
+  pair->right = core::ImageView<const std::uint8_t>{d.right[next_].data(), w, h, w};
   pair->left_exposure_ns = d.exposure_ns[next_];
   pair->right_exposure_ns = pair->left_exposure_ns;
   // The trajectory's frame number, gaps included: the outputs are matched to the truth of the

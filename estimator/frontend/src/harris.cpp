@@ -72,7 +72,7 @@ float HarrisDetector::ComputeResponse(const GrayView& image, int x0, int x1, int
   const int np = n + 2 * r;
   const int px0 = x0 - r;
   const float k = options_.k;
-  ImageView<float> resp = response_.View();
+  core::ImageView<float> resp = response_.View();
   for (int c = 0; c < 3; ++c) std::fill(vertical_[c], vertical_[c] + n, 0.0f);
   float max_response = 0.0f;
   for (int yy = y0 - r, row = 0; yy < y1 + r; ++yy, ++row) {
@@ -121,7 +121,7 @@ float HarrisDetector::ComputeResponse(const GrayView& image, int x0, int x1, int
 // deterministic. The comparisons are computed for a whole row into a mask (vectorised), and only
 // the maxima are visited.
 void HarrisDetector::CollectMaxima(int x0, int x1, int y0, int y1, float threshold) {
-  const ImageView<float> resp = response_.View();
+  const core::ImageView<float> resp = response_.View();
   const int cap = kMaxCandidatesPerBucket;
   const int n = x1 - x0;
   for (int y = y0; y < y1; ++y) {

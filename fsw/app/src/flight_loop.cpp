@@ -151,9 +151,9 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
 
   PipelineFrame frame;
   frame.left =
-      frontend::GrayView{pair.left.data, pair.left.width, pair.left.height, pair.left.stride_bytes};
-  frame.right = frontend::GrayView{pair.right.data, pair.right.width, pair.right.height,
-                                   pair.right.stride_bytes};
+      frontend::GrayView{pair.left.data, pair.left.width, pair.left.height, pair.left.stride};
+  frame.right =
+      frontend::GrayView{pair.right.data, pair.right.width, pair.right.height, pair.right.stride};
   frame.utime = pair.left_exposure_ns / core::kNsPerUs;
   // Frame numbers continue across outages: a source that numbers only the pairs it served (not
   // the frames its camera missed) is shifted past the cycles coasted in between.
@@ -211,10 +211,10 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
       r.height = h;
       for (std::int32_t y = 0; y < h; ++y) {
         std::memcpy(r.left.get() + static_cast<std::size_t>(y) * w,
-                    pair.left.data + static_cast<std::size_t>(y) * pair.left.stride_bytes,
+                    pair.left.data + static_cast<std::size_t>(y) * pair.left.stride,
                     static_cast<std::size_t>(w));
         std::memcpy(r.right.get() + static_cast<std::size_t>(y) * w,
-                    pair.right.data + static_cast<std::size_t>(y) * pair.right.stride_bytes,
+                    pair.right.data + static_cast<std::size_t>(y) * pair.right.stride,
                     static_cast<std::size_t>(w));
       }
       Push(&out_->frame_group, RecordRef{RecordKind::kFrame, slot});

@@ -10,22 +10,16 @@
 
 #include <cstdint>
 
+#include "swf/core/image_view.hpp"
 #include "swf/core/status.hpp"
 #include "swf/core/time.hpp"
 
 namespace swf::drivers {
 
-// A read-only 8-bit gray image in a buffer the source owns. Row r starts at data + r * stride.
-struct ImageView {
-  const std::uint8_t* data = nullptr;
-  std::int32_t width = 0;
-  std::int32_t height = 0;
-  std::int32_t stride_bytes = 0;
-};
-
 struct StereoPair {
-  ImageView left;
-  ImageView right;
+  // Read-only 8-bit gray images in buffers the source owns.
+  core::ImageView<const std::uint8_t> left;
+  core::ImageView<const std::uint8_t> right;
   core::TimeNs left_exposure_ns = 0;  // exposure time stamp (monotonic clock), nanoseconds
   core::TimeNs right_exposure_ns = 0;
   std::uint64_t seq = 0;             // +1 per pair served, starting at 0

@@ -64,7 +64,7 @@ class HarrisDetector {
 
   // The response image of the last call (for tests and plots): valid only around the buckets
   // that were searched (all of them when no bucket was full).
-  ImageView<const float> Response() const { return response_.View(); }
+  core::ImageView<const float> Response() const { return response_.View(); }
 
  private:
   struct Bucket {

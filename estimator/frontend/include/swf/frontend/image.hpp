@@ -1,38 +1,22 @@
-// Images of the front end: non-owning views, fixed-capacity owned images, bilinear sampling and
-// a 2x pyramid. 8-bit grey pixels; coordinates are pixel centres (x right, y down, (0,0) is the
-// centre of the top-left pixel).
+// Images of the front end: 8-bit grey views (core::ImageView), fixed-capacity owned images,
+// bilinear sampling and a 2x pyramid. 8-bit grey pixels; coordinates are pixel centres (x right, y
+// down, (0,0) is the centre of the top-left pixel).
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
-#include <type_traits>
 
+#include "swf/core/image_view.hpp"
 #include "swf/core/status.hpp"
 #include "swf/frontend/config.hpp"
 
 namespace swf::frontend {
 
-// A rectangle of pixels owned elsewhere. stride is in elements per row.
-template <typename T>
-struct ImageView {
-  T* data = nullptr;
-  int width = 0;
-  int height = 0;
-  int stride = 0;
-
-  T* Row(int y) const { return data + static_cast<std::ptrdiff_t>(y) * stride; }
-  T& At(int x, int y) const { return Row(y)[x]; }
-  bool Valid() const { return data != nullptr && width > 0 && height > 0 && stride >= width; }
-  // Read-only view of the same pixels.
-  ImageView<const T> Const() const { return ImageView<const T>{data, width, height, stride}; }
-  // Mutable views convert to read-only ones, as T* converts to const T*.
-  operator ImageView<const T>() const requires(!std::is_const_v<T>) { return Const(); }
-};
-
-using GrayView = ImageView<const std::uint8_t>;
-using MutableGrayView = ImageView<std::uint8_t>;
+// 8-bit grey views, the front end's images.
+using GrayView = core::ImageView<const std::uint8_t>;
+using MutableGrayView = core::ImageView<std::uint8_t>;
 
 // An image with storage inside the object (kCapacity pixels) and a runtime size.
 template <typename T, std::size_t kCapacity = kMaxPixels>
@@ -50,12 +34,10 @@ class Image {
   }
   int Width() const { return width_; }
   int Height() const { return height_; }
-  ImageView<T> View() { return ImageView<T>{pixels_.data(), width_, height_, width_}; }
-  ImageView<const T> View() const {
-    return ImageView<const T>{pixels_.data(), width_, height_, width_};
-  }
+  core::ImageView<T> View() { return {pixels_.data(), width_, height_, width_}; }
+  core::ImageView<const T> View() const { return {pixels_.data(), width_, height_, width_}; }
   // Copies a view of the same size (call Resize first).
-  void CopyFrom(const ImageView<const T>& src) {
+  void CopyFrom(const core::ImageView<const T>& src) {
     for (int y = 0; y < height_; ++y) {
       std::memcpy(pixels_.data() + static_cast<std::size_t>(y) * width_, src.Row(y),
                   sizeof(T) * static_cast<std::size_t>(width_));
