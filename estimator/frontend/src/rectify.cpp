@@ -27,6 +27,7 @@ using rectify_detail::Quadratic;
 using rectify_detail::Segment;
 using rectify_detail::SegmentKind;
 using rectify_detail::WindowHalf;
+constexpr int kSegment = rectify_detail::kSegment;
 
 bool ValidCalibration(const CameraCalibration& c) {
   return c.width > 1 && c.height > 1 && c.fx > 0.0 && c.fy > 0.0 && std::isfinite(c.cx) &&
@@ -83,6 +84,163 @@ bool FitWindowHalf(const double* ex, const double* ey, double mx, double my, int
   return false;
 }
 
+// The rectifying rotation of the left camera (file comment): the baseline becomes +x and the
+// optical axis the half-way rotation's, made perpendicular to the baseline. False for a baseline
+// too short or along the optical axis.
+bool RectifyingRotation(const estimator::Pose<double>& left_T_right, Mat3<double>* rect_R_left) {
+  const Vec3<double> t = left_T_right.t;
+  const double baseline = t.norm();
+  if (!(baseline > 1e-6)) return false;
+  const Mat3<double> left_R_mid =
+      estimator::ExpSO3<double>(0.5 * estimator::LogSO3<double>(left_T_right.R));
+  const Vec3<double> e1 = t / baseline;
+  Vec3<double> e2 = left_R_mid.col(2).cross(e1);
+  if (!(e2.norm() > 1e-6)) return false;  // baseline along the optical axis
+  e2.normalize();
+  const Vec3<double> e3 = e1.cross(e2);
+  rect_R_left->row(0) = e1.transpose();
+  rect_R_left->row(1) = e2.transpose();
+  rect_R_left->row(2) = e3.transpose();
+  return true;
+}
+
+// The exact map (RawPixel) at a segment's output pixels u0 + k, k = 0 .. len - 1, and at its
+// middle, u0 + (len - 1) / 2.
+struct ExactSegment {
+  double x[kSegment] = {};
+  double y[kSegment] = {};
+  double mid_x = 0.0;
+  double mid_y = 0.0;
+};
+
+// False when part of the segment is behind the camera.
+bool SampleExactMap(const StereoRectifier& rectifier, int camera, int u0, int v, int len,
+                    ExactSegment* exact) {
+  bool visible = true;
+  for (int k = 0; k < len; ++k) {
+    visible = visible && rectifier.RawPixel(camera, u0 + k, v, &exact->x[k], &exact->y[k]);
+  }
+  const double mid = 0.5 * (len - 1);
+  return visible && rectifier.RawPixel(camera, u0 + mid, v, &exact->mid_x, &exact->mid_y);
+}
+
+// One coordinate of a Quadratic: through f0, fm, fl at k = 0, (len - 1) / 2, len - 1 (Newton form
+// converted to monomials).
+void FitQuadratic(double f0, double fm, double fl, int len, float* coef) {
+  const double last = len - 1;
+  const double mid = 0.5 * last;
+  double c1 = 0.0;
+  double c2 = 0.0;
+  if (len > 1) {
+    const double slope_m = (fm - f0) / mid;
+    const double slope_l = (fl - f0) / last;
+    c2 = (slope_l - slope_m) / (last - mid);
+    c1 = slope_m - c2 * mid;
+  }
+  // Stored in 1/128 px with the rounding offset folded in: truncation rounds.
+  coef[0] = static_cast<float>(f0 * kWeightOne + 0.5);
+  coef[1] = static_cast<float>(c1 * kWeightOne);
+  coef[2] = static_cast<float>(c2 * kWeightOne);
+}
+
+// True when the exact source (x, y) lies in the raw image: the pixels MaxTableErrorPx covers.
+bool InRawImage(const CameraCalibration& cal, double x, double y) {
+  return x >= 0.0 && y >= 0.0 && x <= cal.width - 1 && y <= cal.height - 1;
+}
+
+// One table segment as FitSegment leaves it. A default one has no source at all.
+struct SegmentFit {
+  Segment segment{};
+  SegmentKind kind = SegmentKind::kOutside;
+  bool identity = false;  // every pixel rounds to itself
+  double error = 0.0;     // largest |table - exact map| over the pixels in the raw image
+};
+
+// A segment stored as `quad`: its kind (kInside when both taps of every pixel are inside, kMixed
+// when some pixel has a source, else kOutside) and its error against the exact map.
+SegmentFit CheckQuadratic(const Quadratic& quad, const ExactSegment& exact,
+                          const CameraCalibration& cal, int u0, int v, int len) {
+  // Fixed-point limits (1/128 px): the fast path needs both taps inside (X <= (w-1)*128 - 1);
+  // a pixel has a source when 0 <= X <= (w-1)*128.
+  const auto fast_x = static_cast<float>((cal.width - 1) * kWeightOne);
+  const auto fast_y = static_cast<float>((cal.height - 1) * kWeightOne);
+  SegmentFit fit;
+  fit.segment.quad = quad;
+  fit.identity = true;
+  bool all_fast = true;
+  bool any_source = false;
+  for (int k = 0; k < len; ++k) {
+    const float fx = EvalSegment(quad.x, static_cast<float>(k));
+    const float fy = EvalSegment(quad.y, static_cast<float>(k));
+    const double tx = (fx - 0.5) / kWeightOne;
+    const double ty = (fy - 0.5) / kWeightOne;
+    const bool source = fx >= 0.0f && fy >= 0.0f && fx < fast_x + 1.0f && fy < fast_y + 1.0f;
+    all_fast = all_fast && fx >= 0.0f && fy >= 0.0f && fx < fast_x && fy < fast_y;
+    any_source = any_source || source;
+    fit.identity = fit.identity && source && static_cast<int>(fx) == (u0 + k) * kWeightOne &&
+                   static_cast<int>(fy) == v * kWeightOne;
+    if (InRawImage(cal, exact.x[k], exact.y[k])) {
+      fit.error = std::max(fit.error, std::hypot(tx - exact.x[k], ty - exact.y[k]));
+    }
+  }
+  fit.kind = all_fast     ? SegmentKind::kInside
+             : any_source ? SegmentKind::kMixed
+                          : SegmentKind::kOutside;
+  return fit;
+}
+
+// The two WindowHalfs of a full segment: their own quadratics through the exact map at j = 0, 3.5,
+// 7. False when a half fits no window.
+bool FitWindow(const StereoRectifier& rectifier, int camera, const CameraCalibration& cal,
+               const ExactSegment& exact, int u0, int v, WindowHalf* halves) {
+  for (int h = 0; h < 2; ++h) {
+    const int k0 = h * kHalf;
+    double hx = 0.0;
+    double hy = 0.0;
+    if (!rectifier.RawPixel(camera, u0 + k0 + 3.5, v, &hx, &hy) ||
+        !FitWindowHalf(exact.x + k0, exact.y + k0, hx, hy, cal.width, cal.height, &halves[h])) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// Largest |table - exact map| of a kWindow segment over the pixels in the raw image.
+double WindowError(const WindowHalf* halves, const ExactSegment& exact,
+                   const CameraCalibration& cal) {
+  double error = 0.0;
+  for (int k = 0; k < kSegment; ++k) {
+    const WindowHalf& half = halves[k / kHalf];
+    const double tx = half.column + (EvalHalf(half.x, k % kHalf) - 4.0) / kFineOne;
+    const double ty = half.row + (EvalHalf(half.y, k % kHalf) - 4.0) / kFineOne;
+    if (InRawImage(cal, exact.x[k], exact.y[k])) {
+      error = std::max(error, std::hypot(tx - exact.x[k], ty - exact.y[k]));
+    }
+  }
+  return error;
+}
+
+// Table segment of camera `camera` (calibration `cal`) at output pixels u0 .. u0 + len - 1 of row
+// v: kWindow where both halves fit a window, else the segment's Quadratic.
+SegmentFit FitSegment(const StereoRectifier& rectifier, int camera, const CameraCalibration& cal,
+                      int u0, int v, int len) {
+  ExactSegment exact;
+  if (!SampleExactMap(rectifier, camera, u0, v, len, &exact)) return SegmentFit{};
+  Quadratic quad;
+  FitQuadratic(exact.x[0], exact.mid_x, exact.x[len - 1], len, quad.x);
+  FitQuadratic(exact.y[0], exact.mid_y, exact.y[len - 1], len, quad.y);
+  SegmentFit fit = CheckQuadratic(quad, exact, cal, u0, v, len);
+  WindowHalf halves[2];
+  if (fit.kind == SegmentKind::kInside && len == kSegment &&
+      FitWindow(rectifier, camera, cal, exact, u0, v, halves)) {
+    fit.segment.half[0] = halves[0];
+    fit.segment.half[1] = halves[1];
+    fit.kind = SegmentKind::kWindow;
+    fit.error = WindowError(halves, exact, cal);
+  }
+  return fit;
+}
+
 }  // namespace
 
 bool StereoRectifier::RawPixel(int camera, double u, double v, double* raw_u, double* raw_v) const {
@@ -120,21 +278,26 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
   }
   calib_[0] = left;
   calib_[1] = right;
+  if (const Status s = ConfigureGeometry(options, w, h); s != Status::kOk) return s;
+  width_ = w;
+  height_ = h;
+  segments_per_row_ = (w + kSegment - 1) / kSegment;
+  max_table_error_px_ = 0.0;
+  identity_ = left.width == w && left.height == h && right.width == w && right.height == h;
+  std::size_t windows = 0;
+  for (int c = 0; c < 2; ++c) windows += BuildTable(c);
+  window_fraction_ =
+      static_cast<double>(windows) / (2.0 * static_cast<double>(h) * segments_per_row_);
+  configured_ = true;
+  return Status::kOk;
+}
+
+Status StereoRectifier::ConfigureGeometry(const RectifyOptions& options, int width, int height) {
+  const CameraCalibration& left = calib_[0];
+  const CameraCalibration& right = calib_[1];
   const estimator::Pose<double> left_T_right = left.body_T_camera.Inverse() * right.body_T_camera;
-  const Vec3<double> t = left_T_right.t;
-  const double baseline = t.norm();
-  if (!(baseline > 1e-6)) return Status::kInvalidArgument;
-  const Mat3<double> left_R_mid =
-      estimator::ExpSO3<double>(0.5 * estimator::LogSO3<double>(left_T_right.R));
-  const Vec3<double> e1 = t / baseline;
-  Vec3<double> e2 = left_R_mid.col(2).cross(e1);
-  if (!(e2.norm() > 1e-6)) return Status::kInvalidArgument;  // baseline along the optical axis
-  e2.normalize();
-  const Vec3<double> e3 = e1.cross(e2);
   Mat3<double> rect_R_left;
-  rect_R_left.row(0) = e1.transpose();
-  rect_R_left.row(1) = e2.transpose();
-  rect_R_left.row(2) = e3.transpose();
+  if (!RectifyingRotation(left_T_right, &rect_R_left)) return Status::kInvalidArgument;
   rect_from_cam_[0] = rect_R_left;
   rect_from_cam_[1] = rect_R_left * left_T_right.R;
 
@@ -148,129 +311,41 @@ Status StereoRectifier::Configure(const CameraCalibration& left, const CameraCal
     ray_x += 0.5 * axis.x() / axis.z();
     ray_y += 0.5 * axis.y() / axis.z();
   }
-  const double sx = static_cast<double>(w) / left.width;
-  const double sy = static_cast<double>(h) / left.height;
+  const double sx = static_cast<double>(width) / left.width;
+  const double sy = static_cast<double>(height) / left.height;
   camera_.fx = f;
   camera_.fy = f;
   camera_.cx = 0.5 * (left.cx + right.cx) * sx - f * ray_x;
   camera_.cy = 0.5 * (left.cy + right.cy) * sy - f * ray_y;
-  camera_.baseline_m = baseline;
+  camera_.baseline_m = left_T_right.t.norm();
   estimator::Pose<double> left_T_rect;
   left_T_rect.R = rect_R_left.transpose();
   rectified_in_body_ = left.body_T_camera * left_T_rect;
-  width_ = w;
-  height_ = h;
-  segments_per_row_ = (w + kSegment - 1) / kSegment;
+  return Status::kOk;
+}
 
-  max_table_error_px_ = 0.0;
+std::size_t StereoRectifier::BuildTable(int camera) {
+  Table& table = table_[camera];
   std::size_t windows = 0;
-  identity_ = left.width == w && left.height == h && right.width == w && right.height == h;
-  for (int c = 0; c < 2; ++c) {
-    const CameraCalibration& cal = calib_[c];
-    Table& table = table_[c];
-    // Fixed-point limits (1/128 px): the fast path needs both taps inside (X <= (w-1)*128 - 1);
-    // a pixel has a source when 0 <= X <= (w-1)*128.
-    const auto fast_x = static_cast<float>((cal.width - 1) * kWeightOne);
-    const auto fast_y = static_cast<float>((cal.height - 1) * kWeightOne);
-    for (int v = 0; v < h; ++v) {
-      table.row_inside[v] = true;
-      table.row_window[v] = true;
-      for (int s = 0; s < segments_per_row_; ++s) {
-        const std::size_t index = static_cast<std::size_t>(v) * segments_per_row_ + s;
-        Segment& seg = table.segment[index];
-        const int u0 = s * kSegment;
-        const int len = std::min(kSegment, w - u0);
-        double ex[kSegment] = {};
-        double ey[kSegment] = {};
-        bool visible = true;
-        for (int k = 0; k < len; ++k) visible = visible && RawPixel(c, u0 + k, v, &ex[k], &ey[k]);
-        const double last = len - 1;
-        const double mid = 0.5 * last;
-        double mx = 0.0;
-        double my = 0.0;
-        visible = visible && RawPixel(c, u0 + mid, v, &mx, &my);
-        if (!visible) {  // part of the segment is behind the camera: no source at all
-          seg = Segment{};
-          table.kind[index] = SegmentKind::kOutside;
-          table.row_inside[v] = false;
-          table.row_window[v] = false;
-          identity_ = false;
-          continue;
-        }
-        // Quadratic through k = 0, last / 2, last (Newton form converted to monomials).
-        auto fit = [&](double f0, double fm, double fl, float* coef) {
-          double c1 = 0.0;
-          double c2 = 0.0;
-          if (len > 1) {
-            const double slope_m = (fm - f0) / mid;
-            const double slope_l = (fl - f0) / last;
-            c2 = (slope_l - slope_m) / (last - mid);
-            c1 = slope_m - c2 * mid;
-          }
-          // Stored in 1/128 px with the rounding offset folded in: truncation rounds.
-          coef[0] = static_cast<float>(f0 * kWeightOne + 0.5);
-          coef[1] = static_cast<float>(c1 * kWeightOne);
-          coef[2] = static_cast<float>(c2 * kWeightOne);
-        };
-        Quadratic quad;
-        fit(ex[0], mx, ex[len - 1], quad.x);
-        fit(ey[0], my, ey[len - 1], quad.y);
-        bool all_fast = true;
-        bool any_source = false;
-        double error = 0.0;  // of what Rectify samples, over the pixels with an exact source
-        auto inside = [&](int k) {
-          return ex[k] >= 0.0 && ey[k] >= 0.0 && ex[k] <= cal.width - 1 && ey[k] <= cal.height - 1;
-        };
-        for (int k = 0; k < len; ++k) {
-          const float fx = EvalSegment(quad.x, static_cast<float>(k));
-          const float fy = EvalSegment(quad.y, static_cast<float>(k));
-          const double tx = (fx - 0.5) / kWeightOne;
-          const double ty = (fy - 0.5) / kWeightOne;
-          const bool source = fx >= 0.0f && fy >= 0.0f && fx < fast_x + 1.0f && fy < fast_y + 1.0f;
-          all_fast = all_fast && fx >= 0.0f && fy >= 0.0f && fx < fast_x && fy < fast_y;
-          any_source = any_source || source;
-          identity_ = identity_ && source && static_cast<int>(fx) == (u0 + k) * kWeightOne &&
-                      static_cast<int>(fy) == v * kWeightOne;
-          if (inside(k)) error = std::max(error, std::hypot(tx - ex[k], ty - ey[k]));
-        }
-        seg.quad = quad;
-        table.kind[index] = all_fast     ? SegmentKind::kInside
-                            : any_source ? SegmentKind::kMixed
-                                         : SegmentKind::kOutside;
-        table.row_inside[v] = table.row_inside[v] && all_fast;
-        // Window halves: their own quadratics through the exact map (j = 0, 3.5, 7).
-        WindowHalf halves[2];
-        bool window = all_fast && len == kSegment;
-        for (int hh = 0; hh < 2 && window; ++hh) {
-          const int k0 = hh * kHalf;
-          double hx = 0.0;
-          double hy = 0.0;
-          window = RawPixel(c, u0 + k0 + 3.5, v, &hx, &hy) &&
-                   FitWindowHalf(ex + k0, ey + k0, hx, hy, cal.width, cal.height, &halves[hh]);
-        }
-        if (window) {
-          error = 0.0;
-          for (int k = 0; k < kSegment; ++k) {
-            const WindowHalf& half = halves[k / kHalf];
-            const double tx = half.column + (EvalHalf(half.x, k % kHalf) - 4.0) / kFineOne;
-            const double ty = half.row + (EvalHalf(half.y, k % kHalf) - 4.0) / kFineOne;
-            if (inside(k)) error = std::max(error, std::hypot(tx - ex[k], ty - ey[k]));
-          }
-          seg.half[0] = halves[0];
-          seg.half[1] = halves[1];
-          table.kind[index] = SegmentKind::kWindow;
-          ++windows;
-        } else {
-          table.row_window[v] = false;
-        }
-        max_table_error_px_ = std::max(max_table_error_px_, error);
-      }
+  for (int v = 0; v < height_; ++v) {
+    table.row_inside[v] = true;
+    table.row_window[v] = true;
+    for (int s = 0; s < segments_per_row_; ++s) {
+      const std::size_t index = static_cast<std::size_t>(v) * segments_per_row_ + s;
+      const int u0 = s * kSegment;
+      const SegmentFit fit =
+          FitSegment(*this, camera, calib_[camera], u0, v, std::min(kSegment, width_ - u0));
+      const bool window = fit.kind == SegmentKind::kWindow;
+      table.segment[index] = fit.segment;
+      table.kind[index] = fit.kind;
+      table.row_inside[v] = table.row_inside[v] && (window || fit.kind == SegmentKind::kInside);
+      table.row_window[v] = table.row_window[v] && window;
+      identity_ = identity_ && fit.identity;
+      max_table_error_px_ = std::max(max_table_error_px_, fit.error);
+      windows += window ? 1 : 0;
     }
   }
-  window_fraction_ =
-      static_cast<double>(windows) / (2.0 * static_cast<double>(h) * segments_per_row_);
-  configured_ = true;
-  return Status::kOk;
+  return windows;
 }
 
 bool StereoRectifier::TablePixel(int camera, int u, int v, float* raw_u, float* raw_v) const {

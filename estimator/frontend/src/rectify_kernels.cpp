@@ -454,6 +454,69 @@ void RemapNeon(RemapJob job) {  // a copy: o aliases anything
 }
 #endif  // __aarch64__
 
+// Taps of pixels q .. q + 7 of a kWindow segment (portable kernel, step 1): the offset of the
+// top-left tap, the window origin + dx + (dy ? stride : 0), and the weights.
+[[gnu::always_inline]] inline void WindowHalfTaps(const WindowHalf& half, std::int32_t stride,
+                                                  int q, std::int32_t* offset, std::int16_t* wx,
+                                                  std::int16_t* wy) {
+  const V4i stride4 = {stride, stride, stride, stride};
+  V8s coef;
+  std::memcpy(&coef, &half, sizeof(coef));
+  const V8u x = EvalHalf8<0>(coef);
+  const V8u y = EvalHalf8<3>(coef);
+  const V8u dx = x >> kFineBits;
+  const std::int32_t origin = half.row * stride + half.column;
+  const V8u dy = y >> kFineBits;
+  const V4i off_lo = origin + WidenLo(dx) + (-WidenLo(dy) & stride4);
+  const V4i off_hi = origin + WidenHi(dx) + (-WidenHi(dy) & stride4);
+  const auto ax = reinterpret_cast<V8s>((x >> kFineToWeight) & (kWeightOne - 1));
+  const auto ay = reinterpret_cast<V8s>((y >> kFineToWeight) & (kWeightOne - 1));
+  std::memcpy(offset + q, &off_lo, sizeof(off_lo));
+  std::memcpy(offset + q + 4, &off_hi, sizeof(off_hi));
+  std::memcpy(wx + q, &ax, sizeof(ax));
+  std::memcpy(wy + q, &ay, sizeof(ay));
+}
+
+// Step 1 of the portable kernel: the source coordinates of output row v in 1/128 px, as the
+// offset of each pixel's top-left tap and its weights. Pixels left to the per-pixel pass and
+// lanes past the last pixel get a harmless tap at offset 0.
+[[gnu::always_inline]] inline void PortableRowTaps(const RemapJob& job, int v, std::int32_t* offset,
+                                                   std::int16_t* wx, std::int16_t* wy) {
+  const std::int32_t stride = job.raw->stride;
+  const V4i stride4 = {stride, stride, stride, stride};
+  const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
+  for (int s = 0; s < job.segments_per_row; ++s) {
+    const int u0 = s * kSegment;
+    const SegmentKind kind = job.kind[row + s];
+    if (kind == SegmentKind::kWindow) {
+      for (int h = 0; h < 2; ++h) {
+        WindowHalfTaps(job.segment[row + s].half[h], stride, u0 + h * kHalf, offset, wx, wy);
+      }
+      continue;
+    }
+    if (kind != SegmentKind::kInside) {
+      for (int k = 0; k < kSegment; ++k) {
+        offset[u0 + k] = 0;  // the pixels are redone by the per-pixel pass
+        wx[u0 + k] = 0;
+        wy[u0 + k] = 0;
+      }
+      continue;
+    }
+    for (int q = 0; q < kSegment; q += 8) {
+      const Coords8 c = SegmentCoords(job.segment[row + s].quad, q);
+      const V4i off_lo = (c.fy_lo >> kWeightBits) * stride4 + (c.fx_lo >> kWeightBits);
+      const V4i off_hi = (c.fy_hi >> kWeightBits) * stride4 + (c.fx_hi >> kWeightBits);
+      const V8s ax = Narrow(c.fx_lo, c.fx_hi) & (kWeightOne - 1);
+      const V8s ay = Narrow(c.fy_lo, c.fy_hi) & (kWeightOne - 1);
+      std::memcpy(offset + u0 + q, &off_lo, sizeof(off_lo));
+      std::memcpy(offset + u0 + q + 4, &off_hi, sizeof(off_hi));
+      std::memcpy(wx + u0 + q, &ax, sizeof(ax));
+      std::memcpy(wy + u0 + q, &ay, sizeof(ay));
+    }
+  }
+  for (int u = job.width; u < job.segments_per_row * kSegment; ++u) offset[u] = 0;
+}
+
 // Portable kernel (any GCC target): per row, the coordinates of every fast-path pixel, then
 // 16-bit gathers lane by lane and the blend, 8 pixels at a time.
 void RemapPortable(const RemapJob& job) {
@@ -464,62 +527,13 @@ void RemapPortable(const RemapJob& job) {
   alignas(16) std::uint8_t blended[kRow];
   const int w = job.width;
   const int padded = job.segments_per_row * kSegment;
-  const std::int32_t stride = job.raw->stride;
-  const V4i stride4 = {stride, stride, stride, stride};
+  const std::uint8_t* src = job.raw->data;
+  const std::uint8_t* below = src + job.raw->stride;
   for (int v = 0; v < job.height; ++v) {
-    const std::size_t row = static_cast<std::size_t>(v) * job.segments_per_row;
-    // 1. Source coordinates of the row in 1/128 px: offset of the top-left tap and the weights.
-    for (int s = 0; s < job.segments_per_row; ++s) {
-      const int u0 = s * kSegment;
-      const SegmentKind kind = job.kind[row + s];
-      if (kind == SegmentKind::kWindow) {
-        for (int h = 0; h < 2; ++h) {
-          const WindowHalf& half = job.segment[row + s].half[h];
-          V8s coef;
-          std::memcpy(&coef, &half, sizeof(coef));
-          const V8u x = EvalHalf8<0>(coef);
-          const V8u y = EvalHalf8<3>(coef);
-          // Top-left tap: the window origin + dx + (dy ? stride : 0).
-          const V8u dx = x >> kFineBits;
-          const std::int32_t origin = half.row * stride + half.column;
-          const V8u dy = y >> kFineBits;
-          const V4i off_lo = origin + WidenLo(dx) + (-WidenLo(dy) & stride4);
-          const V4i off_hi = origin + WidenHi(dx) + (-WidenHi(dy) & stride4);
-          const auto ax = reinterpret_cast<V8s>((x >> kFineToWeight) & (kWeightOne - 1));
-          const auto ay = reinterpret_cast<V8s>((y >> kFineToWeight) & (kWeightOne - 1));
-          const int q = u0 + h * kHalf;
-          std::memcpy(offset + q, &off_lo, sizeof(off_lo));
-          std::memcpy(offset + q + 4, &off_hi, sizeof(off_hi));
-          std::memcpy(wx + q, &ax, sizeof(ax));
-          std::memcpy(wy + q, &ay, sizeof(ay));
-        }
-        continue;
-      }
-      if (kind != SegmentKind::kInside) {
-        for (int k = 0; k < kSegment; ++k) {
-          offset[u0 + k] = 0;  // a harmless tap; the pixels are redone by the per-pixel pass
-          wx[u0 + k] = 0;
-          wy[u0 + k] = 0;
-        }
-        continue;
-      }
-      for (int q = 0; q < kSegment; q += 8) {
-        const Coords8 c = SegmentCoords(job.segment[row + s].quad, q);
-        const V4i off_lo = (c.fy_lo >> kWeightBits) * stride4 + (c.fx_lo >> kWeightBits);
-        const V4i off_hi = (c.fy_hi >> kWeightBits) * stride4 + (c.fx_hi >> kWeightBits);
-        const V8s ax = Narrow(c.fx_lo, c.fx_hi) & (kWeightOne - 1);
-        const V8s ay = Narrow(c.fy_lo, c.fy_hi) & (kWeightOne - 1);
-        std::memcpy(offset + u0 + q, &off_lo, sizeof(off_lo));
-        std::memcpy(offset + u0 + q + 4, &off_hi, sizeof(off_hi));
-        std::memcpy(wx + u0 + q, &ax, sizeof(ax));
-        std::memcpy(wy + u0 + q, &ay, sizeof(ay));
-      }
-    }
-    for (int u = w; u < padded; ++u) offset[u] = 0;  // lanes past the last pixel
+    // 1. Source coordinates of the row.
+    PortableRowTaps(job, v, offset, wx, wy);
     // 2. Gather the two source bytes of the top and of the bottom row (one 16-bit load each,
     // straight into a vector lane) and 3. blend.
-    const std::uint8_t* src = job.raw->data;
-    const std::uint8_t* below = src + stride;
     for (int u = 0; u < padded; u += 8) {
       const std::int32_t* off = offset + u;
       V8u t;

@@ -33,6 +33,7 @@
 // the simulator) is copied row by row, which is the output the table would give.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include "swf/core/status.hpp"
@@ -148,6 +149,10 @@ class StereoRectifier {
     bool row_inside[kMaxImageHeight];  // every segment of the row is kInside or kWindow
     bool row_window[kMaxImageHeight];  // every segment of the row is kWindow
   };
+  // Configure's steps: the rectifying rotations and the rectified camera (kInvalidArgument when
+  // the rig cannot be rectified), then one camera's table (returns its count of kWindow segments).
+  core::Status ConfigureGeometry(const RectifyOptions& options, int width, int height);
+  std::size_t BuildTable(int camera);
   void RemapOne(const GrayView& raw, const Table& table, const MutableGrayView& out) const;
 
   CameraCalibration calib_[2]{};
