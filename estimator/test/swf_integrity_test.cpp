@@ -13,7 +13,6 @@
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
 #include "swf/testing/allocation_counter.hpp"
-#include "synthetic_scene.hpp"
 
 namespace swf::estimator {
 namespace {

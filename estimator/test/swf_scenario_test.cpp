@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "scene_runner.hpp"
-#include "synthetic_scene.hpp"
 
 namespace swf::estimator {
 namespace {
@@ -105,12 +104,7 @@ TEST(SwfScenario, SidewaysEarlyMarginalizationInverseDepthAndFirstEstimates) {
 TEST(SwfScenario, StaticRigVisualOdometryStopsConverging) {
   double batch = 0, swf3 = 0, vo3 = 0, vsdf3 = 0;
   for (std::uint64_t seed : {1u, 2u, 3u}) {
-    SceneOptions so;
-    so.motion = SceneOptions::Motion::kStatic;
-    so.start_altitude_m = 30.0;
-    so.num_landmarks = 30;
-    so.landmark_radius_m = 5.0;
-    so.jitter_rad = 0.0;
+    SceneOptions so = testing::StaticRig();
     so.seed = seed;
     const SyntheticScene scene(so);
     batch +=
@@ -142,17 +136,12 @@ TEST(SwfScenario, StaticCamerasConvergeLikeOneOverM) {
   std::vector<double> mse(40, 0.0);
   const int runs = 6;
   for (int seed = 1; seed <= runs; ++seed) {
-    SceneOptions so;
-    so.motion = SceneOptions::Motion::kStatic;
-    so.start_altitude_m = 30.0;
-    so.num_landmarks = 30;
-    so.landmark_radius_m = 5.0;
-    so.jitter_rad = 0.0;
+    SceneOptions so = testing::StaticRig();
     so.seed = static_cast<std::uint64_t>(seed);
     const SyntheticScene scene(so);
     const RunResult r = RunScene(std::make_unique<StereoSwf<5>>().get(), scene,
-                                 ModeOptions(SwfMode::kSlidingWindow), true);
-    for (int m = 0; m < 40; ++m) mse[m] += r.mse_by_frame[m] / runs;
+                                 ModeOptions(SwfMode::kSlidingWindow));
+    for (int m = 0; m < 40; ++m) mse[m] += r.mse_m2[m] / runs;
   }
   for (int m : {5, 10, 20, 40}) {
     const double ratio = mse[m - 1] * m / mse[0];  // 1 for exact 1/m convergence

@@ -12,7 +12,6 @@
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
 #include "swf/testing/allocation_counter.hpp"
-#include "synthetic_scene.hpp"
 
 namespace swf::estimator {
 namespace {
@@ -273,7 +272,7 @@ TEST(SwfStereo, CorruptedFirstMeasurementsAreContained) {
   ASSERT_GT(far, 3);
   ASSERT_GT(near, 3);
   auto rms = [&](auto filter, double gate_m) {
-    return RunScene(filter.get(), corrupted, robust, false, gate_m).rms_m;
+    return RunScene(filter.get(), corrupted, robust, gate_m).rms_m;
   };
   const double e_xyz = rms(std::make_unique<StereoSwf<5>>(), 0.0);
   const double e_inv = rms(std::make_unique<InverseDepthSwf<5>>(), 0.0);

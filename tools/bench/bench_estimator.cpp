@@ -32,8 +32,6 @@
 #include <random>
 #include <string>
 
-#include "../../estimator/test/inertial_scene.hpp"
-#include "../../estimator/test/synthetic_scene.hpp"
 #include "kitti_vo.hpp"
 #include "kitti_vo_ceres.hpp"
 #include "kitti_vo_synth.hpp"
@@ -41,29 +39,23 @@
 #include "swf/estimator/inertial_model.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
+#include "swf/scene/runner.hpp"
 
 namespace {
 
-using swf::estimator::ImuBiases;
-using swf::estimator::ImuPreintegration;
 using swf::estimator::InertialStereoModel;
 using swf::estimator::Mat15;
-using swf::estimator::Mat3;
-using swf::estimator::Mat6;
-using swf::estimator::NavState;
-using swf::estimator::Pose;
 using swf::estimator::SlidingWindowFilter;
 using swf::estimator::StereoModel;
 using swf::estimator::SwfMode;
 using swf::estimator::SwfOptions;
-using swf::estimator::Vec15;
 using swf::estimator::Vec3;
-using swf::estimator::testing::InertialScene;
-using swf::estimator::testing::InertialSceneOptions;
-using swf::estimator::testing::MakeInertialScene;
-using swf::estimator::testing::PreintegrateFrame;
-using swf::estimator::testing::SceneOptions;
-using swf::estimator::testing::SyntheticScene;
+using swf::scene::InertialScene;
+using swf::scene::InertialSceneOptions;
+using swf::scene::MakeInertialScene;
+using swf::scene::MotionInput;
+using swf::scene::SceneOptions;
+using swf::scene::SyntheticScene;
 
 const SyntheticScene& Fig14Scene() {
   static const SyntheticScene kScene = [] {
@@ -88,38 +80,23 @@ const SyntheticScene& Fig13Scene() {
   return kScene;
 }
 
-// Feeds frame j (motion input = true relative motion, as from an IMU).
-template <typename Filter>
-void AddFrame(Filter* swf, const SyntheticScene& scene, std::size_t j) {
-  static const Mat6<double> kQSqrt = [] {
-    Mat6<double> q = Mat6<double>::Zero();
-    q.diagonal() << Vec3<double>::Constant(10.0), Vec3<double>::Constant(500.0);
-    return q;
-  }();
-  const auto& f = scene.frames()[j];
-  if (j == 0) {
-    (void)swf->AddPose(f.truth);
-  } else {
-    (void)swf->AddPoseWithMotion(scene.frames()[j - 1].truth.Inverse() * f.truth, kQSqrt);
-  }
-  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options().sigma_px;
-  for (const auto& o : f.obs) (void)swf->AddObservation(o.id, o.z, r_sqrt);
-}
-
+// The feeders TimeUpdateAt finds by the scene's type (swf/scene/runner.hpp feeds the frames):
+// stereo frames with the true relative motion as the motion input (as from an IMU), inertial
+// frames after the first pose with its prior and each frame's preintegrated IMU motion.
 template <typename Filter>
 void Configure(Filter* swf, const SyntheticScene& scene, SwfMode mode) {
   StereoModel<double> model;
   model.camera = scene.camera();
-  SwfOptions options;
-  options.mode = mode;
-  options.first_pose_sigma_m = 1e-3;
-  options.first_pose_sigma_rad = 1e-5;
-  if (swf->Configure(model, options) != swf::core::Status::kOk) std::abort();
+  if (swf->Configure(model, swf::scene::FilterOptions(mode)) != swf::core::Status::kOk)
+    std::abort();
 }
 
-// The same two feeders for the stereo-inertial scenes (built with their benchmarks below): the
-// first pose with its prior, then each frame's preintegrated IMU motion. Declared before
-// TimeUpdateAt, whose calls find them by name.
+template <typename Filter>
+void AddFrame(Filter* swf, const SyntheticScene& scene, std::size_t j) {
+  static MotionInput exact;  // the truth, stated at the motion-input noise of the experiments
+  (void)swf::scene::AddFrame(swf, scene, j, &exact);
+}
+
 template <typename Filter>
 void Configure(Filter* swf, const InertialScene& scene, SwfMode mode) {
   SwfOptions options;
@@ -129,21 +106,8 @@ void Configure(Filter* swf, const InertialScene& scene, SwfMode mode) {
 
 template <typename Filter>
 void AddFrame(Filter* swf, const InertialScene& scene, std::size_t j) {
-  if (j == 0) {
-    NavState<double> start = scene.truth[0];
-    start.biases = ImuBiases<double>{};
-    Vec15<double> sigma;
-    sigma << Vec3<double>::Constant(1e-3), Vec3<double>::Constant(1e-5),
-        Vec3<double>::Constant(0.05), Vec3<double>::Constant(0.01), Vec3<double>::Constant(0.1);
-    (void)swf->AddFirstPose(start, Mat15<double>(sigma.cwiseAbs2().asDiagonal()));
-  } else {
-    ImuPreintegration<double> pim;
-    Mat15<double> q_sqrt;
-    if (!PreintegrateFrame(scene, j, swf->NewestPose().biases, &pim, &q_sqrt)) std::abort();
-    (void)swf->AddPoseWithMotion(pim, q_sqrt);
-  }
-  const Mat3<double> r_sqrt = Mat3<double>::Identity() / scene.options.sigma_px;
-  for (const auto& [id, z] : scene.obs[j]) (void)swf->AddObservation(id, z, r_sqrt);
+  static const Mat15<double> kFirstPose = swf::scene::FirstPoseCovariance(1e-3, 1e-5);
+  if (swf::scene::AddFrame(swf, scene, j, kFirstPose) != swf::core::Status::kOk) std::abort();
 }
 
 // Times the update of `frame`: Configure, then frames 0 .. frame - 1 added and updated untimed,
@@ -243,9 +207,7 @@ void BM_Fig13Gates_K10(benchmark::State& state) {
   const SyntheticScene& scene = Fig13Scene();
   auto swf = std::make_unique<Fig13Swf>();
   constexpr std::size_t kFrame = 30;
-  SwfOptions options;
-  options.first_pose_sigma_m = 1e-3;
-  options.first_pose_sigma_rad = 1e-5;
+  SwfOptions options = swf::scene::FilterOptions(SwfMode::kSlidingWindow);
   options.gate_probability = state.range(0) == 0 ? 0.0 : SwfOptions{}.gate_probability;
   StereoModel<double> model;
   model.camera = scene.camera();
@@ -283,7 +245,7 @@ void BM_Fig13Covariances_K10(benchmark::State& state) {
 BENCHMARK(BM_Fig13Covariances_K10)->Unit(benchmark::kMillisecond)->Repetitions(5);
 
 // ---- stereo-inertial: 15-dimensional states (pose, velocity, IMU biases) -------------------
-// The same loads on the analytic IMU scene (estimator/test/inertial_scene.hpp): Fig. 13's
+// The same loads on the analytic IMU scene (swf/scene/inertial_scene.hpp): Fig. 13's
 // descent (150 landmarks in a 2 m disc from 100 m, 1.5 m per frame) and Fig. 14a's sideways
 // pass (50 m up, 2.2 m per frame, 0.055 landmarks per square metre). Preintegration is untimed
 // (bench_imu times it); the update is what the stereo-only rows above time.

@@ -13,10 +13,13 @@
 #include "json.hpp"
 #include "kitti.hpp"
 #include "report.hpp"
+#include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/config.hpp"
 
 namespace swf::eval {
 namespace {
+
+using evaluation::Median;
 
 // What one command hands to the common writer.
 struct Evaluation {

@@ -12,11 +12,14 @@
 
 #include "euroc_imu.hpp"
 #include "report.hpp"
+#include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "swf/image_io/image_io.hpp"
 
 namespace swf::eval {
 namespace {
+
+using evaluation::Median;
 
 // A file name as quoted in a message: at most 120 characters of it (a hostile list may hold a
 // line of megabytes).

@@ -21,6 +21,7 @@
 #include "run_filter.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
+#include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/config.hpp"
 
 namespace {
@@ -33,8 +34,6 @@ using swf::estimator::StereoModel;
 using swf::estimator::SwfMode;
 using swf::estimator::SwfOptions;
 using swf::estimator::Vec3;
-using swf::estimator::testing::SceneOptions;
-using swf::estimator::testing::SyntheticScene;
 using swf::eval::BigBatch;
 using swf::eval::Filter;
 using swf::eval::InverseDepthFilter;
@@ -44,6 +43,11 @@ using swf::eval::RunFilter;
 using swf::eval::Series;
 using swf::eval::Trace;
 using swf::eval::WriteExperiment;
+using swf::evaluation::Mean;
+using swf::evaluation::Median;
+using swf::evaluation::SampleStd;
+using swf::scene::SceneOptions;
+using swf::scene::SyntheticScene;
 
 // Cramer-Rao bound of the landmark MSE after m frames: trace of the landmark marginal
 // covariances of the batch problem evaluated at the true state (noise-free measurements keep the
@@ -100,26 +104,9 @@ Series MonteCarlo(const std::string& name, SceneOptions so, int runs,
     const Trace t = run(scene, 1000 + static_cast<std::uint64_t>(r));
     if (s.y.empty()) s.y.assign(t.mse_m2.size(), 0.0);
     for (std::size_t k = 0; k < t.mse_m2.size(); ++k) s.y[k] += t.mse_m2[k] / runs;
-    if (final_rms != nullptr) final_rms->push_back(t.final_rms_m);
+    if (final_rms != nullptr) final_rms->push_back(t.rms_m);
   }
   return s;
-}
-
-double Mean(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x;
-  return v.empty() ? 0.0 : s / v.size();
-}
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-double Std(const std::vector<double>& v) {
-  const double m = Mean(v);
-  double s = 0;
-  for (double x : v) s += (x - m) * (x - m);
-  return v.size() < 2 ? 0.0 : std::sqrt(s / (v.size() - 1));
 }
 
 int Usage(std::FILE* to = stderr) {
@@ -490,12 +477,7 @@ int main(int argc, char** argv) {
 
   // Fig. 12: static cameras, 30 landmarks.
   if (want("fig12")) {
-    SceneOptions so;
-    so.motion = SceneOptions::Motion::kStatic;
-    so.start_altitude_m = 30.0;
-    so.num_landmarks = 30;
-    so.landmark_radius_m = 5.0;
-    so.jitter_rad = 0.0;
+    SceneOptions so = swf::scene::StaticRig();
     so.frames = 40;
     Series swf5 = MonteCarlo("SWF(5)", so, runs, swf(SwfMode::kSlidingWindow, 5));
     Series one_over_m{"1/m", {}};
@@ -548,9 +530,10 @@ int main(int argc, char** argv) {
         "  \"vo10_std_over_swf10_std\": %.3g,\n  \"vo2_final_rms_m\": %.6g, "
         "\"swf10_error_below_vo2_percent\": %.3g, \"vo2_std_over_swf10_std\": %.3g",
         runs, Mean(rms_batch), Mean(rms_s3), Mean(rms_s10), Mean(rms_vo),
-        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)), Std(rms_vo) / std::max(Std(rms_s10), 1e-12),
-        Mean(rms_vo2), 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
-        Std(rms_vo2) / std::max(Std(rms_s10), 1e-12));
+        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)),
+        SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12), Mean(rms_vo2),
+        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
+        SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12));
     if (!WriteExperiment(out, "fig13_descent", "frame", s, buf)) return 1;
     add("## Fig. 13: descent, 150 landmarks tracked throughout (100 m to 41.5 m)");
     add("");
@@ -577,8 +560,9 @@ int main(int argc, char** argv) {
         "deviation ratio %.2f; against VO(2) (frame-to-frame, the paper's k=1 deleting "
         "filter) %.0f%% below, standard deviation ratio %.2f. %s",
         runs, 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)),
-        Std(rms_vo) / std::max(Std(rms_s10), 1e-12), 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
-        Std(rms_vo2) / std::max(Std(rms_s10), 1e-12),
+        SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12),
+        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
+        SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12),
         runs < 10 ? "The standard deviations come from fewer than 10 runs and are only "
                     "indicative. The paper does not state its VO's window or scene, so the "
                     "remaining gap to 76% is not attributable further."

@@ -138,11 +138,4 @@ TrajectoryErrors ScoreTrajectory(const std::vector<PoseD>& truth,
   return e;
 }
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return kNaN;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
 }  // namespace swf::eval

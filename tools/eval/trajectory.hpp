@@ -54,6 +54,4 @@ struct TrajectoryErrors {
 TrajectoryErrors ScoreTrajectory(const std::vector<PoseD>& truth,
                                  const std::vector<PoseD>& estimate);
 
-double Median(std::vector<double> values);  // NaN for an empty list
-
 }  // namespace swf::eval

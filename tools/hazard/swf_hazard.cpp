@@ -20,13 +20,17 @@
 #include <string>
 #include <vector>
 
-#include "run_filter.hpp"  // tools/eval: the SWF over a measurement-level scene
+#include "swf/estimator/sliding_window_filter.hpp"
+#include "swf/estimator/stereo_model.hpp"
+#include "swf/evaluation/statistics.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
+#include "swf/scene/runner.hpp"
 #include "swf/sim/rng.hpp"
 #include "swf/sim/trajectory.hpp"
 
 namespace {
 
+using swf::evaluation::Quantile;
 using swf::hazard_eval::EvalOptions;
 using swf::hazard_eval::FrameMetrics;
 using swf::hazard_eval::World;
@@ -56,12 +60,6 @@ struct Acc {
   double Pd() const { return rocks_in_view > 0 ? double(rocks_detected) / rocks_in_view : NAN; }
   double Pf() const { return rocks_in_view > 0 ? double(rocks_flagged) / rocks_in_view : NAN; }
   double Far() const { return free_cells > 0 ? double(false_cells) / free_cells : NAN; }
-  static double Quantile(std::vector<double> v, double q) {
-    if (v.empty()) return NAN;
-    const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * v.size()));
-    std::nth_element(v.begin(), v.begin() + k, v.end());
-    return v[k];
-  }
   double WithinSigma(double k) const {
     if (elev_err.empty()) return NAN;
     int in = 0;
@@ -281,27 +279,26 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
       std::fprintf(json, p < 2 ? ", " : "]");
     }
     std::fprintf(json, ", \"slope_error_median_deg\": ");
-    Json(json, Acc::Quantile(t.slope_err, 0.5));
+    Json(json, Quantile(t.slope_err, 0.5));
     std::fprintf(json, ", \"slope_error_p90_deg\": ");
-    Json(json, Acc::Quantile(t.slope_err, 0.9));
+    Json(json, Quantile(t.slope_err, 0.9));
     std::fprintf(json, ", \"elevation_within_1sigma\": ");
     Json(json, t.WithinSigma(1.0));
     std::fprintf(json, ", \"elevation_within_2sigma\": ");
     Json(json, t.WithinSigma(2.0));
     std::fprintf(json, ", \"elevation_sigma_median_m\": ");
-    Json(json, Acc::Quantile(t.elev_sigma, 0.5));
+    Json(json, Quantile(t.elev_sigma, 0.5));
     std::fprintf(json, ", \"elevation_error_median_m\": ");
-    Json(json, Acc::Quantile(t.elev_err, 0.5));
+    Json(json, Quantile(t.elev_err, 0.5));
     std::fprintf(json, ", \"range_resolution_formula_m\": ");
     Json(json, dz);
     std::fprintf(json, ", \"update_ms_mean\": ");
     Json(json, t.update_ms / std::max(1, t.frames));
     std::fprintf(json, "}%s\n", a + 1 < kNumAlt ? "," : "");
     std::fprintf(dat, "%g %g %g %g %g %g %g %g %g %g %g %g %g %g\n", z, t.Pd(), t.Far(),
-                 sweep[0][a].Pd(), sweep[1][a].Pd(), sweep[2][a].Pd(),
-                 Acc::Quantile(t.slope_err, 0.5), Acc::Quantile(t.slope_err, 0.9),
-                 t.WithinSigma(1.0), t.WithinSigma(2.0), Acc::Quantile(t.elev_sigma, 0.5),
-                 t.cell_m / std::max(1, t.frames), dz, t.Pf());
+                 sweep[0][a].Pd(), sweep[1][a].Pd(), sweep[2][a].Pd(), Quantile(t.slope_err, 0.5),
+                 Quantile(t.slope_err, 0.9), t.WithinSigma(1.0), t.WithinSigma(2.0),
+                 Quantile(t.elev_sigma, 0.5), t.cell_m / std::max(1, t.frames), dz, t.Pf());
   }
   std::fclose(dat);
   int valid = 0;
@@ -326,7 +323,7 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
                valid, on_hazard);
   Json(json, valid > 0 ? min_clear : NAN);
   std::fprintf(json, ", \"site_clearance_median_m\": ");
-  Json(json, Acc::Quantile(clear, 0.5));
+  Json(json, Quantile(clear, 0.5));
   std::fprintf(json, ",\n    \"final_map\": [");
   for (int p = 0; p < 3; ++p) {
     const Acc& t = descent_acc[p];
@@ -339,7 +336,7 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
     std::fprintf(json, ", \"elevation_within_1sigma\": ");
     Json(json, t.WithinSigma(1.0));
     std::fprintf(json, ", \"slope_error_median_deg\": ");
-    Json(json, Acc::Quantile(t.slope_err, 0.5));
+    Json(json, Quantile(t.slope_err, 0.5));
     std::fprintf(json, "}%s", p < 2 ? ", " : "]");
   }
   std::fprintf(json, ",\n    \"runs\": [");
@@ -467,7 +464,7 @@ SgmError MeasureSgm(const World& w, const swf::hazard::HazardMapper& m) {
       ++n;
     }
   }
-  r.median_abs = Acc::Quantile(a, 0.5);
+  r.median_abs = Quantile(a, 0.5);
   r.robust_sigma = 1.4826 * r.median_abs;
   r.rms_clipped = n > 0 ? std::sqrt(ss / n) : NAN;
   r.frac_over_1px = double(over) / e.size();
@@ -479,7 +476,7 @@ SgmError MeasureSgm(const World& w, const swf::hazard::HazardMapper& m) {
 // `step` metres, per-update measurements printed as a table (and OUTDIR/flight.dat).
 //
 // With `swf`: the pose error and covariance given to the mapper come from a SlidingWindowFilter
-// run on the measurement-level generator (estimator/test/synthetic_scene.hpp: 0.5 px stereo
+// run on the measurement-level generator (swf/scene/synthetic_scene.hpp: 0.5 px stereo
 // features, 10 cm / 2 mrad motion inputs, window 5) along the same altitudes, one frame per
 // hazard update: error = truth.LocalDifference(estimate), covariance = its newest-pose marginal.
 struct SwfPoses {
@@ -487,9 +484,13 @@ struct SwfPoses {
   std::vector<Eigen::Matrix<double, 6, 6>> covariance;
   std::vector<double> nees;
 };
+// swf-eval's filter capacities (window up to 40, 300 landmarks active, 200 per frame).
+using SwfFilter =
+    swf::estimator::SlidingWindowFilter<swf::estimator::StereoModel<double>, 40, 300, 200, 160>;
+
 bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* out) {
-  swf::eval::SceneOptions so;
-  so.motion = swf::eval::SceneOptions::Motion::kDescent;
+  swf::scene::SceneOptions so;
+  so.motion = swf::scene::SceneOptions::Motion::kDescent;
   so.frames = frames;
   so.start_altitude_m = 100.0;
   so.step_m = step;
@@ -498,12 +499,12 @@ bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* o
   so.max_obs_per_frame = 150;
   so.jitter_rad = 0.1 * M_PI / 180.0;
   so.seed = seed;
-  const swf::eval::SyntheticScene scene(so);
+  const swf::scene::SyntheticScene scene(so);
   out->error.assign(frames, Eigen::Matrix<double, 6, 1>::Zero());
   out->covariance.assign(frames, Eigen::Matrix<double, 6, 6>::Zero());
   out->nees.assign(frames, NAN);
   bool ok = true;
-  auto hook = [&](swf::eval::Filter* f, std::size_t j) {
+  auto hook = [&](SwfFilter* f, std::size_t j) {
     if (f->ComputeCovariances() != swf::core::Status::kOk) {
       ok = false;
       return;
@@ -513,9 +514,16 @@ bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* o
     out->covariance[j] = f->NewestPoseCovariance();
     out->nees[j] = out->error[j].dot(out->covariance[j].ldlt().solve(out->error[j]));
   };
-  (void)swf::eval::RunFilter<swf::eval::Filter>(scene, swf::estimator::SwfMode::kSlidingWindow, 5,
-                                                seed * 31 + 7, hook);
-  return ok;
+  auto swf = std::make_unique<SwfFilter>();
+  swf::estimator::SwfOptions options =
+      swf::scene::FilterOptions(swf::estimator::SwfMode::kSlidingWindow);
+  options.window_size = 5;
+  const swf::scene::Trace trace = swf::scene::RunScene(
+      swf.get(), scene, options,
+      swf::scene::MotionInput(swf::scene::MotionInput::kSigmaM, swf::scene::MotionInput::kSigmaRad,
+                              seed * 31 + 7),
+      hook);
+  return ok && trace.configured == swf::core::Status::kOk;
 }
 
 int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPreset preset,
@@ -577,8 +585,8 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
                     "%.4f %d %.2f %d %d %.5f %.2f %.2f %.2f %.2f %.2f %d\n",
                     agl, mapper->CellM(), st.known_cells, st.safe_cells / k, st.uncertain_cells / k,
                     st.slope_cells / k, st.rock_cells / k, acc.WithinSigma(1.0),
-                    acc.WithinSigma(2.0), Acc::Quantile(acc.elev_sigma, 0.5),
-                    Acc::Quantile(acc.elev_err, 0.5), Acc::Quantile(acc.slope_err, 0.5), se.valid,
+                    acc.WithinSigma(2.0), Quantile(acc.elev_sigma, 0.5),
+                    Quantile(acc.elev_err, 0.5), Quantile(acc.slope_err, 0.5), se.valid,
                     se.median_abs, se.robust_sigma, se.rms_clipped, se.frac_over_1px,
                     m.site_valid ? 1 : 0, m.site_valid ? m.site_clearance_m : NAN, m.rocks_in_view,
                     m.rocks_detected, acc.Far(), se.corr[0], se.corr[1], se.corr[2], se.corr[3],

@@ -17,6 +17,7 @@
 
 #include "euroc.hpp"
 #include "swf/estimator/imu_stream.hpp"
+#include "swf/evaluation/statistics.hpp"
 
 namespace swf::eval {
 namespace {
@@ -134,11 +135,7 @@ std::vector<double> IncrementErrors(const std::vector<ImuSample<double>>& sample
   return errors;
 }
 
-double Rms(const std::vector<double>& v) {
-  double sum = 0.0;
-  for (const double x : v) sum += x * x;
-  return std::sqrt(sum / static_cast<double>(v.size()));
-}
+using evaluation::Rms;
 
 // GIVEN the real ADIS16448 and the ground truth over the 40 shared frames (a static start)
 // WHEN the gyroscope is preintegrated between consecutive frames, with zero bias and with the

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/evaluation/statistics.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/image_io/image_io.hpp"
 #include "swf/sim/trajectory.hpp"
@@ -21,11 +22,7 @@ std::string Shared() {
   return env != nullptr ? env : "../shared";
 }
 
-double Quantile(std::vector<double> v, double q) {
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * v.size()));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
-}
+using evaluation::Quantile;
 
 EvalOptions SmallOptions() {
   EvalOptions o;

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/frontend.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "swf/image_io/image_io.hpp"
@@ -35,11 +36,7 @@ GrayImage MustLoad(const std::string& path) {
   return image;
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 1e9;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+using evaluation::Median;
 
 double FractionBelow(const std::vector<double>& v, double limit) {
   if (v.empty()) return 0.0;

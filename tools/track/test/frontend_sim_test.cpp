@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/frontend.hpp"
 #include "swf/sim/appearance.hpp"
 #include "swf/sim/renderer.hpp"
@@ -34,18 +35,8 @@ std::string SharedDir() {
   return env != nullptr ? env : "../shared";
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 1e9;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 1e9;
-  std::sort(v.begin(), v.end());
-  const auto k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1));
-  return v[k];
-}
+using evaluation::Median;
+using evaluation::Quantile;
 
 // A small deterministic hash in [-1, 1) (estimator-like errors for the prediction).
 double Noise(std::uint32_t id, std::uint32_t axis) {
@@ -231,7 +222,7 @@ void PrintLengths(const char* name, const DescentResult& r) {
   }
   std::vector<double> lengths(all.begin(), all.end());
   std::printf("\n  median %.0f, 90th percentile %.0f, max %.0f\n", Median(lengths),
-              Percentile(lengths, 0.9), Percentile(lengths, 1.0));
+              Quantile(lengths, 0.9), Quantile(lengths, 1.0));
 }
 
 void Print(const char* name, const DescentResult& r) {
@@ -243,10 +234,9 @@ void Print(const char* name, const DescentResult& r) {
       "tracking increment median %.4f px\n"
       "  all: stereo median %.4f px, tracking median %.4f px; new-landmark stereo median %.4f px\n",
       name, r.frames, r.landmarks, r.lit_landmarks, Median(per_frame), r.warped, r.measured,
-      r.lost_tracking, r.lost_stereo, r.rejected, Median(r.stereo_err),
-      Percentile(r.stereo_err, 0.9), Median(r.track_err), Percentile(r.track_err, 0.9),
-      Median(r.track_step_err), Median(r.stereo_err_all), Median(r.track_err_all),
-      Median(r.new_stereo_err));
+      r.lost_tracking, r.lost_stereo, r.rejected, Median(r.stereo_err), Quantile(r.stereo_err, 0.9),
+      Median(r.track_err), Quantile(r.track_err, 0.9), Median(r.track_step_err),
+      Median(r.stereo_err_all), Median(r.track_err_all), Median(r.new_stereo_err));
   PrintLengths(name, r);
 }
 
@@ -271,7 +261,7 @@ TEST(FrontendSimTest, DescentWithPredictionIsSubpixelAgainstTruth) {
   // Track lengths (measured: median 8, 90th percentile 45 frames).
   std::vector<double> lengths(r.lengths.begin(), r.lengths.end());
   lengths.insert(lengths.end(), r.lengths_alive.begin(), r.lengths_alive.end());
-  EXPECT_GE(Percentile(lengths, 0.9), 30.0);
+  EXPECT_GE(Quantile(lengths, 0.9), 30.0);
 }
 
 // No prediction: pyramidal LK from frame to frame, over the first 30 frames (100 m -> 80 m).

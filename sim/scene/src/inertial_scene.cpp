@@ -1,63 +1,11 @@
-// A stereo-inertial scene for the estimator's own tests and benchmarks: the IMU moves on a smooth
-// analytic path (position p0 + v0 t + a t^2 / 2, attitude R0 Exp(w t) with a constant body rate
-// w), so its samples are exact (rate w, specific force R(t)^T (a - g)) before the sensor's white
-// noise and constant biases are added. A camera looking down through a lever arm sees landmarks
-// on the ground: a disc under the start (a descent, paper Fig. 13) or a strip along the path
-// (a sideways pass, Fig. 14a).
-#pragma once
+#include "swf/scene/inertial_scene.hpp"
 
 #include <cmath>
-#include <cstdint>
 #include <random>
-#include <utility>
-#include <vector>
 
-#include "swf/estimator/inertial_model.hpp"
-#include "synthetic_scene.hpp"
+namespace swf::scene {
 
-namespace swf::estimator::testing {
-
-struct InertialSceneOptions {
-  int frames = 40;
-  double frame_rate_hz = 10.0;
-  double imu_rate_hz = 200.0;
-  Vec3<double> p0{0.0, 0.0, 60.0};
-  Vec3<double> v0{0.4, -0.3, -4.0};
-  Vec3<double> accel_world{0.05, 0.04, 0.6};  // braking
-  Vec3<double> rate_body{0.02, -0.03, 0.05};
-  // Landmarks: a disc of this radius under the start, or (strip_density > 0) a strip 60 m wide
-  // along x with this many landmarks per square metre.
-  int disc_landmarks = 150;
-  double disc_radius_m = 8.0;
-  double strip_density_per_m2 = 0.0;
-  double relief_m = 1.0;
-  double sigma_px = 0.5;
-  std::uint64_t seed = 1;
-};
-
-struct InertialScene {
-  InertialStereoModel<double> model;
-  InertialSceneOptions options;
-  ImuNoise<double> noise;
-  ImuBiases<double> true_biases;
-  std::vector<ImuSample<double>> samples;
-  std::vector<std::int64_t> frame_us;
-  std::vector<NavState<double>> truth;                                  // per frame
-  std::vector<std::vector<std::pair<std::int64_t, Vec3<double>>>> obs;  // per frame
-  std::vector<Vec3<double>> landmarks;
-
-  // The noiseless IMU state at t seconds (biases zero).
-  NavState<double> TrueState(double t) const {
-    NavState<double> x;
-    x.world_T_imu.R = r0 * ExpSO3<double>(Vec3<double>(options.rate_body * t));
-    x.world_T_imu.t = options.p0 + options.v0 * t + 0.5 * t * t * options.accel_world;
-    x.velocity_world_mps = options.v0 + options.accel_world * t;
-    return x;
-  }
-  Mat3<double> r0 = Mat3<double>::Identity();
-};
-
-inline InertialScene MakeInertialScene(const InertialSceneOptions& o) {
+InertialScene MakeInertialScene(const InertialSceneOptions& o) {
   InertialScene s;
   s.options = o;
   std::mt19937_64 rng(o.seed);
@@ -68,7 +16,7 @@ inline InertialScene MakeInertialScene(const InertialSceneOptions& o) {
   // Camera looking down, mounted with a lever arm and a small misalignment from the IMU.
   Mat3<double> down;
   down << 1, 0, 0, 0, -1, 0, 0, 0, -1;
-  s.model.imu_T_camera.R = ExpSO3<double>(Vec3<double>(0.02, -0.01, 0.5));
+  s.model.imu_T_camera.R = estimator::ExpSO3<double>(Vec3<double>(0.02, -0.01, 0.5));
   s.model.imu_T_camera.t = Vec3<double>(0.3, -0.2, 0.1);
   s.r0 = down * s.model.imu_T_camera.R.transpose();
   // MEMS-class noise (ADIS16448 datasheet order of magnitude) and turn-on biases.
@@ -125,16 +73,14 @@ inline InertialScene MakeInertialScene(const InertialSceneOptions& o) {
   return s;
 }
 
-// Preintegrates the scene's samples between frames j - 1 and j at the biases `at` (the filter's
-// current estimate) into *pim and its process square-root information; false on failure.
-inline bool PreintegrateFrame(const InertialScene& s, std::size_t j, const ImuBiases<double>& at,
-                              ImuPreintegration<double>* pim, Mat15<double>* sqrt_information) {
-  IntervalSummary interval;
+bool PreintegrateFrame(const InertialScene& s, std::size_t j, const ImuBiases<double>& at,
+                       ImuPreintegration<double>* pim, Mat15<double>* sqrt_information) {
+  estimator::IntervalSummary interval;
   return pim->Reset(s.noise, at) == core::Status::kOk &&
-         PreintegrateInterval(s.samples.data(), static_cast<int>(s.samples.size()),
-                              s.frame_us[j - 1], s.frame_us[j], SampleHold::kMidpoint, 0.02, pim,
-                              &interval) == core::Status::kOk &&
+         estimator::PreintegrateInterval(
+             s.samples.data(), static_cast<int>(s.samples.size()), s.frame_us[j - 1], s.frame_us[j],
+             estimator::SampleHold::kMidpoint, 0.02, pim, &interval) == core::Status::kOk &&
          InertialStereoModel<double>::ProcessSqrtInformation(*pim, sqrt_information);
 }
 
-}  // namespace swf::estimator::testing
+}  // namespace swf::scene
