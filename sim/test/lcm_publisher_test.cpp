@@ -11,6 +11,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 
+#include "small_scene.hpp"
 #include "swf/sim/trajectory.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
@@ -57,22 +58,14 @@ class Inbox {
 TEST(SimLcmPublisherTest, SubscriberReceivesTheRenderedPairAndItsTruth) {
   ASSERT_TRUE(kIsolated) << "cannot create a private network namespace (needs root or userns)";
   // GIVEN a rendered pair of a small scene and its true pose.
-  TerrainOptions t = TerrainPresetOptions(TerrainPreset::kCraterField, 7);
-  t.size = 256;
-  Terrain terrain;
-  ASSERT_EQ(terrain.Configure(t), core::Status::kOk);
-  Appearance appearance;
-  ASSERT_EQ(appearance.Configure(terrain, AppearanceOptions{}), core::Status::kOk);
-  RenderOptions r;
-  r.rig.width_px = 96;
-  r.rig.height_px = 72;
-  Renderer renderer;
-  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
+  testing::SmallScene scene;
+  ASSERT_NO_FATAL_FAILURE(BuildSmallScene(TerrainPreset::kCraterField, 7, 96, 72, &scene));
   estimator::Pose<double> pose;
   pose.R = NadirRotation(0.3);
   pose.t = {1.0, -2.0, 20.0};
   StereoImages images;
-  ASSERT_EQ(renderer.Render(terrain, appearance, pose, 3, &images), core::Status::kOk);
+  ASSERT_EQ(scene.renderer.Render(scene.terrain, scene.appearance, pose, 3, &images),
+            core::Status::kOk);
   const std::vector<TruthLandmark> truth_landmarks = {{5, {1.0, 2.0, -0.5}, 3},
                                                       {9, {-4.0, 0.5, 0.25}, 1}};
 

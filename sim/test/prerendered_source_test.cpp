@@ -4,21 +4,17 @@
 
 #include <gtest/gtest.h>
 
+#include "small_scene.hpp"
+
 namespace swf::sim {
 namespace {
 
 TEST(PrerenderedStereoSourceTest, RendersADescentAndServesItWithItsTimingFaults) {
-  TerrainOptions t = TerrainPresetOptions(TerrainPreset::kSmoothPlains, 1);
-  t.size = 256;
-  Terrain terrain;
-  ASSERT_EQ(terrain.Configure(t), core::Status::kOk);
-  Appearance appearance;
-  ASSERT_EQ(appearance.Configure(terrain, AppearanceOptions{}), core::Status::kOk);
-  RenderOptions r;
-  r.rig.width_px = 64;
-  r.rig.height_px = 48;
-  Renderer renderer;
-  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
+  testing::SmallScene scene;
+  ASSERT_NO_FATAL_FAILURE(BuildSmallScene(TerrainPreset::kSmoothPlains, 1, 64, 48, &scene));
+  const Terrain& terrain = scene.terrain;
+  const Appearance& appearance = scene.appearance;
+  const Renderer& renderer = scene.renderer;
   Trajectory trajectory;
   ASSERT_EQ(trajectory.Configure(HoverTrajectory(10.0, 6)), core::Status::kOk);
 

@@ -17,6 +17,7 @@
 #include "swf/app/app.hpp"
 #include "swf/app/config.hpp"
 #include "swf/app/pipeline.hpp"
+#include "swf/evaluation/statistics.hpp"
 #include "swf/sil/sil.hpp"
 
 namespace swf::app {
@@ -56,11 +57,6 @@ const Descent* RenderedDescent(int width, int height, bool inertial) {
   ApplyEstimatorConfig(d->config, &po, &nav_mode);
   slot = std::move(d);
   return slot.get();
-}
-
-double Percentile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5)];
 }
 
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
@@ -116,9 +112,9 @@ void BM_FrameGroup(benchmark::State& state) {
     }
   }
   state.counters["frames"] = static_cast<double>(ms.size());
-  state.counters["p50_ms"] = Percentile(ms, 0.50);
-  state.counters["p99_ms"] = Percentile(ms, 0.99);
-  state.counters["max_ms"] = Percentile(ms, 1.0);
+  state.counters["p50_ms"] = evaluation::Quantile(ms, 0.50);
+  state.counters["p99_ms"] = evaluation::Quantile(ms, 0.99);
+  state.counters["max_ms"] = evaluation::Quantile(ms, 1.0);
 }
 BENCHMARK(BM_FrameGroup)
     ->ArgNames({"width_px", "imu"})

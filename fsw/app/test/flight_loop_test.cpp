@@ -17,6 +17,7 @@
 #include "swf/app/config.hpp"
 #include "swf/app/hazard_stage.hpp"
 #include "swf/app/lcm_io.hpp"
+#include "swf/evaluation/statistics.hpp"
 #include "swf/sil/evaluation.hpp"
 #include "swf/sil/sil.hpp"
 #include "swf/testing/allocation_counter.hpp"
@@ -489,8 +490,7 @@ TEST(FlightLoopTest, ABaselineErrorIsAScaleErrorOfTheEstimate) {
       ratios.push_back((estimate - pose.t).norm() / (t * ray.norm()));
     }
     EXPECT_GT(ratios.size(), 30u) << extra;
-    std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
-    return ratios.empty() ? 0.0 : ratios[ratios.size() / 2];
+    return ratios.empty() ? 0.0 : evaluation::Quantile(ratios, 0.5);
   };
   const double calibrated = median_range_ratio("");
   const double wide = median_range_ratio("sim.baseline_error_m: 0.1\n");

@@ -1,5 +1,7 @@
 #include "swf/sil/evaluation.hpp"
 
+#include "swf/evaluation/statistics.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -90,7 +92,7 @@ EvaluationResult Evaluation::Evaluate(const app::Pipeline& pipeline,
   if (traj != nullptr) {
     std::fprintf(traj, "# frame est_x est_y est_z true_x true_y true_z error_m\n");
   }
-  double sum2 = 0.0;
+  std::vector<double> pose_errors;
   double nees_sum = 0.0;
   int nees_count = 0;
   for (const Nav& n : navs_) {
@@ -110,7 +112,7 @@ EvaluationResult Evaluation::Evaluate(const app::Pipeline& pipeline,
     o.vpl_m = n.vpl_m;
     result.outputs.push_back(o);
     result.final_attitude_error_deg = o.attitude_error_deg;
-    sum2 += e * e;
+    pose_errors.push_back(e);
     const double nees = Nees(Eigen::Vector3d(n.p[0], n.p[1], n.p[2]) - t, n.position_covariance);
     result.position_nees.push_back(nees);
     if (std::isfinite(nees)) {
@@ -134,7 +136,7 @@ EvaluationResult Evaluation::Evaluate(const app::Pipeline& pipeline,
     }
   }
   if (traj != nullptr) std::fclose(traj);
-  result.pose_rms_error_m = result.navs > 0 ? std::sqrt(sum2 / result.navs) : 0.0;
+  result.pose_rms_error_m = result.navs > 0 ? evaluation::Rms(pose_errors) : 0.0;
   result.mean_position_nees = nees_count > 0 ? nees_sum / nees_count : NAN;
 
   // True landmark positions, computed once per id.
@@ -171,15 +173,9 @@ EvaluationResult Evaluation::Evaluate(const app::Pipeline& pipeline,
       errors.push_back((Eigen::Vector3d(l.p[0], l.p[1], l.p[2]) - t).norm());
     }
     ++result.maps;
-    double s2 = 0.0;
-    for (double e : errors) s2 += e * e;
-    const double rms = errors.empty() ? 0.0 : std::sqrt(s2 / errors.size());
-    double median = 0.0;
-    if (!errors.empty()) {
-      std::vector<double> sorted = errors;
-      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-      median = sorted[sorted.size() / 2];
-    }
+    // NaN for a map with no landmark evaluated (the summary then says null).
+    const double rms = evaluation::Rms(errors);
+    const double median = evaluation::Quantile(errors, 0.5);  // the upper median
     result.landmark_rms_error_m = rms;
     result.landmark_median_error_m = median;
     result.landmarks_evaluated = static_cast<std::int64_t>(errors.size());
