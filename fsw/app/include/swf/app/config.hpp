@@ -74,8 +74,8 @@ struct SimConfig {
   // own frame; the pipeline keeps the calibrated rig (baseline_m, rectified).
   double baseline_error_m = 0.0;
   double relative_rotation_error_rad[3] = {0.0, 0.0, 0.0};
-  // Camera timing faults of the simulated source (sim::PrerenderedStereoSource): each frame after the
-  // first independently not delivered (a gap, pair.dropped_before), and Gaussian jitter of the
+  // Camera timing faults of the simulated source (sim::PrerenderedStereoSource): each frame after
+  // the first independently not delivered (a gap, pair.dropped_before), and Gaussian jitter of the
   // exposure stamps (1 sigma, truncated at 4 sigma); the images stay those of the true time.
   double frame_drop_probability = 0.0;
   double timestamp_jitter_ms = 0.0;
