@@ -107,16 +107,7 @@ std::map<std::string, ConfigSetter> SimFields() {
     c->sim.hfov_deg = d;
     return true;
   };
-  f["sim.baseline_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (!(d > 0.0 && d <= 100.0)) {
-      *why = Excerpt(v) + " is outside (0, 100]";
-      return false;
-    }
-    c->sim.baseline_m = d;
-    return true;
-  };
+  f["sim.baseline_m"] = SimNumber(&SimConfig::baseline_m, 0.0, 100.0, true);
   f["sim.frames"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.frames; }, 0, 100000);
   f["sim.terrain_size"] =
       Int<std::int32_t>([](FswConfig* c) { return &c->sim.terrain_size; }, 64, 8192);
@@ -126,42 +117,15 @@ std::map<std::string, ConfigSetter> SimFields() {
   f["sim.render_threads"] =
       Int<std::int32_t>([](FswConfig* c) { return &c->sim.render_threads; }, 1, 64);
   f["sim.imu"] = Bool([](FswConfig* c) { return &c->sim.imu; });
-  f["sim.imu_sigma_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (d < 0.0 || d > 10.0) {
-      *why = Excerpt(v) + " is outside [0, 10]";
-      return false;
-    }
-    c->sim.imu_sigma_m = d;
-    return true;
-  };
-  f["sim.imu_sigma_rad"] = [](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (d < 0.0 || d > 0.5) {
-      *why = Excerpt(v) + " is outside [0, 0.5]";
-      return false;
-    }
-    c->sim.imu_sigma_rad = d;
-    return true;
-  };
+  f["sim.imu_sigma_m"] = SimNumber(&SimConfig::imu_sigma_m, 0.0, 10.0);
+  f["sim.imu_sigma_rad"] = SimNumber(&SimConfig::imu_sigma_rad, 0.0, 0.5);
   f["sim.imu_unit"] =
       OneOf([](FswConfig* c) { return &c->sim.imu_unit; }, {"none", "mems", "tactical"});
   AddDispersionFields(&f);
   f["sim.target"] = OneOf([](FswConfig* c) { return &c->sim.target; }, {"nominal", "orbital"});
-  f["sim.target_search_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0.0;
-    if (!ParseDouble(v, &d, why)) return false;
-    // 60 m keeps the search square (plus the 10 m clearance cap) and the 100 m view inside the
-    // 204.8 m terrain.
-    if (d < 0.0 || d > 60.0) {
-      *why = Excerpt(v) + " is outside [0, 60]";
-      return false;
-    }
-    c->sim.target_search_m = d;
-    return true;
-  };
+  // 60 m keeps the search square (plus the 10 m clearance cap) and the 100 m view inside the
+  // 204.8 m terrain.
+  f["sim.target_search_m"] = SimNumber(&SimConfig::target_search_m, 0.0, 60.0);
   f["inject.black_from"] = Int<std::int64_t>([](FswConfig* c) { return &c->inject_black_from; }, -1,
                                              std::int64_t{1} << 40);
   f["inject.black_frames"] = Int<std::int64_t>([](FswConfig* c) { return &c->inject_black_frames; },
