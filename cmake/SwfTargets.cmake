@@ -62,14 +62,16 @@ function(swf_lcm_member_handlers target)
   endif()
 endfunction()
 
-# swf_test(<name> SOURCES ... LIBS ... [FLIGHT] [FP_CONTRACT_OFF] [LABELS ...])
-# One GoogleTest executable = one CTest entry. FLIGHT compiles the test under the flight rules so
-# the templates it instantiates are checked against them too.
+# swf_test(<name> SOURCES ... LIBS ... [FLIGHT] [FP_CONTRACT_OFF] [LABELS ...] [SHARDS n])
+# One GoogleTest executable = one CTest entry, or n entries <name>.shard<i>of<n> that each run a
+# GoogleTest shard of it (for long suites, so that ctest -j spreads them over the cores). FLIGHT
+# compiles the test under the flight rules so the templates it instantiates are checked against
+# them too.
 function(swf_test name)
   if(NOT SWF_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "FLIGHT;FP_CONTRACT_OFF" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "FLIGHT;FP_CONTRACT_OFF" "TIMEOUT;SHARDS" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest_main)
   if(ARG_FLIGHT)
@@ -79,13 +81,26 @@ function(swf_test name)
     endif()
     target_include_directories(${name} BEFORE PRIVATE ${SWF_FORBIDDEN_HEADERS_DIR})
   endif()
-  add_test(NAME ${name} COMMAND ${name} --gtest_brief=1
-           WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
-  set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
-                       ENVIRONMENT "SWF_SHARED_DIR=${PROJECT_SOURCE_DIR}/../shared")
+  set(environment "SWF_SHARED_DIR=${PROJECT_SOURCE_DIR}/../shared")
+  if(NOT ARG_SHARDS)
+    add_test(NAME ${name} COMMAND ${name} --gtest_brief=1
+             WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+    set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
+                         ENVIRONMENT "${environment}")
+  else()
+    math(EXPR last "${ARG_SHARDS} - 1")
+    foreach(index RANGE ${last})
+      math(EXPR shard "${index} + 1")
+      set(test_name ${name}.shard${shard}of${ARG_SHARDS})
+      add_test(NAME ${test_name} COMMAND ${name} --gtest_brief=1
+               WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+      set_tests_properties(${test_name} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
+        ENVIRONMENT "${environment};GTEST_TOTAL_SHARDS=${ARG_SHARDS};GTEST_SHARD_INDEX=${index}")
+    endforeach()
+  endif()
   swf_scale_test_timeouts()
 endfunction()
 

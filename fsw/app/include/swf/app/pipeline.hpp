@@ -52,6 +52,19 @@ using InertialFlightSwf =
     estimator::SlidingWindowFilter<estimator::InertialStereoModel<double>, kMaxWindow,
                                    kMaxLandmarks, kMaxMeasurementsPerPose, kMaxPriorLandmarks>;
 
+}  // namespace swf::app
+
+// Compiled once, in flight_swf.cpp and inertial_flight_swf.cpp.
+namespace swf::estimator {
+extern template class SlidingWindowFilter<StereoModel<double>, app::kMaxWindow, app::kMaxLandmarks,
+                                          app::kMaxMeasurementsPerPose, app::kMaxPriorLandmarks>;
+extern template class SlidingWindowFilter<InertialStereoModel<double>, app::kMaxWindow,
+                                          app::kMaxLandmarks, app::kMaxMeasurementsPerPose,
+                                          app::kMaxPriorLandmarks>;
+}  // namespace swf::estimator
+
+namespace swf::app {
+
 struct PipelineOptions {
   // Raw cameras: rectify with these calibrations. Otherwise frames arrive rectified and
   // `camera` is the rectified rig.
