@@ -61,6 +61,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Expect(health.integrity_flag_counts.size() ==
            static_cast<std::size_t>(health.num_integrity_flags));
   }
+  swf_msgs::truth_state_t truth;
+  if (CheckedDecode(data, size, &truth).Ok()) ExpectSameBytes(truth, data, size);
   swf_msgs::imu_t imu;
   if (CheckedDecode(data, size, &imu).Ok()) {
     Expect((imu.flags & ~swf::messages::kImuKnownFlags) == 0);

@@ -209,6 +209,10 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::nav_stat
   return Decode(data, size, msg, [](WireReader*) { return DecodeError{}; });
 }
 
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::truth_state_t* msg) {
+  return Decode(data, size, msg, [](WireReader*) { return DecodeError{}; });
+}
+
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::landmark_map_t* msg) {
   return Decode(data, size, msg, CheckLandmarkShape);
 }

@@ -10,6 +10,7 @@
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
+#include "swf_msgs/truth_state_t.hpp"
 
 namespace {
 
@@ -311,6 +312,26 @@ TEST(CheckedDecode, ImuRoundTripsAndUnknownFlagsAreRefused) {
   ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::imu_t>(bytes);
   EXPECT_EQ(Decode<swf_msgs::imu_t>(Encode(SmallFrame())).result, DecodeResult::kWrongType);
   EXPECT_EQ(Decode<swf_msgs::nav_state_t>(bytes).result, DecodeResult::kWrongType);
+}
+
+TEST(CheckedDecode, TruthStateRoundTripsAndIsNoEstimate) {
+  swf_msgs::truth_state_t truth{};
+  truth.utime = 200000;
+  truth.frame_seq = 3;
+  truth.position_world_m[2] = 100.0;
+  truth.orientation_world_q[0] = 1.0;
+  truth.altitude_m = 98.5;
+  const std::vector<std::uint8_t> bytes = Encode(truth);
+  EXPECT_EQ(bytes.size(), 8u + 2 * 8 + 11 * 8);  // fingerprint, two int64, eleven doubles
+  swf_msgs::truth_state_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.frame_seq, 3);
+  EXPECT_EQ(out.altitude_m, 98.5);
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::truth_state_t>(bytes);
+  // Truth and estimates never pass for each other.
+  EXPECT_EQ(Decode<swf_msgs::nav_state_t>(bytes).result, DecodeResult::kWrongType);
+  EXPECT_EQ(Decode<swf_msgs::truth_state_t>(Encode(swf_msgs::nav_state_t{})).result,
+            DecodeResult::kWrongType);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "swf/app/flight_loop.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -259,6 +260,8 @@ void FlightLoop::PublishNav() {
   r.seq = nav_seq_++;
   r.mode = options_.nav_mode;
   pipeline_->MakeNav(&r.nav);
+  r.num_new_sightings = pipeline_->NumNewSightings();
+  std::copy_n(pipeline_->NewSightings(), r.num_new_sightings, r.new_sightings);
   Push(&out_->frame_group, RecordRef{RecordKind::kNav, slot});
 }
 

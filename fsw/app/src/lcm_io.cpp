@@ -114,8 +114,19 @@ void OutputThread::Emit(const char* suffix, std::int64_t utime, const std::uint8
                         bool record_only) {
   impl_->channel.assign(impl_->prefix);
   impl_->channel.append(suffix);
+  EmitOn(impl_->channel, utime, data, size, record_only);
+}
+
+void OutputThread::Send(const std::string& channel, std::int64_t utime, const std::uint8_t* data,
+                        int size) {
+  EmitOn(channel, utime, data, size, /*record_only=*/false);
+}
+
+void OutputThread::EmitOn(const std::string& channel, std::int64_t utime, const std::uint8_t* data,
+                          int size, bool record_only) {
+  for (OutputObserver* o : observers_) o->OnMessage(channel, data, size);
   if (impl_->lcm && !record_only) {
-    if (impl_->lcm->publish(impl_->channel, data, static_cast<unsigned>(size)) == 0) {
+    if (impl_->lcm->publish(channel, data, static_cast<unsigned>(size)) == 0) {
       ++counters_.published;
     } else {
       ++counters_.publish_errors;
@@ -124,9 +135,9 @@ void OutputThread::Emit(const char* suffix, std::int64_t utime, const std::uint8
   if (impl_->log != nullptr) {
     lcm_eventlog_event_t event{};
     event.timestamp = utime;  // the data's own time: logs of identical runs are identical
-    event.channellen = static_cast<std::int32_t>(impl_->channel.size());
+    event.channellen = static_cast<std::int32_t>(channel.size());
     event.datalen = size;
-    event.channel = impl_->channel.data();
+    event.channel = const_cast<char*>(channel.data());
     event.data = const_cast<std::uint8_t*>(data);
     if (lcm_eventlog_write_event(impl_->log, &event) == 0) {
       ++counters_.recorded;

@@ -37,9 +37,9 @@ Status Pipeline::Configure(const PipelineOptions& options) {
     swf_.reset(new (std::nothrow) FlightSwf());
   }
   estimates_.reset(new (std::nothrow) frontend::LandmarkEstimate[kMaxLandmarks]);
-  sightings_.reset(new (std::nothrow) FirstSighting[kMaxSightings]);
+  new_sightings_.reset(new (std::nothrow) NewSighting[kMaxNewSightings]);
   disparities_.reset(new (std::nothrow) float[2 * frontend::kMaxTracks]);
-  if (!frontend_ || !output_ || (!swf_ && !inertial_) || !estimates_ || !sightings_ ||
+  if (!frontend_ || !output_ || (!swf_ && !inertial_) || !estimates_ || !new_sightings_ ||
       !disparities_)
     return Status::kFull;
   if (options.rectify) {
@@ -81,7 +81,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   q_sqrt_.setZero();
   q_sqrt_.diagonal() << Vec3<double>::Constant(1.0 / options_.process_sigma_m),
       Vec3<double>::Constant(1.0 / options_.process_sigma_rad);
-  for (std::uint32_t i = 0; i < kMaxSightings; ++i) sightings_[i] = FirstSighting{};
+  num_new_sightings_ = 0;
   has_previous_pose_ = false;
   has_before_previous_ = false;
   frames_estimated_ = 0;
@@ -403,6 +403,7 @@ Status Pipeline::Coast(const Pose<double>* motion_input) {
 
 // The coasted state of the cycle stamped utime_, seq_ (a missing pair, or a blind frame).
 Status Pipeline::CoastCycle(const Pose<double>* motion_input) {
+  num_new_sightings_ = 0;  // no measurement of this cycle was fused
   const Pose<double>* motion = inertial_ ? nullptr : AcceptMotion(motion_input);
   double inflation = 1.0;
   last_motion_ = FrameMotion(motion, &inflation);
@@ -560,6 +561,7 @@ Status Pipeline::RestartInertial() {
 void Pipeline::AddMeasurements() {
   double su = 0.0, sv = 0.0, suu = 0.0, svv = 0.0, suv = 0.0;
   num_disparities_ = 0;
+  num_new_sightings_ = 0;
   const auto note = [&](double u_left, double u_right, double v) {
     su += u_left;
     sv += v;
@@ -577,10 +579,10 @@ void Pipeline::AddMeasurements() {
   for (const frontend::NewLandmark& n : output_->new_landmarks) {
     if (AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v))) {
       note(n.u_left, n.u_right, n.v);
-      FirstSighting& f = sightings_[n.landmark_id % kMaxSightings];
-      f.frame_seq = seq_;
-      f.u_left = static_cast<float>(n.u_left);
-      f.v = static_cast<float>(n.v);
+      if (num_new_sightings_ < kMaxNewSightings) {
+        new_sightings_[num_new_sightings_++] =
+            NewSighting{n.landmark_id, seq_, static_cast<float>(n.u_left), static_cast<float>(n.v)};
+      }
     }
   }
   image_spread_px_ = 0.0;

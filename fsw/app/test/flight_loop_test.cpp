@@ -465,6 +465,10 @@ TEST(FlightLoopTest, ABaselineErrorIsAScaleErrorOfTheEstimate) {
         "source: sim\nsim.scenario: hover\nsim.frames: 12\nsim.width_px: 256\n"
         "sim.height_px: 192\nsim.terrain_size: 1024\nrate_hz: 10\n" +
         extra);
+    // The simulator's truth side sees the outputs, as in swf-sil (first sightings included).
+    sil::Evaluation truth;
+    truth.Attach(&rig.world->Trajectory(), &rig.world->Terrain(), rig.pipeline->Camera(),
+                 &rig.output);
     FlightLoop loop;
     EXPECT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
                              rig.channels.get(), rig.world.get()),
@@ -473,21 +477,17 @@ TEST(FlightLoopTest, ABaselineErrorIsAScaleErrorOfTheEstimate) {
     rig.output.DrainOnce();
     auto map = std::make_unique<MapOutput>();
     EXPECT_EQ(rig.pipeline->MakeMap(map.get()), core::Status::kOk);
-    const estimator::StereoCamera<double>& cam = rig.pipeline->Camera();
     std::vector<double> ratios;
     for (int i = 0; i < map->num_landmarks; ++i) {
       const MapLandmark& l = map->landmarks[i];
-      const FirstSighting& s = rig.pipeline->Sighting(l.id);
-      if (s.frame_seq < 0) continue;
+      NewSighting s;
+      Eigen::Vector3d true_position;
+      if (!truth.FirstSeen(l.id, &s) || !truth.TrueLandmark(l.id, &true_position)) continue;
       const estimator::Pose<double>& pose =
           rig.world->Trajectory().WorldTCamera(static_cast<std::int32_t>(s.frame_seq));
-      const Eigen::Vector3d ray =
-          pose.R * Eigen::Vector3d((s.u_left - cam.cx) / cam.fx, (s.v - cam.cy) / cam.fy, 1.0);
-      double t = 0.0;
-      if (!rig.world->Terrain().Intersect(pose.t, ray, &t)) continue;
       const Eigen::Vector3d estimate(l.position_world_m[0], l.position_world_m[1],
                                      l.position_world_m[2]);
-      ratios.push_back((estimate - pose.t).norm() / (t * ray.norm()));
+      ratios.push_back((estimate - pose.t).norm() / (true_position - pose.t).norm());
     }
     EXPECT_GT(ratios.size(), 30u) << extra;
     return ratios.empty() ? 0.0 : evaluation::Quantile(ratios, 0.5);

@@ -10,39 +10,6 @@
 
 namespace swf::sil {
 
-void Evaluation::OnNav(const app::NavRecord& r) {
-  Nav n{r.nav.frame_seq,
-        {r.nav.position_world_m[0], r.nav.position_world_m[1], r.nav.position_world_m[2]},
-        {r.nav.orientation_world_q[0], r.nav.orientation_world_q[1], r.nav.orientation_world_q[2],
-         r.nav.orientation_world_q[3]},
-        r.nav.status,
-        r.nav.horizontal_protection_m,
-        r.nav.vertical_protection_m,
-        {}};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) n.position_covariance[3 * i + j] = r.nav.covariance[6 * i + j];
-  navs_.push_back(n);
-}
-
-namespace {
-// e^T P^-1 e, NaN when P is not positive definite (an output without covariance).
-double Nees(const Eigen::Vector3d& e, const double* covariance) {
-  const Eigen::Matrix3d p =
-      Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(covariance);
-  const Eigen::LLT<Eigen::Matrix3d> llt(p);
-  if (llt.info() != Eigen::Success || !(p.trace() > 0.0)) return NAN;
-  return e.dot(llt.solve(e));
-}
-
-// The angle of est_R^T true_R in degrees (est_R from a w, x, y, z quaternion).
-double AttitudeErrorDeg(const double* q, const Eigen::Matrix3d& true_rotation) {
-  const Eigen::Quaterniond est(q[0], q[1], q[2], q[3]);
-  if (!(est.norm() > 0.0)) return NAN;
-  const Eigen::AngleAxisd d(est.normalized().toRotationMatrix().transpose() * true_rotation);
-  return d.angle() * 180.0 / M_PI;
-}
-}  // namespace
-
 double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajectory,
                       const app::ImuOptions& imu,
                       const estimator::Pose<double>& initial_world_T_camera) {
@@ -69,136 +36,122 @@ double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajecto
   return trajectory.NumFrames() > 1 ? std::sqrt(sum2 / trajectory.NumFrames()) : 0.0;
 }
 
-void Evaluation::OnMap(const app::MapRecord& r) {
-  Map m;
-  m.frame_seq = r.map.frame_seq;
-  m.landmarks.reserve(r.map.num_landmarks);
-  for (int i = 0; i < r.map.num_landmarks; ++i) {
-    const app::MapLandmark& l = r.map.landmarks[i];
-    m.landmarks.push_back(
-        Landmark{l.id, {l.position_world_m[0], l.position_world_m[1], l.position_world_m[2]}});
-  }
-  maps_.push_back(std::move(m));
+void Evaluation::Attach(const sim::Trajectory* trajectory, const sim::Terrain* terrain,
+                        const estimator::StereoCamera<double>& camera, app::OutputThread* output) {
+  trajectory_ = trajectory;
+  terrain_ = terrain;
+  camera_ = camera;
+  output_ = output;
+  output->AddObserver(this);
 }
 
-EvaluationResult Evaluation::Evaluate(const app::Pipeline& pipeline,
-                                      const sim::Trajectory& trajectory,
-                                      const sim::Terrain& terrain,
-                                      const std::string& plot_dir) const {
-  EvaluationResult result;
-  const estimator::StereoCamera<double>& cam = pipeline.Camera();
-  std::FILE* traj =
-      plot_dir.empty() ? nullptr : std::fopen((plot_dir + "/trajectory.dat").c_str(), "w");
-  if (traj != nullptr) {
-    std::fprintf(traj, "# frame est_x est_y est_z true_x true_y true_z error_m\n");
-  }
-  std::vector<double> pose_errors;
-  double nees_sum = 0.0;
-  int nees_count = 0;
-  for (const Nav& n : navs_) {
-    if (n.frame_seq < 0 || n.frame_seq >= trajectory.NumFrames()) continue;
-    const estimator::Pose<double>& truth =
-        trajectory.WorldTCamera(static_cast<std::int32_t>(n.frame_seq));
-    const Eigen::Vector3d& t = truth.t;
-    const double e = (Eigen::Vector3d(n.p[0], n.p[1], n.p[2]) - t).norm();
-    EvaluationResult::Output o;
-    o.frame_seq = n.frame_seq;
-    o.altitude_m = t.z() - terrain.HeightAt(t.x(), t.y());
-    o.horizontal_error_m = std::hypot(n.p[0] - t.x(), n.p[1] - t.y());
-    o.vertical_error_m = std::abs(n.p[2] - t.z());
-    o.attitude_error_deg = AttitudeErrorDeg(n.q, truth.R);
-    o.status = n.status;
-    o.hpl_m = n.hpl_m;
-    o.vpl_m = n.vpl_m;
-    result.outputs.push_back(o);
-    result.final_attitude_error_deg = o.attitude_error_deg;
-    pose_errors.push_back(e);
-    const double nees = Nees(Eigen::Vector3d(n.p[0], n.p[1], n.p[2]) - t, n.position_covariance);
-    result.position_nees.push_back(nees);
-    if (std::isfinite(nees)) {
-      nees_sum += nees;
-      ++nees_count;
-    }
-    ++result.navs;
-    result.final_pose_error_m = e;
-    if (n.status == static_cast<std::int8_t>(estimator::NavIntegrity::kValid)) {
-      const double ratio = std::max(n.hpl_m > 0.0 ? o.horizontal_error_m / n.hpl_m : 1e9,
-                                    n.vpl_m > 0.0 ? o.vertical_error_m / n.vpl_m : 1e9);
-      ++result.valid_navs;
-      result.protection_violations += ratio > 1.0 ? 1 : 0;
-      result.max_error_over_protection =
-          std::max(result.max_error_over_protection, std::min(ratio, 1e9));
-    }
-    if (traj != nullptr) {
-      std::fprintf(traj, "%lld %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n",
-                   static_cast<long long>(n.frame_seq), n.p[0], n.p[1], n.p[2], t.x(), t.y(), t.z(),
-                   e);
-    }
-  }
-  if (traj != nullptr) std::fclose(traj);
-  result.pose_rms_error_m = result.navs > 0 ? evaluation::Rms(pose_errors) : 0.0;
-  result.mean_position_nees = nees_count > 0 ? nees_sum / nees_count : NAN;
+template <typename Message>
+void Evaluation::Send(const std::string& channel, const Message& m) {
+  buffer_.resize(static_cast<std::size_t>(m.getEncodedSize()));
+  const int n = m.encode(buffer_.data(), 0, static_cast<int>(buffer_.size()));
+  if (n > 0) output_->Send(channel, m.utime, buffer_.data(), n);
+}
 
-  // True landmark positions, computed once per id.
-  std::map<std::int64_t, Eigen::Vector3d> truth;
-  auto true_position = [&](std::int64_t id, Eigen::Vector3d* p) {
-    const auto it = truth.find(id);
-    if (it != truth.end()) {
-      *p = it->second;
-      return std::isfinite(p->x());
-    }
-    const app::FirstSighting& s = pipeline.Sighting(id);
-    Eigen::Vector3d value = Eigen::Vector3d::Constant(NAN);
-    if (s.frame_seq >= 0 && s.frame_seq < trajectory.NumFrames()) {
-      const estimator::Pose<double>& pose =
-          trajectory.WorldTCamera(static_cast<std::int32_t>(s.frame_seq));
-      const Eigen::Vector3d ray =
-          pose.R * Eigen::Vector3d((s.u_left - cam.cx) / cam.fx, (s.v - cam.cy) / cam.fy, 1.0);
-      double t = 0.0;
-      if (terrain.Intersect(pose.t, ray, &t)) value = pose.t + t * ray;
-    }
-    truth[id] = value;
-    *p = value;
-    return std::isfinite(value.x());
-  };
-  std::FILE* err =
-      plot_dir.empty() ? nullptr : std::fopen((plot_dir + "/landmark_error.dat").c_str(), "w");
-  if (err != nullptr) std::fprintf(err, "# frame rms_error_m median_error_m landmarks\n");
-  std::vector<double> errors;
-  for (const Map& m : maps_) {
-    errors.clear();
-    for (const Landmark& l : m.landmarks) {
-      Eigen::Vector3d t;
-      if (!true_position(l.id, &t)) continue;
-      errors.push_back((Eigen::Vector3d(l.p[0], l.p[1], l.p[2]) - t).norm());
-    }
-    ++result.maps;
-    // NaN for a map with no landmark evaluated (the summary then says null).
-    const double rms = evaluation::Rms(errors);
-    const double median = evaluation::Quantile(errors, 0.5);  // the upper median
-    result.landmark_rms_error_m = rms;
-    result.landmark_median_error_m = median;
-    result.landmarks_evaluated = static_cast<std::int64_t>(errors.size());
-    if (err != nullptr) {
-      std::fprintf(err, "%lld %.6f %.6f %zu\n", static_cast<long long>(m.frame_seq), rms, median,
-                   errors.size());
-    }
+void Evaluation::OnNav(const app::NavRecord& r) {
+  for (std::int32_t k = 0; k < r.num_new_sightings; ++k)
+    first_seen_.emplace(r.new_sightings[k].landmark_id, r.new_sightings[k]);
+  const std::int64_t frame = r.nav.frame_seq;
+  if (frame < 0 || frame >= trajectory_->NumFrames()) return;
+  const estimator::Pose<double>& pose = trajectory_->WorldTCamera(static_cast<std::int32_t>(frame));
+  const Eigen::Quaterniond q(pose.R);
+  truth_.utime = r.nav.utime;
+  truth_.frame_seq = frame;
+  for (int i = 0; i < 3; ++i) {
+    truth_.position_world_m[i] = pose.t[i];
+    truth_.velocity_world_mps[i] = trajectory_->Options().velocity_world_mps[i];
   }
-  if (err != nullptr) std::fclose(err);
-  // The last map with its truth, for the map view.
-  if (!plot_dir.empty() && !maps_.empty()) {
-    if (std::FILE* f = std::fopen((plot_dir + "/map.dat").c_str(), "w")) {
-      std::fprintf(f, "# est_x est_y est_z true_x true_y true_z error_m\n");
-      for (const Landmark& l : maps_.back().landmarks) {
-        Eigen::Vector3d t;
-        if (!true_position(l.id, &t)) continue;
-        std::fprintf(f, "%.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", l.p[0], l.p[1], l.p[2], t.x(),
-                     t.y(), t.z(), (Eigen::Vector3d(l.p[0], l.p[1], l.p[2]) - t).norm());
-      }
-      std::fclose(f);
-    }
+  truth_.orientation_world_q[0] = q.w();
+  truth_.orientation_world_q[1] = q.x();
+  truth_.orientation_world_q[2] = q.y();
+  truth_.orientation_world_q[3] = q.z();
+  truth_.altitude_m = pose.t.z() - terrain_->HeightAt(pose.t.x(), pose.t.y());
+  Send(channels_.truth, truth_);
+}
+
+bool Evaluation::FirstSeen(std::int64_t id, app::NewSighting* sighting) const {
+  const auto it = first_seen_.find(id);
+  if (it == first_seen_.end()) return false;
+  *sighting = it->second;
+  return true;
+}
+
+bool Evaluation::TrueLandmark(std::int64_t id, Eigen::Vector3d* position) {
+  const auto cached = true_landmarks_.find(id);
+  if (cached != true_landmarks_.end()) {
+    *position = cached->second;
+    return std::isfinite(position->x());
   }
-  return result;
+  app::NewSighting s;
+  if (!FirstSeen(id, &s)) return false;
+  Eigen::Vector3d value = Eigen::Vector3d::Constant(NAN);
+  if (s.frame_seq >= 0 && s.frame_seq < trajectory_->NumFrames()) {
+    const estimator::Pose<double>& pose =
+        trajectory_->WorldTCamera(static_cast<std::int32_t>(s.frame_seq));
+    const Eigen::Vector3d ray = pose.R * Eigen::Vector3d((s.u_left - camera_.cx) / camera_.fx,
+                                                         (s.v - camera_.cy) / camera_.fy, 1.0);
+    double t = 0.0;
+    if (terrain_->Intersect(pose.t, ray, &t)) value = pose.t + t * ray;
+  }
+  true_landmarks_[id] = value;
+  *position = value;
+  return std::isfinite(value.x());
+}
+
+void Evaluation::OnMap(const app::MapRecord& r) {
+  truth_map_.utime = r.map.utime;
+  truth_map_.seq = r.seq;
+  truth_map_.frame_seq = r.map.frame_seq;
+  truth_map_.id.clear();
+  truth_map_.position_world_m.clear();
+  for (int i = 0; i < r.map.num_landmarks; ++i) {
+    Eigen::Vector3d p;
+    if (!TrueLandmark(r.map.landmarks[i].id, &p)) continue;
+    truth_map_.id.push_back(r.map.landmarks[i].id);
+    truth_map_.position_world_m.push_back({p.x(), p.y(), p.z()});
+  }
+  truth_map_.num_landmarks = static_cast<std::int32_t>(truth_map_.id.size());
+  truth_map_.covariance_m2.assign(truth_map_.id.size(), std::vector<double>(6, 0.0));
+  truth_map_.num_observations.assign(truth_map_.id.size(), 0);
+  Send(channels_.truth_landmarks, truth_map_);
+}
+
+void Evaluation::OnMessage(const std::string& channel, const std::uint8_t* data, int size) {
+  judge_.Add(channel, data, static_cast<std::size_t>(size));
+}
+
+void Evaluation::WritePlots(const evaluation::RunScore& score, const std::string& plot_dir) {
+  if (plot_dir.empty()) return;
+  if (std::FILE* f = std::fopen((plot_dir + "/trajectory.dat").c_str(), "w")) {
+    std::fprintf(f, "# frame est_x est_y est_z true_x true_y true_z error_m\n");
+    for (const evaluation::OutputScore& o : score.outputs) {
+      std::fprintf(f, "%lld %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n",
+                   static_cast<long long>(o.frame_seq), o.estimate_m[0], o.estimate_m[1],
+                   o.estimate_m[2], o.truth_m[0], o.truth_m[1], o.truth_m[2], o.error_m);
+    }
+    std::fclose(f);
+  }
+  if (std::FILE* f = std::fopen((plot_dir + "/landmark_error.dat").c_str(), "w")) {
+    std::fprintf(f, "# frame rms_error_m median_error_m landmarks\n");
+    for (const evaluation::MapScore& m : score.maps) {
+      std::fprintf(f, "%lld %.6f %.6f %lld\n", static_cast<long long>(m.frame_seq), m.rms_error_m,
+                   m.median_error_m, static_cast<long long>(m.landmarks_evaluated));
+    }
+    std::fclose(f);
+  }
+  if (score.maps.empty()) return;
+  if (std::FILE* f = std::fopen((plot_dir + "/map.dat").c_str(), "w")) {
+    std::fprintf(f, "# est_x est_y est_z true_x true_y true_z error_m\n");
+    for (const evaluation::LandmarkScore& l : score.last_map) {
+      std::fprintf(f, "%.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", l.estimate_m[0], l.estimate_m[1],
+                   l.estimate_m[2], l.truth_m[0], l.truth_m[1], l.truth_m[2], l.error_m);
+    }
+    std::fclose(f);
+  }
 }
 
 }  // namespace swf::sil

@@ -1,5 +1,6 @@
 #include "swf/sil/sil.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -18,16 +19,16 @@ void PrintRenderProgress(int done, int total) {
 }
 
 // Per output, as columns: frame, true altitude, errors, status and protection levels.
-void WriteOutputs(std::FILE* f, const EvaluationResult& eval) {
+void WriteOutputs(std::FILE* f, const evaluation::RunScore& score) {
   bool first = true;
   const auto column = [&](const char* key, auto&& value) {
     std::fprintf(f, "%s\"%s\": [", first ? "" : ", ", key);
     first = false;
-    for (std::size_t k = 0; k < eval.outputs.size(); ++k)
-      std::fprintf(f, "%s%s", k > 0 ? ", " : "", value(eval.outputs[k]).c_str());
+    for (std::size_t k = 0; k < score.outputs.size(); ++k)
+      std::fprintf(f, "%s%s", k > 0 ? ", " : "", value(score.outputs[k]).c_str());
     std::fprintf(f, "]");
   };
-  using Output = EvaluationResult::Output;
+  using Output = evaluation::OutputScore;
   std::fprintf(f, "  \"outputs\": {");
   column("frame", [](const Output& o) { return std::to_string(o.frame_seq); });
   column("altitude_m", [](const Output& o) { return app::JsonNumber(o.altitude_m); });
@@ -40,6 +41,14 @@ void WriteOutputs(std::FILE* f, const EvaluationResult& eval) {
   column("hpl_m", [](const Output& o) { return app::JsonNumber(o.hpl_m); });
   column("vpl_m", [](const Output& o) { return app::JsonNumber(o.vpl_m); });
   std::fprintf(f, "},\n");
+}
+
+// A fixed six-decimal figure, null when there is none.
+std::string Fixed6(double v) {
+  if (!std::isfinite(v)) return "null";
+  char text[40];
+  std::snprintf(text, sizeof text, "%.6f", v);
+  return text;
 }
 
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
@@ -147,14 +156,16 @@ estimator::StereoCamera<double> SimulatedDescent::RectifiedRig(const app::FswCon
 drivers::MotionProvider* SimulatedDescent::Motion() { return world_.get(); }
 drivers::ImuProvider* SimulatedDescent::Imu() { return world_.get(); }
 
-void SimulatedDescent::Observe(app::OutputThread* output) { output->AddObserver(&evaluation_); }
+void SimulatedDescent::Observe(app::OutputThread* output) {
+  evaluation_.Attach(&world_->Trajectory(), &world_->Terrain(), world_->Camera(), output);
+}
 
 void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightParts& parts,
                                 const app::PipelineOptions& po, std::int64_t imu_samples_taken,
                                 app::Verdict* verdict, app::ImuReport* imu) {
   const SimWorld& world = *world_;
-  eval_ =
-      evaluation_.Evaluate(*parts.pipeline, world.Trajectory(), world.Terrain(), config.plot_dir);
+  score_ = evaluation_.Score();
+  Evaluation::WritePlots(score_, config.plot_dir);
   hazard_evals_ = evaluation_.EvaluateHazard(parts.hazard->Mapper().Options(), world.Trajectory(),
                                              world.Terrain());
   if (!config.plot_dir.empty() && !hazard_evals_.empty()) {
@@ -162,8 +173,8 @@ void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightP
     if (hazard_eval::WriteHazardMapPng(parts.hazard->Mapper(), png) != core::Status::kOk)
       std::fprintf(stderr, "swf-sil: cannot write %s\n", png.c_str());
   }
-  if (eval_.protection_violations > 0) {
-    app::Fail(verdict, std::to_string(eval_.protection_violations) +
+  if (score_.protection_violations > 0) {
+    app::Fail(verdict, std::to_string(score_.protection_violations) +
                            " VALID outputs erred beyond their protection level");
   }
   // The unit's true bias at the last sample the pipeline took.
@@ -179,14 +190,18 @@ void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightP
 
 std::string SimulatedDescent::RunLine() const {
   char text[160];
-  if (eval_.landmarks_evaluated > 0) {
+  if (LandmarksEvaluated() > 0) {
     std::snprintf(text, sizeof text, ", landmark RMS error %.3f m, pose RMS error %.3f m",
-                  eval_.landmark_rms_error_m, eval_.pose_rms_error_m);
+                  score_.maps.back().rms_error_m, score_.pose_rms_error_m);
   } else {
     std::snprintf(text, sizeof text, ", no landmark map to evaluate, pose RMS error %.3f m",
-                  eval_.pose_rms_error_m);
+                  score_.pose_rms_error_m);
   }
   return text;
+}
+
+std::int64_t SimulatedDescent::LandmarksEvaluated() const {
+  return score_.maps.empty() ? 0 : score_.maps.back().landmarks_evaluated;
 }
 
 void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
@@ -211,38 +226,40 @@ void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
     }
     std::fprintf(f, "},\n");
   }
-  const EvaluationResult* eval = &eval_;
-  // Landmark errors come from the published landmark maps; with none evaluated they are null,
-  // not a perfect 0.
-  if (eval->landmarks_evaluated > 0) {
+  const evaluation::RunScore& score = score_;
+  // Landmark errors come from the last published landmark map; with none evaluated they are
+  // null, not a perfect 0.
+  if (LandmarksEvaluated() > 0) {
     std::fprintf(f, "  \"landmark_rms_error_m\": %.6f,\n  \"landmark_median_error_m\": %.6f,\n",
-                 eval->landmark_rms_error_m, eval->landmark_median_error_m);
+                 score.maps.back().rms_error_m, score.maps.back().median_error_m);
   } else {
     std::fprintf(f, "  \"landmark_rms_error_m\": null,\n  \"landmark_median_error_m\": null,\n");
   }
   std::fprintf(f,
-               "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %.6f,\n"
+               "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %s,\n"
                "  \"final_pose_error_m\": %.6f,\n  \"nav_outputs\": %lld,\n"
                "  \"landmark_maps\": %lld,\n",
-               static_cast<long long>(eval->landmarks_evaluated), eval->pose_rms_error_m,
-               eval->final_pose_error_m, static_cast<long long>(eval->navs),
-               static_cast<long long>(eval->maps));
+               static_cast<long long>(LandmarksEvaluated()), Fixed6(score.pose_rms_error_m).c_str(),
+               score.final_pose_error_m, static_cast<long long>(score.outputs.size()),
+               static_cast<long long>(score.maps.size()));
   std::fprintf(f, "  \"mean_position_nees\": %s,\n  \"position_nees\": [",
-               app::JsonNumber(eval->mean_position_nees).c_str());
-  for (std::size_t k = 0; k < eval->position_nees.size(); ++k)
-    std::fprintf(f, "%s%s", k > 0 ? ", " : "", app::JsonNumber(eval->position_nees[k]).c_str());
+               app::JsonNumber(score.mean_position_nees).c_str());
+  for (std::size_t k = 0; k < score.outputs.size(); ++k) {
+    std::fprintf(f, "%s%s", k > 0 ? ", " : "",
+                 app::JsonNumber(score.outputs[k].position_nees).c_str());
+  }
   std::fprintf(f, "],\n  \"final_attitude_error_deg\": %s,\n",
-               app::JsonNumber(eval->final_attitude_error_deg).c_str());
-  WriteOutputs(f, *eval);
+               app::JsonNumber(score.final_attitude_error_deg).c_str());
+  WriteOutputs(f, score);
 }
 
 void SimulatedDescent::WriteIntegrityTruth(std::FILE* f) const {
   std::fprintf(f,
                ", \"valid_outputs_vs_truth\": %lld, \"protection_violations\": %lld, "
                "\"max_error_over_protection\": %.4f",
-               static_cast<long long>(eval_.valid_navs),
-               static_cast<long long>(eval_.protection_violations),
-               eval_.max_error_over_protection);
+               static_cast<long long>(score_.valid_navs),
+               static_cast<long long>(score_.protection_violations),
+               score_.max_error_over_protection);
 }
 
 bool SimulatedDescent::WriteHazardTruth(std::FILE* f) const {

@@ -20,6 +20,7 @@
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
+#include "swf_msgs/truth_state_t.hpp"
 
 namespace swf::messages {
 
@@ -75,5 +76,7 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::health_t
 // and non-finite values are the stream checker's to judge (estimator/imu_stream.hpp), not the
 // decoder's: they are counted there.
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::imu_t* msg);
+// Fixed size (truth channels: a simulator's or a test range's).
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::truth_state_t* msg);
 
 }  // namespace swf::messages

@@ -29,6 +29,8 @@ inline constexpr const char* kHealthSuffix = "HEALTH";
 inline constexpr const char* kImuSuffix = "IMU";
 
 // Sees every output as it is published (evaluation, progress display). Output thread only.
+// OnMessage sees every message the thread emits, as encoded for the bus and the log (outputs,
+// inputs being recorded, and what observers send).
 class OutputObserver {
  public:
   virtual ~OutputObserver() = default;
@@ -36,6 +38,8 @@ class OutputObserver {
   virtual void OnMap(const MapRecord& /*r*/) {}
   virtual void OnHealth(const HealthRecord& /*r*/) {}
   virtual void OnHazard(const HazardRecord& /*r*/) {}
+  virtual void OnMessage(const std::string& /*channel*/, const std::uint8_t* /*data*/,
+                         int /*size*/) {}
 };
 
 struct OutputOptions {
@@ -65,6 +69,9 @@ class OutputThread {
   // Opens LCM and the log and sizes the buffers. False with a message.
   bool Open(const OutputOptions& options, OutputChannels* channels, std::string* error);
   void AddObserver(OutputObserver* observer) { observers_.push_back(observer); }
+  // Publishes and records a message an observer made (from its On* callbacks: output thread
+  // only) on a channel of its own, e.g. a simulator's truth beside the estimates.
+  void Send(const std::string& channel, std::int64_t utime, const std::uint8_t* data, int size);
   void Start();
   // Drains everything queued, then stops and closes the log.
   void StopAndDrain();
@@ -78,6 +85,8 @@ class OutputThread {
   // Publishes (unless record_only) and records one encoded message.
   void Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data, int size,
             bool record_only = false);
+  void EmitOn(const std::string& channel, std::int64_t utime, const std::uint8_t* data, int size,
+              bool record_only);
 
   std::unique_ptr<Impl> impl_;
   OutputChannels* channels_ = nullptr;

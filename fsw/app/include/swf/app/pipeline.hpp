@@ -162,13 +162,16 @@ struct MapOutput {
   MapLandmark landmarks[kMaxMapLandmarks];
 };
 
-// Where each landmark was first seen (for ground-truth evaluation and the guidance display).
-struct FirstSighting {
-  std::int64_t frame_seq = -1;
+// A landmark the front end started this frame, and where: the frame group hands them on with the
+// navigation output (NavRecord), and whoever keeps a history of them (the simulator's truth
+// channels, a display) keeps it outside the flight process.
+struct NewSighting {
+  std::int64_t landmark_id = 0;
+  std::int64_t frame_seq = 0;
   float u_left = 0.0f;
   float v = 0.0f;
 };
-inline constexpr std::uint32_t kMaxSightings = 1u << 16;  // by landmark id modulo this
+inline constexpr int kMaxNewSightings = static_cast<int>(frontend::kMaxTracks);
 
 // One stereo pair as the pipeline consumes it.
 struct PipelineFrame {
@@ -232,9 +235,9 @@ class Pipeline {
   core::Status LastStatus() const { return last_status_; }
   const estimator::IntegrityReport& LastIntegrity() const { return report_; }
   const IntegrityCounters& Integrity() const { return integrity_; }
-  const FirstSighting& Sighting(std::int64_t id) const {
-    return sightings_[static_cast<std::uint32_t>(id) % kMaxSightings];
-  }
+  // The landmarks started by the last frame estimated (its measurements were fused).
+  int NumNewSightings() const { return num_new_sightings_; }
+  const NewSighting* NewSightings() const { return new_sightings_.get(); }
   const estimator::StereoCamera<double>& Camera() const { return options_.camera; }
   std::int64_t FramesEstimated() const { return frames_estimated_; }
   bool Rectifies() const { return options_.rectify; }
@@ -267,7 +270,8 @@ class Pipeline {
   core::Status ComputeCovariances();
   estimator::Mat6<double> camera_covariance_ = estimator::Mat6<double>::Zero();
   std::unique_ptr<frontend::LandmarkEstimate[]> estimates_;
-  std::unique_ptr<FirstSighting[]> sightings_;
+  std::unique_ptr<NewSighting[]> new_sightings_;
+  int num_new_sightings_ = 0;
   frontend::StereoFrame current_{};
   std::int64_t utime_ = 0;
   std::int64_t seq_ = 0;

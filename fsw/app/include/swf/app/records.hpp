@@ -62,6 +62,9 @@ struct NavRecord {
   std::int64_t seq = 0;
   std::int8_t mode = 0;
   NavOutput nav;
+  // The landmarks the frame started (not published: for observers of the output thread).
+  std::int32_t num_new_sightings = 0;
+  NewSighting new_sightings[kMaxNewSightings];
 };
 
 struct MapRecord {

@@ -1,58 +1,32 @@
-// Evaluation of a simulated run against the simulator's truth (ground side, after the run):
-// pose error of every navigation output, the error of every landmark of every published map, and
-// every published hazard map against the terrain's hazard truth. A landmark's true position is
-// where the ray through the pixel it was first seen at, from the true camera pose of that frame,
-// meets the terrain.
+// The simulator's side of evaluation (ground side). During the run it sends the truth beside the
+// estimates on channels of their own (evaluation::JudgeChannels: truth_state_t on SIM_TRUTH for
+// every navigation output's frame, the true positions of every published map's landmarks on
+// SIM_TRUTH_LANDMARKS), so that they are published and recorded with the run, and it hands every
+// message the run emits to evaluation::RunJudge, the same judge swf-judge runs on logs. A
+// landmark's true position is where the ray through the pixel it was first seen at (the frame
+// group's NewSighting), from the true camera pose of that frame, meets the terrain. Hazard maps
+// are kept for the hazard evaluation against the terrain's truth after the run.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/pipeline.hpp"
+#include "swf/evaluation/run_judge.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/imu_model.hpp"
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
+#include "swf_msgs/landmark_map_t.hpp"
+#include "swf_msgs/truth_state_t.hpp"
 
 namespace swf::sil {
-
-struct EvaluationResult {
-  std::int64_t navs = 0;
-  double pose_rms_error_m = 0.0;
-  double final_pose_error_m = 0.0;
-  std::int64_t maps = 0;
-  double landmark_rms_error_m = 0.0;     // the last published map
-  double landmark_median_error_m = 0.0;  // the last published map
-  std::int64_t landmarks_evaluated = 0;  // in the last map
-  // Integrity against truth: VALID outputs, and those whose true horizontal or vertical error
-  // exceeded its protection level (each one an integrity failure: VALID promised otherwise).
-  std::int64_t valid_navs = 0;
-  std::int64_t protection_violations = 0;
-  double max_error_over_protection = 0.0;  // largest true error / protection level (VALID)
-  // Consistency of the published covariance: e^T P^-1 e of the position error against the
-  // output's 3x3 position covariance, per output (NaN where it had none); chi-square with 3
-  // degrees of freedom, mean 3, for a consistent estimator.
-  std::vector<double> position_nees;
-  double mean_position_nees = 0.0;  // over the outputs with a covariance
-  // Per output, in output order: the true altitude of the camera above the terrain below it,
-  // the errors (the simulator's world is z-up: horizontal = x, y) and what the output claimed.
-  struct Output {
-    std::int64_t frame_seq = 0;
-    double altitude_m = 0.0;
-    double horizontal_error_m = 0.0;
-    double vertical_error_m = 0.0;
-    double attitude_error_deg = 0.0;  // angle of est_R^T true_R
-    std::int8_t status = 0;           // nav_state_t.STATUS_*
-    double hpl_m = 0.0;
-    double vpl_m = 0.0;
-  };
-  std::vector<Output> outputs;
-  double final_attitude_error_deg = 0.0;
-};
 
 // The IMU alone from the filter's starting state (its pose, the guidance's velocity, zero
 // biases): each frame interval preintegrated and propagated, no camera. Returns the RMS of the
@@ -85,39 +59,32 @@ struct HazardEvaluation {
   double site_clearance_m = -1.0;  // site to the nearest truth hazard node (capped at 20 m)
 };
 
-// Keeps copies of the outputs (output thread) for the evaluation after the run.
 class Evaluation : public app::OutputObserver {
  public:
-  void OnNav(const app::NavRecord& r) override;
-  void OnMap(const app::MapRecord& r) override;
-  void OnHazard(const app::HazardRecord& r) override;
+  // Before the run: the descent whose truth is sent, the rectified rig the pipeline measures
+  // with, and the thread that publishes and records (this observer's callbacks run on it).
+  void Attach(const sim::Trajectory* trajectory, const sim::Terrain* terrain,
+              const estimator::StereoCamera<double>& camera, app::OutputThread* output);
 
-  // After the run (the pipeline is idle). Writes gnuplot data into plot_dir when not empty.
-  EvaluationResult Evaluate(const app::Pipeline& pipeline, const sim::Trajectory& trajectory,
-                            const sim::Terrain& terrain, const std::string& plot_dir) const;
+  void OnNav(const app::NavRecord& r) override;  // first sightings; the frame's truth state
+  void OnMap(const app::MapRecord& r) override;  // the true positions of the map's landmarks
+  void OnHazard(const app::HazardRecord& r) override;
+  void OnMessage(const std::string& channel, const std::uint8_t* data, int size) override;
+
+  // After the run (the output thread stopped).
+  evaluation::RunScore Score() const { return judge_.Score(); }
+  // The frame and pixel a landmark was first seen at, and where that ray meets the terrain
+  // (false: never seen, or the ray misses the terrain).
+  bool FirstSeen(std::int64_t id, app::NewSighting* sighting) const;
+  bool TrueLandmark(std::int64_t id, Eigen::Vector3d* position);
+  // Gnuplot data of a judged run into plot_dir: trajectory.dat, landmark_error.dat, map.dat.
+  static void WritePlots(const evaluation::RunScore& score, const std::string& plot_dir);
   // Every published hazard map, in order, against the truth of the mapper's thresholds.
   std::vector<HazardEvaluation> EvaluateHazard(const hazard::HazardMapperOptions& thresholds,
                                                const sim::Trajectory& trajectory,
                                                const sim::Terrain& terrain) const;
 
  private:
-  struct Nav {
-    std::int64_t frame_seq;
-    double p[3];
-    double q[4];  // world_R_camera (w, x, y, z)
-    std::int8_t status;
-    double hpl_m;
-    double vpl_m;
-    double position_covariance[9];
-  };
-  struct Landmark {
-    std::int64_t id;
-    double p[3];
-  };
-  struct Map {
-    std::int64_t frame_seq;
-    std::vector<Landmark> landmarks;
-  };
   // The fields of a published hazard map the evaluation reads.
   struct PublishedHazardMap {
     std::int64_t frame_seq = 0;
@@ -131,12 +98,24 @@ class Evaluation : public app::OutputObserver {
     double site_m[2] = {0.0, 0.0};
     double site_score = 0.0;
   };
+  template <typename Message>
+  void Send(const std::string& channel, const Message& m);
+
   static HazardEvaluation EvaluateHazardMap(const PublishedHazardMap& map,
                                             const hazard::HazardMapperOptions& thresholds,
                                             const sim::Terrain& terrain,
                                             const sim::HazardMap& truth);
-  std::vector<Nav> navs_;
-  std::vector<Map> maps_;
+  const sim::Trajectory* trajectory_ = nullptr;
+  const sim::Terrain* terrain_ = nullptr;
+  estimator::StereoCamera<double> camera_;
+  app::OutputThread* output_ = nullptr;
+  evaluation::JudgeChannels channels_;
+  evaluation::RunJudge judge_;
+  std::unordered_map<std::int64_t, app::NewSighting> first_seen_;
+  std::unordered_map<std::int64_t, Eigen::Vector3d> true_landmarks_;  // NaN: the ray missed
+  swf_msgs::truth_state_t truth_;
+  swf_msgs::landmark_map_t truth_map_;
+  std::vector<std::uint8_t> buffer_;
   std::vector<PublishedHazardMap> hazard_maps_;
 };
 

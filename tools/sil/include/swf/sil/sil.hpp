@@ -47,10 +47,12 @@ class SimulatedDescent final : public app::ProcessExtension {
   const SimWorld* World() const { return world_.get(); }
 
  private:
+  std::int64_t LandmarksEvaluated() const;  // in the last published map
+
   const app::FswConfig* config_ = nullptr;
   std::unique_ptr<SimWorld> world_;
   Evaluation evaluation_;
-  EvaluationResult eval_;
+  evaluation::RunScore score_;
   std::vector<HazardEvaluation> hazard_evals_;
 };
 

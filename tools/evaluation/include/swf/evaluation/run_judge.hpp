@@ -1,0 +1,132 @@
+// RunJudge: the one evaluation of a run's navigation and landmark outputs against truth, from
+// messages alone. It reads what a run published or recorded: the estimates (nav_state_t on
+// SWF_NAV, landmark_map_t on SWF_LANDMARKS) and the truth a simulator or test range sent on
+// channels of its own (truth_state_t on SIM_TRUTH, landmark_map_t with true positions on
+// SIM_TRUTH_LANDMARKS). Estimates and truth are paired by frame_seq, landmarks by id, whatever
+// order they arrive in. So a live run (swf-sil feeds it the bytes it emits), a replay, a
+// hardware-in-the-loop run and every campaign run are judged by the same code (swf-judge reads
+// logs).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "swf_msgs/landmark_map_t.hpp"
+#include "swf_msgs/nav_state_t.hpp"
+#include "swf_msgs/truth_state_t.hpp"
+
+namespace swf::evaluation {
+
+struct JudgeChannels {
+  std::string nav = "SWF_NAV";
+  std::string landmarks = "SWF_LANDMARKS";
+  std::string truth = "SIM_TRUTH";
+  std::string truth_landmarks = "SIM_TRUTH_LANDMARKS";
+};
+
+// One navigation output against the truth of its frame. The world is z-up (horizontal = x, y).
+struct OutputScore {
+  std::int64_t frame_seq = 0;
+  double estimate_m[3] = {0.0, 0.0, 0.0};
+  double truth_m[3] = {0.0, 0.0, 0.0};
+  double error_m = 0.0;
+  double altitude_m = 0.0;  // true height above the terrain below
+  double horizontal_error_m = 0.0;
+  double vertical_error_m = 0.0;
+  double attitude_error_deg = 0.0;  // angle of est_R^T true_R
+  std::int8_t status = 0;           // nav_state_t.STATUS_*
+  double hpl_m = 0.0;
+  double vpl_m = 0.0;
+  // e^T P^-1 e against the output's 3x3 position covariance; NaN without a usable covariance.
+  double position_nees = 0.0;
+};
+
+// One published landmark map: its landmarks with a true position.
+struct MapScore {
+  std::int64_t frame_seq = 0;
+  std::int64_t landmarks_evaluated = 0;
+  double rms_error_m = 0.0;     // NaN when none was evaluated
+  double median_error_m = 0.0;  // the upper median; NaN when none was evaluated
+};
+
+struct LandmarkScore {
+  std::int64_t id = 0;
+  double estimate_m[3] = {0.0, 0.0, 0.0};
+  double truth_m[3] = {0.0, 0.0, 0.0};
+  double error_m = 0.0;
+};
+
+struct RunScore {
+  // Navigation outputs with the truth of their frame, in arrival order.
+  std::vector<OutputScore> outputs;
+  std::int64_t navs_without_truth = 0;
+  double pose_rms_error_m = 0.0;  // NaN without outputs
+  double final_pose_error_m = 0.0;
+  double final_attitude_error_deg = 0.0;
+  double mean_position_nees = 0.0;  // over the outputs with a covariance; NaN without any
+  // Integrity against truth: VALID outputs, and those whose true horizontal or vertical error
+  // exceeded its protection level (each one an integrity failure).
+  std::int64_t valid_navs = 0;
+  std::int64_t protection_violations = 0;
+  double max_error_over_protection = 0.0;  // largest true error / protection level (VALID)
+  // Landmark maps with their truth, in arrival order, and the last one landmark by landmark.
+  std::vector<MapScore> maps;
+  std::int64_t maps_without_truth = 0;
+  std::vector<LandmarkScore> last_map;
+  // Messages on a judged channel that did not decode (named in the first error).
+  std::int64_t undecodable = 0;
+  std::string first_decode_error;
+};
+
+class RunJudge {
+ public:
+  explicit RunJudge(JudgeChannels channels = {});
+
+  // One message as it went over the bus or into a log. Channels the judge does not read are
+  // ignored (true); a judged message that does not decode is counted and false.
+  bool Add(const std::string& channel, const void* data, std::size_t size);
+
+  void AddNav(const swf_msgs::nav_state_t& m);
+  void AddLandmarks(const swf_msgs::landmark_map_t& m);
+  void AddTruth(const swf_msgs::truth_state_t& m);
+  void AddTruthLandmarks(const swf_msgs::landmark_map_t& m);
+
+  RunScore Score() const;
+
+ private:
+  struct Nav {
+    std::int64_t frame_seq;
+    double p[3];
+    double q[4];  // world_R_camera (w, x, y, z)
+    std::int8_t status;
+    double hpl_m;
+    double vpl_m;
+    double position_covariance[9];
+  };
+  struct Truth {
+    double p[3];
+    double q[4];
+    double altitude_m;
+  };
+  struct Landmark {
+    std::int64_t id;
+    double p[3];
+  };
+  struct Map {
+    std::int64_t frame_seq;
+    std::vector<Landmark> landmarks;
+  };
+
+  JudgeChannels channels_;
+  std::vector<Nav> navs_;
+  std::vector<Map> maps_;
+  std::map<std::int64_t, Truth> truth_;
+  std::map<std::int64_t, std::map<std::int64_t, Landmark>> truth_maps_;  // frame_seq -> id
+  std::int64_t undecodable_ = 0;
+  std::string first_decode_error_;
+};
+
+}  // namespace swf::evaluation

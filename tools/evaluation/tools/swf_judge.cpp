@@ -1,0 +1,152 @@
+// swf-judge: judges a run from its LCM logs. Every message of the logs goes to RunJudge (the
+// evaluation swf-sil runs live); the estimates and the truth may come from different logs (a
+// replay's output log and the simulated descent's log it replayed).
+//   swf-judge RUN.lcmlog [MORE.lcmlog ...] [--json FILE] [--outputs]
+// Exit: 0 judged, no VALID output beyond its protection level; 1 judged, with integrity failures;
+// 2 nothing judged (usage, an unreadable or damaged log, no estimate with its truth).
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "swf/drivers/log_stereo_source.hpp"
+#include "swf/evaluation/run_judge.hpp"
+
+namespace {
+
+using nlohmann::json;
+using swf::evaluation::RunScore;
+
+// Feeds every event of one log; false with the error naming the file and record.
+bool Feed(const std::string& path, swf::evaluation::RunJudge* judge, std::int64_t* events,
+          std::string* error) {
+  swf::drivers::LogReader reader;
+  if (!reader.Open(path, error)) return false;
+  swf::drivers::LogEvent event;
+  for (;;) {
+    const int r = reader.Next(&event, error);
+    if (r == 0) return true;
+    if (r < 0) return false;
+    ++*events;
+    judge->Add(event.channel, event.data.data(), event.data.size());
+  }
+}
+
+json Report(const RunScore& s, bool with_outputs) {
+  json navigation = {{"outputs_judged", s.outputs.size()},
+                     {"outputs_without_truth", s.navs_without_truth},
+                     {"pose_rms_error_m", s.pose_rms_error_m},
+                     {"final_pose_error_m", s.final_pose_error_m},
+                     {"final_attitude_error_deg", s.final_attitude_error_deg},
+                     {"mean_position_nees", s.mean_position_nees}};
+  json integrity = {{"valid_outputs", s.valid_navs},
+                    {"protection_violations", s.protection_violations},
+                    {"max_error_over_protection", s.max_error_over_protection}};
+  json landmarks = {{"maps_judged", s.maps.size()}, {"maps_without_truth", s.maps_without_truth}};
+  if (!s.maps.empty()) {
+    landmarks["last_map_frame"] = s.maps.back().frame_seq;
+    landmarks["last_map_landmarks_evaluated"] = s.maps.back().landmarks_evaluated;
+    landmarks["last_map_rms_error_m"] = s.maps.back().rms_error_m;
+    landmarks["last_map_median_error_m"] = s.maps.back().median_error_m;
+  }
+  json report = {{"navigation", navigation},
+                 {"integrity", integrity},
+                 {"landmarks", landmarks},
+                 {"undecodable_messages", s.undecodable}};
+  if (s.undecodable > 0) report["first_decode_error"] = s.first_decode_error;
+  if (with_outputs) {
+    json outputs = json::array();
+    for (const swf::evaluation::OutputScore& o : s.outputs) {
+      outputs.push_back({{"frame", o.frame_seq},
+                         {"altitude_m", o.altitude_m},
+                         {"error_m", o.error_m},
+                         {"horizontal_error_m", o.horizontal_error_m},
+                         {"vertical_error_m", o.vertical_error_m},
+                         {"attitude_error_deg", o.attitude_error_deg},
+                         {"status", o.status},
+                         {"hpl_m", o.hpl_m},
+                         {"vpl_m", o.vpl_m},
+                         {"position_nees", o.position_nees}});
+    }
+    report["outputs"] = outputs;
+  }
+  return report;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "swf-judge: judges a run's navigation and landmark outputs (SWF_NAV, SWF_LANDMARKS) "
+      "against the truth recorded beside them (SIM_TRUTH, SIM_TRUTH_LANDMARKS)"};
+  std::vector<std::string> logs;
+  std::string json_path;
+  bool with_outputs = false;
+  swf::evaluation::JudgeChannels channels;
+  app.add_option("logs", logs, "LCM logs: the run's outputs and the truth (any order)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--json", json_path, "write the report here instead of standard output");
+  app.add_flag("--outputs", with_outputs, "include every judged navigation output");
+  app.add_option("--nav-channel", channels.nav, "estimates' navigation channel")
+      ->capture_default_str();
+  app.add_option("--landmarks-channel", channels.landmarks, "estimates' landmark channel")
+      ->capture_default_str();
+  app.add_option("--truth-channel", channels.truth, "truth states' channel")->capture_default_str();
+  app.add_option("--truth-landmarks-channel", channels.truth_landmarks,
+                 "true landmark positions' channel")
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+
+  swf::evaluation::RunJudge judge(channels);
+  std::int64_t events = 0;
+  for (const std::string& path : logs) {
+    std::string error;
+    if (!Feed(path, &judge, &events, &error)) {
+      std::fprintf(stderr, "swf-judge: %s\n", error.c_str());
+      return 2;
+    }
+  }
+  const RunScore score = judge.Score();
+  json report = Report(score, with_outputs);
+  report["logs"] = logs;
+  report["events_read"] = events;
+  const bool judged = !score.outputs.empty();
+  const bool failed = score.protection_violations > 0;
+  report["result"] = !judged ? "not judged" : (failed ? "failed" : "ok");
+  if (!judged) {
+    report["reason"] = score.navs_without_truth > 0
+                           ? "no navigation output has the truth of its frame"
+                           : "no navigation output in the logs";
+  } else if (failed) {
+    report["reason"] = std::to_string(score.protection_violations) +
+                       " VALID outputs erred beyond their protection level";
+  }
+  const std::string text = report.dump(2) + "\n";
+  if (json_path.empty()) {
+    std::cout << text;
+  } else {
+    std::ofstream out(json_path);
+    if (!(out << text)) {
+      std::fprintf(stderr, "swf-judge: cannot write %s\n", json_path.c_str());
+      return 2;
+    }
+  }
+  std::fprintf(stderr,
+               "swf-judge: %s: %zu outputs judged, pose RMS %.3f m, %lld of %lld VALID "
+               "outputs beyond their protection level%s\n",
+               report["result"].get<std::string>().c_str(), score.outputs.size(),
+               score.pose_rms_error_m, static_cast<long long>(score.protection_violations),
+               static_cast<long long>(score.valid_navs),
+               score.undecodable > 0 ? " (some messages did not decode: see the report)" : "");
+  if (!judged) return 2;
+  return failed ? 1 : 0;
+}
