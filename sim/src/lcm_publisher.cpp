@@ -1,12 +1,14 @@
 #include "swf/sim/lcm_publisher.hpp"
 
+#include <cmath>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <lcm/lcm-cpp.hpp>
 
 #include "swf_msgs/landmark_map_t.hpp"
-#include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
+#include "swf_msgs/truth_state_t.hpp"
 
 namespace swf::sim {
 
@@ -15,7 +17,7 @@ struct SimLcmPublisher::Impl {
   std::vector<std::uint8_t> buffer;
   std::string channel;
   swf_msgs::stereo_frame_t frame;
-  swf_msgs::nav_state_t nav;
+  swf_msgs::truth_state_t truth;
   swf_msgs::landmark_map_t map;
 };
 
@@ -71,17 +73,18 @@ core::Status SimLcmPublisher::PublishFrame(const StereoImages& images, std::int6
 
 core::Status SimLcmPublisher::PublishTruthPose(const estimator::Pose<double>& world_T_camera,
                                                const Eigen::Vector3d& velocity_world_mps,
-                                               std::int64_t seq, std::int64_t utime) {
+                                               double altitude_m, std::int64_t seq,
+                                               std::int64_t utime) {
   if (!impl_->lcm) return core::Status::kNotConfigured;
   if (!world_T_camera.t.allFinite() || !world_T_camera.R.allFinite() ||
-      !velocity_world_mps.allFinite()) {
+      !velocity_world_mps.allFinite() || !std::isfinite(altitude_m)) {
     return core::Status::kInvalidArgument;
   }
-  swf_msgs::nav_state_t& m = impl_->nav;
-  m = swf_msgs::nav_state_t{};
+  swf_msgs::truth_state_t& m = impl_->truth;
+  m = swf_msgs::truth_state_t{};
   m.utime = utime;
-  m.seq = truth_seq_++;
   m.frame_seq = seq;
+  m.altitude_m = altitude_m;
   const Eigen::Quaterniond q(world_T_camera.R);
   for (int i = 0; i < 3; ++i) {
     m.position_world_m[i] = world_T_camera.t[i];
@@ -91,7 +94,6 @@ core::Status SimLcmPublisher::PublishTruthPose(const estimator::Pose<double>& wo
   m.orientation_world_q[1] = q.x();
   m.orientation_world_q[2] = q.y();
   m.orientation_world_q[3] = q.z();
-  m.mode = kTruthMode;
   const std::int32_t size = m.getEncodedSize();
   if (static_cast<std::int32_t>(impl_->buffer.size()) < size) impl_->buffer.resize(size);
   if (m.encode(impl_->buffer.data(), 0, size) != size) return core::Status::kInvalidArgument;

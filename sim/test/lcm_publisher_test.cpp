@@ -14,8 +14,8 @@
 #include "small_scene.hpp"
 #include "swf/sim/trajectory.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
-#include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
+#include "swf_msgs/truth_state_t.hpp"
 
 namespace swf::sim {
 namespace {
@@ -39,7 +39,7 @@ class Inbox {
     frame_channel = channel;
     ++received;
   }
-  void OnTruth(const lcm::ReceiveBuffer*, const std::string&, const swf_msgs::nav_state_t* m) {
+  void OnTruth(const lcm::ReceiveBuffer*, const std::string&, const swf_msgs::truth_state_t* m) {
     truth = *m;
     ++received;
   }
@@ -50,7 +50,7 @@ class Inbox {
   }
   swf_msgs::stereo_frame_t frame;
   std::string frame_channel;
-  swf_msgs::nav_state_t truth;
+  swf_msgs::truth_state_t truth;
   swf_msgs::landmark_map_t landmarks;
   int received = 0;
 };
@@ -81,7 +81,7 @@ TEST(SimLcmPublisherTest, SubscriberReceivesTheRenderedPairAndItsTruth) {
   SimLcmPublisher publisher;
   ASSERT_EQ(publisher.Open(kUrl, "SIM_"), core::Status::kOk);
   ASSERT_EQ(publisher.PublishFrame(images, 3, 200000), core::Status::kOk);
-  ASSERT_EQ(publisher.PublishTruthPose(pose, Eigen::Vector3d(0.0, 0.0, -10.0), 3, 200000),
+  ASSERT_EQ(publisher.PublishTruthPose(pose, Eigen::Vector3d(0.0, 0.0, -10.0), 19.5, 3, 200000),
             core::Status::kOk);
   ASSERT_EQ(publisher.PublishTruthLandmarks(truth_landmarks, 3, 200000), core::Status::kOk);
   EXPECT_EQ(publisher.Published(), 3);
@@ -98,7 +98,7 @@ TEST(SimLcmPublisherTest, SubscriberReceivesTheRenderedPairAndItsTruth) {
   EXPECT_EQ(inbox.frame.left, images.left);
   EXPECT_EQ(inbox.frame.right, images.right);
   EXPECT_EQ(inbox.truth.frame_seq, 3);
-  EXPECT_EQ(inbox.truth.mode, kTruthMode);
+  EXPECT_EQ(inbox.truth.altitude_m, 19.5);
   const Eigen::Quaterniond q(inbox.truth.orientation_world_q[0], inbox.truth.orientation_world_q[1],
                              inbox.truth.orientation_world_q[2],
                              inbox.truth.orientation_world_q[3]);
@@ -124,7 +124,7 @@ TEST(SimLcmPublisherTest, RefusesToPublishBeforeOpenAndBadInput) {
   EXPECT_EQ(publisher.PublishFrame(images, 0, 0), core::Status::kInvalidArgument);
   estimator::Pose<double> pose;
   pose.t.x() = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(publisher.PublishTruthPose(pose, Eigen::Vector3d::Zero(), 0, 0),
+  EXPECT_EQ(publisher.PublishTruthPose(pose, Eigen::Vector3d::Zero(), 0.0, 0, 0),
             core::Status::kInvalidArgument);
   EXPECT_EQ(publisher.Published(), 0);
   SimLcmPublisher bad;

@@ -7,7 +7,7 @@
 // craters.csv, rocks.csv, terrain_hazard.png (shaded terrain | hazard truth) and
 // contact_sheet.png (12 left frames). Progress goes to stderr.
 // --lcm URL also publishes every rendered pair as it is rendered: STEREO (stereo_frame_t), TRUTH
-// (nav_state_t) and TRUTH_LANDMARKS (landmark_map_t), see swf/sim/lcm_publisher.hpp; --no-png
+// (truth_state_t) and TRUTH_LANDMARKS (landmark_map_t), see swf/sim/lcm_publisher.hpp; --no-png
 // skips the per-frame PNG files (streaming only).
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -293,7 +293,9 @@ int main(int argc, char** argv) {
       if (Status s = publisher.PublishFrame(images, k, utime); s != Status::kOk) {
         return Fail("LCM stereo frame", s);
       }
-      if (Status s = publisher.PublishTruthPose(pose, traj.velocity_world_mps, k, utime);
+      const double altitude_m = pose.t.z() - terrain.HeightAt(pose.t.x(), pose.t.y());
+      if (Status s =
+              publisher.PublishTruthPose(pose, traj.velocity_world_mps, altitude_m, k, utime);
           s != Status::kOk) {
         return Fail("LCM truth pose", s);
       }

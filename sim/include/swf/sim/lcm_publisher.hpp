@@ -3,15 +3,15 @@
 // Channels (prefix + name, prefix empty by default):
 //   STEREO           swf_msgs::stereo_frame_t, the rendered pair (rectified, 8-bit), exactly what
 //                    the flight software receives from its cameras;
-//   TRUTH            swf_msgs::nav_state_t, the true world_T_camera of that pair (position,
-//                    quaternion w x y z, velocity), covariance all zero, mode = kTruthMode (-1,
-//                    not an estimator mode), frame_seq = the pair's seq;
+//   TRUTH            swf_msgs::truth_state_t, the true world_T_camera of that pair (position,
+//                    quaternion w x y z), its velocity and its height above the terrain,
+//                    frame_seq = the pair's seq;
 //   TRUTH_LANDMARKS  swf_msgs::landmark_map_t, the true positions of the landmarks the
 //                    measurement-level generator observes in that frame (id = landmark index,
 //                    covariance zero, num_observations = frames that have observed it so far).
-// No truth schema exists in messages/: truth reuses the estimator's output types so that every
-// consumer of NAV / LANDMARKS can read it unchanged. Messages are encoded into buffers owned by the
-// publisher (grown on first use only) and published as bytes.
+// Truth never passes for an estimate: the pose has its own type, and the landmarks' map is on a
+// channel of its own (swf::evaluation::RunJudge and swf-judge read both). Messages are encoded into
+// buffers owned by the publisher (grown on first use only) and published as bytes.
 #pragma once
 
 #include <Eigen/Core>
@@ -26,7 +26,6 @@
 
 namespace swf::sim {
 
-inline constexpr std::int8_t kTruthMode = -1;
 inline constexpr const char* kSimStereoChannel = "STEREO";
 inline constexpr const char* kSimTruthChannel = "TRUTH";
 inline constexpr const char* kSimTruthLandmarksChannel = "TRUTH_LANDMARKS";
@@ -52,8 +51,8 @@ class SimLcmPublisher {
   // kInvalidArgument for an empty or inconsistent image, kIoError when LCM refuses the message.
   core::Status PublishFrame(const StereoImages& images, std::int64_t seq, std::int64_t utime);
   core::Status PublishTruthPose(const estimator::Pose<double>& world_T_camera,
-                                const Eigen::Vector3d& velocity_world_mps, std::int64_t seq,
-                                std::int64_t utime);
+                                const Eigen::Vector3d& velocity_world_mps, double altitude_m,
+                                std::int64_t seq, std::int64_t utime);
   core::Status PublishTruthLandmarks(const std::vector<TruthLandmark>& landmarks, std::int64_t seq,
                                      std::int64_t utime);
 
@@ -66,7 +65,6 @@ class SimLcmPublisher {
   std::unique_ptr<Impl> impl_;
   std::string prefix_;
   std::int64_t published_ = 0;
-  std::int64_t truth_seq_ = 0;
   std::int64_t landmarks_seq_ = 0;
 };
 
