@@ -35,6 +35,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Expect(frame.right.size() == static_cast<std::size_t>(frame.num_bytes));
     ExpectSameBytes(frame, data, size);
   }
+  // A live receiver's bounded decode (drivers' LcmStereoSource): never beyond its limits.
+  swf_msgs::stereo_frame_t bounded;
+  if (CheckedDecode(data, size, 64, 48, &bounded).Ok()) {
+    Expect(bounded.width <= 64 && bounded.height <= 48);
+    Expect(bounded.left.size() == static_cast<std::size_t>(bounded.num_bytes));
+  }
   swf_msgs::nav_state_t nav;
   if (CheckedDecode(data, size, &nav).Ok()) ExpectSameBytes(nav, data, size);
   swf_msgs::landmark_map_t map;

@@ -1,5 +1,6 @@
 #include "swf/messages/checked_decode.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace swf::messages {
@@ -106,13 +107,13 @@ DecodeError Fill(const void* data, std::size_t size, Msg* msg) {
   return {};
 }
 
-DecodeError CheckStereoShape(WireReader* r) {
+DecodeError CheckStereoShape(WireReader* r, std::int32_t max_width, std::int32_t max_height) {
   if (!r->Skip(kStereoPrefixBytes)) return Error(DecodeResult::kTruncated, "width", 0);
   std::int32_t width = 0;
   std::int32_t height = 0;
   std::int32_t num_bytes = 0;
-  DecodeError e = ReadCount(r, "width", kMaxImageSidePx, &width);
-  if (e.Ok()) e = ReadCount(r, "height", kMaxImageSidePx, &height);
+  DecodeError e = ReadCount(r, "width", std::min(max_width, kMaxImageSidePx), &width);
+  if (e.Ok()) e = ReadCount(r, "height", std::min(max_height, kMaxImageSidePx), &height);
   if (e.Ok()) e = ReadCount(r, "num_bytes", kMaxImageBytes, &num_bytes);
   if (!e.Ok()) return e;
   if (std::int64_t{width} * height != num_bytes) {
@@ -201,7 +202,16 @@ void Describe(const DecodeError& error, char* out, std::size_t size) {
 }
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::stereo_frame_t* msg) {
-  return Decode(data, size, msg, CheckStereoShape);
+  return Decode(data, size, msg, [](WireReader* r) {
+    return CheckStereoShape(r, kMaxImageSidePx, kMaxImageSidePx);
+  });
+}
+
+DecodeError CheckedDecode(const void* data, std::size_t size, std::int32_t max_width,
+                          std::int32_t max_height, swf_msgs::stereo_frame_t* msg) {
+  return Decode(data, size, msg, [max_width, max_height](WireReader* r) {
+    return CheckStereoShape(r, max_width, max_height);
+  });
 }
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::nav_state_t* msg) {

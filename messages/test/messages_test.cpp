@@ -184,6 +184,32 @@ TEST(CheckedDecode, StereoFrameLengthsAreCheckedBeforeAnyAllocation) {
   EXPECT_STREQ(text, "num_bytes -1: bad length");
 }
 
+TEST(CheckedDecode, StereoFrameWithinTheReceiversLimitsFitsItsReservedBuffers) {
+  const std::vector<std::uint8_t> bytes = Encode(SmallFrame());  // 4 x 2
+  swf_msgs::stereo_frame_t out;
+  // GIVEN a receiver whose buffers hold 4 x 2 px WHEN a 4 x 2 frame arrives THEN it decodes into
+  // them without reallocating.
+  out.left.reserve(8);
+  out.right.reserve(8);
+  const std::uint8_t* left = out.left.data();
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), 4, 2, &out).Ok());
+  EXPECT_EQ(out.left.data(), left);
+  EXPECT_EQ(out.right[7], 9);
+  // A frame wider or taller than the receiver's limits is refused before anything is filled.
+  DecodeError e = CheckedDecode(bytes.data(), bytes.size(), 3, 2, &out);
+  EXPECT_EQ(e.result, DecodeResult::kOverLimit);
+  EXPECT_STREQ(e.field, "width");
+  EXPECT_EQ(e.value, 4);
+  e = CheckedDecode(bytes.data(), bytes.size(), 4, 1, &out);
+  EXPECT_EQ(e.result, DecodeResult::kOverLimit);
+  EXPECT_STREQ(e.field, "height");
+  // Limits beyond the type's own are the type's own.
+  const std::vector<std::uint8_t> huge =
+      WithInt32(WithInt32(bytes, kStereoWidth, 65537), kStereoHeight, 65537);
+  EXPECT_EQ(CheckedDecode(huge.data(), huge.size(), 1 << 30, 1 << 30, &out).result,
+            DecodeResult::kOverLimit);
+}
+
 TEST(CheckedDecode, LandmarkMapCountIsCheckedAgainstTheBytesAndTheLimit) {
   swf_msgs::landmark_map_t map{};
   map.num_landmarks = 2;

@@ -68,6 +68,13 @@ void Describe(const DecodeError& error, char* out, std::size_t size);
 // Decodes `size` bytes at `data` into *msg. Anything but kOk leaves *msg unspecified (but valid to
 // destroy or reuse). Exactly one message must fill the bytes.
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::stereo_frame_t* msg);
+// The same within a receiver's own, tighter image limits (a live subscriber whose buffers are sized
+// to its camera): a frame wider than max_width or taller than max_height px is kOverLimit ("width"
+// / "height") before anything is filled, so decoding into a message whose left/right vectors are
+// reserved to max_width x max_height bytes never allocates. Limits above kMaxImageSidePx are
+// kMaxImageSidePx.
+DecodeError CheckedDecode(const void* data, std::size_t size, std::int32_t max_width,
+                          std::int32_t max_height, swf_msgs::stereo_frame_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::nav_state_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::landmark_map_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_map_t* msg);
