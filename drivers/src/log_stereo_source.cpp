@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <sstream>
 
 #include "swf/drivers/imu_message.hpp"
+#include "swf/drivers/stereo_frame_message.hpp"
 #include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
@@ -16,8 +16,6 @@ namespace {
 constexpr std::uint32_t kLogMagic = 0xEDA1DA01u;
 constexpr std::size_t kRecordHeaderBytes = 4 + 8 + 8 + 4 + 4;  // sync, eventnum, time, lengths
 constexpr std::int64_t kMaxChannelBytes = 256;                 // LCM's own channel name limit
-// Exposure times in microseconds that still fit in nanoseconds (core::TimeNs, int64).
-constexpr std::int64_t kMaxUtime = std::numeric_limits<std::int64_t>::max() / core::kNsPerUs;
 
 std::uint32_t Be32(const std::uint8_t* p) {
   return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
@@ -108,22 +106,6 @@ bool LogStereoSource::Load(const std::string& path, const std::string& channel,
   return true;
 }
 
-namespace {
-// A decoded frame's fields that the decoder cannot judge: "" when usable, else why not.
-std::string CheckFrameFields(const swf_msgs::stereo_frame_t& msg) {
-  if (msg.width <= 0 || msg.height <= 0) {
-    return "empty image (" + std::to_string(msg.width) + "x" + std::to_string(msg.height) + ")";
-  }
-  if (msg.seq < 0) return "negative seq " + std::to_string(msg.seq);
-  if (msg.dropped_before < 0)
-    return "negative dropped_before " + std::to_string(msg.dropped_before);
-  for (const std::int64_t t : {msg.utime, msg.left_exposure_utime, msg.right_exposure_utime}) {
-    if (t < 0 || t > kMaxUtime) return "exposure time " + std::to_string(t) + " us out of range";
-  }
-  return "";
-}
-}  // namespace
-
 void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
   frames_.clear();
   imu_.clear();
@@ -157,8 +139,8 @@ void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
       load_error_ = where + ": stereo_frame_t does not decode (" + what + ")";
       break;
     }
-    const std::string bad = CheckFrameFields(msg);
-    if (!bad.empty()) {
+    char bad[96];
+    if (!CheckStereoFrameFields(msg, bad, sizeof bad)) {
       load_error_ = where + ": " + bad;
       break;
     }
@@ -171,7 +153,7 @@ void LogStereoSource::Load(LogReader* reader, const std::string& channel) {
     rectified_ = msg.rectified;
     Frame f;
     f.seq = msg.seq;
-    f.left_ns = msg.left_exposure_utime * core::kNsPerUs;  // in range: CheckFrameFields
+    f.left_ns = msg.left_exposure_utime * core::kNsPerUs;  // in range: CheckStereoFrameFields
     f.right_ns = msg.right_exposure_utime * core::kNsPerUs;
     f.dropped_before = msg.dropped_before;
     f.has_motion = msg.has_motion;
@@ -212,14 +194,12 @@ void LogStereoSource::Admit(Frame frame) {
       return;
     }
     // Both sequence numbers are non-negative: the gap cannot overflow. Frames the recorded
-    // dropped_before already accounts for (a source numbering its frames across the camera's
-    // losses, as the simulator does) were never in the log: only the rest of the gap is missing.
-    const std::int64_t gap = frame.seq - last.seq - 1;
-    const std::int64_t missing = std::max<std::int64_t>(0, gap - frame.dropped_before);
-    stream_.frames_missing += missing;
-    const std::int64_t dropped = std::int64_t{frame.dropped_before} + missing;
+    // dropped_before already accounts for were never in the log: only the rest of the gap is
+    // missing from it.
+    std::int64_t missing = 0;
     frame.dropped_before = static_cast<std::int32_t>(
-        std::min<std::int64_t>(dropped, std::numeric_limits<std::int32_t>::max()));
+        PairsLostBefore(frame.seq - last.seq - 1, frame.dropped_before, &missing));
+    stream_.frames_missing += missing;
   }
   frame.imu_begin = imu_pending_;
   frame.imu_end = imu_.size();
