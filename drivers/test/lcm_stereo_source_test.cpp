@@ -400,8 +400,8 @@ TEST_F(LcmSource, MutatedMessagesAreServedOrCounted) {
       source_.Release(p);
     }
   }
-  ASSERT_TRUE(WaitReceived(kMessages / 2))
-      << source_.Detail().received;  // loopback may lose some under load: counted
+  // Loopback UDP may still lose some under load: the invariant below holds for what arrived.
+  ASSERT_TRUE(WaitReceived(kMessages / 2)) << source_.Detail().received;
   StereoPair p;
   while (source_.Next(100 * core::kNsPerMs, &p) == core::Status::kOk) {
     ++served;
