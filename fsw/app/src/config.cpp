@@ -17,6 +17,8 @@
 #include <sstream>
 
 #include "swf/app/config_fields.hpp"
+#include "swf/app/lcm_io.hpp"
+#include "swf/drivers/lcm_stereo_source.hpp"
 
 namespace swf::app {
 
@@ -165,13 +167,21 @@ const std::map<std::string, ConfigSetter>& Fields() {
         c->source = SourceKind::kAravis;
       else if (v == "log")
         c->source = SourceKind::kLog;
+      else if (v == "lcm")
+        c->source = SourceKind::kLcm;
       else {
-        *why = Quoted(v) + " is not one of sim v4l2 aravis log";
+        *why = Quoted(v) + " is not one of sim v4l2 aravis log lcm";
         return false;
       }
       return true;
     };
     f["log.path"] = Text([](FswConfig* c) { return &c->log_path; });
+    f["lcm_source.url"] = Text([](FswConfig* c) { return &c->lcm_source.url; });
+    f["lcm_source.channel"] = Text([](FswConfig* c) { return &c->lcm_source.channel; });
+    // The frame group holds one pair; the receiver needs a free buffer to keep receiving.
+    f["lcm_source.buffers"] =
+        Int<std::int32_t>([](FswConfig* c) { return &c->lcm_source.buffers; }, 2,
+                          drivers::kMaxLcmBuffers, " (drivers::kMaxLcmBuffers)");
     f["imu.enabled"] = Bool([](FswConfig* c) { return &c->imu.enabled; });
     f["imu.static_start"] = Bool([](FswConfig* c) { return &c->imu.static_start; });
     f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
@@ -522,6 +532,7 @@ const char* SourceName(SourceKind kind) {
     case SourceKind::kV4l2: return "v4l2";
     case SourceKind::kAravis: return "aravis";
     case SourceKind::kLog: return "log";
+    case SourceKind::kLcm: return "lcm";
   }
   return "?";
 }
@@ -545,7 +556,32 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
     if (c.camera.left.empty()) return fail("camera.left", "required for a camera source");
     if (c.camera.right.empty()) return fail("camera.right", "required for a camera source");
   }
-  if (c.source == SourceKind::kV4l2 || c.source == SourceKind::kAravis) {
+  if (c.source == SourceKind::kLcm) {
+    if (c.lcm_source.channel.empty()) {
+      return fail("lcm_source.channel", "required when source is lcm");
+    }
+    if (c.lcm_source.url.empty() && c.lcm_url.empty()) {
+      return fail("lcm_source.url", "empty, and so is lcm.url");
+    }
+    // Subscribing to one of this process's own outputs would take its messages for frames.
+    for (const char* suffix : {kNavSuffix, kLandmarksSuffix, kHazardSuffix, kHealthSuffix}) {
+      if (c.lcm_source.channel == c.channel_prefix + suffix) {
+        return fail("lcm_source.channel",
+                    Quoted(c.lcm_source.channel) + " is this process's own output channel");
+      }
+    }
+    for (const char* field : {"camera.left", "camera.right", "camera.fake"}) {
+      if (c.origins.keys.count(field) != 0) {
+        return fail(field, "not for source lcm (the frames come from lcm_source.channel)");
+      }
+    }
+  } else {
+    for (const char* field : {"lcm_source.url", "lcm_source.channel", "lcm_source.buffers"}) {
+      if (c.origins.keys.count(field) != 0) return fail(field, "only for source lcm");
+    }
+  }
+  if (c.source == SourceKind::kV4l2 || c.source == SourceKind::kAravis ||
+      c.source == SourceKind::kLcm) {
     if (c.camera.left_calibration.empty()) {
       return fail("camera.left_calibration", "required for a camera source");
     }
@@ -563,7 +599,7 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   if (c.source == SourceKind::kSim && !Extends(c, "sim")) {
     return fail("source",
                 "'sim' is the simulated descent, flown by swf-sil (this program flies "
-                "v4l2, aravis and log)");
+                "v4l2, aravis, log and lcm)");
   }
   if (c.initial == "truth" && c.source != SourceKind::kSim && c.source != SourceKind::kLog) {
     return fail("initial", "'truth' needs the simulator (source sim, or a log of a sim run)");

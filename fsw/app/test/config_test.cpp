@@ -110,7 +110,7 @@ TEST(ConfigTest, NamesTheFieldAndLineOfEveryProblem) {
   Refused("source: sim\nrate_hz: fast\n", "t.cfg:2: rate_hz: 'fast' is not a finite number");
   Refused("source: sim\nrate_hz: 0\n", "rate_hz: 0 is outside");
   Refused("source: sim\nwidnow: 5\n", "t.cfg:2: widnow: unknown field");
-  Refused("source: usb\n", "source: 'usb' is not one of sim v4l2 aravis log");
+  Refused("source: usb\n", "source: 'usb' is not one of sim v4l2 aravis log lcm");
   Refused("source: sim\nmode: batch\n", "mode: 'batch' is not one of");
   Refused("source: sim\nwindow\n", "t.cfg:2: expected 'key: value'");
   Refused("source: sim\n: 5\n", "t.cfg:2: expected 'key: value', got ': 5' (no key)");
@@ -146,6 +146,49 @@ TEST(ConfigTest, RefusesInconsistentCombinationsAtTheLineOfTheField) {
           "t.cfg:3: sim.target: 'orbital' selects a descent");
   Refused("source: sim\nenvelope.min_range_m: 5\n",
           "t.cfg:2: envelope.min_range_m: only for camera and log sources");
+}
+
+// source: lcm: raw pairs published on a channel by a camera process; the calibrations give their
+// size and the pipeline rectifies them.
+TEST(ConfigTest, LcmSourceKeysAndTheirRefusals) {
+  const std::string base =
+      "source: lcm\ninitial: position\ncamera.left_calibration: l.yaml\n"
+      "camera.right_calibration: r.yaml\n";  // lines 1-4
+  FswConfig c;
+  ASSERT_TRUE(Accepted(base + "lcm_source.channel: CAM_STEREO\nlcm_source.buffers: 8\n", &c));
+  EXPECT_EQ(c.source, SourceKind::kLcm);
+  EXPECT_STREQ(SourceName(c.source), "lcm");
+  EXPECT_EQ(c.lcm_source.channel, "CAM_STEREO");
+  EXPECT_EQ(c.lcm_source.buffers, 8);
+  EXPECT_EQ(c.lcm_source.url, "");  // the outputs' bus, lcm.url
+  ASSERT_TRUE(
+      Accepted(base + "lcm_source.channel: C\nlcm_source.url: udpm://239.1.2.3:7667\n", &c));
+  EXPECT_EQ(c.lcm_source.url, "udpm://239.1.2.3:7667");
+
+  Refused(base, "t.cfg: lcm_source.channel: required when source is lcm");
+  Refused(base + "lcm_source.channel: C\nlcm_source.buffers: 1\n",
+          "t.cfg:6: lcm_source.buffers: 1 is outside [2, 16]");
+  Refused(base + "lcm_source.channel: C\nlcm_source.buffers: 17\n",
+          "t.cfg:6: lcm_source.buffers: 17 is outside [2, 16]");
+  // Its own outputs are not frames.
+  Refused(base + "lcm_source.channel: SWF_NAV\n",
+          "t.cfg:5: lcm_source.channel: 'SWF_NAV' is this process's own output channel");
+  Refused(base + "lcm.channel_prefix: X_\nlcm_source.channel: X_HEALTH\n",
+          "t.cfg:6: lcm_source.channel: 'X_HEALTH' is this process's own output channel");
+  Refused(base + "lcm_source.channel: C\ncamera.left: /dev/video0\n",
+          "t.cfg:6: camera.left: not for source lcm");
+  Refused(base + "lcm_source.channel: C\ncamera.fake: true\n",
+          "t.cfg:6: camera.fake: not for source lcm");
+  Refused("source: lcm\ninitial: position\nlcm_source.channel: C\n",
+          "t.cfg: camera.left_calibration: required");
+  Refused(
+      "source: lcm\nlcm_source.channel: C\ncamera.left_calibration: l.yaml\n"
+      "camera.right_calibration: r.yaml\n",
+      "t.cfg: initial: 'truth' needs the simulator");
+  Refused("source: log\nlog.path: x.lcmlog\nlcm_source.channel: C\n",
+          "t.cfg:3: lcm_source.channel: only for source lcm");
+  Refused("source: sim\nlcm_source.buffers: 4\n",
+          "t.cfg:2: lcm_source.buffers: only for source lcm");
 }
 
 // The stereo-inertial keys: the simulator's unit, the IMU's parameters for camera sources, and

@@ -19,7 +19,7 @@
 
 namespace swf::app {
 
-enum class SourceKind : std::uint8_t { kSim, kV4l2, kAravis, kLog };
+enum class SourceKind : std::uint8_t { kSim, kV4l2, kAravis, kLog, kLcm };
 
 struct SimConfig {
   std::string scenario = "descent";  // descent | hover | sideways | lab
@@ -127,6 +127,15 @@ struct CameraConfig {
   double pair_tolerance_ms = 2.0;
 };
 
+// source: lcm: raw stereo_frame_t pairs published live on an LCM channel (a camera process on
+// another computer), received by drivers::LcmStereoSource; camera.*_calibration give their size
+// and the pipeline rectifies them, as for an unrectified log.
+struct LcmSourceConfig {
+  std::string url;           // "" = lcm.url (the bus the outputs go to)
+  std::string channel;       // required with source lcm
+  std::int32_t buffers = 4;  // pairs the source's pool holds
+};
+
 // Where the settings came from, so that every error names the line to change: the file, and for
 // each key given, "<file>:<line>" or "--set" (a command-line override). Keys left at their default
 // are absent (their errors name the file alone).
@@ -153,6 +162,7 @@ struct FswConfig {
   const ConfigExtension* extension = nullptr;  // the program's keys beyond the flight's (or none)
   SourceKind source = SourceKind::kSim;        // required in every file
   std::string log_path;                        // source: log
+  LcmSourceConfig lcm_source;                  // source: lcm
   SimConfig sim;
   CameraConfig camera;
   ImuConfig imu;

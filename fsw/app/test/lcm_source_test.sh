@@ -1,0 +1,72 @@
+#!/bin/sh
+# swf-fsw with `source: lcm` end to end: inside a private network namespace (loopback only, a
+# multicast route on it) a separate publisher process (lcm_stereo_publisher) sends raw 320x240
+# stereo_frame_t pairs of a textured plane at 10 Hz on CAM_STEREO over real UDP multicast, and
+# swf-fsw receives them through LcmStereoSource, rectifies them with the rig's calibrations
+# (config/fake_gv_*.yaml) and flies 20 frames. The publisher starts first and sends until it has
+# seen 20 nav_state_t, so frames sent before swf-fsw subscribed are simply never seen (no
+# start-up race). After the first answer it sends one junk message: counted as rejected, which
+# the verdict must say (1 of 20 frames is over the 1 % loss bound: not ok).
+# Checks: 20 frames flown, 20 nav_state_t and 4 hazard maps recorded, the junk rejected and
+# named, at most a few counted drops (a loaded machine may fill the pool), zero allocations on
+# the real-time threads, the verdict and the exit code agree.
+# usage: lcm_source_test.sh SWF-FSW LCM-STEREO-PUBLISHER
+set -eu
+fsw=$1 pub=$2
+here=$(dirname "$0")
+fail() { echo "FAIL: $*" >&2; exit 1; }
+if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
+$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged userns)"
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+cat > "$dir/lcm.cfg" <<CFG
+source: lcm
+lcm_source.channel: CAM_STEREO
+lcm_source.buffers: 16
+camera.left_calibration: $here/../config/fake_gv_left.yaml
+camera.right_calibration: $here/../config/fake_gv_right.yaml
+rate_hz: 10
+pacing: lockstep
+window: 5
+max_tracks: 100
+max_disparity_px: 64
+hazard_every: 5
+health_every: 5
+max_frames: 20
+rt.mlockall: false
+rt.priority: 0
+initial: position
+initial.position_m: 0 0 10
+# The textured plane is 300 px x 0.2 m / 8 px = 7.5 m away.
+envelope.min_range_m: 5
+record.path: $dir/live.lcmlog
+summary.path: $dir/summary.json
+CFG
+"$fsw" --config "$dir/lcm.cfg" --check || fail "the configuration is refused"
+url="udpm://239.255.76.67:7667?ttl=0"
+$ns sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo || exit 9
+  "$1" "$3" CAM_STEREO SWF_NAV 320 240 20 --junk 2> "$4/pub.err" & pub=$!
+  rc=0; "$0" --config "$2" 2> "$4/err" || rc=$?
+  prc=0; wait $pub || prc=$?
+  echo "$rc $prc" > "$4/rc"' "$fsw" "$pub" "$dir/lcm.cfg" "$url" "$dir"
+cat "$dir/err" "$dir/pub.err"
+read -r rc prc < "$dir/rc"
+[ "$prc" -eq 0 ] || fail "the publisher did not see 20 nav_state_t (exit $prc)"
+json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
+result=$(json "$dir/summary.json" "d['result']")
+case "$result:$rc" in ok:0|degraded:3|failed:1) ;; *) fail "result $result with exit $rc" ;; esac
+[ "$result" != ok ] || fail "a rejected message on the channel went unreported (result ok)"
+[ "$(json "$dir/summary.json" "d['source']")" = lcm ] || fail "not the lcm source"
+[ "$(json "$dir/summary.json" "d['frames']")" -eq 20 ] || fail "not 20 frames"
+[ "$(json "$dir/summary.json" "d['frames_rejected']")" -eq 1 ] || fail "the junk message was not counted"
+dropped=$(json "$dir/summary.json" "d['frames_dropped']")
+echo "frames dropped (counted): $dropped"
+[ "$dropped" -le 5 ] || fail "$dropped frames dropped"
+[ "$(json "$dir/summary.json" "d['allocations_after_start']")" -eq 0 ] || fail "real-time allocations"
+grep -q "lcm CAM_STEREO: .* 20 pairs served; 1 rejected (1 undecodable" "$dir/err" ||
+  fail "the source's counts are not reported"
+cmp="/usr/bin/python3 $here/log_compare.py"
+[ "$($cmp --count SWF_STEREO "$dir/live.lcmlog")" -eq 20 ] || fail "frames not recorded"
+[ "$($cmp --count SWF_NAV "$dir/live.lcmlog")" -eq 20 ] || fail "not 20 nav_state_t"
+[ "$($cmp --count SWF_HAZARD "$dir/live.lcmlog")" -eq 4 ] || fail "not 4 hazard maps"
+echo PASS
