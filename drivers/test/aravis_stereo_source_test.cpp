@@ -6,7 +6,6 @@
 
 #include <arv.h>
 #include <gtest/gtest.h>
-#include <sched.h>
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -18,18 +17,10 @@
 #include <cstring>
 
 #include "swf/testing/allocation_counter.hpp"
+#include "swf/testing/private_network.hpp"
 
 namespace swf::drivers {
 namespace {
-
-// Runs before main(), while the process has a single thread (unshare applies to the caller only).
-bool EnterPrivateNetwork() {
-  if (unshare(CLONE_NEWNET) != 0) {
-    // Not root: an unprivileged user namespace gives the same isolation.
-    if (unshare(CLONE_NEWUSER | CLONE_NEWNET) != 0) return false;
-  }
-  return std::system("ip link set lo up && ip addr add 127.0.0.2/8 dev lo") == 0;
-}
 
 // Each fake camera lives in its own child process, forked before any thread exists, so the
 // allocation count of the test process is the driver's (and Aravis's receive threads') alone, and
@@ -77,7 +68,8 @@ FakeCameraServer StartServer(const char* address, const char* serial) {
   return server;
 }
 
-const bool kIsolated = EnterPrivateNetwork();
+// Before main(), while the process has a single thread.
+const bool kIsolated = swf::testing::EnterPrivateNetwork("ip addr add 127.0.0.2/8 dev lo");
 const FakeCameraServer kLeft = kIsolated ? StartServer("127.0.0.1", "SWFL") : FakeCameraServer{};
 const FakeCameraServer kRight = kIsolated ? StartServer("127.0.0.2", "SWFR") : FakeCameraServer{};
 

@@ -6,7 +6,6 @@
 
 #include <gtest/gtest.h>
 #include <lcm/lcm.h>
-#include <sched.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -17,21 +16,15 @@
 
 #include "swf/core/time.hpp"
 #include "swf/testing/allocation_counter.hpp"
+#include "swf/testing/private_network.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
 namespace swf::drivers {
 namespace {
 
-// Runs before main(), while the process has a single thread (unshare applies to the caller only).
-bool EnterPrivateNetwork() {
-  if (unshare(CLONE_NEWNET) != 0) {
-    if (unshare(CLONE_NEWUSER | CLONE_NEWNET) != 0) return false;  // not root
-  }
-  return std::system("ip link set lo up && ip route add 239.0.0.0/8 dev lo") == 0;
-}
-
-const bool kIsolated = EnterPrivateNetwork();
+// Before main(), while the process has a single thread.
+const bool kIsolated = swf::testing::EnterPrivateNetwork("ip route add 239.0.0.0/8 dev lo");
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 constexpr const char* kChannel = "TEST_STEREO";
 constexpr core::TimeNs kWait = 2 * core::kNsPerS;  // for a frame that was sent: generous

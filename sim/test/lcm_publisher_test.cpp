@@ -4,7 +4,6 @@
 #include "swf/sim/lcm_publisher.hpp"
 
 #include <gtest/gtest.h>
-#include <sched.h>
 
 #include <Eigen/Geometry>
 #include <cstdlib>
@@ -13,6 +12,7 @@
 
 #include "small_scene.hpp"
 #include "swf/sim/trajectory.hpp"
+#include "swf/testing/private_network.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 #include "swf_msgs/truth_state_t.hpp"
@@ -20,15 +20,8 @@
 namespace swf::sim {
 namespace {
 
-// Runs before main(), while the process has a single thread (unshare applies to the caller only).
-bool EnterPrivateNetwork() {
-  if (unshare(CLONE_NEWNET) != 0) {
-    if (unshare(CLONE_NEWUSER | CLONE_NEWNET) != 0) return false;  // not root
-  }
-  return std::system("ip link set lo up && ip route add 239.0.0.0/8 dev lo") == 0;
-}
-
-const bool kIsolated = EnterPrivateNetwork();
+// Before main(), while the process has a single thread.
+const bool kIsolated = swf::testing::EnterPrivateNetwork("ip route add 239.0.0.0/8 dev lo");
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 class Inbox {
