@@ -690,6 +690,10 @@ int ConfigureLoop(FlightProcess* fp) {
   lo.inject_first_frame = config.inject_frame;
   lo.inject_frames = config.inject_frames;
   lo.inject_ms = config.inject_ms;
+  if (fp->imu == &fp->lcm_imu) {
+    lo.imu_wait_ns = static_cast<core::TimeNs>(config.imu.max_latency_ms * 1e6);
+    lo.imu_period_ns = static_cast<core::TimeNs>(1e9 / config.imu.rate_hz);
+  }
   drivers::MotionProvider* motion = fp->extension_source
                                         ? fp->extension->Motion()
                                         : static_cast<drivers::MotionProvider*>(fp->log_source);
@@ -764,13 +768,17 @@ ImuReport ReportImu(FlightProcess* fp) {
     fp->lcm_imu.Stop();
     report.has_lcm = true;
     report.lcm = fp->lcm_imu.Counters();
+    const LoopCounters& loop = fp->loop.Counters();
     std::fprintf(stderr,
                  "%s: imu over LCM: %lld received, %lld undecodable, %lld lost to a full "
-                 "queue, %lld stamped too far ahead\n",
+                 "queue, %lld stamped too far ahead; %lld frames waited for late samples, %lld "
+                 "of them in vain (imu.max_latency_ms)\n",
                  fp->tool, static_cast<long long>(report.lcm.received),
                  static_cast<long long>(report.lcm.undecodable),
                  static_cast<long long>(report.lcm.queue_full),
-                 static_cast<long long>(report.lcm.future_dropped));
+                 static_cast<long long>(report.lcm.future_dropped),
+                 static_cast<long long>(loop.imu_waits),
+                 static_cast<long long>(loop.imu_wait_timeouts));
   }
   if (const estimator::NavState<double>* x = pipeline.NewestNavState()) {
     report.has_biases = true;

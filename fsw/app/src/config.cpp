@@ -186,6 +186,7 @@ const std::map<std::string, ConfigSetter>& Fields() {
     f["imu.static_start"] = Bool([](FswConfig* c) { return &c->imu.static_start; });
     f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
     f["imu.rate_hz"] = ImuNumber(&ImuConfig::rate_hz, 10000.0);
+    f["imu.max_latency_ms"] = ImuNumber(&ImuConfig::max_latency_ms, 1000.0);
     f["imu.gyro_noise_density"] = ImuNumber(&ImuConfig::gyro_noise_density, 1.0);
     f["imu.gyro_random_walk"] = ImuNumber(&ImuConfig::gyro_random_walk, 1.0);
     f["imu.accel_noise_density"] = ImuNumber(&ImuConfig::accel_noise_density, 10.0);

@@ -101,7 +101,23 @@ void FlightLoop::FeedImu(std::int64_t until_utime) {
   const bool lockstep = options_.pacing == Pacing::kLockstep;
   std::int32_t slot = -1;
   estimator::ImuSample<double> sample;
-  while (imu_->NextImu(until_utime, &sample)) {
+  // Covered: the newest sample is within one IMU period of the exposure.
+  const std::int64_t covered_utime = until_utime - options_.imu_period_ns / 1000;
+  const TimeNs deadline = core::MonotonicNs() + options_.imu_wait_ns;
+  bool waited = false;
+  for (;;) {
+    if (!imu_->NextImu(until_utime, &sample)) {
+      if (last_imu_utime_ >= covered_utime || options_.imu_wait_ns <= 0) break;
+      if (core::MonotonicNs() >= deadline) {
+        ++counters_.imu_wait_timeouts;
+        break;
+      }
+      if (!waited) ++counters_.imu_waits;
+      waited = true;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));  // a sample is 2.5-5 ms
+      continue;
+    }
+    last_imu_utime_ = sample.t_us;
     pipeline_->AddImu(sample);
     ++counters_.imu_samples;
     if (!options_.record_frames) continue;

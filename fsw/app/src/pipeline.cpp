@@ -181,7 +181,8 @@ Status Pipeline::Estimate(const Pose<double>* motion_input) {
   if (s != Status::kOk) {
     last_status_ = s;
     if (inertial_ && s == Status::kEmpty) {
-      // No IMU sample has ever arrived: nothing carries the state to this frame.
+      // No IMU sample has ever arrived (nothing carries the state to this frame), or the static
+      // start has too few yet.
       report_ = estimator::IntegrityReport{};
       report_.status = estimator::NavIntegrity::kInvalid;
       report_.flags = estimator::kFlagNoMotionInput;
@@ -267,6 +268,13 @@ Status Pipeline::AddFrameState(const Pose<double>* motion) {
 // first-state sigmas; the IMU intervals start at this frame.
 Status Pipeline::AddFirstState() {
   if (!inertial_) return swf_->AddPose(options_.initial_world_T_camera);
+  if (options_.imu.static_start) {
+    // A live IMU stream may have begun just before the first pair: the static start waits,
+    // frame by frame (INVALID, no motion input), until the rest is long enough to level on.
+    const estimator::ImuSample<double>* samples = nullptr;
+    if (imu_.Buffered(utime_, &samples) < options_.imu.static_alignment.min_samples)
+      return Status::kEmpty;
+  }
   estimator::NavState<double> first;
   first.world_T_imu = options_.initial_world_T_camera * options_.imu.imu_T_camera.Inverse();
   first.velocity_world_mps = options_.imu.initial_velocity_world_mps;

@@ -13,6 +13,7 @@
 #include <memory>
 #include <vector>
 
+#include "small_rig.hpp"
 #include "swf/app/app.hpp"
 #include "swf/app/config.hpp"
 #include "swf/app/hazard_stage.hpp"
@@ -39,15 +40,7 @@ struct Rig : FlightParts {
     EXPECT_TRUE(world->Build(config, &error)) << error;
     EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
     source = std::make_unique<sim::PrerenderedStereoSource>(&world->Frames());
-    PipelineOptions po;
-    po.camera = world->Camera();
-    po.width_px = world->Width();
-    po.height_px = world->Height();
-    po.frontend.harris.bucket_cols = po.width_px / 40;
-    po.frontend.harris.bucket_rows = po.height_px / 40;
-    po.frontend.max_tracks = 100;
-    po.frontend.stereo.max_disparity = 64;
-    po.swf.window_size = 5;
+    PipelineOptions po = testing::SmallRigOptions(*world);
     po.process_sigma_m = 0.05;
     po.process_sigma_rad = 0.001;
     po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);

@@ -3,9 +3,9 @@
 # multicast route on it) a separate publisher process (lcm_stereo_publisher) sends raw 320x240
 # stereo_frame_t pairs of a textured plane at 10 Hz on CAM_STEREO over real UDP multicast, and
 # swf-fsw receives them through LcmStereoSource, rectifies them with the rig's calibrations
-# (config/fake_gv_*.yaml) and flies 20 frames. The publisher starts first and sends until it has
-# seen 20 nav_state_t, so frames sent before swf-fsw subscribed are simply never seen (no
-# start-up race). After the first answer it sends one junk message: counted as rejected, which
+# (config/fake_gv_*.yaml) and flies 20 frames. The publisher starts first and sends until swf-fsw,
+# having answered, falls silent (1 s), so frames sent before swf-fsw subscribed are simply never
+# seen (no start-up race). After the first answer it sends one junk message: counted as rejected, which
 # the verdict must say (1 of 20 frames is over the 1 % loss bound: not ok).
 # Checks: 20 frames flown, 20 nav_state_t and 4 hazard maps recorded, the junk rejected and
 # named, at most a few counted drops (a loaded machine may fill the pool), zero allocations on
@@ -18,7 +18,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
 $ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged userns)"
 dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
+trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
 cat > "$dir/lcm.cfg" <<CFG
 source: lcm
 lcm_source.channel: CAM_STEREO
@@ -69,4 +69,46 @@ cmp="/usr/bin/python3 $here/log_compare.py"
 [ "$($cmp --count SWF_STEREO "$dir/live.lcmlog")" -eq 20 ] || fail "frames not recorded"
 [ "$($cmp --count SWF_NAV "$dir/live.lcmlog")" -eq 20 ] || fail "not 20 nav_state_t"
 [ "$($cmp --count SWF_HAZARD "$dir/live.lcmlog")" -eq 4 ] || fail "not 4 hazard maps"
+echo "PASS: stereo over LCM"
+
+# Then stereo-inertial: the same publisher is also the IMU (imu_t at 200 Hz on CAM_IMU, the rig
+# standing still) and swf-fsw takes both from the bus (LcmImuInput beside LcmStereoSource), levels
+# its start on the static IMU (gravity, zero velocity, gyroscope bias) and flies the 20 frames on
+# the preintegrated IMU, VALID once levelled.
+cp "$dir/lcm.cfg" "$dir/imu.cfg"
+cat >> "$dir/imu.cfg" <<CFG
+imu.enabled: true
+imu.channel: CAM_IMU
+imu.rate_hz: 200
+imu.static_start: true
+# A bench on Earth (the default is the Moon's).
+imu.gravity_mps2: 9.81
+CFG
+sed -i -e "s#^record.path: .*#record.path: $dir/imu.lcmlog#" \
+  -e "s#^summary.path: .*#summary.path: $dir/imu.json#" "$dir/imu.cfg"
+"$fsw" --config "$dir/imu.cfg" --check || fail "the stereo-inertial configuration is refused"
+$ns sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo || exit 9
+  "$1" "$3" CAM_STEREO SWF_NAV 320 240 17 --imu CAM_IMU 2> "$4/imu_pub.err" & pub=$!
+  rc=0; "$0" --config "$2" 2> "$4/imu_err" || rc=$?
+  prc=0; wait $pub || prc=$?
+  echo "$rc $prc" > "$4/imu_rc"' "$fsw" "$pub" "$dir/imu.cfg" "$url" "$dir"
+cat "$dir/imu_err" "$dir/imu_pub.err"
+read -r rc prc < "$dir/imu_rc"
+[ "$prc" -eq 0 ] || fail "stereo-inertial: the publisher saw fewer than 17 nav_state_t (exit $prc)"
+result=$(json "$dir/imu.json" "d['result']")
+echo "stereo-inertial: result $result, exit $rc"
+case "$result:$rc" in ok:0|degraded:3|failed:1) ;; *) fail "result $result with exit $rc" ;; esac
+[ "$(json "$dir/imu.json" "d['frames']")" -eq 20 ] || fail "stereo-inertial: not 20 frames"
+accepted=$(json "$dir/imu.json" "d['imu']['accepted']")
+echo "IMU samples accepted: $accepted"
+[ "$accepted" -ge 360 ] || fail "stereo-inertial: only $accepted IMU samples fused"
+[ "$(json "$dir/imu.json" "d['imu']['static_start']")" -eq 1 ] || fail "no static start"
+# The first pairs may come before 50 samples of rest (250 ms): INVALID until the static start.
+invalid=$(json "$dir/imu.json" "d['integrity']['frames_invalid']")
+valid=$(json "$dir/imu.json" "d['integrity']['frames_valid']")
+echo "stereo-inertial: $valid VALID, $invalid INVALID (waiting for the static start)"
+[ "$invalid" -le 3 ] || fail "$invalid INVALID frames"
+[ "$valid" -ge 15 ] || fail "only $valid VALID frames"
+[ "$(json "$dir/imu.json" "d['allocations_after_start']")" -eq 0 ] || fail "real-time allocations"
+[ "$($cmp --count SWF_IMU "$dir/imu.lcmlog")" -eq "$accepted" ] || fail "IMU samples not recorded"
 echo PASS

@@ -1,11 +1,14 @@
-// A camera process on the bus, for the end-to-end test of `source: lcm` (lcm_source_test.sh):
+// A camera process on the bus, for the end-to-end tests of `source: lcm` (lcm_source_test.sh):
 // publishes raw stereo_frame_t pairs of a textured plane (right view shifted by a fixed
-// disparity, the scene sliding one pixel per frame) at 10 Hz until it has seen `pairs`
-// nav_state_t messages of the flight process on NAV_CHANNEL, or for at most 60 s. With --junk,
-// once the flight process has answered a frame, one message that is no frame (it must be counted
-// as rejected).
-// usage: lcm_stereo_publisher URL CHANNEL NAV_CHANNEL WIDTH HEIGHT PAIRS [--junk]
-// Exit 0 when the flight process answered every pair, 1 otherwise.
+// disparity, the scene sliding one pixel per frame) at 10 Hz until the flight process, having
+// answered with nav_state_t on NAV_CHANNEL, falls silent for 1 s (or for at most 60 s). With
+// --junk, once the flight process has answered a frame, one message that is no frame (it must be
+// counted as rejected). With --imu CHANNEL it is also the vehicle's IMU: the rig stands still (the
+// scene does not slide) and before each pair the 200 Hz imu_t samples of the interval up to its
+// exposure go out on CHANNEL, stamped on the exposures' clock: no rotation, the specific force
+// of gravity for a camera looking at the plane horizontally (camera y axis down).
+// usage: lcm_stereo_publisher URL CHANNEL NAV_CHANNEL WIDTH HEIGHT PAIRS [--junk] [--imu CHANNEL]
+// Exit 0 when the flight process answered at least PAIRS pairs, 1 otherwise.
 #include <lcm/lcm.h>
 
 #include <chrono>
@@ -15,6 +18,8 @@
 #include <cstring>
 #include <vector>
 
+#include "block_texture.hpp"
+#include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
 namespace {
@@ -22,27 +27,35 @@ namespace {
 constexpr int kDisparityPx = 8;
 constexpr std::int64_t kPeriodUs = 100000;
 
-// Random gray blocks of 6 px: corners everywhere, unambiguous along the epipolar lines.
-std::uint8_t Texture(int x, int y) {
-  std::uint32_t h = static_cast<std::uint32_t>((x + 4096) / 6) * 73856093U ^
-                    static_cast<std::uint32_t>((y + 4096) / 6) * 19349663U;
-  h ^= h >> 13;
-  h *= 0x5bd1e995U;
-  h ^= h >> 15;
-  return static_cast<std::uint8_t>(40 + (h % 176));
-}
-
 std::int64_t NowUs() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
              std::chrono::steady_clock::now().time_since_epoch())
       .count();
 }
 
+// The samples stamped in (from_us, to_us], 5 ms apart on the 5 ms grid.
+void PublishImu(lcm_t* lcm, const char* channel, std::int64_t from_us, std::int64_t to_us,
+                std::int64_t* seq, std::vector<std::uint8_t>* bytes) {
+  constexpr std::int64_t kImuPeriodUs = 5000;
+  swf_msgs::imu_t m{};
+  m.specific_force_mps2[1] = -9.81;  // gravity's reaction, up = -y for a level camera
+  m.flags = swf_msgs::imu_t::FLAG_VALID;
+  for (std::int64_t t = (from_us / kImuPeriodUs + 1) * kImuPeriodUs; t <= to_us;
+       t += kImuPeriodUs) {
+    m.utime = t;
+    m.seq = (*seq)++;
+    bytes->resize(static_cast<std::size_t>(m.getEncodedSize()));
+    m.encode(bytes->data(), 0, static_cast<int>(bytes->size()));
+    lcm_publish(lcm, channel, bytes->data(), static_cast<unsigned>(bytes->size()));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc < 7) {
-    std::fprintf(stderr, "usage: %s URL CHANNEL NAV_CHANNEL WIDTH HEIGHT PAIRS [--junk]\n",
+    std::fprintf(stderr,
+                 "usage: %s URL CHANNEL NAV_CHANNEL WIDTH HEIGHT PAIRS [--junk] [--imu CHANNEL]\n",
                  argv[0]);
     return 2;
   }
@@ -50,13 +63,34 @@ int main(int argc, char** argv) {
   const int width = std::atoi(argv[4]);
   const int height = std::atoi(argv[5]);
   const int pairs = std::atoi(argv[6]);
-  const bool junk = argc > 7 && std::strcmp(argv[7], "--junk") == 0;
+  bool junk = false;
+  const char* imu_channel = nullptr;
+  for (int i = 7; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--junk") == 0) {
+      junk = true;
+    } else if (std::strcmp(argv[i], "--imu") == 0 && i + 1 < argc) {
+      imu_channel = argv[++i];
+    } else {
+      std::fprintf(stderr, "lcm_stereo_publisher: unknown option %s\n", argv[i]);
+      return 2;
+    }
+  }
+  const int slide = imu_channel != nullptr ? 0 : 1;  // pixels per frame
   lcm_t* lcm = lcm_create(argv[1]);
   if (lcm == nullptr) return 1;
-  int navs = 0;
+  // The flight process's answers: how many, and when the last came.
+  struct Answers {
+    int count = 0;
+    std::int64_t last_us = 0;
+  } answers;
   lcm_subscribe(
       lcm, argv[3],
-      [](const lcm_recv_buf_t*, const char*, void* count) { ++*static_cast<int*>(count); }, &navs);
+      [](const lcm_recv_buf_t*, const char*, void* a) {
+        Answers* answers = static_cast<Answers*>(a);
+        ++answers->count;
+        answers->last_us = NowUs();
+      },
+      &answers);
   swf_msgs::stereo_frame_t f{};
   f.rectified = false;
   f.width = width;
@@ -67,21 +101,32 @@ int main(int argc, char** argv) {
   std::vector<std::uint8_t> bytes;
   std::int64_t next_us = NowUs();
   bool junk_sent = false;
-  for (int k = 0; k < 600 && navs < pairs; ++k) {
-    if (junk && !junk_sent && navs > 0) {
+  std::int64_t imu_seq = 0;
+  std::int64_t imu_until_us = 0;  // the last IMU stamp published
+  // Until the flight process has stopped answering (1 s of silence after its first answer).
+  for (int k = 0; k < 600 && !(answers.count > 0 && NowUs() - answers.last_us > 1000000); ++k) {
+    if (junk && !junk_sent && answers.count > 0) {
       // Once the flight process is known to listen (it answered a frame).
       const std::uint8_t bytes[5] = {1, 2, 3, 4, 5};
       lcm_publish(lcm, channel, bytes, sizeof bytes);
       junk_sent = true;
     }
     f.seq = k;
-    f.left_exposure_utime = NowUs();
+    const std::int64_t exposure_us = NowUs();
+    if (imu_channel != nullptr) {
+      PublishImu(lcm, imu_channel, k == 0 ? exposure_us - kPeriodUs : imu_until_us, exposure_us,
+                 &imu_seq, &bytes);
+      imu_until_us = exposure_us;
+    }
+    f.left_exposure_utime = exposure_us;
     f.right_exposure_utime = f.left_exposure_utime;
     f.utime = f.left_exposure_utime;
     for (int y = 0; y < height; ++y) {
       for (int x = 0; x < width; ++x) {
-        f.left[static_cast<std::size_t>(y * width + x)] = Texture(x + k, y);
-        f.right[static_cast<std::size_t>(y * width + x)] = Texture(x + k + kDisparityPx, y);
+        f.left[static_cast<std::size_t>(y * width + x)] =
+            swf::testing::BlockTexture(x + slide * k, y);
+        f.right[static_cast<std::size_t>(y * width + x)] =
+            swf::testing::BlockTexture(x + slide * k + kDisparityPx, y);
       }
     }
     bytes.resize(static_cast<std::size_t>(f.getEncodedSize()));
@@ -95,7 +140,8 @@ int main(int argc, char** argv) {
       lcm_handle_timeout(lcm, static_cast<int>(left_us / 1000 + 1));
     }
   }
-  std::fprintf(stderr, "lcm_stereo_publisher: %d nav_state_t seen of %d\n", navs, pairs);
+  std::fprintf(stderr, "lcm_stereo_publisher: %d nav_state_t seen, %d wanted\n", answers.count,
+               pairs);
   lcm_destroy(lcm);
-  return navs >= pairs ? 0 : 1;
+  return answers.count >= pairs ? 0 : 1;
 }

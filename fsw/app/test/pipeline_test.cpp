@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 
+#include "small_rig.hpp"
 #include "swf/app/config.hpp"
 #include "swf/sil/sil.hpp"
 
@@ -37,15 +38,7 @@ struct Descent {
         << error;
     EXPECT_TRUE(world->Build(config, &error)) << error;
     EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
-    PipelineOptions po;
-    po.camera = world->Camera();
-    po.width_px = world->Width();
-    po.height_px = world->Height();
-    po.frontend.harris.bucket_cols = po.width_px / 40;
-    po.frontend.harris.bucket_rows = po.height_px / 40;
-    po.frontend.max_tracks = 100;
-    po.frontend.stereo.max_disparity = 64;
-    po.swf.window_size = 5;
+    PipelineOptions po = testing::SmallRigOptions(*world);
     po.process_sigma_m = 0.02;  // the simulated motion input's noise
     po.process_sigma_rad = 0.0005;
     po.integrity.max_speed_mps = 50.0;

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "block_texture.hpp"
 #include "scripted_v4l2_kernel.hpp"
 #include "swf/app/app.hpp"
 #include "swf/app/config.hpp"
@@ -38,16 +39,6 @@ constexpr int kHeight = 192;
 constexpr int kDisparityPx = 8;
 constexpr double kFocalPx = 200.0;
 constexpr double kBaselineM = 0.2;
-
-// Random gray blocks of 6 px: corners everywhere, unambiguous along the epipolar lines.
-std::uint8_t Texture(int x, int y) {
-  std::uint32_t h = static_cast<std::uint32_t>((x + 4096) / 6) * 73856093U ^
-                    static_cast<std::uint32_t>((y + 4096) / 6) * 19349663U;
-  h ^= h >> 13;
-  h *= 0x5bd1e995U;
-  h ^= h >> 15;
-  return static_cast<std::uint8_t>(40 + (h % 176));
-}
 
 // Forwards to the scripted kernel and paints every dequeued GREY frame with the textured scene
 // (left or right view by device, shifted by the frame's sequence number). Allocates only while
@@ -124,7 +115,8 @@ class TexturingKernel final : public drivers::V4l2Kernel {
       if (m.length < static_cast<std::size_t>(kWidth) * kHeight) return;
       const int shift = static_cast<int>(b.sequence) + (left ? 0 : kDisparityPx);
       for (int y = 0; y < kHeight; ++y) {
-        for (int x = 0; x < kWidth; ++x) m.data[y * kWidth + x] = Texture(x + shift, y);
+        for (int x = 0; x < kWidth; ++x)
+          m.data[y * kWidth + x] = swf::testing::BlockTexture(x + shift, y);
       }
       return;
     }

@@ -28,14 +28,6 @@ Pair MakePair(double disparity, std::uint32_t seed) {
               texture.RenderShifted<TestImage>(400, 240, -disparity, 0.0)};
 }
 
-CornerList Detect(const TestImage& img) {
-  auto detector = std::make_unique<HarrisDetector>();
-  EXPECT_EQ(detector->Configure(HarrisOptions{}), core::Status::kOk);
-  CornerList corners;
-  EXPECT_EQ(detector->Detect(img.View(), nullptr, 0, &corners), core::Status::kOk);
-  return corners;
-}
-
 class StereoSubpixelTest : public ::testing::TestWithParam<double> {};
 
 // GIVEN an exactly known subpixel disparity WHEN matching THEN median error <= 0.015 px
@@ -43,7 +35,7 @@ class StereoSubpixelTest : public ::testing::TestWithParam<double> {};
 TEST_P(StereoSubpixelTest, MedianErrorBelowFifteenThousandthsPixel) {
   const double truth = GetParam();
   const Pair pair = MakePair(truth, 7);
-  const CornerList corners = Detect(pair.left);
+  const CornerList corners = testing::DetectCorners(pair.left);
   ASSERT_GE(corners.size(), 100u);
   StereoMatcher matcher;
   ASSERT_EQ(matcher.Configure(StereoMatcherOptions{}), core::Status::kOk);
@@ -73,7 +65,7 @@ TEST(StereoMatcherTest, RejectsUnrelatedImages) {
   const testing::Texture b(12);
   const TestImage left = a.RenderShifted<TestImage>(400, 240, 0.0, 0.0);
   const TestImage right = b.RenderShifted<TestImage>(400, 240, 0.0, 0.0);
-  const CornerList corners = Detect(left);
+  const CornerList corners = testing::DetectCorners(left);
   StereoMatcher matcher;
   ASSERT_EQ(matcher.Configure(StereoMatcherOptions{}), core::Status::kOk);
   StereoMatchList matches;
@@ -112,7 +104,7 @@ TEST(StereoMatcherTest, RejectsALookAlikeThatBeatsTheTrueMatch) {
   }
   // Left features whose look-alike patch lies inside the copy and whose true match outside it.
   CornerList strip;
-  for (const Corner& c : Detect(left)) {
+  for (const Corner& c : testing::DetectCorners(left)) {
     const int x = static_cast<int>(c.x);
     if (x >= kCopyFrom + kLookAlike + 5 && x + 5 < kCopyTo + kLookAlike && x - 11 - 5 >= kCopyTo) {
       (void)strip.push_back(c);

@@ -8,6 +8,9 @@
 #include <memory>
 #include <vector>
 
+#include <gtest/gtest.h>
+
+#include "swf/frontend/harris.hpp"
 #include "swf/frontend/image.hpp"
 #include "swf/frontend/synthetic_texture.hpp"
 
@@ -45,6 +48,15 @@ inline double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Harris corners of a test image with the default options.
+inline CornerList DetectCorners(const TestImage& img) {
+  auto detector = std::make_unique<HarrisDetector>();
+  EXPECT_EQ(detector->Configure(HarrisOptions{}), core::Status::kOk);
+  CornerList corners;
+  EXPECT_EQ(detector->Detect(img.View(), nullptr, 0, &corners), core::Status::kOk);
+  return corners;
 }
 
 }  // namespace swf::frontend::testing

@@ -16,14 +16,6 @@ using testing::Median;
 using testing::Render;
 using testing::TestImage;
 
-CornerList Detect(const TestImage& img) {
-  auto detector = std::make_unique<HarrisDetector>();
-  EXPECT_EQ(detector->Configure(HarrisOptions{}), core::Status::kOk);
-  CornerList corners;
-  EXPECT_EQ(detector->Detect(img.View(), nullptr, 0, &corners), core::Status::kOk);
-  return corners;
-}
-
 struct FlowCase {
   double dx;
   double dy;
@@ -44,7 +36,7 @@ double FlowMedian(const FlowCase& shift, bool brightness_offset) {
   TrackerOptions options;
   options.brightness_offset = brightness_offset;
   EXPECT_EQ(tracker.Configure(options), core::Status::kOk);
-  const CornerList corners = Detect(a);
+  const CornerList corners = testing::DetectCorners(a);
   EXPECT_GE(corners.size(), 100u);
   std::vector<double> errors;
   errors.reserve(corners.size());
@@ -130,7 +122,7 @@ TEST(PatchTrackerTest, WarpedTrackingBeatsSquarePatches) {
   });
   PatchTracker tracker;
   ASSERT_EQ(tracker.Configure(TrackerOptions{}), core::Status::kOk);
-  const CornerList corners = Detect(a);
+  const CornerList corners = testing::DetectCorners(a);
   std::vector<double> warped_errors;
   std::vector<double> square_errors;
   std::size_t candidates = 0;

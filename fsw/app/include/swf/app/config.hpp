@@ -89,6 +89,8 @@ struct ImuConfig {
   bool enabled = false;
   std::string channel;  // LCM channel of the IMU ("" = channel_prefix + "IMU")
   double rate_hz = 200.0;
+  // imu_t over LCM: how long the frame group waits for the samples up to an exposure.
+  double max_latency_ms = 20.0;
   // Continuous-time noise (Allan deviation of the datasheet; defaults: the ADIS16448 as EuRoC
   // calibrated it).
   double gyro_noise_density = 1.6968e-4;  // rad/s/sqrt(Hz)

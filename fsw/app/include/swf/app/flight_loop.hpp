@@ -63,6 +63,12 @@ struct LoopOptions {
   core::TimeNs restart_after_ns = core::kNsPerS;         // silent this long: restart the source
   core::TimeNs restart_interval_ns = core::kNsPerS / 2;  // between restart attempts
   core::TimeNs max_outage_ns = 30 * core::kNsPerS;       // lost this long: end the run
+  // A live IMU stream (imu_t over LCM) runs on its own thread and its newest samples may arrive
+  // after the pair they precede: the frame group waits at most this long for the samples up to
+  // the exposure (one IMU period short of it) before it integrates what it has (0: never waits;
+  // the simulator and logs hand every sample at once).
+  core::TimeNs imu_wait_ns = 0;
+  core::TimeNs imu_period_ns = core::kNsPerS / 200;
   // Thread set-up of the hazard group (the frame group runs on the caller's thread).
   int hazard_priority = 0;  // SCHED_FIFO priority, 0 = normal scheduling
   // Fault injection for tests: busy-wait inject_ms in stage inject_stage for frames
@@ -100,6 +106,8 @@ struct LoopCounters {
   std::int64_t source_recoveries = 0;      // outages ended by a pair
   std::int64_t longest_outage_cycles = 0;  // missed cycles of the longest outage
   std::int64_t imu_samples = 0;            // handed to the pipeline (before its checks)
+  std::int64_t imu_waits = 0;              // cycles that waited for a live IMU's samples
+  std::int64_t imu_wait_timeouts = 0;      // ... and integrated without them (imu_wait_ns)
 };
 
 class FlightLoop {
@@ -166,6 +174,7 @@ class FlightLoop {
   HazardStage* hazard_ = nullptr;
   drivers::MotionProvider* motion_ = nullptr;
   drivers::ImuProvider* imu_ = nullptr;
+  std::int64_t last_imu_utime_ = 0;  // the newest sample handed to the pipeline
   bool configured_ = false;
   core::TimeNs period_ns_ = 0;
 

@@ -1,0 +1,24 @@
+// The pipeline options the frame-group tests fly their small simulated rigs with (256 x 192 px):
+// the world's rectified rig, 100 tracks in 40-px buckets, disparities up to 64 px, a window of 5.
+// Each test adds its own process noise and start.
+#pragma once
+
+#include "swf/app/pipeline.hpp"
+#include "swf/sil/sim_world.hpp"
+
+namespace swf::testing {
+
+inline app::PipelineOptions SmallRigOptions(const sil::SimWorld& world) {
+  app::PipelineOptions po;
+  po.camera = world.Camera();
+  po.width_px = world.Width();
+  po.height_px = world.Height();
+  po.frontend.harris.bucket_cols = po.width_px / 40;
+  po.frontend.harris.bucket_rows = po.height_px / 40;
+  po.frontend.max_tracks = 100;
+  po.frontend.stereo.max_disparity = 64;
+  po.swf.window_size = 5;
+  return po;
+}
+
+}  // namespace swf::testing
