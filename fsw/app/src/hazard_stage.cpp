@@ -17,6 +17,29 @@ std::int8_t HazardClassCode(hazard::HazardClass k) {
   return 0;
 }
 
+Status FillHazardRecord(const hazard::HazardMapper& m, HazardRecord* out) {
+  const std::int32_t n = m.GridCells();
+  const std::int32_t cells = n * n;
+  if (cells > out->capacity_cells) return Status::kFull;
+  out->origin_world_m[0] = m.CornerX();
+  out->origin_world_m[1] = m.CornerY();
+  out->cell_size_m = m.CellM();
+  out->cells_per_side = n;
+  for (std::int32_t c = 0; c < cells; ++c) {
+    out->elevation_m[c] = m.Elevation()[c];
+    out->sigma_m[c] = m.Sigma()[c];
+    out->slope_deg[c] = m.SlopeDeg()[c];
+    out->roughness_m[c] = m.Roughness()[c];
+    out->hazard_class[c] = HazardClassCode(m.Classes()[c]);
+  }
+  const hazard::SafeSite& site = m.Site();
+  out->safe_site_valid = site.valid;
+  out->safe_site_world_m[0] = site.position_world_m.x();
+  out->safe_site_world_m[1] = site.position_world_m.y();
+  out->safe_site_score = site.score;
+  return Status::kOk;
+}
+
 Status MapperHazardStage::Configure(const hazard::HazardMapperOptions& options) {
   mapper_.reset(new (std::nothrow) hazard::HazardMapper());
   if (!mapper_) return Status::kFull;
@@ -40,31 +63,12 @@ Status MapperHazardStage::Process(const HazardInput& input, HazardRecord* out) {
     ++errors_;
     return s;
   }
-  const hazard::HazardMapper& m = *mapper_;
-  const std::int32_t n = m.GridCells();
-  const std::int32_t cells = n * n;
-  if (cells > out->capacity_cells) {
+  if (FillHazardRecord(*mapper_, out) != Status::kOk) {
     ++errors_;
     return Status::kFull;
   }
   out->utime = input.utime;
   out->frame_seq = input.frame_seq;
-  out->origin_world_m[0] = m.CornerX();
-  out->origin_world_m[1] = m.CornerY();
-  out->cell_size_m = m.CellM();
-  out->cells_per_side = n;
-  for (std::int32_t c = 0; c < cells; ++c) {
-    out->elevation_m[c] = m.Elevation()[c];
-    out->sigma_m[c] = m.Sigma()[c];
-    out->slope_deg[c] = m.SlopeDeg()[c];
-    out->roughness_m[c] = m.Roughness()[c];
-    out->hazard_class[c] = HazardClassCode(m.Classes()[c]);
-  }
-  const hazard::SafeSite& site = m.Site();
-  out->safe_site_valid = site.valid;
-  out->safe_site_world_m[0] = site.position_world_m.x();
-  out->safe_site_world_m[1] = site.position_world_m.y();
-  out->safe_site_score = site.score;
   return Status::kOk;
 }
 

@@ -15,6 +15,13 @@ namespace swf::app {
 // safe.
 std::int8_t HazardClassCode(hazard::HazardClass k);
 
+// The mapper's current map into *out as the hazard group publishes it (grid, per-cell layers with
+// class codes, safe site); utime, frame_seq and update_ms are the caller's. kFull when the grid
+// exceeds out->capacity_cells. The one conversion from mapper state to a published map: the
+// ground tools (tools/hazard) publish through it too, so what they evaluate is what guidance gets.
+// Does not allocate.
+core::Status FillHazardRecord(const hazard::HazardMapper& mapper, HazardRecord* out);
+
 class MapperHazardStage final : public HazardStage {
  public:
   // Allocates the mapper (options.camera and image size must be those of the rectified pair).

@@ -126,6 +126,21 @@ struct HazardRecord {
   double safe_site_world_m[2] = {0.0, 0.0};
   double safe_site_score = 0.0;
   float update_ms = 0.0f;  // wall time of the hazard update (not published; not deterministic)
+
+  // Sizes the arrays for `cells` cells (grid_cells^2); before start only (it allocates).
+  core::Status Allocate(std::int32_t cells) {
+    elevation_m.reset(new (std::nothrow) float[cells]);
+    sigma_m.reset(new (std::nothrow) float[cells]);
+    slope_deg.reset(new (std::nothrow) float[cells]);
+    roughness_m.reset(new (std::nothrow) float[cells]);
+    hazard_class.reset(new (std::nothrow) std::int8_t[cells]);
+    if (!elevation_m || !sigma_m || !slope_deg || !roughness_m || !hazard_class) {
+      capacity_cells = 0;
+      return core::Status::kFull;
+    }
+    capacity_cells = cells;
+    return core::Status::kOk;
+  }
 };
 
 enum class RecordKind : std::uint8_t { kFrame, kNav, kMap, kHealth, kHazard, kImu };
@@ -176,16 +191,9 @@ struct OutputChannels {
     }
     const std::int32_t cells = hazard_cells * hazard_cells;
     for (std::size_t i = 0; i < kHazardPoolSize && cells > 0; ++i) {
-      HazardRecord& h = hazards[static_cast<std::int32_t>(i)];
-      h.elevation_m.reset(new (std::nothrow) float[cells]);
-      h.sigma_m.reset(new (std::nothrow) float[cells]);
-      h.slope_deg.reset(new (std::nothrow) float[cells]);
-      h.roughness_m.reset(new (std::nothrow) float[cells]);
-      h.hazard_class.reset(new (std::nothrow) std::int8_t[cells]);
-      if (!h.elevation_m || !h.sigma_m || !h.slope_deg || !h.roughness_m || !h.hazard_class) {
+      if (hazards[static_cast<std::int32_t>(i)].Allocate(cells) != core::Status::kOk) {
         return core::Status::kFull;
       }
-      h.capacity_cells = cells;
     }
     for (std::size_t i = 0; i < kFramePoolSize; ++i) {
       FrameRecord& f = frames[static_cast<std::int32_t>(i)];
