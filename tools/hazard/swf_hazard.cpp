@@ -32,7 +32,7 @@ namespace {
 
 using swf::evaluation::Quantile;
 using swf::hazard_eval::EvalOptions;
-using swf::hazard_eval::FrameMetrics;
+using swf::hazard_eval::HazardMapMetrics;
 using swf::hazard_eval::World;
 
 constexpr double kSweepAltitudes[] = {100.0, 80.0, 60.0, 50.0, 40.0, 30.0, 20.0, 15.0, 10.0};
@@ -44,14 +44,14 @@ struct Acc {
       frames = 0;
   double cell_m = 0.0, update_ms = 0.0;
   std::vector<double> slope_err, elev_err, elev_sigma;
-  void Add(const FrameMetrics& m) {
-    rocks_in_view += m.rocks_in_view;
+  void Add(const HazardMapMetrics& m, double ms) {
+    rocks_in_view += m.rocks_resolved;
     rocks_detected += m.rocks_detected;
     rocks_flagged += m.rocks_flagged;
     false_cells += m.false_rock_cells;
     free_cells += m.rock_free_cells;
     cell_m += m.cell_m;
-    update_ms += m.update_ms;
+    update_ms += ms;
     ++frames;
     slope_err.insert(slope_err.end(), m.slope_errors_deg.begin(), m.slope_errors_deg.end());
     elev_err.insert(elev_err.end(), m.elevation_errors_m.begin(), m.elevation_errors_m.end());
@@ -145,6 +145,18 @@ std::string WriteFailure(const std::string& path) {
   return path + ": cannot write the hazard map PNG";
 }
 
+// The world's published map (World::Publish / Evaluate) as a PNG; failures are the caller's.
+swf::core::Status WritePublishedPng(const World& world, const EvalOptions& eo,
+                                    const std::string& path) {
+  return swf::hazard_eval::WriteHazardMapPng(swf::hazard_eval::ViewOf(world.Published()),
+                                             eo.footprint_radius_m, path);
+}
+
+std::string EvaluateFailure(swf::core::Status s) {
+  return std::string("cannot publish the hazard map for evaluation (") + swf::core::ToString(s) +
+         ")";
+}
+
 void Json(FILE* f, double v) {
   if (std::isfinite(v)) {
     std::fprintf(f, "%.6g", v);
@@ -180,13 +192,14 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
           return Fail(std::string(kPresetNames[p]) + " seed " + std::to_string(seed) + ": " +
                       StepFailure(a, kSweepAltitudes[a], st));
         }
-        FrameMetrics m = world.Evaluate(*mapper, kSweepAltitudes[a]);
-        m.update_ms = ms;
-        sweep[p][a].Add(m);
-        all_alt[a].Add(m);
+        HazardMapMetrics m;
+        if (const swf::core::Status st = world.Evaluate(*mapper, &m); st != swf::core::Status::kOk)
+          return Fail(EvaluateFailure(st));
+        sweep[p][a].Add(m, ms);
+        all_alt[a].Add(m, ms);
         if (p == 2 && s == 0 && (a == 5 || a == 7)) {
-          (void)swf::hazard_eval::WriteHazardMapPng(
-              *mapper,
+          (void)WritePublishedPng(
+              world, eo,
               out + "/hazard_map_rocks_" + std::to_string(int(kSweepAltitudes[a])) + "m.png");
         }
       }
@@ -217,30 +230,29 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
       const double y0 = rng.Uniform(-20.0, 20.0);
       const double heading = rng.Uniform(0.0, 6.283);
       int f = 0;
-      FrameMetrics m;
+      HazardMapMetrics m;
+      double ms = 0.0;
       for (double alt : kDescentAltitudes) {
         const auto pose =
             CameraPose(world, x0 + 0.2 * rng.Gaussian(), y0 + 0.2 * rng.Gaussian(), alt, heading);
-        double ms = 0.0;
         if (const swf::core::Status st = world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms);
             st != swf::core::Status::kOk) {
           return Fail(std::string(kPresetNames[p]) + " descent seed " + std::to_string(seed) +
                       ": " + StepFailure(f, alt, st));
         }
         ++f;
-        m = world.Evaluate(*mapper, alt);
-        m.update_ms = ms;
+        if (const swf::core::Status st = world.Evaluate(*mapper, &m); st != swf::core::Status::kOk)
+          return Fail(EvaluateFailure(st));
       }
-      descent_acc[p].Add(m);
+      descent_acc[p].Add(m, ms);
       results.push_back({p, s, m.site_valid, m.site_on_hazard, m.site_clearance_m,
                          mapper->Site().stable_updates});
       if (s == 0) {
-        (void)swf::hazard_eval::WriteHazardMapPng(
-            *mapper, out + "/hazard_map_descent_" + kPresetNames[p] + ".png");
+        (void)WritePublishedPng(world, eo, out + "/hazard_map_descent_" + kPresetNames[p] + ".png");
       }
       if (m.site_valid && m.site_on_hazard) {  // every failure kept for inspection
-        (void)swf::hazard_eval::WriteHazardMapPng(
-            *mapper,
+        (void)WritePublishedPng(
+            world, eo,
             out + "/hazard_map_failed_" + kPresetNames[p] + "_" + std::to_string(s) + ".png");
       }
     }
@@ -342,11 +354,13 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
   std::fprintf(json, ",\n    \"runs\": [");
   for (std::size_t i = 0; i < results.size(); ++i) {
     const DescentResult& r = results[i];
+    char clearance[32] = "null";  // no site, no clearance
+    if (r.valid) std::snprintf(clearance, sizeof clearance, "%.3f", r.clearance);
     std::fprintf(json,
                  "%s{\"preset\": \"%s\", \"seed\": %d, \"site\": %s, \"on_hazard\": %s, "
-                 "\"clearance_m\": %.3f, \"stable_updates\": %d}",
+                 "\"clearance_m\": %s, \"stable_updates\": %d}",
                  i == 0 ? "\n      " : ",\n      ", kPresetNames[r.preset], r.seed,
-                 r.valid ? "true" : "false", r.on_hazard ? "true" : "false", r.clearance, r.stable);
+                 r.valid ? "true" : "false", r.on_hazard ? "true" : "false", clearance, r.stable);
   }
   std::fprintf(json, "]\n  }\n}\n");
   if (std::fclose(json) != 0) return Fail(out + "/hazard_eval.json: write failed");
@@ -396,8 +410,9 @@ int Map(const std::string& path, const EvalOptions& eo, swf::sim::TerrainPreset 
     }
     ++f;
   }
-  if (swf::hazard_eval::WriteHazardMapPng(*mapper, path) != swf::core::Status::kOk)
-    return Fail(WriteFailure(path));
+  if (const swf::core::Status st = world.Publish(*mapper); st != swf::core::Status::kOk)
+    return Fail(path + ": " + EvaluateFailure(st));
+  if (WritePublishedPng(world, eo, path) != swf::core::Status::kOk) return Fail(WriteFailure(path));
   return 0;
 }
 
@@ -572,9 +587,13 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     }
     ++f;
     const double agl = alt - world.Terrain().HeightAt(x0, y0);
-    FrameMetrics m = world.Evaluate(*mapper, agl);
+    HazardMapMetrics m;
+    if (const swf::core::Status st2 = world.Evaluate(*mapper, &m); st2 != swf::core::Status::kOk) {
+      std::fclose(dat);
+      return Fail(EvaluateFailure(st2));
+    }
     Acc acc;
-    acc.Add(m);
+    acc.Add(m, ms);
     const SgmError se = MeasureSgm(world, *mapper);
     const swf::hazard::HazardStats& st = mapper->Stats();
     const double k = std::max(1, st.known_cells);
@@ -588,7 +607,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
                     acc.WithinSigma(2.0), Quantile(acc.elev_sigma, 0.5),
                     Quantile(acc.elev_err, 0.5), Quantile(acc.slope_err, 0.5), se.valid,
                     se.median_abs, se.robust_sigma, se.rms_clipped, se.frac_over_1px,
-                    m.site_valid ? 1 : 0, m.site_valid ? m.site_clearance_m : NAN, m.rocks_in_view,
+                    m.site_valid ? 1 : 0, m.site_valid ? m.site_clearance_m : NAN, m.rocks_resolved,
                     m.rocks_detected, acc.Far(), se.corr[0], se.corr[1], se.corr[2], se.corr[3],
                     st.disparity_scale, st.calibration_landmarks);
       return std::string(b);
@@ -647,8 +666,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
                 rock.center_m.x(), rock.center_m.y(), rock.height_m, rock.diameter_m,
                 mapper->Sigma()[c], static_cast<int>(mapper->Classes()[c]));
   }
-  if (swf::hazard_eval::WriteHazardMapPng(*mapper, out + "/flight_map.png") !=
-      swf::core::Status::kOk)
+  if (WritePublishedPng(world, eo, out + "/flight_map.png") != swf::core::Status::kOk)
     return Fail(WriteFailure(out + "/flight_map.png"));
   return 0;
 }

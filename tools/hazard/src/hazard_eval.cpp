@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "swf/app/hazard_stage.hpp"
 #include "swf/sim/appearance.hpp"
 #include "swf/sim/image_io.hpp"
 #include "swf/sim/rng.hpp"
@@ -118,128 +119,34 @@ core::Status World::Step(const estimator::Pose<double>& world_T_camera, std::uin
   return s;
 }
 
-FrameMetrics World::Evaluate(const hazard::HazardMapper& m, double altitude_m) const {
-  FrameMetrics r;
-  r.altitude_m = altitude_m;
-  r.cell_m = m.CellM();
-  const int n = m.GridCells();
-  const double cell = m.CellM();
-  const double tcell = terrain_.CellM();
-  const int tn = terrain_.Size();
-  const auto node_of = [&](double x, double y, int* i, int* j) {
-    *i = static_cast<int>(std::lround((x - terrain_.NodeX(0)) / tcell));
-    *j = static_cast<int>(std::lround((y - terrain_.NodeY(0)) / tcell));
-    return *i >= 0 && *j >= 0 && *i < tn && *j < tn;
-  };
-  // Max truth rock height within radius of (x, y).
-  const auto max_rock_near = [&](double x, double y, double radius) {
-    int ci = 0;
-    int cj = 0;
-    node_of(x, y, &ci, &cj);
-    const int rn = static_cast<int>(std::ceil(radius / tcell));
-    float best = 0.0f;
-    for (int j = std::max(0, cj - rn); j <= std::min(tn - 1, cj + rn); ++j) {
-      for (int i = std::max(0, ci - rn); i <= std::min(tn - 1, ci + rn); ++i) {
-        if (std::hypot(terrain_.NodeX(i) - x, terrain_.NodeY(j) - y) > radius) continue;
-        best = std::max(best, truth_.rock_height_m[static_cast<std::size_t>(j) * tn + i]);
-      }
-    }
-    return best;
-  };
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const std::size_t c = static_cast<std::size_t>(j) * n + i;
-      if (std::isnan(m.Elevation()[c])) continue;
-      ++r.known_cells;
-      const double x = m.CornerX() + (i + 0.5) * cell;
-      const double y = m.CornerY() + (j + 0.5) * cell;
-      // Truth: mean height over the cell (4 x 4 samples).
-      double mean = 0.0;
-      for (int b = 0; b < 4; ++b) {
-        for (int a = 0; a < 4; ++a) {
-          mean += terrain_.HeightAt(x + (a - 1.5) * cell / 4.0, y + (b - 1.5) * cell / 4.0);
-        }
-      }
-      mean /= 16.0;
-      r.elevation_errors_m.push_back(std::fabs(m.Elevation()[c] - mean));
-      r.elevation_sigmas_m.push_back(m.Sigma()[c]);
-      int ti = 0;
-      int tj = 0;
-      if (!std::isnan(m.SlopeDeg()[c]) && node_of(x, y, &ti, &tj)) {
-        r.slope_errors_deg.push_back(
-            std::fabs(m.SlopeDeg()[c] - truth_.slope_deg[static_cast<std::size_t>(tj) * tn + ti]));
-      }
-      const bool rock_near =
-          max_rock_near(x, y, 0.5 * cell + 0.3) >= 0.5 * options_.max_rock_height_m;
-      const bool is_rock = m.Classes()[c] == hazard::HazardClass::kRock;
-      r.rock_cells += is_rock;
-      if (!rock_near) {
-        ++r.rock_free_cells;
-        r.false_rock_cells += is_rock;
-      }
-    }
+core::Status World::Publish(const hazard::HazardMapper& mapper) {
+  const std::int32_t cells = mapper.GridCells() * mapper.GridCells();
+  if (cells > published_.capacity_cells) {
+    if (core::Status s = published_.Allocate(cells); s != core::Status::kOk) return s;
   }
-  for (const sim::Rock& rock : terrain_.Rocks()) {
-    if (rock.height_m < options_.max_rock_height_m) continue;
-    int ci = 0;
-    int cj = 0;
-    if (!m.CellOf(rock.center_m.x(), rock.center_m.y(), &ci, &cj)) continue;
-    // In view = inside the part of the map precise enough to resolve the threshold (the
-    // mapper's own criterion: sigma <= threshold / 3); elsewhere a rock can only be kUncertain.
-    const float sigma = m.Sigma()[static_cast<std::size_t>(cj) * n + ci];
-    if (!(sigma * 3.0 <= options_.max_rock_height_m)) continue;
-    ++r.rocks_in_view;
-    const double radius = 0.5 * rock.diameter_m + cell;
-    const int rc = static_cast<int>(std::ceil(radius / cell));
-    bool found = false;
-    bool flagged = false;
-    for (int j = std::max(0, cj - rc); j <= std::min(n - 1, cj + rc); ++j) {
-      for (int i = std::max(0, ci - rc); i <= std::min(n - 1, ci + rc); ++i) {
-        const double x = m.CornerX() + (i + 0.5) * cell;
-        const double y = m.CornerY() + (j + 0.5) * cell;
-        if (std::hypot(x - rock.center_m.x(), y - rock.center_m.y()) > radius) continue;
-        const hazard::HazardClass k = m.Classes()[static_cast<std::size_t>(j) * n + i];
-        found = found || k == hazard::HazardClass::kRock;
-        flagged =
-            flagged || k == hazard::HazardClass::kRock || k == hazard::HazardClass::kUncertain;
-      }
-    }
-    r.rocks_detected += found;
-    r.rocks_flagged += flagged;
-  }
-  const hazard::SafeSite& site = m.Site();
-  r.site_valid = site.valid;
-  if (site.valid) {
-    const double search = options_.footprint_radius_m + 10.0;
-    int ci = 0;
-    int cj = 0;
-    node_of(site.position_world_m.x(), site.position_world_m.y(), &ci, &cj);
-    const int rn = static_cast<int>(std::ceil(search / tcell));
-    double nearest = search;
-    for (int j = std::max(0, cj - rn); j <= std::min(tn - 1, cj + rn); ++j) {
-      for (int i = std::max(0, ci - rn); i <= std::min(tn - 1, ci + rn); ++i) {
-        if (truth_.hazard[static_cast<std::size_t>(j) * tn + i] == 0) continue;
-        nearest = std::min(nearest, std::hypot(terrain_.NodeX(i) - site.position_world_m.x(),
-                                               terrain_.NodeY(j) - site.position_world_m.y()));
-      }
-    }
-    r.site_clearance_m = nearest;
-    r.site_on_hazard = nearest < options_.footprint_radius_m;
-  }
-  return r;
+  return app::FillHazardRecord(mapper, &published_);
 }
 
-void RenderHazardMap(const hazard::HazardMapper& m, int scale, std::vector<std::uint8_t>* rgb,
-                     int* width, int* height) {
-  const int n = m.GridCells();
-  const double cell = m.CellM();
+core::Status World::Evaluate(const hazard::HazardMapper& mapper, HazardMapMetrics* metrics) {
+  if (core::Status s = Publish(mapper); s != core::Status::kOk) return s;
+  MetricOptions o;
+  o.max_rock_height_m = options_.max_rock_height_m;
+  o.footprint_radius_m = options_.footprint_radius_m;
+  *metrics = EvaluateHazardMap(ViewOf(published_), terrain_, terrain_.Rocks(), truth_, o);
+  return core::Status::kOk;
+}
+
+void RenderHazardMap(const HazardMapView& m, double footprint_radius_m, int scale,
+                     std::vector<std::uint8_t>* rgb, int* width, int* height) {
+  const int n = m.cells_per_side;
+  const double cell = m.cell_m;
   *width = n * scale;
   *height = n * scale;
   rgb->assign(static_cast<std::size_t>(*width) * *height * 3, 0);
   const auto elev = [&](int i, int j) {
     i = std::clamp(i, 0, n - 1);
     j = std::clamp(j, 0, n - 1);
-    return m.Elevation()[static_cast<std::size_t>(j) * n + i];
+    return m.elevation_m[static_cast<std::size_t>(j) * n + i];
   };
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
@@ -247,7 +154,7 @@ void RenderHazardMap(const hazard::HazardMapper& m, int scale, std::vector<std::
       double r = 20;
       double g = 30;
       double b = 70;  // unknown
-      if (!std::isnan(m.Elevation()[c])) {
+      if (!std::isnan(m.elevation_m[c])) {
         float ex = elev(i + 1, j) - elev(i - 1, j);
         float ey = elev(i, j + 1) - elev(i, j - 1);
         if (std::isnan(ex)) ex = 0.0f;
@@ -260,32 +167,28 @@ void RenderHazardMap(const hazard::HazardMapper& m, int scale, std::vector<std::
         double tr = 1.0;
         double tg = 1.0;
         double tb = 1.0;
-        switch (m.Classes()[c]) {
-          case hazard::HazardClass::kSafe:
-            tr = 0.75;
-            tg = 1.0;
-            tb = 0.75;
-            break;
-          case hazard::HazardClass::kUncertain:
-            tr = 1.0;
-            tg = 0.9;
-            tb = 0.3;
-            break;
-          case hazard::HazardClass::kSlope:
-            tr = 1.0;
-            tg = 0.55;
-            tb = 0.1;
-            break;
-          case hazard::HazardClass::kRock:
-            tr = 1.0;
-            tg = 0.1;
-            tb = 0.1;
-            break;
-          case hazard::HazardClass::kUnknown:
-            tr = 0.6;
-            tg = 0.6;
-            tb = 0.8;
-            break;
+        // The tint of each published class code (app::HazardClassCode); other codes untinted.
+        const std::int8_t k = m.hazard_class[c];
+        if (k == app::HazardClassCode(hazard::HazardClass::kSafe)) {
+          tr = 0.75;
+          tg = 1.0;
+          tb = 0.75;
+        } else if (k == app::HazardClassCode(hazard::HazardClass::kUncertain)) {
+          tr = 1.0;
+          tg = 0.9;
+          tb = 0.3;
+        } else if (k == app::HazardClassCode(hazard::HazardClass::kSlope)) {
+          tr = 1.0;
+          tg = 0.55;
+          tb = 0.1;
+        } else if (k == app::HazardClassCode(hazard::HazardClass::kRock)) {
+          tr = 1.0;
+          tg = 0.1;
+          tb = 0.1;
+        } else if (k == app::HazardClassCode(hazard::HazardClass::kUnknown)) {
+          tr = 0.6;
+          tg = 0.6;
+          tb = 0.8;
         }
         r = 255.0 * shade * tr;
         g = 255.0 * shade * tg;
@@ -303,11 +206,10 @@ void RenderHazardMap(const hazard::HazardMapper& m, int scale, std::vector<std::
       }
     }
   }
-  const hazard::SafeSite& site = m.Site();
-  if (!site.valid) return;
-  const double px = (site.position_world_m.x() - m.CornerX()) / cell * scale;
-  const double py = *height - (site.position_world_m.y() - m.CornerY()) / cell * scale;
-  const double rad = m.Options().footprint_radius_m / cell * scale;
+  if (!m.site_valid) return;
+  const double px = (m.site_world_m[0] - m.origin_world_m[0]) / cell * scale;
+  const double py = *height - (m.site_world_m[1] - m.origin_world_m[1]) / cell * scale;
+  const double rad = footprint_radius_m / cell * scale;
   const auto put = [&](int x, int y) {
     if (x < 0 || y < 0 || x >= *width || y >= *height) return;
     std::uint8_t* p = rgb->data() + (static_cast<std::size_t>(y) * *width + x) * 3;
@@ -324,11 +226,12 @@ void RenderHazardMap(const hazard::HazardMapper& m, int scale, std::vector<std::
   }
 }
 
-core::Status WriteHazardMapPng(const hazard::HazardMapper& mapper, const std::string& path) {
+core::Status WriteHazardMapPng(const HazardMapView& map, double footprint_radius_m,
+                               const std::string& path) {
   std::vector<std::uint8_t> rgb;
   int w = 0;
   int h = 0;
-  RenderHazardMap(mapper, 2, &rgb, &w, &h);
+  RenderHazardMap(map, footprint_radius_m, 2, &rgb, &w, &h);
   return sim::WritePng(path, rgb.data(), w, h, 3, w * 3);
 }
 

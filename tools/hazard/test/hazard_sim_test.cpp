@@ -149,7 +149,7 @@ TEST(HazardSimTest, ReducedDescentAgainstTruth) {
               core::Status::kOk);
     auto mapper = std::make_unique<hazard::HazardMapper>();
     ASSERT_EQ(mapper->Configure(world.MapperOptions()), core::Status::kOk);
-    FrameMetrics m;
+    HazardMapMetrics m;
     int f = 0;
     for (double alt : {40.0, 25.0, 15.0, 10.0}) {
       estimator::Pose<double> pose;
@@ -157,7 +157,7 @@ TEST(HazardSimTest, ReducedDescentAgainstTruth) {
       pose.t = {1.0, 2.0, world.Terrain().HeightAt(1.0, 2.0) + alt};
       ASSERT_EQ(world.Step(pose, f, 77 + f, mapper.get(), nullptr), core::Status::kOk);
       ++f;
-      m = world.Evaluate(*mapper, alt);
+      ASSERT_EQ(world.Evaluate(*mapper, &m), core::Status::kOk);
       const hazard::HazardStats& st = mapper->Stats();
       std::printf(
           "  %.0f m: cell %.2f known %d safe %d uncertain %d rock %d (false %d) slope %d, "
@@ -175,16 +175,16 @@ TEST(HazardSimTest, ReducedDescentAgainstTruth) {
         "preset %d: %d known cells (%.2f m), within 1 sigma %.1f%%, rocks %d (%d flagged)"
         "/%d, false %d/%d, site %d clearance %.2f m\n",
         p, m.known_cells, m.cell_m, 100.0 * frac, m.rocks_detected, m.rocks_flagged,
-        m.rocks_in_view, m.false_rock_cells, m.rock_free_cells, m.site_valid, m.site_clearance_m);
+        m.rocks_resolved, m.false_rock_cells, m.rock_free_cells, m.site_valid, m.site_clearance_m);
     EXPECT_GT(m.known_cells, 2000);
     EXPECT_GT(frac, 0.4);
     EXPECT_LT(frac, 0.95);
     EXPECT_FALSE(m.site_valid && m.site_on_hazard);
     EXPECT_LT(m.false_rock_cells, std::max(5, m.rock_free_cells / 50));
     if (p == 2) {
-      ASSERT_GT(m.rocks_in_view, 0);
+      ASSERT_GT(m.rocks_resolved, 0);
       // Flagged = kRock or kUncertain (never a landing site): every resolved rock.
-      EXPECT_EQ(m.rocks_flagged, m.rocks_in_view);
+      EXPECT_EQ(m.rocks_flagged, m.rocks_resolved);
     }
   }
 }

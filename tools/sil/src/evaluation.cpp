@@ -6,8 +6,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "swf/app/hazard_stage.hpp"
-
 namespace swf::sil {
 
 double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajectory,
@@ -159,21 +157,29 @@ void Evaluation::WritePlots(const evaluation::RunScore& score, const std::string
 namespace swf::sil {
 
 void Evaluation::OnHazard(const app::HazardRecord& r) {
-  PublishedHazardMap m;
+  const std::int32_t cells = r.cells_per_side * r.cells_per_side;
+  app::HazardRecord& m = hazard_maps_.emplace_back();
+  if (m.Allocate(cells) != core::Status::kOk) {
+    hazard_maps_.pop_back();
+    return;
+  }
+  m.seq = r.seq;
+  m.utime = r.utime;
   m.frame_seq = r.frame_seq;
-  m.origin_m[0] = r.origin_world_m[0];
-  m.origin_m[1] = r.origin_world_m[1];
-  m.cell_m = r.cell_size_m;
+  m.origin_world_m[0] = r.origin_world_m[0];
+  m.origin_world_m[1] = r.origin_world_m[1];
+  m.cell_size_m = r.cell_size_m;
   m.cells_per_side = r.cells_per_side;
-  const std::size_t cells = static_cast<std::size_t>(r.cells_per_side) * r.cells_per_side;
-  m.elevation_m.assign(r.elevation_m.get(), r.elevation_m.get() + cells);
-  m.sigma_m.assign(r.sigma_m.get(), r.sigma_m.get() + cells);
-  m.classes.assign(r.hazard_class.get(), r.hazard_class.get() + cells);
-  m.site_valid = r.safe_site_valid;
-  m.site_m[0] = r.safe_site_world_m[0];
-  m.site_m[1] = r.safe_site_world_m[1];
-  m.site_score = r.safe_site_score;
-  hazard_maps_.push_back(std::move(m));
+  std::copy_n(r.elevation_m.get(), cells, m.elevation_m.get());
+  std::copy_n(r.sigma_m.get(), cells, m.sigma_m.get());
+  std::copy_n(r.slope_deg.get(), cells, m.slope_deg.get());
+  std::copy_n(r.roughness_m.get(), cells, m.roughness_m.get());
+  std::copy_n(r.hazard_class.get(), cells, m.hazard_class.get());
+  m.safe_site_valid = r.safe_site_valid;
+  m.safe_site_world_m[0] = r.safe_site_world_m[0];
+  m.safe_site_world_m[1] = r.safe_site_world_m[1];
+  m.safe_site_score = r.safe_site_score;
+  m.update_ms = r.update_ms;
 }
 
 std::vector<HazardEvaluation> Evaluation::EvaluateHazard(
@@ -186,118 +192,22 @@ std::vector<HazardEvaluation> Evaluation::EvaluateHazard(
   sim::HazardMap truth;
   if (hazard_maps_.empty() || sim::ComputeHazardTruth(terrain, ho, &truth) != core::Status::kOk)
     return result;
-  for (const PublishedHazardMap& m : hazard_maps_) {
-    HazardEvaluation e = EvaluateHazardMap(m, thresholds, terrain, truth);
+  hazard_eval::MetricOptions mo;
+  mo.max_rock_height_m = thresholds.max_rock_height_m;
+  mo.footprint_radius_m = thresholds.footprint_radius_m;
+  mo.cell_errors = false;  // the summary reports counts and the site only
+  for (const app::HazardRecord& m : hazard_maps_) {
+    HazardEvaluation e;
+    e.frame_seq = m.frame_seq;
+    e.map =
+        hazard_eval::EvaluateHazardMap(hazard_eval::ViewOf(m), terrain, terrain.Rocks(), truth, mo);
     if (m.frame_seq >= 0 && m.frame_seq < trajectory.NumFrames()) {
       const Eigen::Vector3d& t = trajectory.WorldTCamera(static_cast<std::int32_t>(m.frame_seq)).t;
       e.altitude_m = t.z() - terrain.HeightAt(t.x(), t.y());
     }
-    result.push_back(e);
+    result.push_back(std::move(e));
   }
   return result;
-}
-
-namespace {
-// The height class of a rock of height h against the threshold (kRockHeightClasses classes).
-int RockHeightClass(double h, double threshold) {
-  if (h < 2.0 * threshold) return 0;
-  return h < 4.0 * threshold ? 1 : 2;
-}
-}  // namespace
-
-HazardEvaluation Evaluation::EvaluateHazardMap(const PublishedHazardMap& m,
-                                               const hazard::HazardMapperOptions& o,
-                                               const sim::Terrain& terrain,
-                                               const sim::HazardMap& truth) {
-  HazardEvaluation r;
-  r.frame_seq = m.frame_seq;
-  const int n = m.cells_per_side;
-  const double cell = m.cell_m;
-  if (n <= 0 || !(cell > 0.0)) return r;
-  const std::int8_t rock_code = app::HazardClassCode(hazard::HazardClass::kRock);
-  const int tn = truth.size;
-  const double tcell = terrain.CellM();
-  const auto cell_of = [&](double x, double y, int* i, int* j) {
-    const double fx = (x - m.origin_m[0]) / cell;
-    const double fy = (y - m.origin_m[1]) / cell;
-    if (!(fx >= 0.0 && fy >= 0.0 && fx < n && fy < n)) return false;
-    *i = static_cast<int>(fx);
-    *j = static_cast<int>(fy);
-    return true;
-  };
-  // Truth nodes within radius of (x, y); f(node index, distance) for each.
-  const auto for_nodes_near = [&](double x, double y, double radius, auto&& f) {
-    const int ci = static_cast<int>(std::lround((x - terrain.NodeX(0)) / tcell));
-    const int cj = static_cast<int>(std::lround((y - terrain.NodeY(0)) / tcell));
-    const int rn = static_cast<int>(std::ceil(radius / tcell));
-    for (int j = std::max(0, cj - rn); j <= std::min(tn - 1, cj + rn); ++j) {
-      for (int i = std::max(0, ci - rn); i <= std::min(tn - 1, ci + rn); ++i) {
-        const double d = std::hypot(terrain.NodeX(i) - x, terrain.NodeY(j) - y);
-        if (d <= radius) f(static_cast<std::size_t>(j) * tn + i, d);
-      }
-    }
-  };
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const std::size_t c = static_cast<std::size_t>(j) * n + i;
-      if (std::isnan(m.elevation_m[c])) continue;
-      ++r.known_cells;
-      float rock = 0.0f;
-      for_nodes_near(m.origin_m[0] + (i + 0.5) * cell, m.origin_m[1] + (j + 0.5) * cell,
-                     0.5 * cell + 0.3,
-                     [&](std::size_t k, double) { rock = std::max(rock, truth.rock_height_m[k]); });
-      if (rock >= 0.5 * o.max_rock_height_m) continue;
-      ++r.rock_free_cells;
-      r.false_rock_cells += m.classes[c] == rock_code;
-    }
-  }
-  if (r.rock_free_cells > 0) {
-    r.false_alarm_rate = static_cast<double>(r.false_rock_cells) / r.rock_free_cells;
-  }
-  for (const sim::Rock& rock : terrain.Rocks()) {
-    if (rock.height_m < o.max_rock_height_m) continue;
-    int ci = 0;
-    int cj = 0;
-    if (!cell_of(rock.center_m.x(), rock.center_m.y(), &ci, &cj)) continue;
-    const float sigma = m.sigma_m[static_cast<std::size_t>(cj) * n + ci];
-    if (!(3.0 * sigma <= o.max_rock_height_m)) continue;
-    const int height_class = RockHeightClass(rock.height_m, o.max_rock_height_m);
-    ++r.rocks_resolved;
-    ++r.rocks_resolved_by_height[height_class];
-    const double radius = 0.5 * rock.diameter_m + cell;
-    const int rc = static_cast<int>(std::ceil(radius / cell));
-    bool found = false;
-    for (int j = std::max(0, cj - rc); j <= std::min(n - 1, cj + rc) && !found; ++j) {
-      for (int i = std::max(0, ci - rc); i <= std::min(n - 1, ci + rc); ++i) {
-        const double dx = m.origin_m[0] + (i + 0.5) * cell - rock.center_m.x();
-        const double dy = m.origin_m[1] + (j + 0.5) * cell - rock.center_m.y();
-        if (std::hypot(dx, dy) <= radius &&
-            m.classes[static_cast<std::size_t>(j) * n + i] == rock_code) {
-          found = true;
-          break;
-        }
-      }
-    }
-    r.rocks_detected += found;
-    r.rocks_detected_by_height[height_class] += found;
-  }
-  if (r.rocks_resolved > 0) {
-    r.detection_probability = static_cast<double>(r.rocks_detected) / r.rocks_resolved;
-  }
-  r.site_valid = m.site_valid;
-  if (m.site_valid) {
-    r.site_x_m = m.site_m[0];
-    r.site_y_m = m.site_m[1];
-    r.site_score = m.site_score;
-    constexpr double kSearchM = 20.0;
-    double nearest = kSearchM;
-    for_nodes_near(r.site_x_m, r.site_y_m, kSearchM, [&](std::size_t k, double d) {
-      if (truth.hazard[k] != 0) nearest = std::min(nearest, d);
-    });
-    r.site_clearance_m = nearest;
-    r.site_on_hazard = nearest <= o.footprint_radius_m;
-  }
-  return r;
 }
 
 }  // namespace swf::sil

@@ -52,7 +52,8 @@ std::string Fixed6(double v) {
 }
 
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
-void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& h) {
+void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& e) {
+  const hazard_eval::HazardMapMetrics& h = e.map;
   std::fprintf(
       f,
       "{\"frame\": %lld, \"altitude_m\": %s, \"known_cells\": %d, "
@@ -60,7 +61,7 @@ void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& h) {
       "\"rocks_resolved_by_height\": [%d, %d, %d], "
       "\"rocks_detected_by_height\": [%d, %d, %d], \"rock_free_cells\": %d, "
       "\"false_rock_cells\": %d, \"false_alarm_rate\": %.5f, \"site_on_truth_hazard\": %s}",
-      static_cast<long long>(h.frame_seq), app::JsonNumber(h.altitude_m).c_str(), h.known_cells,
+      static_cast<long long>(e.frame_seq), app::JsonNumber(e.altitude_m).c_str(), h.known_cells,
       h.rocks_resolved, h.rocks_detected,
       h.detection_probability >= 0.0 ? app::JsonNumber(h.detection_probability).c_str() : "null",
       h.rocks_resolved_by_height[0], h.rocks_resolved_by_height[1], h.rocks_resolved_by_height[2],
@@ -72,20 +73,20 @@ void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& h) {
 // The hazard maps: the final one with its safe site, and every one by altitude. The height
 // classes are [1, 2), [2, 4), [4, inf) times the rock threshold (hazard.max_rock_height_m).
 void WriteHazardMaps(std::FILE* f, const std::vector<HazardEvaluation>& evals) {
-  const HazardEvaluation& h = evals.back();
   std::fprintf(f, "  \"hazard\": ");
-  WriteHazardEvaluation(f, h);
+  WriteHazardEvaluation(f, evals.back());
   std::fprintf(f, ",\n  \"hazard_by_map\": [");
   for (std::size_t k = 0; k < evals.size(); ++k) {
     std::fprintf(f, "%s\n    ", k > 0 ? "," : "");
     WriteHazardEvaluation(f, evals[k]);
   }
   std::fprintf(f, "],\n");
+  const hazard_eval::HazardMapMetrics& h = evals.back().map;
   if (h.site_valid) {
     std::fprintf(f,
                  "  \"safe_site\": {\"x_m\": %.3f, \"y_m\": %.3f, \"score\": %.4f, "
                  "\"clearance_to_truth_hazard_m\": %.3f, \"on_truth_hazard\": %s}\n",
-                 h.site_x_m, h.site_y_m, h.site_score, h.site_clearance_m,
+                 h.site_world_m[0], h.site_world_m[1], h.site_score, h.site_clearance_m,
                  h.site_on_hazard ? "true" : "false");
   } else {
     std::fprintf(f, "  \"safe_site\": null\n");
@@ -168,9 +169,13 @@ void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightP
   Evaluation::WritePlots(score_, config.plot_dir);
   hazard_evals_ = evaluation_.EvaluateHazard(parts.hazard->Mapper().Options(), world.Trajectory(),
                                              world.Terrain());
-  if (!config.plot_dir.empty() && !hazard_evals_.empty()) {
+  // The picture of what guidance received: the last published map, not the mapper's state.
+  const app::HazardRecord* last = evaluation_.LastHazardMap();
+  if (!config.plot_dir.empty() && !hazard_evals_.empty() && last != nullptr) {
     const std::string png = config.plot_dir + "/hazard.png";
-    if (hazard_eval::WriteHazardMapPng(parts.hazard->Mapper(), png) != core::Status::kOk)
+    if (hazard_eval::WriteHazardMapPng(hazard_eval::ViewOf(*last),
+                                       parts.hazard->Mapper().Options().footprint_radius_m,
+                                       png) != core::Status::kOk)
       std::fprintf(stderr, "swf-sil: cannot write %s\n", png.c_str());
   }
   if (score_.protection_violations > 0) {

@@ -1,14 +1,17 @@
 // Hazard-mapping evaluation against the simulator's truth (tools only, never flight code):
-// seeded descents over a simulated terrain, metrics of a HazardMapper's map against the exact
-// terrain layers, and the hazard-map PNG rendering.
+// seeded descents over a simulated terrain, each map published as the flight process publishes it
+// and judged by the one hazard-map-vs-truth metric (map_metrics.hpp), and the hazard-map PNG
+// rendering of a published map.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "swf/app/records.hpp"
 #include "swf/core/status.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
+#include "swf/hazard_eval/map_metrics.hpp"
 #include "swf/sim/appearance.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/renderer.hpp"
@@ -28,27 +31,6 @@ struct EvalOptions {
   double max_rock_height_m = 0.3;
   double max_slope_deg = 10.0;
   std::string shared_dir = "../shared";
-};
-
-// Metrics of one map against truth.
-struct FrameMetrics {
-  double altitude_m = 0.0;
-  double cell_m = 0.0;
-  int known_cells = 0;
-  int rocks_in_view = 0;     // truth rocks >= max_rock_height whose centre cell is resolved
-                             // (sigma <= max_rock_height / 3)
-  int rocks_detected = 0;    // ... with a kRock cell within the rock's radius + one cell
-  int rocks_flagged = 0;     // ... with a kRock or kUncertain cell there (never a site)
-  int rock_cells = 0;        // cells classified kRock
-  int false_rock_cells = 0;  // kRock cells with no truth rock >= half the threshold nearby
-  int rock_free_cells = 0;   // known cells with no such rock nearby
-  std::vector<double> slope_errors_deg;    // |estimated - true| per fitted cell
-  std::vector<double> elevation_errors_m;  // |estimated - true cell mean|
-  std::vector<double> elevation_sigmas_m;
-  bool site_valid = false;
-  bool site_on_hazard = false;    // a truth hazard node inside the footprint at the site
-  double site_clearance_m = 0.0;  // site to nearest truth hazard node
-  double update_ms = 0.0;
 };
 
 class World {
@@ -72,8 +54,13 @@ class World {
                     std::uint64_t rng_seed, hazard::HazardMapper* mapper, double* update_ms,
                     const Eigen::Matrix<double, 6, 1>* pose_error = nullptr,
                     const Eigen::Matrix<double, 6, 6>* pose_covariance = nullptr);
-  // Compares the map with truth.
-  FrameMetrics Evaluate(const hazard::HazardMapper& mapper, double altitude_m) const;
+  // Publishes the mapper's map into Published() as the flight process's hazard group does
+  // (app::FillHazardRecord); kFull when the record cannot be sized.
+  core::Status Publish(const hazard::HazardMapper& mapper);
+  const app::HazardRecord& Published() const { return published_; }
+  // Publishes the mapper's map and judges it against truth (EvaluateHazardMap, per-cell errors
+  // included, the options' rock threshold and footprint).
+  core::Status Evaluate(const hazard::HazardMapper& mapper, HazardMapMetrics* metrics);
   hazard::HazardMapperOptions MapperOptions() const;
 
  private:
@@ -84,13 +71,15 @@ class World {
   sim::HazardMap truth_;
   sim::StereoImages images_;
   std::vector<hazard::HazardLandmark> landmarks_;
+  app::HazardRecord published_;
 };
 
-// Hazard map as RGB (3 x scale^2 bytes per cell, north up): hill-shaded elevation, classes
-// tinted (rock red, slope orange, uncertain yellow, safe green, unknown dark blue), the safe site
-// as a white footprint circle with a cross.
-void RenderHazardMap(const hazard::HazardMapper& mapper, int scale, std::vector<std::uint8_t>* rgb,
-                     int* width, int* height);
-core::Status WriteHazardMapPng(const hazard::HazardMapper& mapper, const std::string& path);
+// A published hazard map as RGB (3 x scale^2 bytes per cell, north up): hill-shaded elevation,
+// classes tinted (rock red, slope orange, uncertain yellow, safe green, unknown dark blue), the
+// safe site as a white footprint circle (footprint_radius_m) with a cross.
+void RenderHazardMap(const HazardMapView& map, double footprint_radius_m, int scale,
+                     std::vector<std::uint8_t>* rgb, int* width, int* height);
+core::Status WriteHazardMapPng(const HazardMapView& map, double footprint_radius_m,
+                               const std::string& path);
 
 }  // namespace swf::hazard_eval

@@ -19,6 +19,7 @@
 #include "swf/app/pipeline.hpp"
 #include "swf/evaluation/run_judge.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
+#include "swf/hazard_eval/map_metrics.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/imu_model.hpp"
 #include "swf/sim/terrain.hpp"
@@ -35,28 +36,12 @@ double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajecto
                       const app::ImuOptions& imu,
                       const estimator::Pose<double>& initial_world_T_camera);
 
-// A published hazard map against the simulator's hazard truth (sim/hazard.hpp, same thresholds).
-// Rocks are counted in height classes [1, 2), [2, 4) and [4, inf) times the rock threshold.
-inline constexpr int kRockHeightClasses = 3;
+// A published hazard map against the simulator's hazard truth (sim/hazard.hpp, the mapper's
+// thresholds), by the one hazard-map-vs-truth metric (swf/hazard_eval/map_metrics.hpp).
 struct HazardEvaluation {
-  std::int64_t frame_seq = -1;  // the frame the map belongs to
-  double altitude_m = 0.0;      // true altitude of the camera above the terrain at that frame
-  int known_cells = 0;
-  int rocks_resolved = 0;               // truth rocks >= the threshold whose cell resolves it
-                                        // (sigma <= threshold / 3)
-  int rocks_detected = 0;               // ... with a rock cell within the rock's radius + one cell
-  double detection_probability = -1.0;  // detected / resolved (-1: none resolved)
-  int rocks_resolved_by_height[kRockHeightClasses] = {};
-  int rocks_detected_by_height[kRockHeightClasses] = {};
-  int rock_free_cells = 0;        // known cells without a truth rock >= threshold / 2 nearby
-  int false_rock_cells = 0;       // ... classified rock
-  double false_alarm_rate = 0.0;  // false_rock_cells / rock_free_cells
-  bool site_valid = false;
-  double site_x_m = 0.0;
-  double site_y_m = 0.0;
-  double site_score = 0.0;
-  bool site_on_hazard = false;     // a truth hazard node within the footprint of the site
-  double site_clearance_m = -1.0;  // site to the nearest truth hazard node (capped at 20 m)
+  std::int64_t frame_seq = -1;        // the frame the map belongs to
+  double altitude_m = 0.0;            // true altitude of the camera above the terrain at that frame
+  hazard_eval::HazardMapMetrics map;  // counts and the site (no per-cell errors)
 };
 
 class Evaluation : public app::OutputObserver {
@@ -83,28 +68,15 @@ class Evaluation : public app::OutputObserver {
   std::vector<HazardEvaluation> EvaluateHazard(const hazard::HazardMapperOptions& thresholds,
                                                const sim::Trajectory& trajectory,
                                                const sim::Terrain& terrain) const;
+  // The last published hazard map (a copy kept after the run); null when none was published.
+  const app::HazardRecord* LastHazardMap() const {
+    return hazard_maps_.empty() ? nullptr : &hazard_maps_.back();
+  }
 
  private:
-  // The fields of a published hazard map the evaluation reads.
-  struct PublishedHazardMap {
-    std::int64_t frame_seq = 0;
-    double origin_m[2] = {0.0, 0.0};
-    double cell_m = 0.0;
-    int cells_per_side = 0;
-    std::vector<float> elevation_m;
-    std::vector<float> sigma_m;
-    std::vector<std::int8_t> classes;  // hazard_map_t.CLASS_*
-    bool site_valid = false;
-    double site_m[2] = {0.0, 0.0};
-    double site_score = 0.0;
-  };
   template <typename Message>
   void Send(const std::string& channel, const Message& m);
 
-  static HazardEvaluation EvaluateHazardMap(const PublishedHazardMap& map,
-                                            const hazard::HazardMapperOptions& thresholds,
-                                            const sim::Terrain& terrain,
-                                            const sim::HazardMap& truth);
   const sim::Trajectory* trajectory_ = nullptr;
   const sim::Terrain* terrain_ = nullptr;
   estimator::StereoCamera<double> camera_;
@@ -116,7 +88,7 @@ class Evaluation : public app::OutputObserver {
   swf_msgs::truth_state_t truth_;
   swf_msgs::landmark_map_t truth_map_;
   std::vector<std::uint8_t> buffer_;
-  std::vector<PublishedHazardMap> hazard_maps_;
+  std::vector<app::HazardRecord> hazard_maps_;  // copies: the output thread reuses its slots
 };
 
 }  // namespace swf::sil
