@@ -1,7 +1,8 @@
 // Internal to swf_kitti_vo: one compiled SlidingWindowFilter instance behind a small interface,
 // and the solve that feeds a kitti-vo problem to it. The tiers instantiate MakeTier<K, N, M, P> in
-// three translation units (kitti_vo_tiers_*.cpp; each instantiation takes ~17 s to compile), so
-// they compile in parallel and the rest of the library does not instantiate the filter.
+// one translation unit (kitti_vo_tiers.cpp): a unit's first filter instance costs most of the
+// compile time and the others share it, and the rest of the library does not instantiate the
+// filter.
 #pragma once
 
 #include <algorithm>
@@ -33,14 +34,14 @@ struct KittiVoTier {
 
 // The compiled tiers. Batch tiers have P = 1: without marginalization the prior spans the first
 // pose only.
-// kitti_vo_tiers_batch.cpp
+// kitti_vo_tiers.cpp: batch
 KittiVoTier TierBatch32();   // the kitti-vo sample (26 poses, 2,634 landmarks)
 KittiVoTier TierBatch128();  // KITTI-00-sized excerpts (77 poses, 15,638 landmarks)
-// kitti_vo_tiers_batch_large.cpp
+// batch, long sequences
 KittiVoTier TierBatch512();
 KittiVoTier TierBatch2048();
 KittiVoTier TierBatch4800();  // the longest KITTI odometry sequence (02: 4,661 frames)
-// kitti_vo_tiers_window.cpp
+// sliding windows
 KittiVoTier TierWindow32();
 KittiVoTier TierWindow32Wide();  // KITTI-00-sized windows (up to 686 prior landmarks)
 KittiVoTier TierWindow128();
