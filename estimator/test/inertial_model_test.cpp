@@ -1,6 +1,6 @@
 // Stereo-inertial estimation, the model and the filter's flight properties: InertialStereoModel's
 // residuals and Jacobians against central differences, and the filter with it allocating
-// nothing and repeating bit for bit (estimator_inertial_scenario_test has the accuracy runs).
+// nothing and repeating bit for bit (inertial_scenario_test.cpp has the accuracy runs).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,12 +16,12 @@ namespace {
 using Model = InertialStereoModel<double>;
 using testing::DescentScene;
 using testing::ErrorOf;
+using testing::InertialRunResult;
 using testing::InertialScene;
 using testing::InertialSceneOptions;
 using testing::MakeInertialScene;
 using testing::Pim;
 using testing::RunFilter;
-using testing::RunResult;
 using testing::State;
 using testing::StateError;
 
@@ -150,8 +150,8 @@ TEST(InertialModel, MeasurementJacobianIsThroughTheLeverArm) {
 
 TEST(InertialSwf, AllocatesNothingAndRepeatsBitForBit) {
   const InertialScene scene = DescentScene(2, 20);
-  const RunResult a = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 7);
-  const RunResult b = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 7);
+  const InertialRunResult a = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 7);
+  const InertialRunResult b = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 7);
   EXPECT_EQ(a.allocations, 0u);
   ASSERT_EQ(a.newest.size(), b.newest.size());
   for (std::size_t j = 0; j < a.newest.size(); ++j) {

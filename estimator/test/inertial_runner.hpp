@@ -23,7 +23,7 @@ using scene::MakeInertialScene;
 using scene::PreintegrateFrame;
 using State = NavState<double>;
 using Pim = ImuPreintegration<double>;
-using RunResult = scene::InertialTrace;
+using InertialRunResult = scene::InertialTrace;
 
 // The default descent (swf/scene/inertial_scene.hpp) with this seed and length.
 inline InertialScene DescentScene(std::uint64_t seed, int frames) {
@@ -48,9 +48,9 @@ inline StateError ErrorOf(const State& estimate, const State& truth) {
 // Start: the true pose and velocity known to a few cm, biases unknown (zero) with the
 // datasheet's turn-on sigmas.
 template <int K, int P>
-RunResult RunFilter(const InertialScene& s, SwfMode mode, int covariance_every) {
+InertialRunResult RunFilter(const InertialScene& s, SwfMode mode, int covariance_every) {
   auto swf = std::make_unique<SlidingWindowFilter<InertialStereoModel<double>, K, 200, 200, P>>();
-  const RunResult r = scene::RunInertialScene<swf::testing::AllocationScope>(
+  const InertialRunResult r = scene::RunInertialScene<swf::testing::AllocationScope>(
       swf.get(), s, mode, scene::FirstPoseCovariance(0.05, 0.002), covariance_every);
   EXPECT_EQ(r.configured, core::Status::kOk);
   EXPECT_EQ(r.rejected_frames, 0);

@@ -16,20 +16,20 @@ namespace {
 using Model = InertialStereoModel<double>;
 using testing::DescentScene;
 using testing::ErrorOf;
+using testing::InertialRunResult;
 using testing::InertialScene;
 using testing::InertialSceneOptions;
 using testing::MakeInertialScene;
 using testing::Pim;
 using testing::RunFilter;
-using testing::RunResult;
 using testing::State;
 using testing::StateError;
 
 TEST(InertialSwf, BiasesConvergeAndTheWindowStaysNearBatch) {
   constexpr int kFrames = 40;
   const InertialScene scene = DescentScene(1, kFrames);
-  const RunResult swf = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 0);
-  const RunResult batch = RunFilter<kFrames, 1>(scene, SwfMode::kBatch, 0);
+  const InertialRunResult swf = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 0);
+  const InertialRunResult batch = RunFilter<kFrames, 1>(scene, SwfMode::kBatch, 0);
   EXPECT_EQ(swf.failed_updates, 0);
   EXPECT_EQ(batch.failed_updates, 0);
   // Time to a stated accuracy, and staying there: gyro bias within 1.1 mrad/s and accel bias
@@ -82,7 +82,7 @@ TEST(InertialSwf, NeesOfTheWholeStateIsConsistent) {
   int n = 0;
   for (std::uint64_t seed = 11; seed < 21; ++seed) {
     const InertialScene scene = DescentScene(seed, 25);
-    const RunResult r = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 1000);
+    const InertialRunResult r = RunFilter<5, 200>(scene, SwfMode::kSlidingWindow, 1000);
     ASSERT_EQ(r.covariance.size(), 2u);  // the first frame's and the last's
     Mat15<double> unused;
     const Vec15<double> e = Model::Difference(scene.truth.back(), r.newest.back(), &unused);
@@ -105,7 +105,7 @@ TEST(InertialSwf, CameraBlindForTwoSecondsTheImuCarriesTheEstimate) {
   constexpr int kBlindFrom = 20;
   constexpr int kBlindTo = 39;
   for (int j = kBlindFrom; j <= kBlindTo; ++j) scene.obs[static_cast<std::size_t>(j)].clear();
-  const RunResult r = RunFilter<5, 300>(scene, SwfMode::kSlidingWindow, 1);
+  const InertialRunResult r = RunFilter<5, 300>(scene, SwfMode::kSlidingWindow, 1);
   ASSERT_EQ(r.failed_updates, 0);
   ASSERT_EQ(r.covariance.size(), scene.truth.size());
   auto error_m = [&](int j) {
