@@ -44,13 +44,23 @@ summary.path: $dir/summary.json
 CFG
 "$fsw" --config "$dir/lcm.cfg" --check || fail "the configuration is refused"
 url="udpm://239.255.76.67:7667?ttl=0"
-$ns sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo || exit 9
-  "$1" "$3" CAM_STEREO SWF_NAV 320 240 20 --junk 2> "$4/pub.err" & pub=$!
-  rc=0; "$0" --config "$2" 2> "$4/err" || rc=$?
-  prc=0; wait $pub || prc=$?
-  echo "$rc $prc" > "$4/rc"' "$fsw" "$pub" "$dir/lcm.cfg" "$url" "$dir"
-cat "$dir/err" "$dir/pub.err"
-read -r rc prc < "$dir/rc"
+# fly TAG CONFIG PUBLISHER-ARGS...: inside the namespace, the publisher (URL, then its arguments)
+# and swf-fsw on CONFIG; sets rc (swf-fsw's exit) and prc (the publisher's); their stderr is kept
+# in $dir/TAG.err and $dir/TAG.pub.err.
+fly() {
+  tag=$1 cfg=$2
+  shift 2
+  $ns sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo || exit 9
+    fsw=$1 pub=$2 cfg=$3 url=$4 out=$5
+    shift 5
+    "$pub" "$url" "$@" 2> "$out.pub.err" & p=$!
+    rc=0; "$fsw" --config "$cfg" 2> "$out.err" || rc=$?
+    prc=0; wait $p || prc=$?
+    echo "$rc $prc" > "$out.rc"' sh "$fsw" "$pub" "$cfg" "$url" "$dir/$tag" "$@"
+  cat "$dir/$tag.err" "$dir/$tag.pub.err"
+  read -r rc prc < "$dir/$tag.rc"
+}
+fly stereo "$dir/lcm.cfg" CAM_STEREO SWF_NAV 320 240 20 --junk
 [ "$prc" -eq 0 ] || fail "the publisher did not see 20 nav_state_t (exit $prc)"
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 result=$(json "$dir/summary.json" "d['result']")
@@ -63,7 +73,7 @@ dropped=$(json "$dir/summary.json" "d['frames_dropped']")
 echo "frames dropped (counted): $dropped"
 [ "$dropped" -le 5 ] || fail "$dropped frames dropped"
 [ "$(json "$dir/summary.json" "d['allocations_after_start']")" -eq 0 ] || fail "real-time allocations"
-grep -q "lcm CAM_STEREO: .* 20 pairs served; 1 rejected (1 undecodable" "$dir/err" ||
+grep -q "lcm CAM_STEREO: .* 20 pairs served; 1 rejected (1 undecodable" "$dir/stereo.err" ||
   fail "the source's counts are not reported"
 cmp="/usr/bin/python3 $here/log_compare.py"
 [ "$($cmp --count SWF_STEREO "$dir/live.lcmlog")" -eq 20 ] || fail "frames not recorded"
@@ -87,13 +97,7 @@ CFG
 sed -i -e "s#^record.path: .*#record.path: $dir/imu.lcmlog#" \
   -e "s#^summary.path: .*#summary.path: $dir/imu.json#" "$dir/imu.cfg"
 "$fsw" --config "$dir/imu.cfg" --check || fail "the stereo-inertial configuration is refused"
-$ns sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo || exit 9
-  "$1" "$3" CAM_STEREO SWF_NAV 320 240 17 --imu CAM_IMU 2> "$4/imu_pub.err" & pub=$!
-  rc=0; "$0" --config "$2" 2> "$4/imu_err" || rc=$?
-  prc=0; wait $pub || prc=$?
-  echo "$rc $prc" > "$4/imu_rc"' "$fsw" "$pub" "$dir/imu.cfg" "$url" "$dir"
-cat "$dir/imu_err" "$dir/imu_pub.err"
-read -r rc prc < "$dir/imu_rc"
+fly imu "$dir/imu.cfg" CAM_STEREO SWF_NAV 320 240 17 --imu CAM_IMU
 [ "$prc" -eq 0 ] || fail "stereo-inertial: the publisher saw fewer than 17 nav_state_t (exit $prc)"
 result=$(json "$dir/imu.json" "d['result']")
 echo "stereo-inertial: result $result, exit $rc"

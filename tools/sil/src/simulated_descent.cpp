@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "swf/app/config.hpp"
+#include "swf/app/config_fields.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/sim/rig.hpp"
 
@@ -41,14 +42,6 @@ void WriteOutputs(std::FILE* f, const evaluation::RunScore& score) {
   column("hpl_m", [](const Output& o) { return app::JsonNumber(o.hpl_m); });
   column("vpl_m", [](const Output& o) { return app::JsonNumber(o.vpl_m); });
   std::fprintf(f, "},\n");
-}
-
-// A fixed six-decimal figure, null when there is none.
-std::string Fixed6(double v) {
-  if (!std::isfinite(v)) return "null";
-  char text[40];
-  std::snprintf(text, sizeof text, "%.6f", v);
-  return text;
 }
 
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
@@ -240,13 +233,16 @@ void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
   } else {
     std::fprintf(f, "  \"landmark_rms_error_m\": null,\n  \"landmark_median_error_m\": null,\n");
   }
-  std::fprintf(f,
-               "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %s,\n"
-               "  \"final_pose_error_m\": %.6f,\n  \"nav_outputs\": %lld,\n"
-               "  \"landmark_maps\": %lld,\n",
-               static_cast<long long>(LandmarksEvaluated()), Fixed6(score.pose_rms_error_m).c_str(),
-               score.final_pose_error_m, static_cast<long long>(score.outputs.size()),
-               static_cast<long long>(score.maps.size()));
+  std::fprintf(
+      f,
+      "  \"landmarks_evaluated\": %lld,\n  \"pose_rms_error_m\": %s,\n"
+      "  \"final_pose_error_m\": %.6f,\n  \"nav_outputs\": %lld,\n"
+      "  \"landmark_maps\": %lld,\n",
+      static_cast<long long>(LandmarksEvaluated()),
+      (std::isfinite(score.pose_rms_error_m) ? app::Fixed(score.pose_rms_error_m, 6) : "null")
+          .c_str(),
+      score.final_pose_error_m, static_cast<long long>(score.outputs.size()),
+      static_cast<long long>(score.maps.size()));
   std::fprintf(f, "  \"mean_position_nees\": %s,\n  \"position_nees\": [",
                app::JsonNumber(score.mean_position_nees).c_str());
   for (std::size_t k = 0; k < score.outputs.size(); ++k) {
