@@ -60,6 +60,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     ExpectSameBytes(hazard, data, size);
   }
+  swf_msgs::hazard_truth_t hazard_truth;
+  if (CheckedDecode(data, size, &hazard_truth).Ok()) {
+    Expect(hazard_truth.num_cells == hazard_truth.rows * hazard_truth.cols);
+    Expect(hazard_truth.rock_free.size() == static_cast<std::size_t>(hazard_truth.num_cells));
+    Expect(hazard_truth.num_rocks <= swf::messages::kMaxTruthRocks);
+    Expect(hazard_truth.rock_height_m.size() == static_cast<std::size_t>(hazard_truth.num_rocks));
+    for (const std::int8_t f : hazard_truth.rock_free) Expect(f == 0 || f == 1);
+    ExpectSameBytes(hazard_truth, data, size);
+  }
   swf_msgs::health_t health;
   if (CheckedDecode(data, size, &health).Ok()) {
     Expect(health.stage_name.size() == static_cast<std::size_t>(health.num_stages));

@@ -23,6 +23,16 @@ constexpr std::int64_t kBytesPerLandmark = 8 + 24 + 48 + 4;
 constexpr std::size_t kHazardPrefixBytes = 24 + 16 + 24 + 8;
 constexpr std::int64_t kBytesPerCell = 4 * 4 + 1;
 constexpr std::int64_t kHazardSuffixBytes = 1 + 16 + 8;
+// hazard_truth_t: utime, frame_seq (2 x 8), origin_world_m (2 x 8), cell_size_m (8); then rows,
+// cols, num_cells (3 x 4). Per cell: elevation (8), slope (4) and rock_free (1). After the cells:
+// max_rock_height_m, footprint_radius_m (2 x 8), then num_rocks. Per rock: centre (2 x 8),
+// diameter, height (2 x 8). Last: site_valid (1), site_world_m (2 x 8), site_clearance_m,
+// site_search_m (2 x 8).
+constexpr std::size_t kHazardTruthPrefixBytes = 16 + 16 + 8;
+constexpr std::int64_t kBytesPerTruthCell = 8 + 4 + 1;
+constexpr std::int64_t kHazardTruthCriteriaBytes = 2 * 8;
+constexpr std::int64_t kBytesPerTruthRock = 16 + 16;
+constexpr std::int64_t kHazardTruthSuffixBytes = 1 + 16 + 16;
 // health_t: utime .. allocations_after_start (8 x 8), fault_bits (4), estimator_status (1),
 // num_features, num_landmarks (2 x 4), frames_valid .. restarts (4 x 8), last_recovery_frames (4),
 // measurements_gated .. gate_suspensions (5 x 8); then num_integrity_flags.
@@ -130,19 +140,41 @@ DecodeError CheckLandmarkShape(WireReader* r) {
   return ExpectRemaining(*r, "landmarks", kBytesPerLandmark * n);
 }
 
-DecodeError CheckHazardShape(WireReader* r) {
-  if (!r->Skip(kHazardPrefixBytes)) return Error(DecodeResult::kTruncated, "rows", 0);
+// rows, cols and num_cells of a grid: each within its limit, num_cells = rows * cols.
+DecodeError ReadGridCells(WireReader* r, std::int32_t* cells) {
   std::int32_t rows = 0;
   std::int32_t cols = 0;
-  std::int32_t cells = 0;
   DecodeError e = ReadCount(r, "rows", kMaxHazardSideCells, &rows);
   if (e.Ok()) e = ReadCount(r, "cols", kMaxHazardSideCells, &cols);
-  if (e.Ok()) e = ReadCount(r, "num_cells", kMaxHazardCells, &cells);
+  if (e.Ok()) e = ReadCount(r, "num_cells", kMaxHazardCells, cells);
   if (!e.Ok()) return e;
-  if (std::int64_t{rows} * cols != cells) {
-    return Error(DecodeResult::kBadLength, "num_cells", cells);  // != rows * cols
+  if (std::int64_t{rows} * cols != *cells) {
+    return Error(DecodeResult::kBadLength, "num_cells", *cells);  // != rows * cols
   }
+  return {};
+}
+
+DecodeError CheckHazardShape(WireReader* r) {
+  if (!r->Skip(kHazardPrefixBytes)) return Error(DecodeResult::kTruncated, "rows", 0);
+  std::int32_t cells = 0;
+  const DecodeError e = ReadGridCells(r, &cells);
+  if (!e.Ok()) return e;
   return ExpectRemaining(*r, "cells", kBytesPerCell * cells + kHazardSuffixBytes);
+}
+
+DecodeError CheckHazardTruthShape(WireReader* r) {
+  if (!r->Skip(kHazardTruthPrefixBytes)) return Error(DecodeResult::kTruncated, "rows", 0);
+  std::int32_t cells = 0;
+  DecodeError e = ReadGridCells(r, &cells);
+  if (!e.Ok()) return e;
+  if (!r->Skip(
+          static_cast<std::uint64_t>(kBytesPerTruthCell * cells + kHazardTruthCriteriaBytes))) {
+    return Error(DecodeResult::kTruncated, "cells", cells);
+  }
+  std::int32_t rocks = 0;
+  e = ReadCount(r, "num_rocks", kMaxTruthRocks, &rocks);
+  if (!e.Ok()) return e;
+  return ExpectRemaining(*r, "rocks", kBytesPerTruthRock * rocks + kHazardTruthSuffixBytes);
 }
 
 DecodeError CheckHealthShape(WireReader* r) {
@@ -234,6 +266,15 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_m
     if (c < swf_msgs::hazard_map_t::CLASS_UNKNOWN || c > swf_msgs::hazard_map_t::CLASS_UNCERTAIN) {
       return Error(DecodeResult::kBadValue, "hazard_class", c);
     }
+  }
+  return e;
+}
+
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_truth_t* msg) {
+  DecodeError e = Decode(data, size, msg, CheckHazardTruthShape);
+  if (!e.Ok()) return e;
+  for (const std::int8_t f : msg->rock_free) {
+    if (f != 0 && f != 1) return Error(DecodeResult::kBadValue, "rock_free", f);
   }
   return e;
 }

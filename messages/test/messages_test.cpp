@@ -5,6 +5,7 @@
 
 #include "swf/messages/checked_decode.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
+#include "swf_msgs/hazard_truth_t.hpp"
 #include "swf_msgs/health_t.hpp"
 #include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
@@ -358,6 +359,50 @@ TEST(CheckedDecode, TruthStateRoundTripsAndIsNoEstimate) {
   EXPECT_EQ(Decode<swf_msgs::nav_state_t>(bytes).result, DecodeResult::kWrongType);
   EXPECT_EQ(Decode<swf_msgs::truth_state_t>(Encode(swf_msgs::nav_state_t{})).result,
             DecodeResult::kWrongType);
+}
+
+TEST(CheckedDecode, HazardTruthCellsRocksAndFlagsAreChecked) {
+  swf_msgs::hazard_truth_t truth{};
+  truth.frame_seq = 40;
+  truth.rows = 2;
+  truth.cols = 1;
+  truth.num_cells = 2;
+  truth.elevation_m = {0.5, 0.25};
+  truth.slope_deg = {1.0f, 2.0f};
+  truth.rock_free = {1, 0};
+  truth.max_rock_height_m = 0.3;
+  truth.num_rocks = 1;
+  truth.rock_center_world_m = {{1.0, 2.0}};
+  truth.rock_diameter_m = {0.8};
+  truth.rock_height_m = {0.4};
+  truth.site_valid = true;
+  truth.site_clearance_m = 3.5;
+  const std::vector<std::uint8_t> bytes = Encode(truth);
+  swf_msgs::hazard_truth_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.rock_center_world_m[0][1], 2.0);
+  EXPECT_EQ(out.site_clearance_m, 3.5);  // the fields after the rocks are where they should be
+  // utime, frame_seq (2 x 8), origin (2 x 8), cell size (8): then rows, cols, num_cells.
+  constexpr std::size_t kNumCells = 8 + 40 + 8;
+  // After two cells of 13 bytes and the two criteria: num_rocks.
+  constexpr std::size_t kNumRocks = kNumCells + 4 + 2 * 13 + 16;
+  DecodeError e = Decode<swf_msgs::hazard_truth_t>(WithInt32(bytes, kNumCells, 3));  // != 2 x 1
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  EXPECT_STREQ(e.field, "num_cells");
+  e = Decode<swf_msgs::hazard_truth_t>(WithInt32(bytes, kNumRocks, -1));
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  EXPECT_STREQ(e.field, "num_rocks");
+  e = Decode<swf_msgs::hazard_truth_t>(WithInt32(bytes, kNumRocks, 1 << 30));
+  EXPECT_EQ(e.result, DecodeResult::kOverLimit);
+  e = Decode<swf_msgs::hazard_truth_t>(WithInt32(bytes, kNumRocks, 2));
+  EXPECT_EQ(e.result, DecodeResult::kTruncated);
+  truth.rock_free[1] = 2;
+  e = Decode<swf_msgs::hazard_truth_t>(Encode(truth));
+  EXPECT_EQ(e.result, DecodeResult::kBadValue);
+  EXPECT_STREQ(e.field, "rock_free");
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::hazard_truth_t>(bytes);
+  // Truth and the estimate it judges never pass for each other.
+  EXPECT_EQ(Decode<swf_msgs::hazard_map_t>(bytes).result, DecodeResult::kWrongType);
 }
 
 }  // namespace

@@ -644,7 +644,7 @@ int Preallocate(FlightProcess* fp) {
                               po.width_px, &fp->error)) {
     return fp->Refuse();
   }
-  if (fp->extension_source) fp->extension->Observe(&fp->parts.output);
+  if (fp->extension_source) fp->extension->Observe(&fp->parts);
   fp->progress_display.Reset(
       fp->tool,
       config.max_frames > 0 ? std::min(config.max_frames, fp->total_frames) : fp->total_frames,

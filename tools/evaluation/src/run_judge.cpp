@@ -71,6 +71,14 @@ bool RunJudge::Add(const std::string& channel, const void* data, std::size_t siz
     swf_msgs::truth_state_t m;
     if (!Decode(data, size, channel, &m, bad, why)) return false;
     AddTruth(m);
+  } else if (channel == channels_.hazard) {
+    swf_msgs::hazard_map_t m;
+    if (!Decode(data, size, channel, &m, bad, why)) return false;
+    AddHazard(std::move(m));
+  } else if (channel == channels_.truth_hazard) {
+    swf_msgs::hazard_truth_t m;
+    if (!Decode(data, size, channel, &m, bad, why)) return false;
+    AddTruthHazard(std::move(m));
   }
   return true;
 }
@@ -112,6 +120,36 @@ void RunJudge::AddTruthLandmarks(const swf_msgs::landmark_map_t& m) {
     const double* p = m.position_world_m[i].data();
     truth[m.id[i]] = Landmark{m.id[i], {p[0], p[1], p[2]}};
   }
+}
+
+void RunJudge::AddHazard(swf_msgs::hazard_map_t m) {
+  const auto truth = hazard_truth_waiting_.find(m.frame_seq);
+  if (truth == hazard_truth_waiting_.end()) {
+    hazard_waiting_[m.frame_seq] = std::move(m);
+    return;
+  }
+  JudgeHazard(m, truth->second);
+  hazard_truth_waiting_.erase(truth);
+}
+
+void RunJudge::AddTruthHazard(swf_msgs::hazard_truth_t m) {
+  const auto map = hazard_waiting_.find(m.frame_seq);
+  if (map == hazard_waiting_.end()) {
+    hazard_truth_waiting_[m.frame_seq] = std::move(m);
+    return;
+  }
+  JudgeHazard(map->second, m);
+  hazard_waiting_.erase(map);
+}
+
+void RunJudge::JudgeHazard(const swf_msgs::hazard_map_t& map,
+                           const swf_msgs::hazard_truth_t& truth) {
+  const HazardMapView view = ViewOf(map);
+  if (!SameGrid(view, truth)) {
+    ++hazard_truth_mismatched_;
+    return;
+  }
+  hazard_judged_.push_back(JudgedHazard{map.frame_seq, JudgeHazardMap(view, truth, false)});
 }
 
 RunScore RunJudge::Score() const {
@@ -188,6 +226,14 @@ RunScore RunJudge::Score() const {
     score.maps.push_back(MapScore{m.frame_seq, static_cast<std::int64_t>(errors.size()),
                                   Rms(errors), Quantile(errors, 0.5)});
   }
+
+  for (const JudgedHazard& h : hazard_judged_) {
+    const auto truth = truth_.find(h.frame_seq);
+    score.hazard_maps.push_back(
+        HazardScore{h.frame_seq, truth == truth_.end() ? NAN : truth->second.altitude_m, h.map});
+  }
+  score.hazard_maps_without_truth = static_cast<std::int64_t>(hazard_waiting_.size());
+  score.hazard_truth_mismatched = hazard_truth_mismatched_;
   return score;
 }
 

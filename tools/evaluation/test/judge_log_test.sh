@@ -1,6 +1,7 @@
 #!/bin/sh
 # swf-judge on a recorded simulated descent: the log carries the truth channels beside the
-# estimates, and the judge, reading only the log, gives the figures swf-sil's summary gave live.
+# estimates (navigation, landmarks, hazard maps), and the judge, reading only the log, gives the
+# figures swf-sil's summary gave live.
 # Then the failures: a damaged log is named with its record, a log without truth is "not judged".
 # usage: judge_log_test.sh SWF_SIL SWF_JUDGE CONFIG
 set -eu
@@ -28,11 +29,21 @@ checks = [
     ("landmark RMS", summary["landmark_rms_error_m"], marks["last_map_rms_error_m"], 5e-7),
     ("protection violations", summary["integrity"]["protection_violations"],
      judge["integrity"]["protection_violations"], 0),
+    ("hazard maps", len(summary["hazard_by_map"]), judge["hazard"]["maps_judged"], 0),
 ]
+live_map = summary["hazard"]
+logged_map = judge["hazard"]["last_map"]
+for key in ("frame", "known_cells", "rocks_resolved", "rocks_detected", "rock_free_cells",
+            "false_rock_cells"):
+    checks.append(("final hazard map " + key, live_map[key], logged_map[key], 0))
+if summary["safe_site"] is not None:
+    checks.append(("safe site clearance", summary["safe_site"]["clearance_to_truth_hazard_m"],
+                   logged_map["site"]["clearance_to_truth_hazard_m"], 5e-4))
 bad = [c for c in checks if abs(c[1] - c[2]) > c[3]]
 for name, live, logged, _ in checks:
     print(f"{name}: live {live}, from the log {logged}")
 assert summary["nav_outputs"] > 0 and marks["maps_judged"] > 0, "nothing was judged"
+assert judge["hazard"]["maps_judged"] > 0 and judge["hazard"]["maps_without_truth"] == 0
 assert judge["result"] == "ok", judge["result"]
 sys.exit(1 if bad else 0)
 PY

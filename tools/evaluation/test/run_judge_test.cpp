@@ -53,6 +53,56 @@ std::vector<std::uint8_t> Encode(const Msg& m) {
   return bytes;
 }
 
+// A 4 x 4 map of 1 m cells at the origin: all known but cell (0, 3), sigma 0.05 m, safe but a
+// rock at cell (1, 1) and one at (3, 3); its site at (0.5, 0.5).
+swf_msgs::hazard_map_t HazardMap(std::int64_t frame) {
+  swf_msgs::hazard_map_t m{};
+  m.frame_seq = frame;
+  m.cell_size_m = 1.0;
+  m.rows = 4;
+  m.cols = 4;
+  m.num_cells = 16;
+  m.elevation_m.assign(16, 0.0f);
+  m.elevation_m[3 * 4 + 0] = NAN;
+  m.sigma_m.assign(16, 0.05f);
+  m.slope_deg.assign(16, 1.0f);
+  m.roughness_m.assign(16, 0.0f);
+  m.hazard_class.assign(16, swf_msgs::hazard_map_t::CLASS_SAFE);
+  m.hazard_class[1 * 4 + 1] = swf_msgs::hazard_map_t::CLASS_ROCK;
+  m.hazard_class[3 * 4 + 3] = swf_msgs::hazard_map_t::CLASS_ROCK;
+  m.safe_site_valid = true;
+  m.safe_site_world_m[0] = 0.5;
+  m.safe_site_world_m[1] = 0.5;
+  return m;
+}
+
+// Its truth: flat, one 0.5 m rock of 1 m diameter on cell (1, 1) (the only cell not rock-free),
+// the site 1.2 m from a hazard (inside the 1.5 m footprint).
+swf_msgs::hazard_truth_t HazardTruth(std::int64_t frame, double cell_m = 1.0) {
+  swf_msgs::hazard_truth_t t{};
+  t.frame_seq = frame;
+  t.cell_size_m = cell_m;
+  t.rows = 4;
+  t.cols = 4;
+  t.num_cells = 16;
+  t.elevation_m.assign(16, 0.1);
+  t.slope_deg.assign(16, 3.0f);
+  t.rock_free.assign(16, 1);
+  t.rock_free[1 * 4 + 1] = 0;
+  t.max_rock_height_m = 0.3;
+  t.footprint_radius_m = 1.5;
+  t.num_rocks = 1;
+  t.rock_center_world_m = {{1.5, 1.5}};
+  t.rock_diameter_m = {1.0};
+  t.rock_height_m = {0.5};
+  t.site_valid = true;
+  t.site_world_m[0] = 0.5;
+  t.site_world_m[1] = 0.5;
+  t.site_clearance_m = 1.2;
+  t.site_search_m = 20.0;
+  return t;
+}
+
 TEST(RunJudge, PairsEstimatesWithTheTruthOfTheirFrame) {
   RunJudge judge;
   // Truth of frame 2 arrives before its estimate, frame 1's after; frame 3 has no truth.
@@ -118,6 +168,56 @@ TEST(RunJudge, NothingToJudgeGivesNoNumbersNotZeros) {
   EXPECT_TRUE(s.outputs.empty());
   EXPECT_TRUE(std::isnan(s.pose_rms_error_m));
   EXPECT_TRUE(std::isnan(s.mean_position_nees));
+}
+
+TEST(RunJudge, JudgesHazardMapsAgainstTheTruthOfTheirGrid) {
+  RunJudge judge;
+  judge.AddTruth(Truth(10, 60.0, 58.0));
+  // Truth before its map (frame 10) and after it (20); a map never answered (30); a truth drawn
+  // for another grid (40).
+  judge.AddTruthHazard(HazardTruth(10));
+  judge.AddHazard(HazardMap(10));
+  judge.AddHazard(HazardMap(20));
+  judge.AddTruthHazard(HazardTruth(20));
+  judge.AddHazard(HazardMap(30));
+  judge.AddHazard(HazardMap(40));
+  judge.AddTruthHazard(HazardTruth(40, 2.0));
+  const RunScore s = judge.Score();
+  ASSERT_EQ(s.hazard_maps.size(), 2u);
+  EXPECT_EQ(s.hazard_maps[0].frame_seq, 10);
+  EXPECT_EQ(s.hazard_maps[0].altitude_m, 58.0);
+  EXPECT_TRUE(std::isnan(s.hazard_maps[1].altitude_m));  // no truth state of frame 20
+  EXPECT_EQ(s.hazard_maps_without_truth, 1);
+  EXPECT_EQ(s.hazard_truth_mismatched, 1);
+  const HazardMapMetrics& m = s.hazard_maps[0].map;
+  EXPECT_EQ(m.known_cells, 15);
+  EXPECT_EQ(m.rock_cells, 2);
+  EXPECT_EQ(m.rocks_resolved, 1);               // 3 sigma 0.15 m <= 0.3 m
+  EXPECT_EQ(m.rocks_detected, 1);               // the rock cell (1, 1) lies on it
+  EXPECT_EQ(m.rocks_resolved_by_height[0], 1);  // 0.5 m: [1, 2) x 0.3 m
+  EXPECT_EQ(m.rock_free_cells, 14);             // the known cells but (1, 1)
+  EXPECT_EQ(m.false_rock_cells, 1);             // (3, 3)
+  EXPECT_DOUBLE_EQ(m.false_alarm_rate, 1.0 / 14.0);
+  EXPECT_EQ(m.site_clearance_m, 1.2);
+  EXPECT_TRUE(m.site_on_hazard);
+  EXPECT_TRUE(m.elevation_errors_m.empty());  // the judge reports counts, not per-cell errors
+  // Per-cell errors when asked: |0 - 0.1| per known cell, |1 - 3| degrees of slope.
+  const HazardMapMetrics cells = JudgeHazardMap(ViewOf(HazardMap(10)), HazardTruth(10), true);
+  ASSERT_EQ(cells.elevation_errors_m.size(), 15u);
+  EXPECT_DOUBLE_EQ(cells.elevation_errors_m[0], 0.1);
+  EXPECT_EQ(cells.slope_errors_deg[0], 2.0);
+}
+
+TEST(RunJudge, HazardMessagesAreReadByChannel) {
+  RunJudge judge;
+  const std::vector<std::uint8_t> map = Encode(HazardMap(5));
+  const std::vector<std::uint8_t> truth = Encode(HazardTruth(5));
+  EXPECT_TRUE(judge.Add("SWF_HAZARD", map.data(), map.size()));
+  EXPECT_FALSE(judge.Add("SIM_TRUTH_HAZARD", map.data(), map.size()));  // a map is no truth
+  EXPECT_TRUE(judge.Add("SIM_TRUTH_HAZARD", truth.data(), truth.size()));
+  const RunScore s = judge.Score();
+  EXPECT_EQ(s.hazard_maps.size(), 1u);
+  EXPECT_EQ(s.undecodable, 1);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
-// swf-judge: judges a run from its LCM logs. Every message of the logs goes to RunJudge (the
-// evaluation swf-sil runs live); the estimates and the truth may come from different logs (a
-// replay's output log and the simulated descent's log it replayed).
+// swf-judge: judges a run from its LCM logs (navigation, landmarks, hazard maps). Every message of
+// the logs goes to RunJudge (the evaluation swf-sil runs live); the estimates and the truth may
+// come from different logs (a replay's output log and the simulated descent's log it replayed).
 //   swf-judge RUN.lcmlog [MORE.lcmlog ...] [--json FILE] [--outputs]
 // Exit: 0 judged, no VALID output beyond its protection level; 1 judged, with integrity failures;
 // 2 nothing judged (usage, an unreadable or damaged log, no estimate with its truth).
@@ -35,6 +35,31 @@ bool Feed(const std::string& path, swf::evaluation::RunJudge* judge, std::int64_
   }
 }
 
+// A judged hazard map as the summary of swf-sil gives it.
+json HazardReport(const swf::evaluation::HazardScore& h) {
+  const swf::evaluation::HazardMapMetrics& m = h.map;
+  json report = {{"frame", h.frame_seq},
+                 {"altitude_m", h.altitude_m},
+                 {"known_cells", m.known_cells},
+                 {"rocks_resolved", m.rocks_resolved},
+                 {"rocks_detected", m.rocks_detected},
+                 {"rocks_flagged", m.rocks_flagged},
+                 {"detection_probability", nullptr},
+                 {"rock_free_cells", m.rock_free_cells},
+                 {"false_rock_cells", m.false_rock_cells},
+                 {"false_alarm_rate", m.false_alarm_rate},
+                 {"site", nullptr}};
+  if (m.detection_probability >= 0.0) report["detection_probability"] = m.detection_probability;
+  if (m.site_valid) {
+    report["site"] = {{"x_m", m.site_world_m[0]},
+                      {"y_m", m.site_world_m[1]},
+                      {"score", m.site_score},
+                      {"clearance_to_truth_hazard_m", m.site_clearance_m},
+                      {"on_truth_hazard", m.site_on_hazard}};
+  }
+  return report;
+}
+
 json Report(const RunScore& s, bool with_outputs) {
   json navigation = {{"outputs_judged", s.outputs.size()},
                      {"outputs_without_truth", s.navs_without_truth},
@@ -52,9 +77,15 @@ json Report(const RunScore& s, bool with_outputs) {
     landmarks["last_map_rms_error_m"] = s.maps.back().rms_error_m;
     landmarks["last_map_median_error_m"] = s.maps.back().median_error_m;
   }
+  json hazard = {{"maps_judged", s.hazard_maps.size()},
+                 {"maps_without_truth", s.hazard_maps_without_truth},
+                 {"truth_for_another_grid", s.hazard_truth_mismatched},
+                 {"last_map", nullptr}};
+  if (!s.hazard_maps.empty()) hazard["last_map"] = HazardReport(s.hazard_maps.back());
   json report = {{"navigation", navigation},
                  {"integrity", integrity},
                  {"landmarks", landmarks},
+                 {"hazard", hazard},
                  {"undecodable_messages", s.undecodable}};
   if (s.undecodable > 0) report["first_decode_error"] = s.first_decode_error;
   if (with_outputs) {
@@ -72,6 +103,9 @@ json Report(const RunScore& s, bool with_outputs) {
                          {"position_nees", o.position_nees}});
     }
     report["outputs"] = outputs;
+    json maps = json::array();
+    for (const swf::evaluation::HazardScore& h : s.hazard_maps) maps.push_back(HazardReport(h));
+    report["hazard_maps"] = maps;
   }
   return report;
 }
@@ -80,8 +114,9 @@ json Report(const RunScore& s, bool with_outputs) {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "swf-judge: judges a run's navigation and landmark outputs (SWF_NAV, SWF_LANDMARKS) "
-      "against the truth recorded beside them (SIM_TRUTH, SIM_TRUTH_LANDMARKS)"};
+      "swf-judge: judges a run's navigation, landmark and hazard outputs (SWF_NAV, SWF_LANDMARKS, "
+      "SWF_HAZARD) against the truth recorded beside them (SIM_TRUTH, SIM_TRUTH_LANDMARKS, "
+      "SIM_TRUTH_HAZARD)"};
   std::vector<std::string> logs;
   std::string json_path;
   bool with_outputs = false;
@@ -90,7 +125,7 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--json", json_path, "write the report here instead of standard output");
-  app.add_flag("--outputs", with_outputs, "include every judged navigation output");
+  app.add_flag("--outputs", with_outputs, "include every judged navigation output and hazard map");
   app.add_option("--nav-channel", channels.nav, "estimates' navigation channel")
       ->capture_default_str();
   app.add_option("--landmarks-channel", channels.landmarks, "estimates' landmark channel")
@@ -98,6 +133,10 @@ int main(int argc, char** argv) {
   app.add_option("--truth-channel", channels.truth, "truth states' channel")->capture_default_str();
   app.add_option("--truth-landmarks-channel", channels.truth_landmarks,
                  "true landmark positions' channel")
+      ->capture_default_str();
+  app.add_option("--hazard-channel", channels.hazard, "estimates' hazard map channel")
+      ->capture_default_str();
+  app.add_option("--truth-hazard-channel", channels.truth_hazard, "hazard maps' truth channel")
       ->capture_default_str();
   try {
     app.parse(argc, argv);
@@ -142,10 +181,10 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr,
                "swf-judge: %s: %zu outputs judged, pose RMS %.3f m, %lld of %lld VALID "
-               "outputs beyond their protection level%s\n",
+               "outputs beyond their protection level, %zu hazard maps judged%s\n",
                report["result"].get<std::string>().c_str(), score.outputs.size(),
                score.pose_rms_error_m, static_cast<long long>(score.protection_violations),
-               static_cast<long long>(score.valid_navs),
+               static_cast<long long>(score.valid_navs), score.hazard_maps.size(),
                score.undecodable > 0 ? " (some messages did not decode: see the report)" : "");
   if (!judged) return 2;
   return failed ? 1 : 0;

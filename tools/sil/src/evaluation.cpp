@@ -35,11 +35,19 @@ double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajecto
 }
 
 void Evaluation::Attach(const sim::Trajectory* trajectory, const sim::Terrain* terrain,
-                        const estimator::StereoCamera<double>& camera, app::OutputThread* output) {
+                        const estimator::StereoCamera<double>& camera,
+                        const hazard::HazardMapperOptions& mapper, app::OutputThread* output) {
   trajectory_ = trajectory;
   terrain_ = terrain;
   camera_ = camera;
   output_ = output;
+  hazard_options_.max_rock_height_m = mapper.max_rock_height_m;
+  hazard_options_.footprint_radius_m = mapper.footprint_radius_m;
+  sim::HazardOptions truth;
+  truth.max_slope_deg = mapper.max_slope_deg;
+  truth.max_rock_height_m = mapper.max_rock_height_m;
+  if (sim::ComputeHazardTruth(*terrain, truth, &hazard_truth_) != core::Status::kOk)
+    hazard_truth_ = sim::HazardMap{};  // no truth: maps are sent without (and not judged)
   output->AddObserver(this);
 }
 
@@ -118,6 +126,36 @@ void Evaluation::OnMap(const app::MapRecord& r) {
   Send(channels_.truth_landmarks, truth_map_);
 }
 
+void Evaluation::OnHazard(const app::HazardRecord& r) {
+  const std::int32_t cells = r.cells_per_side * r.cells_per_side;
+  if (last_hazard_map_.capacity_cells < cells &&
+      last_hazard_map_.Allocate(cells) != core::Status::kOk)
+    return;
+  app::HazardRecord& m = last_hazard_map_;
+  m.seq = r.seq;
+  m.utime = r.utime;
+  m.frame_seq = r.frame_seq;
+  m.origin_world_m[0] = r.origin_world_m[0];
+  m.origin_world_m[1] = r.origin_world_m[1];
+  m.cell_size_m = r.cell_size_m;
+  m.cells_per_side = r.cells_per_side;
+  std::copy_n(r.elevation_m.get(), cells, m.elevation_m.get());
+  std::copy_n(r.sigma_m.get(), cells, m.sigma_m.get());
+  std::copy_n(r.slope_deg.get(), cells, m.slope_deg.get());
+  std::copy_n(r.roughness_m.get(), cells, m.roughness_m.get());
+  std::copy_n(r.hazard_class.get(), cells, m.hazard_class.get());
+  m.safe_site_valid = r.safe_site_valid;
+  m.safe_site_world_m[0] = r.safe_site_world_m[0];
+  m.safe_site_world_m[1] = r.safe_site_world_m[1];
+  m.safe_site_score = r.safe_site_score;
+  m.update_ms = r.update_ms;
+  if (hazard_truth_.size == 0) return;
+  swf_msgs::hazard_truth_t truth = hazard_eval::HazardTruthOf(
+      hazard_eval::ViewOf(r), *terrain_, terrain_->Rocks(), hazard_truth_, hazard_options_);
+  truth.utime = r.utime;
+  Send(channels_.truth_hazard, truth);
+}
+
 void Evaluation::OnMessage(const std::string& channel, const std::uint8_t* data, int size) {
   judge_.Add(channel, data, static_cast<std::size_t>(size));
 }
@@ -150,64 +188,6 @@ void Evaluation::WritePlots(const evaluation::RunScore& score, const std::string
     }
     std::fclose(f);
   }
-}
-
-}  // namespace swf::sil
-
-namespace swf::sil {
-
-void Evaluation::OnHazard(const app::HazardRecord& r) {
-  const std::int32_t cells = r.cells_per_side * r.cells_per_side;
-  app::HazardRecord& m = hazard_maps_.emplace_back();
-  if (m.Allocate(cells) != core::Status::kOk) {
-    hazard_maps_.pop_back();
-    return;
-  }
-  m.seq = r.seq;
-  m.utime = r.utime;
-  m.frame_seq = r.frame_seq;
-  m.origin_world_m[0] = r.origin_world_m[0];
-  m.origin_world_m[1] = r.origin_world_m[1];
-  m.cell_size_m = r.cell_size_m;
-  m.cells_per_side = r.cells_per_side;
-  std::copy_n(r.elevation_m.get(), cells, m.elevation_m.get());
-  std::copy_n(r.sigma_m.get(), cells, m.sigma_m.get());
-  std::copy_n(r.slope_deg.get(), cells, m.slope_deg.get());
-  std::copy_n(r.roughness_m.get(), cells, m.roughness_m.get());
-  std::copy_n(r.hazard_class.get(), cells, m.hazard_class.get());
-  m.safe_site_valid = r.safe_site_valid;
-  m.safe_site_world_m[0] = r.safe_site_world_m[0];
-  m.safe_site_world_m[1] = r.safe_site_world_m[1];
-  m.safe_site_score = r.safe_site_score;
-  m.update_ms = r.update_ms;
-}
-
-std::vector<HazardEvaluation> Evaluation::EvaluateHazard(
-    const hazard::HazardMapperOptions& thresholds, const sim::Trajectory& trajectory,
-    const sim::Terrain& terrain) const {
-  std::vector<HazardEvaluation> result;
-  sim::HazardOptions ho;
-  ho.max_slope_deg = thresholds.max_slope_deg;
-  ho.max_rock_height_m = thresholds.max_rock_height_m;
-  sim::HazardMap truth;
-  if (hazard_maps_.empty() || sim::ComputeHazardTruth(terrain, ho, &truth) != core::Status::kOk)
-    return result;
-  hazard_eval::MetricOptions mo;
-  mo.max_rock_height_m = thresholds.max_rock_height_m;
-  mo.footprint_radius_m = thresholds.footprint_radius_m;
-  mo.cell_errors = false;  // the summary reports counts and the site only
-  for (const app::HazardRecord& m : hazard_maps_) {
-    HazardEvaluation e;
-    e.frame_seq = m.frame_seq;
-    e.map =
-        hazard_eval::EvaluateHazardMap(hazard_eval::ViewOf(m), terrain, terrain.Rocks(), truth, mo);
-    if (m.frame_seq >= 0 && m.frame_seq < trajectory.NumFrames()) {
-      const Eigen::Vector3d& t = trajectory.WorldTCamera(static_cast<std::int32_t>(m.frame_seq)).t;
-      e.altitude_m = t.z() - terrain.HeightAt(t.x(), t.y());
-    }
-    result.push_back(std::move(e));
-  }
-  return result;
 }
 
 }  // namespace swf::sil

@@ -45,8 +45,8 @@ void WriteOutputs(std::FILE* f, const evaluation::RunScore& score) {
 }
 
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
-void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& e) {
-  const hazard_eval::HazardMapMetrics& h = e.map;
+void WriteHazardEvaluation(std::FILE* f, const evaluation::HazardScore& e) {
+  const evaluation::HazardMapMetrics& h = e.map;
   std::fprintf(
       f,
       "{\"frame\": %lld, \"altitude_m\": %s, \"known_cells\": %d, "
@@ -65,7 +65,7 @@ void WriteHazardEvaluation(std::FILE* f, const HazardEvaluation& e) {
 
 // The hazard maps: the final one with its safe site, and every one by altitude. The height
 // classes are [1, 2), [2, 4), [4, inf) times the rock threshold (hazard.max_rock_height_m).
-void WriteHazardMaps(std::FILE* f, const std::vector<HazardEvaluation>& evals) {
+void WriteHazardMaps(std::FILE* f, const std::vector<evaluation::HazardScore>& evals) {
   std::fprintf(f, "  \"hazard\": ");
   WriteHazardEvaluation(f, evals.back());
   std::fprintf(f, ",\n  \"hazard_by_map\": [");
@@ -74,7 +74,7 @@ void WriteHazardMaps(std::FILE* f, const std::vector<HazardEvaluation>& evals) {
     WriteHazardEvaluation(f, evals[k]);
   }
   std::fprintf(f, "],\n");
-  const hazard_eval::HazardMapMetrics& h = evals.back().map;
+  const evaluation::HazardMapMetrics& h = evals.back().map;
   if (h.site_valid) {
     std::fprintf(f,
                  "  \"safe_site\": {\"x_m\": %.3f, \"y_m\": %.3f, \"score\": %.4f, "
@@ -150,8 +150,9 @@ estimator::StereoCamera<double> SimulatedDescent::RectifiedRig(const app::FswCon
 drivers::MotionProvider* SimulatedDescent::Motion() { return world_.get(); }
 drivers::ImuProvider* SimulatedDescent::Imu() { return world_.get(); }
 
-void SimulatedDescent::Observe(app::OutputThread* output) {
-  evaluation_.Attach(&world_->Trajectory(), &world_->Terrain(), world_->Camera(), output);
+void SimulatedDescent::Observe(app::FlightParts* parts) {
+  evaluation_.Attach(&world_->Trajectory(), &world_->Terrain(), world_->Camera(),
+                     parts->hazard->Mapper().Options(), &parts->output);
 }
 
 void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightParts& parts,
@@ -160,11 +161,9 @@ void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightP
   const SimWorld& world = *world_;
   score_ = evaluation_.Score();
   Evaluation::WritePlots(score_, config.plot_dir);
-  hazard_evals_ = evaluation_.EvaluateHazard(parts.hazard->Mapper().Options(), world.Trajectory(),
-                                             world.Terrain());
   // The picture of what guidance received: the last published map, not the mapper's state.
   const app::HazardRecord* last = evaluation_.LastHazardMap();
-  if (!config.plot_dir.empty() && !hazard_evals_.empty() && last != nullptr) {
+  if (!config.plot_dir.empty() && !score_.hazard_maps.empty() && last != nullptr) {
     const std::string png = config.plot_dir + "/hazard.png";
     if (hazard_eval::WriteHazardMapPng(hazard_eval::ViewOf(*last),
                                        parts.hazard->Mapper().Options().footprint_radius_m,
@@ -264,8 +263,8 @@ void SimulatedDescent::WriteIntegrityTruth(std::FILE* f) const {
 }
 
 bool SimulatedDescent::WriteHazardTruth(std::FILE* f) const {
-  if (hazard_evals_.empty()) return false;
-  WriteHazardMaps(f, hazard_evals_);
+  if (score_.hazard_maps.empty()) return false;
+  WriteHazardMaps(f, score_.hazard_maps);
   return true;
 }
 

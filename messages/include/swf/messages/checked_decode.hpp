@@ -15,6 +15,7 @@
 #include <cstdint>
 
 #include "swf_msgs/hazard_map_t.hpp"
+#include "swf_msgs/hazard_truth_t.hpp"
 #include "swf_msgs/health_t.hpp"
 #include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
@@ -32,6 +33,7 @@ inline constexpr std::int32_t kMaxImageBytes = kMaxImageSidePx * kMaxImageSidePx
 inline constexpr std::int32_t kMaxMapLandmarks = 65536;
 inline constexpr std::int32_t kMaxHazardSideCells = 1024;  // rows, cols
 inline constexpr std::int32_t kMaxHazardCells = kMaxHazardSideCells * kMaxHazardSideCells;
+inline constexpr std::int32_t kMaxTruthRocks = 65536;   // hazard_truth_t (a ground message)
 inline constexpr std::int32_t kMaxIntegrityFlags = 32;  // one per bit of an int32
 inline constexpr std::int32_t kMaxStages = 32;
 inline constexpr std::int32_t kMaxStageNameBytes = 64;  // with the terminating NUL
@@ -78,6 +80,7 @@ DecodeError CheckedDecode(const void* data, std::size_t size, std::int32_t max_w
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::nav_state_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::landmark_map_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_map_t* msg);
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_truth_t* msg);
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::health_t* msg);
 // Fixed size; refuses flags outside kImuKnownFlags (kBadValue, "flags"). Times, sequence numbers
 // and non-finite values are the stream checker's to judge (estimator/imu_stream.hpp), not the

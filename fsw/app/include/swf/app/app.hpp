@@ -112,8 +112,9 @@ class ProcessExtension {
   // Its motion input and IMU samples, when it opened the source (nullptr otherwise).
   virtual drivers::MotionProvider* Motion() = 0;
   virtual drivers::ImuProvider* Imu() = 0;
-  // Observers of the published outputs it needs during the run.
-  virtual void Observe(OutputThread* output) = 0;
+  // Observers of the published outputs it needs during the run (added to parts->output; the
+  // parts are assembled).
+  virtual void Observe(FlightParts* parts) = 0;
   // After the run (the pipeline idle, the outputs drained): the run against its truth. Adds its
   // findings to the verdict, the true biases to the IMU report (when `imu`), and prints nothing.
   virtual void Evaluate(const FswConfig& config, const FlightParts& parts,

@@ -1,11 +1,11 @@
-// RunJudge: the one evaluation of a run's navigation and landmark outputs against truth, from
-// messages alone. It reads what a run published or recorded: the estimates (nav_state_t on
-// SWF_NAV, landmark_map_t on SWF_LANDMARKS) and the truth a simulator or test range sent on
-// channels of its own (truth_state_t on SIM_TRUTH, landmark_map_t with true positions on
-// SIM_TRUTH_LANDMARKS). Estimates and truth are paired by frame_seq, landmarks by id, whatever
-// order they arrive in. So a live run (swf-sil feeds it the bytes it emits), a replay, a
-// hardware-in-the-loop run and every campaign run are judged by the same code (swf-judge reads
-// logs).
+// RunJudge: the one evaluation of a run's navigation, landmark and hazard outputs against truth,
+// from messages alone. It reads what a run published or recorded: the estimates (nav_state_t on
+// SWF_NAV, landmark_map_t on SWF_LANDMARKS, hazard_map_t on SWF_HAZARD) and the truth a simulator
+// or test range sent on channels of its own (truth_state_t on SIM_TRUTH, landmark_map_t with true
+// positions on SIM_TRUTH_LANDMARKS, hazard_truth_t on SIM_TRUTH_HAZARD). Estimates and truth are
+// paired by frame_seq, landmarks by id, whatever order they arrive in. So a live run (swf-sil feeds
+// it the bytes it emits), a replay, a hardware-in-the-loop run and every campaign run are judged by
+// the same code (swf-judge reads logs).
 #pragma once
 
 #include <cstddef>
@@ -14,6 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "swf/evaluation/hazard_score.hpp"
+#include "swf_msgs/hazard_map_t.hpp"
+#include "swf_msgs/hazard_truth_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/truth_state_t.hpp"
@@ -25,6 +28,8 @@ struct JudgeChannels {
   std::string landmarks = "SWF_LANDMARKS";
   std::string truth = "SIM_TRUTH";
   std::string truth_landmarks = "SIM_TRUTH_LANDMARKS";
+  std::string hazard = "SWF_HAZARD";
+  std::string truth_hazard = "SIM_TRUTH_HAZARD";
 };
 
 // One navigation output against the truth of its frame. The world is z-up (horizontal = x, y).
@@ -52,6 +57,13 @@ struct MapScore {
   double median_error_m = 0.0;  // the upper median; NaN when none was evaluated
 };
 
+// One published hazard map against its truth (hazard_score.hpp; no per-cell errors).
+struct HazardScore {
+  std::int64_t frame_seq = 0;
+  double altitude_m = 0.0;  // true altitude at the map's frame (SIM_TRUTH); NaN without it
+  HazardMapMetrics map;
+};
+
 struct LandmarkScore {
   std::int64_t id = 0;
   double estimate_m[3] = {0.0, 0.0, 0.0};
@@ -76,6 +88,11 @@ struct RunScore {
   std::vector<MapScore> maps;
   std::int64_t maps_without_truth = 0;
   std::vector<LandmarkScore> last_map;
+  // Hazard maps with their truth, in arrival order; those still without truth at the end, and
+  // those whose truth was for another grid (neither is judged).
+  std::vector<HazardScore> hazard_maps;
+  std::int64_t hazard_maps_without_truth = 0;
+  std::int64_t hazard_truth_mismatched = 0;
   // Messages on a judged channel that did not decode (named in the first error).
   std::int64_t undecodable = 0;
   std::string first_decode_error;
@@ -93,6 +110,10 @@ class RunJudge {
   void AddLandmarks(const swf_msgs::landmark_map_t& m);
   void AddTruth(const swf_msgs::truth_state_t& m);
   void AddTruthLandmarks(const swf_msgs::landmark_map_t& m);
+  // A map waits for its truth and a truth for its map (by frame_seq); the pair is judged when the
+  // second arrives and neither is kept.
+  void AddHazard(swf_msgs::hazard_map_t m);
+  void AddTruthHazard(swf_msgs::hazard_truth_t m);
 
   RunScore Score() const;
 
@@ -120,11 +141,21 @@ class RunJudge {
     std::vector<Landmark> landmarks;
   };
 
+  void JudgeHazard(const swf_msgs::hazard_map_t& map, const swf_msgs::hazard_truth_t& truth);
+
   JudgeChannels channels_;
   std::vector<Nav> navs_;
   std::vector<Map> maps_;
   std::map<std::int64_t, Truth> truth_;
-  std::map<std::int64_t, std::map<std::int64_t, Landmark>> truth_maps_;  // frame_seq -> id
+  std::map<std::int64_t, std::map<std::int64_t, Landmark>> truth_maps_;    // frame_seq -> id
+  std::map<std::int64_t, swf_msgs::hazard_map_t> hazard_waiting_;          // frame_seq -> map
+  std::map<std::int64_t, swf_msgs::hazard_truth_t> hazard_truth_waiting_;  // frame_seq -> truth
+  struct JudgedHazard {
+    std::int64_t frame_seq;
+    HazardMapMetrics map;
+  };
+  std::vector<JudgedHazard> hazard_judged_;
+  std::int64_t hazard_truth_mismatched_ = 0;
   std::int64_t undecodable_ = 0;
   std::string first_decode_error_;
 };

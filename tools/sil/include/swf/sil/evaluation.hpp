@@ -1,11 +1,12 @@
 // The simulator's side of evaluation (ground side). During the run it sends the truth beside the
 // estimates on channels of their own (evaluation::JudgeChannels: truth_state_t on SIM_TRUTH for
 // every navigation output's frame, the true positions of every published map's landmarks on
-// SIM_TRUTH_LANDMARKS), so that they are published and recorded with the run, and it hands every
-// message the run emits to evaluation::RunJudge, the same judge swf-judge runs on logs. A
-// landmark's true position is where the ray through the pixel it was first seen at (the frame
-// group's NewSighting), from the true camera pose of that frame, meets the terrain. Hazard maps
-// are kept for the hazard evaluation against the terrain's truth after the run.
+// SIM_TRUTH_LANDMARKS, the truth of every published hazard map on its grid on SIM_TRUTH_HAZARD),
+// so that they are published and recorded with the run, and it hands every message the run emits
+// to evaluation::RunJudge, the same judge swf-judge runs on logs. A landmark's true position is
+// where the ray through the pixel it was first seen at (the frame group's NewSighting), from the
+// true camera pose of that frame, meets the terrain. A hazard map's truth is drawn from the
+// terrain at the mapper's thresholds (hazard_eval::HazardTruthOf).
 #pragma once
 
 #include <Eigen/Core>
@@ -36,24 +37,18 @@ double ImuOnlyPoseRms(const sim::ImuModel& unit, const sim::Trajectory& trajecto
                       const app::ImuOptions& imu,
                       const estimator::Pose<double>& initial_world_T_camera);
 
-// A published hazard map against the simulator's hazard truth (sim/hazard.hpp, the mapper's
-// thresholds), by the one hazard-map-vs-truth metric (swf/hazard_eval/map_metrics.hpp).
-struct HazardEvaluation {
-  std::int64_t frame_seq = -1;        // the frame the map belongs to
-  double altitude_m = 0.0;            // true altitude of the camera above the terrain at that frame
-  hazard_eval::HazardMapMetrics map;  // counts and the site (no per-cell errors)
-};
-
 class Evaluation : public app::OutputObserver {
  public:
   // Before the run: the descent whose truth is sent, the rectified rig the pipeline measures
-  // with, and the thread that publishes and records (this observer's callbacks run on it).
+  // with, the hazard mapper's thresholds, and the thread that publishes and records (this
+  // observer's callbacks run on it).
   void Attach(const sim::Trajectory* trajectory, const sim::Terrain* terrain,
-              const estimator::StereoCamera<double>& camera, app::OutputThread* output);
+              const estimator::StereoCamera<double>& camera,
+              const hazard::HazardMapperOptions& mapper, app::OutputThread* output);
 
-  void OnNav(const app::NavRecord& r) override;  // first sightings; the frame's truth state
-  void OnMap(const app::MapRecord& r) override;  // the true positions of the map's landmarks
-  void OnHazard(const app::HazardRecord& r) override;
+  void OnNav(const app::NavRecord& r) override;        // first sightings; the frame's truth state
+  void OnMap(const app::MapRecord& r) override;        // the true positions of the map's landmarks
+  void OnHazard(const app::HazardRecord& r) override;  // the map's truth; keeps the last map
   void OnMessage(const std::string& channel, const std::uint8_t* data, int size) override;
 
   // After the run (the output thread stopped).
@@ -64,13 +59,9 @@ class Evaluation : public app::OutputObserver {
   bool TrueLandmark(std::int64_t id, Eigen::Vector3d* position);
   // Gnuplot data of a judged run into plot_dir: trajectory.dat, landmark_error.dat, map.dat.
   static void WritePlots(const evaluation::RunScore& score, const std::string& plot_dir);
-  // Every published hazard map, in order, against the truth of the mapper's thresholds.
-  std::vector<HazardEvaluation> EvaluateHazard(const hazard::HazardMapperOptions& thresholds,
-                                               const sim::Trajectory& trajectory,
-                                               const sim::Terrain& terrain) const;
   // The last published hazard map (a copy kept after the run); null when none was published.
   const app::HazardRecord* LastHazardMap() const {
-    return hazard_maps_.empty() ? nullptr : &hazard_maps_.back();
+    return last_hazard_map_.capacity_cells > 0 ? &last_hazard_map_ : nullptr;
   }
 
  private:
@@ -88,7 +79,9 @@ class Evaluation : public app::OutputObserver {
   swf_msgs::truth_state_t truth_;
   swf_msgs::landmark_map_t truth_map_;
   std::vector<std::uint8_t> buffer_;
-  std::vector<app::HazardRecord> hazard_maps_;  // copies: the output thread reuses its slots
+  hazard_eval::MetricOptions hazard_options_;
+  sim::HazardMap hazard_truth_;        // per terrain node, at the mapper's thresholds
+  app::HazardRecord last_hazard_map_;  // a copy: the output thread reuses its slots
 };
 
 }  // namespace swf::sil

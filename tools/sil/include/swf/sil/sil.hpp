@@ -34,7 +34,7 @@ class SimulatedDescent final : public app::ProcessExtension {
                                                int height_px) override;
   drivers::MotionProvider* Motion() override;
   drivers::ImuProvider* Imu() override;
-  void Observe(app::OutputThread* output) override;
+  void Observe(app::FlightParts* parts) override;
   void Evaluate(const app::FswConfig& config, const app::FlightParts& parts,
                 const app::PipelineOptions& po, std::int64_t imu_samples_taken,
                 app::Verdict* verdict, app::ImuReport* imu) override;
@@ -53,7 +53,6 @@ class SimulatedDescent final : public app::ProcessExtension {
   std::unique_ptr<SimWorld> world_;
   Evaluation evaluation_;
   evaluation::RunScore score_;
-  std::vector<HazardEvaluation> hazard_evals_;
 };
 
 }  // namespace swf::sil

@@ -1,0 +1,83 @@
+// The hazard-map-vs-truth metric: one published hazard map (what guidance receives) against the
+// truth of that map (hazard_truth_t: the simulator's terrain and rocks on the map's own grid,
+// sent on SIM_TRUTH_HAZARD). The one definition every evaluation reports with: RunJudge (swf-sil's
+// summary `hazard`, `hazard_by_map`, `safe_site`; swf-judge on logs), `swf-hazard eval|flight` and
+// hazard_sim_test. How the truth is drawn from a terrain: swf/hazard_eval/map_metrics.hpp.
+//
+// Definitions (threshold h = truth.max_rock_height_m, footprint radius r, cell size c):
+// - known cell: elevation not NaN.
+// - resolved rock: a truth rock of height >= h whose centre lies in a cell with 3 sigma <= h
+//   (the mapper's own criterion for declaring kRock; elsewhere a rock can only be kUncertain).
+//   Detected: a CLASS_ROCK cell centre within the rock's radius + c of its centre. Flagged: a
+//   CLASS_ROCK or CLASS_UNCERTAIN cell there (never a landing site). Counted also by height class
+//   [1, 2), [2, 4), [4, inf) x h.
+// - false alarm: a CLASS_ROCK cell among the rock-free known cells (truth.rock_free).
+// - safe site: on hazard when the truth's clearance of the map's site is <= r. `<=` because a
+//   hazard at exactly r lies on the footprint's edge, inside the closed disc the lander occupies:
+//   a safety claim takes the conservative side.
+// - per-cell errors (cell_errors): |elevation - truth cell mean| with the cell's sigma beside it,
+//   and |slope - truth slope| where both are known.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "swf_msgs/hazard_map_t.hpp"
+#include "swf_msgs/hazard_truth_t.hpp"
+
+namespace swf::evaluation {
+
+// A published hazard map (hazard_map_t, or the flight process's record of one) as plain arrays,
+// not owned. Cell (i, j) is centred at (origin + (i + 0.5) cell_m, ...); arrays row-major
+// j * n + i.
+struct HazardMapView {
+  std::int64_t frame_seq = -1;
+  double origin_world_m[2] = {0.0, 0.0};
+  double cell_m = 0.0;
+  int cells_per_side = 0;
+  const float* elevation_m = nullptr;  // NaN: unknown
+  const float* sigma_m = nullptr;
+  const float* slope_deg = nullptr;           // may be null (no slope errors then)
+  const std::int8_t* hazard_class = nullptr;  // hazard_map_t.CLASS_*
+  bool site_valid = false;
+  double site_world_m[2] = {0.0, 0.0};
+  double site_score = 0.0;
+};
+
+// The view of a decoded message (its arrays stay the message's). A map that is not square has no
+// cells in the view (cells_per_side 0): the flight process publishes square maps only.
+HazardMapView ViewOf(const swf_msgs::hazard_map_t& map);
+
+inline constexpr int kRockHeightClasses = 3;
+
+struct HazardMapMetrics {
+  double cell_m = 0.0;
+  int known_cells = 0;
+  int rock_cells = 0;  // known cells classified rock
+  int rocks_resolved = 0;
+  int rocks_detected = 0;
+  int rocks_flagged = 0;
+  int rocks_resolved_by_height[kRockHeightClasses] = {};
+  int rocks_detected_by_height[kRockHeightClasses] = {};
+  double detection_probability = -1.0;  // detected / resolved; -1: none resolved
+  int rock_free_cells = 0;
+  int false_rock_cells = 0;
+  double false_alarm_rate = 0.0;  // false_rock_cells / rock_free_cells; 0 without such cells
+  bool site_valid = false;
+  double site_world_m[2] = {0.0, 0.0};
+  double site_score = 0.0;
+  bool site_on_hazard = false;
+  double site_clearance_m = -1.0;          // capped at the truth's site_search_m; -1 without a site
+  std::vector<double> elevation_errors_m;  // per known cell (cell_errors only)
+  std::vector<double> elevation_sigmas_m;  // the same cells' sigma
+  std::vector<double> slope_errors_deg;    // per known cell with a slope
+};
+
+// True when `truth` is the truth of `map`'s grid (frame, origin, cell size, cells).
+bool SameGrid(const HazardMapView& map, const swf_msgs::hazard_truth_t& truth);
+
+// The map against its truth (which must be on the same grid: SameGrid).
+HazardMapMetrics JudgeHazardMap(const HazardMapView& map, const swf_msgs::hazard_truth_t& truth,
+                                bool cell_errors);
+
+}  // namespace swf::evaluation
