@@ -461,7 +461,7 @@ TEST(FlightLoopTest, ABaselineErrorIsAScaleErrorOfTheEstimate) {
     // The simulator's truth side sees the outputs, as in swf-sil (first sightings included).
     sil::Evaluation truth;
     truth.Attach(&rig.world->Trajectory(), &rig.world->Terrain(), rig.pipeline->Camera(),
-                 &rig.output);
+                 hazard::HazardMapperOptions{}, &rig.output);
     FlightLoop loop;
     EXPECT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
                              rig.channels.get(), rig.world.get()),

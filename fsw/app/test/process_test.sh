@@ -59,7 +59,8 @@ cat "$dir/err"
 grep -q "cut.lcmlog: record [0-9]* at byte [0-9]*: truncated" "$dir/err" ||
   fail "the error does not name the record"
 replayed=$($cmp --count SWF_NAV "$dir/r3.lcmlog")
-[ "$replayed" -gt 10 ] && [ "$replayed" -lt 30 ] || fail "replayed $replayed frames"
+# Some frames but not all: the cut lies inside the log (where depends on the record sizes).
+[ "$replayed" -gt 0 ] && [ "$replayed" -lt 30 ] || fail "replayed $replayed frames"
 grep -q "the $replayed frames before it were replayed" "$dir/err" ||
   fail "not every frame before the damaged record was processed"
 
