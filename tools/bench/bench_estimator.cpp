@@ -59,12 +59,8 @@ using swf::scene::SyntheticScene;
 
 const SyntheticScene& Fig14Scene() {
   static const SyntheticScene kScene = [] {
-    SceneOptions so;
-    so.motion = SceneOptions::Motion::kSideways;
+    SceneOptions so = swf::scene::Fig14Sideways();
     so.frames = 160;
-    so.start_altitude_m = 50.0;
-    so.step_m = 2.2;
-    so.landmark_density_per_m2 = 0.055;
     so.seed = 3;
     return SyntheticScene(so);
   }();

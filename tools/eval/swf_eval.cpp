@@ -151,12 +151,7 @@ bool AddNees(const std::string& out, int runs, std::string* md) {
   // The Fig. 15 scene (sideways at 50 m, ~25 features per frame, landmarks entering and leaving)
   // exercises pose and landmark marginalization; the descent scene with 40 landmarks is the EDL
   // case.
-  SceneOptions sideways;
-  sideways.motion = SceneOptions::Motion::kSideways;
-  sideways.start_altitude_m = 50.0;
-  sideways.step_m = 3.3;
-  sideways.landmark_density_per_m2 = 0.07;
-  sideways.frames = 40;
+  const SceneOptions sideways = swf::scene::Fig15Sideways();
   SceneOptions descent;
   descent.frames = 40;
   descent.num_landmarks = 40;
@@ -573,12 +568,8 @@ int main(int argc, char** argv) {
   }
   // Fig. 14: run time per frame and state-vector size.
   if (want("fig14")) {
-    SceneOptions so;
-    so.motion = SceneOptions::Motion::kSideways;
+    SceneOptions so = swf::scene::Fig14Sideways();
     so.frames = 150;
-    so.start_altitude_m = 50.0;
-    so.step_m = 2.2;
-    so.landmark_density_per_m2 = 0.055;
     so.seed = 7;
     const SyntheticScene scene(so);
     const Trace batch = RunFilter<BigBatch>(scene, SwfMode::kBatch, 150, 1);
@@ -627,12 +618,7 @@ int main(int argc, char** argv) {
   }
   // Fig. 15: sideways motion, ~85% overlap, ~25 features per frame.
   if (want("fig15")) {
-    SceneOptions so;
-    so.motion = SceneOptions::Motion::kSideways;
-    so.start_altitude_m = 50.0;
-    so.step_m = 3.3;
-    so.landmark_density_per_m2 = 0.07;
-    so.frames = 40;
+    const SceneOptions so = swf::scene::Fig15Sideways();
     std::vector<Series> s;
     s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40)));
     s.push_back(MonteCarlo("SWF(2)", so, runs, swf(SwfMode::kSlidingWindow, 2)));

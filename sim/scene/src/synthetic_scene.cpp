@@ -33,6 +33,22 @@ SceneOptions StaticRig() {
   return so;
 }
 
+SceneOptions Fig15Sideways() {
+  SceneOptions so;
+  so.motion = SceneOptions::Motion::kSideways;
+  so.start_altitude_m = 50.0;
+  so.step_m = 3.3;
+  so.landmark_density_per_m2 = 0.07;
+  return so;
+}
+
+SceneOptions Fig14Sideways() {
+  SceneOptions so = Fig15Sideways();
+  so.step_m = 2.2;
+  so.landmark_density_per_m2 = 0.055;
+  return so;
+}
+
 SyntheticScene::SyntheticScene(const SceneOptions& options) : options_(options), camera_(EdlRig()) {
   std::mt19937_64 rng(options.seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);

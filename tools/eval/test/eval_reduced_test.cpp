@@ -55,10 +55,7 @@ TEST(EvalMath, AlignRigidRecoversAKnownTransform) {
 // degrees of freedom (the full evaluation uses 50 runs and the exact chi-square bounds).
 TEST(EvalReduced, NeesOfSwf5IsNearItsDegreesOfFreedom) {
   NeesOptions o;
-  o.scene.motion = SceneOptions::Motion::kSideways;
-  o.scene.start_altitude_m = 50.0;
-  o.scene.step_m = 3.3;
-  o.scene.landmark_density_per_m2 = 0.07;
+  o.scene = scene::Fig15Sideways();
   o.scene.frames = 25;
   o.window = 5;
   o.runs = 10;
