@@ -12,6 +12,7 @@
 namespace swf::estimator::testing {
 
 using scene::EdlRig;
+using scene::Fig15Sideways;
 using scene::SceneFrame;
 using scene::SceneObservation;
 using scene::SceneOptions;

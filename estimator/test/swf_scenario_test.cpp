@@ -2,7 +2,9 @@
 // modes it compares. Host-only: they are too slow for the emulated aarch64 run.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdio>
+#include <initializer_list>
 #include <memory>
 #include <vector>
 
@@ -19,39 +21,48 @@ using testing::SceneOptions;
 using testing::StereoSwf;
 using testing::SyntheticScene;
 
+// One filter instance and its options, run on a scene for its landmark RMS (m).
+struct FilterRun {
+  double (*rms_m)(const SyntheticScene& scene, const SwfOptions& options);
+  SwfOptions options;
+};
+template <typename Filter>
+double LandmarkRms(const SyntheticScene& scene, const SwfOptions& options) {
+  return RunScene(std::make_unique<Filter>().get(), scene, options).rms_m;
+}
+template <typename Filter>
+FilterRun RunOf(const SwfOptions& options) {
+  return {&LandmarkRms<Filter>, options};
+}
+template <typename Filter>
+FilterRun RunOf(SwfMode mode) {
+  return RunOf<Filter>(ModeOptions(mode));
+}
+
+// Each run's landmark RMS averaged over the scenes `so` makes with each of `seeds`.
+template <std::size_t N>
+std::array<double, N> MeanRms(SceneOptions so, std::initializer_list<std::uint64_t> seeds,
+                              const std::array<FilterRun, N>& runs) {
+  std::array<double, N> mean{};
+  for (std::uint64_t seed : seeds) {
+    so.seed = seed;
+    const SyntheticScene scene(so);
+    for (std::size_t i = 0; i < N; ++i) {
+      mean[i] += runs[i].rms_m(scene, runs[i].options) / static_cast<double>(seeds.size());
+    }
+  }
+  return mean;
+}
+
 // Paper Fig. 13 setting (scaled): 150 landmarks tracked over a 100 m -> 41.5 m descent with an
 // IMU-like relative-motion input. The test prints each filter's RMS error; the numbers, with and
 // without first-estimate Jacobians, are in estimator/README.md.
 TEST(SwfScenario, DescentWindowOfTenApproachesBatchAndBeatsVisualOdometry) {
-  double batch = 0, swf3 = 0, swf5 = 0, swf10 = 0, vo5 = 0, vsdf5 = 0;
-  for (std::uint64_t seed : {1u, 2u}) {
-    SceneOptions so;
-    so.seed = seed;
-    const SyntheticScene scene(so);
-    batch +=
-        RunScene(std::make_unique<StereoSwf<40, 1>>().get(), scene, ModeOptions(SwfMode::kBatch))
-            .rms_m /
-        2;
-    swf3 += RunScene(std::make_unique<StereoSwf<3>>().get(), scene,
-                     ModeOptions(SwfMode::kSlidingWindow))
-                .rms_m /
-            2;
-    swf5 += RunScene(std::make_unique<StereoSwf<5>>().get(), scene,
-                     ModeOptions(SwfMode::kSlidingWindow))
-                .rms_m /
-            2;
-    swf10 += RunScene(std::make_unique<StereoSwf<10>>().get(), scene,
-                      ModeOptions(SwfMode::kSlidingWindow))
-                 .rms_m /
-             2;
-    vo5 += RunScene(std::make_unique<StereoSwf<5>>().get(), scene,
-                    ModeOptions(SwfMode::kVisualOdometry))
-               .rms_m /
-           2;
-    vsdf5 +=
-        RunScene(std::make_unique<StereoSwf<5>>().get(), scene, ModeOptions(SwfMode::kVsdf)).rms_m /
-        2;
-  }
+  const auto [batch, swf3, swf5, swf10, vo5, vsdf5] = MeanRms<6>(
+      SceneOptions{}, {1, 2},
+      {RunOf<StereoSwf<40, 1>>(SwfMode::kBatch), RunOf<StereoSwf<3>>(SwfMode::kSlidingWindow),
+       RunOf<StereoSwf<5>>(SwfMode::kSlidingWindow), RunOf<StereoSwf<10>>(SwfMode::kSlidingWindow),
+       RunOf<StereoSwf<5>>(SwfMode::kVisualOdometry), RunOf<StereoSwf<5>>(SwfMode::kVsdf)});
   std::printf(
       "descent landmark RMS (m): batch %.4f  SWF(3) %.4f  SWF(5) %.4f  SWF(10) %.4f  "
       "VO(5) %.4f  VSDF(5) %.4f\n",
@@ -69,28 +80,15 @@ TEST(SwfScenario, DescentWindowOfTenApproachesBatchAndBeatsVisualOdometry) {
 // remove most of it in either parameterization. The test prints the RMS of each variant; the
 // numbers are in estimator/README.md and swf-eval's Fig. 15 section.
 TEST(SwfScenario, SidewaysEarlyMarginalizationInverseDepthAndFirstEstimates) {
-  double batch = 0, xyz = 0, inv = 0, xyz_fej = 0, inv_fej = 0;
-  for (std::uint64_t seed : {1u, 2u}) {
-    SceneOptions so;
-    so.motion = SceneOptions::Motion::kSideways;
-    so.start_altitude_m = 50.0;
-    so.step_m = 3.3;
-    so.landmark_density_per_m2 = 0.07;
-    so.seed = seed;
-    const SyntheticScene scene(so);
-    SwfOptions plain = ModeOptions(SwfMode::kSlidingWindow);
-    plain.first_estimate_jacobians = false;
-    const SwfOptions fej = ModeOptions(SwfMode::kSlidingWindow);
-    batch +=
-        RunScene(std::make_unique<StereoSwf<40, 1>>().get(), scene, ModeOptions(SwfMode::kBatch))
-            .rms_m;
-    xyz += RunScene(std::make_unique<StereoSwf<2>>().get(), scene, plain).rms_m;
-    inv += RunScene(std::make_unique<InverseDepthSwf<2>>().get(), scene, plain).rms_m;
-    xyz_fej += RunScene(std::make_unique<StereoSwf<2>>().get(), scene, fej).rms_m;
-    inv_fej += RunScene(std::make_unique<InverseDepthSwf<2>>().get(), scene, fej).rms_m;
-  }
+  SwfOptions plain = ModeOptions(SwfMode::kSlidingWindow);
+  plain.first_estimate_jacobians = false;
+  const SwfOptions fej = ModeOptions(SwfMode::kSlidingWindow);
+  const auto [batch, xyz, inv, xyz_fej, inv_fej] = MeanRms<5>(
+      testing::Fig15Sideways(), {1, 2},
+      {RunOf<StereoSwf<40, 1>>(SwfMode::kBatch), RunOf<StereoSwf<2>>(plain),
+       RunOf<InverseDepthSwf<2>>(plain), RunOf<StereoSwf<2>>(fej), RunOf<InverseDepthSwf<2>>(fej)});
   std::printf(
-      "sideways landmark RMS sum over 2 seeds (m): batch %.4f; SWF(2) world point %.4f, inverse "
+      "sideways landmark RMS, mean of 2 seeds (m): batch %.4f; SWF(2) world point %.4f, inverse "
       "depth %.4f; with first-estimate Jacobians %.4f / %.4f\n",
       batch, xyz, inv, xyz_fej, inv_fej);
   EXPECT_GT(xyz, 2.0 * batch);
@@ -102,27 +100,10 @@ TEST(SwfScenario, SidewaysEarlyMarginalizationInverseDepthAndFirstEstimates) {
 // Paper section 4.2.4 on the static rig (every landmark seen in every frame): deleting instead
 // of marginalizing stops convergence; the paper reports SWF error ~76% below VO.
 TEST(SwfScenario, StaticRigVisualOdometryStopsConverging) {
-  double batch = 0, swf3 = 0, vo3 = 0, vsdf3 = 0;
-  for (std::uint64_t seed : {1u, 2u, 3u}) {
-    SceneOptions so = testing::StaticRig();
-    so.seed = seed;
-    const SyntheticScene scene(so);
-    batch +=
-        RunScene(std::make_unique<StereoSwf<40, 1>>().get(), scene, ModeOptions(SwfMode::kBatch))
-            .rms_m /
-        3;
-    swf3 += RunScene(std::make_unique<StereoSwf<3>>().get(), scene,
-                     ModeOptions(SwfMode::kSlidingWindow))
-                .rms_m /
-            3;
-    vo3 += RunScene(std::make_unique<StereoSwf<3>>().get(), scene,
-                    ModeOptions(SwfMode::kVisualOdometry))
-               .rms_m /
-           3;
-    vsdf3 +=
-        RunScene(std::make_unique<StereoSwf<3>>().get(), scene, ModeOptions(SwfMode::kVsdf)).rms_m /
-        3;
-  }
+  const auto [batch, swf3, vo3, vsdf3] = MeanRms<4>(
+      testing::StaticRig(), {1, 2, 3},
+      {RunOf<StereoSwf<40, 1>>(SwfMode::kBatch), RunOf<StereoSwf<3>>(SwfMode::kSlidingWindow),
+       RunOf<StereoSwf<3>>(SwfMode::kVisualOdometry), RunOf<StereoSwf<3>>(SwfMode::kVsdf)});
   std::printf(
       "static landmark RMS (m): batch %.4f  SWF(3) %.4f  VO(3) %.4f (SWF %.0f%% below VO)"
       "  VSDF(3) %.4f\n",
