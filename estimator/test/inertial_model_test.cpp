@@ -10,22 +10,10 @@
 
 #include "inertial_runner.hpp"
 
-namespace swf::estimator {
+namespace swf::estimator::testing {
 namespace {
 
 using Model = InertialStereoModel<double>;
-using testing::DescentScene;
-using testing::ErrorOf;
-using testing::InertialRunResult;
-using testing::InertialScene;
-using testing::InertialSceneOptions;
-using testing::MakeInertialScene;
-using testing::Pim;
-using testing::RunFilter;
-using testing::State;
-using testing::StateError;
-
-using testing::EdlRig;
 
 // ---- the model's derivatives --------------------------------------------------------------
 
@@ -212,4 +200,4 @@ TEST(StaticAlignmentTest, LevelsTheGuidanceAttitudeAndReadsTheGyroBias) {
 }
 
 }  // namespace
-}  // namespace swf::estimator
+}  // namespace swf::estimator::testing

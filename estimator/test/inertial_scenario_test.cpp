@@ -10,20 +10,10 @@
 
 #include "inertial_runner.hpp"
 
-namespace swf::estimator {
+namespace swf::estimator::testing {
 namespace {
 
 using Model = InertialStereoModel<double>;
-using testing::DescentScene;
-using testing::ErrorOf;
-using testing::InertialRunResult;
-using testing::InertialScene;
-using testing::InertialSceneOptions;
-using testing::MakeInertialScene;
-using testing::Pim;
-using testing::RunFilter;
-using testing::State;
-using testing::StateError;
 
 TEST(InertialSwf, BiasesConvergeAndTheWindowStaysNearBatch) {
   constexpr int kFrames = 40;
@@ -58,7 +48,7 @@ TEST(InertialSwf, BiasesConvergeAndTheWindowStaysNearBatch) {
   for (std::size_t j = 1; j < scene.truth.size(); ++j) {
     Pim pim;
     Mat15<double> unused;
-    ASSERT_TRUE(testing::PreintegrateFrame(scene, j, reckoned.biases, &pim, &unused));
+    ASSERT_TRUE(PreintegrateFrame(scene, j, reckoned.biases, &pim, &unused));
     reckoned = scene.model.Propagate(reckoned, pim);
   }
   const double reckoned_m = (reckoned.world_T_imu.t - scene.truth.back().world_T_imu.t).norm();
@@ -134,4 +124,4 @@ TEST(InertialSwf, CameraBlindForTwoSecondsTheImuCarriesTheEstimate) {
 }
 
 }  // namespace
-}  // namespace swf::estimator
+}  // namespace swf::estimator::testing
