@@ -329,7 +329,8 @@ SceneOptions LongPass(int frames) {
 }
 
 template <typename Filter>
-std::uint64_t CountAllocations(Filter* swf, const SyntheticScene& scene, SwfMode mode) {
+std::uint64_t CountAllocations(const SyntheticScene& scene, SwfMode mode) {
+  const auto swf = std::make_unique<Filter>();
   typename Filter::ModelType model;
   model.camera = scene.camera();
   EXPECT_EQ(swf->Configure(model, ModeOptions(mode)), core::Status::kOk);
@@ -361,33 +362,21 @@ TEST(SwfStereo, ZeroAllocationsOverAThousandFramesInEveryMode) {
   for (const auto& f : scene.frames()) obs += static_cast<double>(f.obs.size());
   std::printf("long pass: %.1f measurements per frame\n", obs / 1000.0);
   EXPECT_GT(obs / 1000.0, 15.0);
-  EXPECT_EQ(CountAllocations(
-                std::make_unique<SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>>().get(),
-                scene, SwfMode::kSlidingWindow),
-            0u);
-  EXPECT_EQ(CountAllocations(
-                std::make_unique<SlidingWindowFilter<StereoModel<double>, 1, 400, 64, 96>>().get(),
-                scene, SwfMode::kSlidingWindow),
-            0u);
-  EXPECT_EQ(CountAllocations(
-                std::make_unique<SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>>().get(),
-                scene, SwfMode::kVisualOdometry),
-            0u);
-  EXPECT_EQ(CountAllocations(
-                std::make_unique<SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>>().get(),
-                scene, SwfMode::kVsdf),
+  using Stereo10 = SlidingWindowFilter<StereoModel<double>, 10, 400, 64, 96>;
+  for (const SwfMode mode : {SwfMode::kSlidingWindow, SwfMode::kVisualOdometry, SwfMode::kVsdf}) {
+    EXPECT_EQ(CountAllocations<Stereo10>(scene, mode), 0u) << static_cast<int>(mode);
+  }
+  EXPECT_EQ((CountAllocations<SlidingWindowFilter<StereoModel<double>, 1, 400, 64, 96>>(
+                scene, SwfMode::kSlidingWindow)),
             0u);
   EXPECT_EQ(
-      CountAllocations(
-          std::make_unique<SlidingWindowFilter<InverseDepthStereoModel<double>, 10, 400, 64, 96>>()
-              .get(),
-          scene, SwfMode::kSlidingWindow),
+      (CountAllocations<SlidingWindowFilter<InverseDepthStereoModel<double>, 10, 400, 64, 96>>(
+          scene, SwfMode::kSlidingWindow)),
       0u);
   // Batch holds the whole sequence in its window, so it is bounded by K frames.
   const SyntheticScene short_pass(LongPass(60));
-  EXPECT_EQ(CountAllocations(
-                std::make_unique<SlidingWindowFilter<StereoModel<double>, 60, 1000, 64, 1>>().get(),
-                short_pass, SwfMode::kBatch),
+  EXPECT_EQ((CountAllocations<SlidingWindowFilter<StereoModel<double>, 60, 1000, 64, 1>>(
+                short_pass, SwfMode::kBatch)),
             0u);
 }
 
