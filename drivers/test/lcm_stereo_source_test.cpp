@@ -16,12 +16,16 @@
 
 #include "swf/core/time.hpp"
 #include "swf/testing/allocation_counter.hpp"
+#include "swf/testing/encode.hpp"
 #include "swf/testing/private_network.hpp"
+#include "swf/testing/stereo_frame.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
 namespace swf::drivers {
 namespace {
+
+using swf::testing::Encode;
 
 // Before main(), while the process has a single thread.
 const bool kIsolated = swf::testing::EnterPrivateNetwork("ip route add 239.0.0.0/8 dev lo");
@@ -39,30 +43,16 @@ std::uint8_t RightPixel(std::int64_t seq, std::size_t i) {
 // A raw pair numbered `seq`, exposed at 1 s + seq x 100 ms (right 20 us later).
 swf_msgs::stereo_frame_t Frame(std::int64_t seq, std::int32_t width = 64,
                                std::int32_t height = 48) {
-  swf_msgs::stereo_frame_t f{};
+  swf_msgs::stereo_frame_t f = swf::testing::RawStereoFrame(width, height);
   f.seq = seq;
   f.left_exposure_utime = 1000000 + seq * 100000;
   f.right_exposure_utime = f.left_exposure_utime + 20;
   f.utime = f.left_exposure_utime;
-  f.rectified = false;
-  f.width = width;
-  f.height = height;
-  f.num_bytes = width * height;
-  f.left.resize(static_cast<std::size_t>(f.num_bytes));
-  f.right.resize(f.left.size());
   for (std::size_t i = 0; i < f.left.size(); ++i) {
     f.left[i] = LeftPixel(seq, i);
     f.right[i] = RightPixel(seq, i);
   }
   return f;
-}
-
-template <typename Msg>
-std::vector<std::uint8_t> Encode(const Msg& m) {
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
-            static_cast<int>(bytes.size()));
-  return bytes;
 }
 
 class LcmSource : public ::testing::Test {

@@ -8,47 +8,60 @@
 #include <limits>
 #include <vector>
 
+#include "swf/testing/encode.hpp"
+
 namespace swf::guidance {
 namespace {
 
-void PublishNav(lcm::LCM* lcm, std::int64_t seq) {
-  swf_msgs::nav_state_t nav{};
-  nav.seq = seq;
-  nav.frame_seq = seq;
-  nav.position_world_m[2] = 100.0 - seq;
-  ASSERT_EQ(lcm->publish("SWF_NAV", &nav), 0);
-}
+using swf::testing::Encode;
 
-TEST(GuidanceMonitorTest, CountsLostAndMalformedAndKeepsGoing) {
-  lcm::LCM lcm("memq://");
-  ASSERT_TRUE(lcm.good());
-  GuidanceMonitor monitor(&lcm, "SWF_", false);
-  PublishNav(&lcm, 0);
-  PublishNav(&lcm, 1);
-  const std::vector<std::uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9};
-  ASSERT_EQ(lcm.publish("SWF_NAV", garbage.data(), static_cast<unsigned>(garbage.size())), 0);
-  swf_msgs::health_t foreign{};  // the right channel, the wrong type
-  ASSERT_EQ(lcm.publish("SWF_NAV", &foreign), 0);
-  PublishNav(&lcm, 4);  // 2 and 3 lost
-  PublishNav(&lcm, 5);
-  PublishNav(&lcm, 3);  // late
-  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
+// Each test's in-process LCM (memq://: a publish is queued until handled) and the monitor
+// subscribed on it.
+class GuidanceMonitorTest : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(lcm_.good()); }
+
+  void PublishNav(std::int64_t seq) {
+    swf_msgs::nav_state_t nav{};
+    nav.seq = seq;
+    nav.frame_seq = seq;
+    nav.position_world_m[2] = 100.0 - seq;
+    ASSERT_EQ(lcm_.publish("SWF_NAV", &nav), 0);
   }
-  EXPECT_EQ(monitor.Nav().received, 5);
-  EXPECT_EQ(monitor.Nav().malformed, 2);
-  EXPECT_EQ(monitor.Nav().lost, 2);
-  EXPECT_EQ(monitor.Nav().out_of_order, 1);
-  EXPECT_EQ(monitor.LastNav().seq, 3);
-  EXPECT_DOUBLE_EQ(monitor.LastNav().position_world_m[2], 97.0);
+
+  // Hands everything published so far to the monitor.
+  void Deliver() {
+    for (int i = 0; i < 20 && lcm_.handleTimeout(10) > 0; ++i) {
+    }
+  }
+
+  lcm::LCM lcm_{"memq://"};
+  GuidanceMonitor monitor_{&lcm_, "SWF_", false};
+};
+
+TEST_F(GuidanceMonitorTest, CountsLostAndMalformedAndKeepsGoing) {
+  PublishNav(0);
+  PublishNav(1);
+  const std::vector<std::uint8_t> garbage = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+  ASSERT_EQ(lcm_.publish("SWF_NAV", garbage.data(), static_cast<unsigned>(garbage.size())), 0);
+  swf_msgs::health_t foreign{};  // the right channel, the wrong type
+  ASSERT_EQ(lcm_.publish("SWF_NAV", &foreign), 0);
+  PublishNav(4);  // 2 and 3 lost
+  PublishNav(5);
+  PublishNav(3);  // late
+  Deliver();
+  EXPECT_EQ(monitor_.Nav().received, 5);
+  EXPECT_EQ(monitor_.Nav().malformed, 2);
+  EXPECT_EQ(monitor_.Nav().lost, 2);
+  EXPECT_EQ(monitor_.Nav().out_of_order, 1);
+  EXPECT_EQ(monitor_.LastNav().seq, 3);
+  EXPECT_DOUBLE_EQ(monitor_.LastNav().position_world_m[2], 97.0);
 }
 
 // GIVEN hazard maps on SWF_HAZARD WHEN one is consistent, one claims more cells than rows x cols
 // and one carries an unknown class THEN only the first is accepted, the others are counted as
 // malformed, and the sequence check sees no gap.
-TEST(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
-  lcm::LCM lcm("memq://");
-  ASSERT_TRUE(lcm.good());
-  GuidanceMonitor monitor(&lcm, "SWF_", false);
+TEST_F(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
   swf_msgs::hazard_map_t good{};
   good.seq = 0;
   good.frame_seq = 4;
@@ -60,25 +73,24 @@ TEST(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
   good.slope_deg = {1.0f, 2.0f};
   good.roughness_m = {0.0f, 0.3f};
   good.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_UNCERTAIN};
-  ASSERT_EQ(lcm.publish("SWF_HAZARD", &good), 0);
+  ASSERT_EQ(lcm_.publish("SWF_HAZARD", &good), 0);
   swf_msgs::hazard_map_t wrong_size = good;
   wrong_size.seq = 1;
   wrong_size.rows = 2;
-  ASSERT_EQ(lcm.publish("SWF_HAZARD", &wrong_size), 0);
+  ASSERT_EQ(lcm_.publish("SWF_HAZARD", &wrong_size), 0);
   swf_msgs::hazard_map_t bad_class = good;
   bad_class.seq = 1;
   bad_class.hazard_class[1] = 42;
-  ASSERT_EQ(lcm.publish("SWF_HAZARD", &bad_class), 0);
+  ASSERT_EQ(lcm_.publish("SWF_HAZARD", &bad_class), 0);
   swf_msgs::hazard_map_t next = good;
   next.seq = 1;
   next.frame_seq = 9;
-  ASSERT_EQ(lcm.publish("SWF_HAZARD", &next), 0);
-  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
-  }
-  EXPECT_EQ(monitor.Hazard().received, 2);
-  EXPECT_EQ(monitor.Hazard().malformed, 2);
-  EXPECT_EQ(monitor.Hazard().lost, 0);
-  EXPECT_EQ(monitor.LastHazard().frame_seq, 9);
+  ASSERT_EQ(lcm_.publish("SWF_HAZARD", &next), 0);
+  Deliver();
+  EXPECT_EQ(monitor_.Hazard().received, 2);
+  EXPECT_EQ(monitor_.Hazard().malformed, 2);
+  EXPECT_EQ(monitor_.Hazard().lost, 0);
+  EXPECT_EQ(monitor_.LastHazard().frame_seq, 9);
 }
 
 // Overwrites the big-endian int32 at byte `offset` of an encoded message.
@@ -87,34 +99,23 @@ void PutInt32(std::vector<std::uint8_t>* bytes, std::size_t offset, std::int32_t
   for (int i = 0; i < 4; ++i) (*bytes)[offset + i] = static_cast<std::uint8_t>(u >> (24 - 8 * i));
 }
 
-template <typename Msg>
-std::vector<std::uint8_t> Encode(const Msg& msg) {
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
-  EXPECT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
-            static_cast<int>(bytes.size()));
-  return bytes;
-}
-
 // GIVEN landmark maps and health messages whose length fields are negative, huge or disagree with
 // the bytes (lcm-gen's decode() threw std::length_error on the first: swf-guidance aborted)
 // WHEN they arrive THEN each is counted as malformed and ignored, and the good ones around them
 // are still received in sequence.
-TEST(GuidanceMonitorTest, HostileLengthFieldsAreCountedNotFatal) {
-  lcm::LCM lcm("memq://");
-  ASSERT_TRUE(lcm.good());
-  GuidanceMonitor monitor(&lcm, "SWF_", false);
+TEST_F(GuidanceMonitorTest, HostileLengthFieldsAreCountedNotFatal) {
   swf_msgs::landmark_map_t map{};
   map.num_landmarks = 1;
   map.id = {7};
   map.position_world_m = {{1, 2, 3}};
   map.covariance_m2 = {{1, 0, 0, 1, 0, 1}};
   map.num_observations = {2};
-  ASSERT_EQ(lcm.publish("SWF_LANDMARKS", &map), 0);
+  ASSERT_EQ(lcm_.publish("SWF_LANDMARKS", &map), 0);
   constexpr std::size_t kNumLandmarks = 8 + 24;  // fingerprint, utime, seq, frame_seq
   for (const std::int32_t bad : {-1, 2147483647, 2}) {
     std::vector<std::uint8_t> bytes = Encode(map);
     PutInt32(&bytes, kNumLandmarks, bad);
-    ASSERT_EQ(lcm.publish("SWF_LANDMARKS", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
+    ASSERT_EQ(lcm_.publish("SWF_LANDMARKS", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
   }
   swf_msgs::health_t health{};
   health.num_stages = 1;
@@ -124,35 +125,30 @@ TEST(GuidanceMonitorTest, HostileLengthFieldsAreCountedNotFatal) {
   health.stage_max_ms = {1.0f};
   std::vector<std::uint8_t> bytes = Encode(health);
   PutInt32(&bytes, 8 + 153 + 4 + 4, 0);  // the stage name's length: 0 (with its NUL it is >= 1)
-  ASSERT_EQ(lcm.publish("SWF_HEALTH", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
+  ASSERT_EQ(lcm_.publish("SWF_HEALTH", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
   map.seq = 1;
   map.position_world_m[0][2] = 4.0;
-  ASSERT_EQ(lcm.publish("SWF_LANDMARKS", &map), 0);
-  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
-  }
-  EXPECT_EQ(monitor.Landmarks().received, 2);
-  EXPECT_EQ(monitor.Landmarks().malformed, 3);
-  EXPECT_EQ(monitor.Landmarks().lost, 0);
-  EXPECT_EQ(monitor.Health().malformed, 1);
-  EXPECT_DOUBLE_EQ(monitor.LastMap().position_world_m[0][2], 4.0);
+  ASSERT_EQ(lcm_.publish("SWF_LANDMARKS", &map), 0);
+  Deliver();
+  EXPECT_EQ(monitor_.Landmarks().received, 2);
+  EXPECT_EQ(monitor_.Landmarks().malformed, 3);
+  EXPECT_EQ(monitor_.Landmarks().lost, 0);
+  EXPECT_EQ(monitor_.Health().malformed, 1);
+  EXPECT_DOUBLE_EQ(monitor_.LastMap().position_world_m[0][2], 4.0);
 }
 
 // GIVEN sequence numbers a publisher never sends (negative, the largest int64) WHEN they arrive
 // THEN the negative one is malformed and the largest counts a (saturating) gap without overflow.
-TEST(GuidanceMonitorTest, ExtremeSequenceNumbersDoNotOverflow) {
-  lcm::LCM lcm("memq://");
-  ASSERT_TRUE(lcm.good());
-  GuidanceMonitor monitor(&lcm, "SWF_", false);
-  PublishNav(&lcm, -5);
-  PublishNav(&lcm, 0);
-  PublishNav(&lcm, std::numeric_limits<std::int64_t>::max());
-  PublishNav(&lcm, 5);  // a step back: out of order
-  for (int i = 0; i < 20 && lcm.handleTimeout(10) > 0; ++i) {
-  }
-  EXPECT_EQ(monitor.Nav().malformed, 1);
-  EXPECT_EQ(monitor.Nav().received, 3);
-  EXPECT_EQ(monitor.Nav().lost, std::numeric_limits<std::int64_t>::max() - 1);
-  EXPECT_EQ(monitor.Nav().out_of_order, 1);
+TEST_F(GuidanceMonitorTest, ExtremeSequenceNumbersDoNotOverflow) {
+  PublishNav(-5);
+  PublishNav(0);
+  PublishNav(std::numeric_limits<std::int64_t>::max());
+  PublishNav(5);  // a step back: out of order
+  Deliver();
+  EXPECT_EQ(monitor_.Nav().malformed, 1);
+  EXPECT_EQ(monitor_.Nav().received, 3);
+  EXPECT_EQ(monitor_.Nav().lost, std::numeric_limits<std::int64_t>::max() - 1);
+  EXPECT_EQ(monitor_.Nav().out_of_order, 1);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/testing/encode.hpp"
 #include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
@@ -159,9 +160,7 @@ std::vector<std::uint8_t> EncodeFrame(const FrameSpec& spec) {
   f.num_bytes = 8;
   f.left.assign(8, static_cast<std::uint8_t>(spec.seq));
   f.right.assign(8, static_cast<std::uint8_t>(spec.seq + 1));
-  std::vector<std::uint8_t> buf(static_cast<std::size_t>(f.getEncodedSize()));
-  EXPECT_EQ(f.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
-  return buf;
+  return swf::testing::Encode(f);
 }
 
 void WriteRecords(const std::string& path, const std::vector<FrameSpec>& specs,
@@ -396,9 +395,7 @@ std::vector<std::uint8_t> EncodeImu(std::int64_t seq, std::int64_t utime) {
   m.angular_rate_radps[2] = 0.01 * static_cast<double>(seq);
   m.specific_force_mps2[2] = 9.81;
   m.flags = swf_msgs::imu_t::FLAG_VALID;
-  std::vector<std::uint8_t> buf(static_cast<std::size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
-  return buf;
+  return swf::testing::Encode(m);
 }
 
 // GIVEN a log with IMU samples recorded between the frames WHEN replayed THEN each frame serves

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "block_texture.hpp"
+#include "swf/testing/stereo_frame.hpp"
 #include "swf_msgs/imu_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
@@ -91,13 +92,7 @@ int main(int argc, char** argv) {
         answers->last_us = NowUs();
       },
       &answers);
-  swf_msgs::stereo_frame_t f{};
-  f.rectified = false;
-  f.width = width;
-  f.height = height;
-  f.num_bytes = width * height;
-  f.left.resize(static_cast<std::size_t>(f.num_bytes));
-  f.right.resize(f.left.size());
+  swf_msgs::stereo_frame_t f = swf::testing::RawStereoFrame(width, height);
   std::vector<std::uint8_t> bytes;
   std::int64_t next_us = NowUs();
   bool junk_sent = false;
