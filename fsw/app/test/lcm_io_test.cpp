@@ -202,8 +202,11 @@ struct Served {
   drivers::SourceStats stats;
 };
 
-Served ServeAll(drivers::LogStereoSource* source) {
+// Loads the log's frames on SWF_STEREO into *source and serves every one.
+Served LoadAndServe(const std::string& path, drivers::LogStereoSource* source) {
   Served out;
+  std::string error;
+  EXPECT_TRUE(source->Load(path, "SWF_STEREO", &error)) << error;
   EXPECT_EQ(source->Start(), core::Status::kOk);
   drivers::StereoPair pair;
   for (std::size_t i = 0; i < 1000 && source->Next(0, &pair) == core::Status::kOk; ++i) {
@@ -218,10 +221,8 @@ Served ServeAll(drivers::LogStereoSource* source) {
 // dropped_before on the next frame and is counted as missing (it replayed as 0 dropped frames).
 TEST(LcmIoTest, AGapInTheSequenceIsCountedAsDroppedFrames) {
   drivers::LogStereoSource source;
-  std::string error;
-  ASSERT_TRUE(source.Load(WriteSequence("gap.lcmlog", {0, 1, 3, 4}), "SWF_STEREO", &error));
+  const Served s = LoadAndServe(WriteSequence("gap.lcmlog", {0, 1, 3, 4}), &source);
   EXPECT_TRUE(source.LoadError().empty()) << source.LoadError();
-  const Served s = ServeAll(&source);
   EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3, 4}));
   EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 0, 1, 0}));
   EXPECT_EQ(source.StreamStats().frames_missing, 1);
@@ -249,9 +250,7 @@ TEST(LcmIoTest, AGapTheCameraRecordedAsDroppedIsNotMissingFromTheLog) {
   const std::string path = TempPath("camera_gap.lcmlog");
   WriteRecords(path, specs, payloads);
   drivers::LogStereoSource source;
-  std::string error;
-  ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error));
-  const Served s = ServeAll(&source);
+  const Served s = LoadAndServe(path, &source);
   EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3, 4, 9}));
   EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 0, 1, 0, 4}));
   EXPECT_EQ(source.StreamStats().frames_missing, 2);
@@ -261,9 +260,7 @@ TEST(LcmIoTest, AGapTheCameraRecordedAsDroppedIsNotMissingFromTheLog) {
 // duplicate and as a frame the source rejected.
 TEST(LcmIoTest, ADuplicatedFrameIsRefused) {
   drivers::LogStereoSource source;
-  std::string error;
-  ASSERT_TRUE(source.Load(WriteSequence("dup.lcmlog", {0, 1, 1, 2}), "SWF_STEREO", &error));
-  const Served s = ServeAll(&source);
+  const Served s = LoadAndServe(WriteSequence("dup.lcmlog", {0, 1, 1, 2}), &source);
   EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 2}));
   EXPECT_EQ(source.StreamStats().duplicates, 1);
   EXPECT_EQ(source.StreamStats().frames_missing, 0);
@@ -274,9 +271,7 @@ TEST(LcmIoTest, ADuplicatedFrameIsRefused) {
 // it and frame 1, now behind, is refused, never fused out of order.
 TEST(LcmIoTest, ASwappedPairIsAGapAndARefusal) {
   drivers::LogStereoSource source;
-  std::string error;
-  ASSERT_TRUE(source.Load(WriteSequence("swap.lcmlog", {0, 2, 1, 3}), "SWF_STEREO", &error));
-  const Served s = ServeAll(&source);
+  const Served s = LoadAndServe(WriteSequence("swap.lcmlog", {0, 2, 1, 3}), &source);
   EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 2, 3}));
   EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 1, 0}));
   EXPECT_EQ(source.StreamStats().out_of_order, 1);
@@ -288,10 +283,8 @@ TEST(LcmIoTest, ASwappedPairIsAGapAndARefusal) {
 // swap) WHEN replayed THEN the frame behind in time is refused as out of order.
 TEST(LcmIoTest, AnExposureTimeGoingBackIsRefused) {
   drivers::LogStereoSource source;
-  std::string error;
-  ASSERT_TRUE(source.Load(WriteSequence("time.lcmlog", {0, 1, 2, 3}, {100, 300, 200, 400}),
-                          "SWF_STEREO", &error));
-  const Served s = ServeAll(&source);
+  const Served s =
+      LoadAndServe(WriteSequence("time.lcmlog", {0, 1, 2, 3}, {100, 300, 200, 400}), &source);
   EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3}));
   EXPECT_EQ(source.StreamStats().out_of_order, 1);
   // The refused frame's number is then missing from the stream that was served.
