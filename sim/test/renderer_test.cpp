@@ -4,19 +4,16 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <string>
 
 #include "swf/sim/trajectory.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::sim {
 namespace {
 
-std::string SharedDir() {
-  const char* env = std::getenv("SWF_SHARED_DIR");
-  return env != nullptr ? env : "../shared";
-}
+using swf::testing::SharedDir;
 
 RigOptions SmallRig() {
   RigOptions rig = EdlRig();

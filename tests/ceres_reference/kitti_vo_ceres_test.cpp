@@ -16,14 +16,12 @@
 #include "kitti_vo.hpp"
 #include "kitti_vo_ceres.hpp"
 #include "kitti_vo_synth.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::tools {
 namespace {
 
-std::string DataDir() {
-  const char* shared = std::getenv("SWF_SHARED_DIR");
-  return std::string(shared != nullptr ? shared : "../shared") + "/data/kitti-vo/";
-}
+std::string DataDir() { return swf::testing::SharedDir() + "/data/kitti-vo/"; }
 
 // Loads the kitti-vo sample (26 poses, 2,634 landmarks, 8,189 factors).
 KittiVoProblem LoadSample() {

@@ -38,10 +38,13 @@
 #include "swf/app/pipeline.hpp"
 #include "swf/estimator/integrity.hpp"
 #include "swf/image_io/image_io.hpp"
+#include "swf/testing/shared_dir.hpp"
 #include "trajectory.hpp"
 
 namespace swf::integrity_test {
 namespace {
+
+using swf::testing::SharedDir;
 
 using eval::PoseD;
 using eval::Vec3D;
@@ -70,11 +73,6 @@ constexpr double kMaxStepM = 0.1;
 constexpr int kFaultStart = 30;
 
 constexpr std::uint32_t kInformational = est::kFlagNoMotionInput;
-
-std::string SharedDir() {
-  const char* shared = std::getenv("SWF_SHARED_DIR");
-  return shared != nullptr ? shared : "../shared";
-}
 
 // ---- The recorded frames, loaded once for every case. ----
 struct Recorded {

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <string>
@@ -18,16 +17,15 @@
 #include "euroc.hpp"
 #include "swf/estimator/imu_stream.hpp"
 #include "swf/evaluation/statistics.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::eval {
 namespace {
 
+using swf::testing::SharedDir;
+
 using estimator::ImuSample;
 
-std::string SharedDir() {
-  const char* dir = std::getenv("SWF_SHARED_DIR");
-  return dir != nullptr ? dir : "../shared";
-}
 std::string EurocDir() { return SharedDir() + "/data/euroc-v101"; }
 
 std::string WriteTemp(const std::string& name, const std::string& text) {

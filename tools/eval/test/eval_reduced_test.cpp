@@ -5,20 +5,17 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <random>
 #include <string>
 
 #include "euroc.hpp"
 #include "experiments.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::eval {
 namespace {
 
-std::string SharedDir() {
-  const char* shared = std::getenv("SWF_SHARED_DIR");
-  return shared != nullptr ? shared : "../shared";
-}
+using swf::testing::SharedDir;
 
 TEST(EvalMath, ChiSquareQuantileMatchesTables) {
   // Table values: chi2_{0.025}(10) = 3.247, chi2_{0.975}(10) = 20.483,

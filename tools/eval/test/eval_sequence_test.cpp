@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -20,17 +19,16 @@
 #include "report.hpp"
 #include "sequence.hpp"
 #include "swf/image_io/image_io.hpp"
+#include "swf/testing/shared_dir.hpp"
 #include "trajectory.hpp"
 
 namespace swf::eval {
 namespace {
 
+using swf::testing::SharedDir;
+
 namespace fs = std::filesystem;
 
-std::string SharedDir() {
-  const char* shared = std::getenv("SWF_SHARED_DIR");
-  return shared != nullptr ? shared : "../shared";
-}
 std::string EurocDir() { return SharedDir() + "/data/euroc-v101"; }
 std::string KittiDir() { return SharedDir() + "/data/kitti-odometry-excerpt"; }
 

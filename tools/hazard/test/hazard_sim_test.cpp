@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,14 +12,12 @@
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/image_io/image_io.hpp"
 #include "swf/sim/trajectory.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::hazard_eval {
 namespace {
 
-std::string Shared() {
-  const char* env = std::getenv("SWF_SHARED_DIR");
-  return env != nullptr ? env : "../shared";
-}
+using swf::testing::SharedDir;
 
 using evaluation::Quantile;
 
@@ -30,7 +27,7 @@ EvalOptions SmallOptions() {
   o.image_height = 240;
   o.terrain_size = 512;
   o.footprint_radius_m = 1.0;
-  o.shared_dir = Shared();
+  o.shared_dir = SharedDir();
   return o;
 }
 
@@ -92,7 +89,7 @@ TEST(HazardSimTest, SgmAgainstSimulatorDisparity) {
 // aloeGT (full-resolution integer disparities, halved) the bad-pixel rate (> 1 px at half
 // resolution, i.e. > 2 px full) of valid pixels is < 10 % and at least 70 % of GT pixels are valid.
 TEST(HazardSimTest, SgmAgainstMiddleburyAloe) {
-  const std::string dir = Shared() + "/data/middlebury/";
+  const std::string dir = SharedDir() + "/data/middlebury/";
   image_io::GrayImage left;
   image_io::GrayImage right;
   image_io::GrayImage truth;

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -18,16 +17,14 @@
 #include "swf/frontend/frontend.hpp"
 #include "swf/frontend/rectify.hpp"
 #include "swf/image_io/image_io.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::frontend {
 namespace {
 
 using image_io::GrayImage;
 
-std::string DataDir() {
-  const char* shared = std::getenv("SWF_SHARED_DIR");
-  return std::string(shared ? shared : "../shared") + "/data";
-}
+std::string DataDir() { return swf::testing::SharedDir() + "/data"; }
 
 GrayImage MustLoad(const std::string& path) {
   GrayImage image;

@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <memory>
 #include <string>
@@ -26,14 +25,12 @@
 #include "swf/sim/renderer.hpp"
 #include "swf/sim/terrain.hpp"
 #include "swf/sim/trajectory.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::frontend {
 namespace {
 
-std::string SharedDir() {
-  const char* env = std::getenv("SWF_SHARED_DIR");
-  return env != nullptr ? env : "../shared";
-}
+using swf::testing::SharedDir;
 
 using evaluation::Median;
 using evaluation::Quantile;
