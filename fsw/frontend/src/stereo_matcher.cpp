@@ -159,13 +159,18 @@ bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right,
   float d = d0;
   float samples[kMaxPatchPixels];
   float mean = 0.0f;
-  for (int it = 0; it <= options_.lk_iterations; ++it) {
-    const float xr = x - d;
+  // The right patch at disparity `at`, and its mean; false when it leaves the image.
+  auto sample_right = [&](float at) {
+    const float xr = x - at;
     if (!InsideForSampling(right, xr, y, margin)) return false;
     SampleGrid(right, xr, y, r, samples);
     mean = 0.0f;
     for (int k = 0; k < count; ++k) mean += samples[k];
     mean /= static_cast<float>(count);
+    return true;
+  };
+  for (int it = 0; it <= options_.lk_iterations; ++it) {
+    if (!sample_right(d)) return false;
     if (it == options_.lk_iterations) break;  // last pass only refreshes samples for the score
     float b = 0.0f;
     const float offset_s = centre * mean;
@@ -176,27 +181,11 @@ bool StereoMatcher::RefineDisparity(const GrayView& left, const GrayView& right,
     if (std::fabs(d - d0) > options_.max_lk_shift_px) return false;
     if (std::fabs(step) < options_.lk_epsilon_px) {
       // Refresh the samples once more at the final disparity for the quality score.
-      const float xf = x - d;
-      if (!InsideForSampling(right, xf, y, margin)) return false;
-      SampleGrid(right, xf, y, r, samples);
-      mean = 0.0f;
-      for (int k = 0; k < count; ++k) mean += samples[k];
-      mean /= static_cast<float>(count);
+      if (!sample_right(d)) return false;
       break;
     }
   }
-  float num = 0.0f;
-  float den_t = 0.0f;
-  float den_s = 0.0f;
-  for (int k = 0; k < count; ++k) {
-    const float a = tmpl[k] - tmpl_mean;
-    const float s = samples[k] - mean;
-    num += a * s;
-    den_t += a * a;
-    den_s += s * s;
-  }
-  const float den = std::sqrt(den_t * den_s);
-  *quality = den > 0.0f ? num / den : 0.0f;
+  *quality = Zncc(tmpl, tmpl_mean, samples, mean, count);
   *disparity = d;
   return std::isfinite(d);
 }

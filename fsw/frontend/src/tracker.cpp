@@ -35,6 +35,21 @@ bool Sample(const GrayView& image, const float* offsets, int count, int grid_rad
 
 }  // namespace
 
+float Zncc(const float* a, float mean_a, const float* b, float mean_b, int count) {
+  float num = 0.0f;
+  float den_a = 0.0f;
+  float den_b = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    const float da = a[k] - mean_a;
+    const float db = b[k] - mean_b;
+    num += da * db;
+    den_a += da * da;
+    den_b += db * db;
+  }
+  const float den = std::sqrt(den_a * den_b);
+  return den > 0.0f ? num / den : 0.0f;
+}
+
 float ScharrX(const float* g, int stride) {
   const float* up = g - stride;
   const float* down = g + stride;
@@ -192,18 +207,7 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
     if (!Sample(image, offsets, count, grid_radius, clamped, margin, x, y, samples, &mean_s))
       return false;
   }
-  float num = 0.0f;
-  float den_t = 0.0f;
-  float den_s = 0.0f;
-  for (int k = 0; k < count; ++k) {
-    const float a = value[k] - mean_t;
-    const float s = samples[k] - mean_s;
-    num += a * s;
-    den_t += a * a;
-    den_s += s * s;
-  }
-  const float den = std::sqrt(den_t * den_s);
-  *quality = den > 0.0f ? num / den : 0.0f;
+  *quality = Zncc(value, mean_t, samples, mean_s, count);
   *cx = x;
   *cy = y;
   return true;

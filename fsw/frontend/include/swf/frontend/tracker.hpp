@@ -59,6 +59,10 @@ struct PatchTemplate {
 float ScharrX(const float* g, int stride);
 float ScharrY(const float* g, int stride);
 
+// Zero-mean normalized cross-correlation of two patches of `count` samples, given their means:
+// the quality score of a track or a stereo match, in [-1, 1]; 0 when either patch is flat.
+float Zncc(const float* a, float mean_a, const float* b, float mean_b, int count);
+
 // H mapping reference-frame pixels to current-frame pixels for the plane through the landmark
 // facing the reference camera (file comment). depth_ref_m is the landmark's z in the reference
 // camera; fx, fy, cx, cy of the rectified left camera.
