@@ -158,23 +158,12 @@ ConfigSetter ImuNumber(double ImuConfig::*field, double hi) {
 const std::map<std::string, ConfigSetter>& Fields() {
   static const std::map<std::string, ConfigSetter> kFields = [] {
     std::map<std::string, ConfigSetter> f;
-    f["source"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      if (v == "sim")
-        c->source = SourceKind::kSim;
-      else if (v == "v4l2")
-        c->source = SourceKind::kV4l2;
-      else if (v == "aravis")
-        c->source = SourceKind::kAravis;
-      else if (v == "log")
-        c->source = SourceKind::kLog;
-      else if (v == "lcm")
-        c->source = SourceKind::kLcm;
-      else {
-        *why = Quoted(v) + " is not one of sim v4l2 aravis log lcm";
-        return false;
-      }
-      return true;
-    };
+    f["source"] =
+        OneOf<SourceKind>([](FswConfig* c) { return &c->source; }, {{"sim", SourceKind::kSim},
+                                                                    {"v4l2", SourceKind::kV4l2},
+                                                                    {"aravis", SourceKind::kAravis},
+                                                                    {"log", SourceKind::kLog},
+                                                                    {"lcm", SourceKind::kLcm}});
     f["log.path"] = Text([](FswConfig* c) { return &c->log_path; });
     f["lcm_source.url"] = Text([](FswConfig* c) { return &c->lcm_source.url; });
     f["lcm_source.channel"] = Text([](FswConfig* c) { return &c->lcm_source.channel; });
@@ -237,28 +226,13 @@ const std::map<std::string, ConfigSetter>& Fields() {
     f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
                                               frontend::kMaxDisparity);
     f["rate_hz"] = Double(&FswConfig::rate_hz, 0.1, 1000.0);
-    f["pacing"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      if (v == "realtime")
-        c->pacing = Pacing::kRealtime;
-      else if (v == "lockstep")
-        c->pacing = Pacing::kLockstep;
-      else {
-        *why = Quoted(v) + " is not one of realtime lockstep";
-        return false;
-      }
-      return true;
-    };
+    f["pacing"] = OneOf<Pacing>([](FswConfig* c) { return &c->pacing; },
+                                {{"realtime", Pacing::kRealtime}, {"lockstep", Pacing::kLockstep}});
     f["hazard_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->hazard_every; }, 1, 100000);
     f["hazard.max_disparities"] =
         Int<std::int32_t>([](FswConfig* c) { return &c->hazard_max_disparities; }, 16, 256);
-    f["hazard.downsample"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      if (v == "1" || v == "2" || v == "4") {
-        c->hazard_downsample = v[0] - '0';
-        return true;
-      }
-      *why = Quoted(v) + " is not one of 1 2 4";
-      return false;
-    };
+    f["hazard.downsample"] = OneOf<std::int32_t>([](FswConfig* c) { return &c->hazard_downsample; },
+                                                 {{"1", 1}, {"2", 2}, {"4", 4}});
     f["health_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->health_every; }, 1, 100000);
     f["max_frames"] =
         Int<std::int64_t>([](FswConfig* c) { return &c->max_frames; }, 0, std::int64_t{1} << 40);

@@ -10,6 +10,7 @@
 #include <initializer_list>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace swf::app {
@@ -100,20 +101,29 @@ ConfigSetter Text(Get get) {
   };
 }
 
-template <typename Get>
-ConfigSetter OneOf(Get get, std::initializer_list<const char*> allowed) {
-  std::vector<std::string> options(allowed.begin(), allowed.end());
+// One of the texts `named` pairs with a value: that value into *get(c). The refusal lists the
+// texts in their order.
+template <typename T, typename Get>
+ConfigSetter OneOf(Get get, std::vector<std::pair<std::string, T>> named) {
   return [=](const std::string& v, FswConfig* c, std::string* why) {
-    for (const std::string& o : options) {
-      if (v == o) {
-        *get(c) = v;
+    for (const auto& [text, value] : named) {
+      if (v == text) {
+        *get(c) = value;
         return true;
       }
     }
     *why = Quoted(v) + " is not one of";
-    for (const std::string& o : options) *why += " " + o;
+    for (const auto& n : named) *why += " " + n.first;
     return false;
   };
+}
+
+// One of the texts in `allowed`, kept as text.
+template <typename Get>
+ConfigSetter OneOf(Get get, std::initializer_list<const char*> allowed) {
+  std::vector<std::pair<std::string, std::string>> named;
+  for (const char* a : allowed) named.emplace_back(a, a);
+  return OneOf<std::string>(get, std::move(named));
 }
 
 // N finite numbers ("a b c" or "a, b, c") into get(c)[0..N), each inside [lo, hi]; `names` says
