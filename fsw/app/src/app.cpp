@@ -473,6 +473,22 @@ int OpenExtensionSource(FlightProcess* fp) {
   return kContinue;
 }
 
+// Configures a live source and makes it the process's, kept as *typed too for its own
+// statistics; it runs to max_frames. kRefused, naming the source, when it refuses its options.
+template <typename Source, typename Options>
+int UseLiveSource(FlightProcess* fp, const char* name, const Options& options,
+                  std::unique_ptr<Source> source, Source** typed) {
+  if (const core::Status s = source->Configure(options); s != core::Status::kOk) {
+    std::fprintf(stderr, "%s: the %s source refused its options (%s): %s\n", fp->tool, name,
+                 core::ToString(s), source->LastError());
+    return kRefused;
+  }
+  fp->total_frames = fp->config.max_frames;
+  *typed = source.get();
+  fp->source = std::move(source);
+  return kContinue;
+}
+
 int OpenLogSource(FlightProcess* fp) {
   const FswConfig& config = fp->config;
   PipelineOptions& po = fp->po;
@@ -546,15 +562,7 @@ int OpenAravisSource(FlightProcess* fp) {
   ao.trigger =
       config.camera.fake ? drivers::TriggerMode::kSoftware : drivers::TriggerMode::kFreeRun;
   ao.frame_rate_hz = config.camera.fake ? 0.0 : config.rate_hz;
-  if (const core::Status s = aravis->Configure(ao); s != core::Status::kOk) {
-    std::fprintf(stderr, "%s: the aravis source refused its options (%s): %s\n", fp->tool,
-                 core::ToString(s), aravis->LastError());
-    return kRefused;
-  }
-  fp->total_frames = config.max_frames;
-  fp->aravis_source = aravis.get();
-  fp->source = std::move(aravis);
-  return kContinue;
+  return UseLiveSource(fp, "aravis", ao, std::move(aravis), &fp->aravis_source);
 #else
   std::fprintf(stderr,
                "%s: configuration refused: source: aravis: this build has no Aravis "
@@ -600,15 +608,7 @@ int OpenLcmSource(FlightProcess* fp) {
   lo.exact_size = true;
   lo.rectified = false;
   lo.buffers = config.lcm_source.buffers;
-  if (const core::Status s = lcm->Configure(lo); s != core::Status::kOk) {
-    std::fprintf(stderr, "%s: the lcm source refused its options (%s): %s\n", fp->tool,
-                 core::ToString(s), lcm->LastError());
-    return kRefused;
-  }
-  fp->total_frames = config.max_frames;
-  fp->lcm_source = lcm.get();
-  fp->source = std::move(lcm);
-  return kContinue;
+  return UseLiveSource(fp, "lcm", lo, std::move(lcm), &fp->lcm_source);
 }
 
 int OpenSource(FlightProcess* fp) {
