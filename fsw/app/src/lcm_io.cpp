@@ -295,6 +295,14 @@ void OutputThread::Handle(const RecordRef& ref) {
     }
     Emit(suffix, message.utime, buf, n);
   };
+  // The records the observers see: filled into their message, shown to them, then published.
+  const auto observe_and_publish = [&](auto& pool, auto fill, auto on_record, auto& message,
+                                       const char* suffix) {
+    const auto& r = pool[ref.slot];
+    fill(r, &message);
+    for (OutputObserver* o : observers_) (o->*on_record)(r);
+    publish(message, pool, suffix);
+  };
   switch (ref.kind) {
     case RecordKind::kFrame:
       FillFrame(channels_->frames[ref.slot], &impl_->frame);
@@ -315,34 +323,21 @@ void OutputThread::Handle(const RecordRef& ref) {
       channels_->imus.Release(ref.slot);
       return;
     }
-    case RecordKind::kNav: {
-      const NavRecord& r = channels_->navs[ref.slot];
-      FillNav(r, &impl_->nav);
-      for (OutputObserver* o : observers_) o->OnNav(r);
-      publish(impl_->nav, channels_->navs, kNavSuffix);
+    case RecordKind::kNav:
+      observe_and_publish(channels_->navs, FillNav, &OutputObserver::OnNav, impl_->nav, kNavSuffix);
       return;
-    }
-    case RecordKind::kMap: {
-      const MapRecord& r = channels_->maps[ref.slot];
-      FillMap(r, &impl_->map);
-      for (OutputObserver* o : observers_) o->OnMap(r);
-      publish(impl_->map, channels_->maps, kLandmarksSuffix);
+    case RecordKind::kMap:
+      observe_and_publish(channels_->maps, FillMap, &OutputObserver::OnMap, impl_->map,
+                          kLandmarksSuffix);
       return;
-    }
-    case RecordKind::kHazard: {
-      const HazardRecord& r = channels_->hazards[ref.slot];
-      FillHazard(r, &impl_->hazard);
-      for (OutputObserver* o : observers_) o->OnHazard(r);
-      publish(impl_->hazard, channels_->hazards, kHazardSuffix);
+    case RecordKind::kHazard:
+      observe_and_publish(channels_->hazards, FillHazard, &OutputObserver::OnHazard, impl_->hazard,
+                          kHazardSuffix);
       return;
-    }
-    case RecordKind::kHealth: {
-      const HealthRecord& r = channels_->healths[ref.slot];
-      FillHealth(r, &impl_->health);
-      for (OutputObserver* o : observers_) o->OnHealth(r);
-      publish(impl_->health, channels_->healths, kHealthSuffix);
+    case RecordKind::kHealth:
+      observe_and_publish(channels_->healths, FillHealth, &OutputObserver::OnHealth, impl_->health,
+                          kHealthSuffix);
       return;
-    }
   }
 }
 
