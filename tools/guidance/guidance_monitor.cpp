@@ -17,13 +17,13 @@ GuidanceMonitor::GuidanceMonitor(lcm::LCM* lcm, const std::string& prefix, bool 
 }
 
 template <typename Msg>
-bool GuidanceMonitor::Decode(const lcm::ReceiveBuffer* buffer, Msg* msg, ChannelStats* stats) {
+bool GuidanceMonitor::Receive(const lcm::ReceiveBuffer* buffer, Msg* msg, ChannelStats* stats) {
   // Checked: a hostile length field is counted here, never thrown or allocated.
   if (!messages::CheckedDecode(buffer->data, buffer->data_size, msg).Ok()) {
     ++stats->malformed;
     return false;
   }
-  return true;
+  return Sequence(msg->seq, stats);
 }
 
 bool GuidanceMonitor::Sequence(std::int64_t seq, ChannelStats* stats) {
@@ -47,8 +47,7 @@ bool GuidanceMonitor::Sequence(std::int64_t seq, ChannelStats* stats) {
 
 void GuidanceMonitor::OnNav(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   swf_msgs::nav_state_t msg;
-  if (!Decode(buffer, &msg, &nav_)) return;
-  if (!Sequence(msg.seq, &nav_)) return;
+  if (!Receive(buffer, &msg, &nav_)) return;
   last_nav_ = msg;
   if (print_) {
     std::printf(
@@ -64,8 +63,7 @@ void GuidanceMonitor::OnNav(const lcm::ReceiveBuffer* buffer, const std::string&
 void GuidanceMonitor::OnLandmarks(const lcm::ReceiveBuffer* buffer,
                                   const std::string& /*channel*/) {
   swf_msgs::landmark_map_t msg;
-  if (!Decode(buffer, &msg, &landmarks_)) return;
-  if (!Sequence(msg.seq, &landmarks_)) return;
+  if (!Receive(buffer, &msg, &landmarks_)) return;
   last_map_ = msg;
   if (print_) {
     std::printf("landmarks %lld frame %lld: %d landmarks\n", static_cast<long long>(msg.seq),
@@ -75,8 +73,7 @@ void GuidanceMonitor::OnLandmarks(const lcm::ReceiveBuffer* buffer,
 
 void GuidanceMonitor::OnHealth(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   swf_msgs::health_t msg;
-  if (!Decode(buffer, &msg, &health_)) return;
-  if (!Sequence(msg.seq, &health_)) return;
+  if (!Receive(buffer, &msg, &health_)) return;
   last_health_ = msg;
   if (print_) {
     std::printf("health %lld: %lld frames, %lld overruns, %lld allocations, faults %d\n",
@@ -88,14 +85,13 @@ void GuidanceMonitor::OnHealth(const lcm::ReceiveBuffer* buffer, const std::stri
 
 void GuidanceMonitor::OnHazard(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   swf_msgs::hazard_map_t msg;
-  if (!Decode(buffer, &msg, &hazard_)) return;
+  if (!Receive(buffer, &msg, &hazard_)) return;
   int safe = 0;
   int hazards = 0;
   for (std::int8_t c : msg.hazard_class) {
     safe += c == swf_msgs::hazard_map_t::CLASS_SAFE;
     hazards += c == swf_msgs::hazard_map_t::CLASS_ROCK || c == swf_msgs::hazard_map_t::CLASS_SLOPE;
   }
-  if (!Sequence(msg.seq, &hazard_)) return;
   if (print_) {
     std::printf("hazard %lld frame %lld: %dx%d cells of %.3f m, %d safe, %d hazard, site %s",
                 static_cast<long long>(msg.seq), static_cast<long long>(msg.frame_seq), msg.cols,

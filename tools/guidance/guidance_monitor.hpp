@@ -52,9 +52,10 @@ class GuidanceMonitor {
   void OnHazard(const lcm::ReceiveBuffer* buffer, const std::string& channel);
 
  private:
+  // Decodes a message and counts its sequence number in `stats`; false (counted as malformed)
+  // when it does not decode or carries a negative sequence number.
   template <typename Msg>
-  bool Decode(const lcm::ReceiveBuffer* buffer, Msg* msg, ChannelStats* stats);
-  // False (counted as malformed) for a negative sequence number.
+  static bool Receive(const lcm::ReceiveBuffer* buffer, Msg* msg, ChannelStats* stats);
   static bool Sequence(std::int64_t seq, ChannelStats* stats);
 
   bool print_;
