@@ -164,35 +164,26 @@ void RenderHazardMap(const HazardMapView& m, double footprint_radius_m, int scal
             Eigen::Vector3d(-ex / (2 * cell), -ey / (2 * cell), 1.0).normalized();
         const Eigen::Vector3d light = Eigen::Vector3d(-1.0, 1.0, 1.414).normalized();
         const double shade = 0.25 + 0.75 * std::max(0.0, normal.dot(light));
-        double tr = 1.0;
-        double tg = 1.0;
-        double tb = 1.0;
         // The tint of each published class code (app::HazardClassCode); other codes untinted.
-        const std::int8_t k = m.hazard_class[c];
-        if (k == app::HazardClassCode(hazard::HazardClass::kSafe)) {
-          tr = 0.75;
-          tg = 1.0;
-          tb = 0.75;
-        } else if (k == app::HazardClassCode(hazard::HazardClass::kUncertain)) {
-          tr = 1.0;
-          tg = 0.9;
-          tb = 0.3;
-        } else if (k == app::HazardClassCode(hazard::HazardClass::kSlope)) {
-          tr = 1.0;
-          tg = 0.55;
-          tb = 0.1;
-        } else if (k == app::HazardClassCode(hazard::HazardClass::kRock)) {
-          tr = 1.0;
-          tg = 0.1;
-          tb = 0.1;
-        } else if (k == app::HazardClassCode(hazard::HazardClass::kUnknown)) {
-          tr = 0.6;
-          tg = 0.6;
-          tb = 0.8;
+        struct Tint {
+          hazard::HazardClass hazard_class;
+          double rgb[3];
+        };
+        static constexpr Tint kTints[] = {
+            {hazard::HazardClass::kSafe, {0.75, 1.0, 0.75}},
+            {hazard::HazardClass::kUncertain, {1.0, 0.9, 0.3}},
+            {hazard::HazardClass::kSlope, {1.0, 0.55, 0.1}},
+            {hazard::HazardClass::kRock, {1.0, 0.1, 0.1}},
+            {hazard::HazardClass::kUnknown, {0.6, 0.6, 0.8}},
+        };
+        static constexpr double kUntinted[3] = {1.0, 1.0, 1.0};
+        const double* tint = kUntinted;
+        for (const Tint& t : kTints) {
+          if (m.hazard_class[c] == app::HazardClassCode(t.hazard_class)) tint = t.rgb;
         }
-        r = 255.0 * shade * tr;
-        g = 255.0 * shade * tg;
-        b = 255.0 * shade * tb;
+        r = 255.0 * shade * tint[0];
+        g = 255.0 * shade * tint[1];
+        b = 255.0 * shade * tint[2];
       }
       for (int y = 0; y < scale; ++y) {
         const int py = (n - 1 - j) * scale + y;  // north up
