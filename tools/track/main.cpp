@@ -76,17 +76,23 @@ bool Detect(const char* path, const GrayImage& image, CornerList* corners) {
   return true;
 }
 
+// The two images of a pair (of one size) and the features detected in the first.
+bool LoadPairAndDetect(const char* a_path, const char* b_path, GrayImage* a, GrayImage* b,
+                       CornerList* corners) {
+  if (!Load(a_path, a) || !Load(b_path, b)) return false;
+  if (a->width != b->width || a->height != b->height) {
+    std::fprintf(stderr, "swf-track: %s is %dx%d but %s is %dx%d\n", b_path, b->width, b->height,
+                 a_path, a->width, a->height);
+    return false;
+  }
+  return Detect(a_path, *a, corners);
+}
+
 int Flow(const char* a_path, const char* b_path) {
   GrayImage a;
   GrayImage b;
-  if (!Load(a_path, &a) || !Load(b_path, &b)) return 1;
-  if (a.width != b.width || a.height != b.height) {
-    std::fprintf(stderr, "swf-track: %s is %dx%d but %s is %dx%d\n", b_path, b.width, b.height,
-                 a_path, a.width, a.height);
-    return 1;
-  }
   auto corners = std::make_unique<CornerList>();
-  if (!Detect(a_path, a, corners.get())) return 1;
+  if (!LoadPairAndDetect(a_path, b_path, &a, &b, corners.get())) return 1;
   auto prev = std::make_unique<swf::frontend::Pyramid>();
   auto cur = std::make_unique<swf::frontend::Pyramid>();
   swf::frontend::PatchTracker tracker;
@@ -118,14 +124,8 @@ int Flow(const char* a_path, const char* b_path) {
 int Stereo(const char* l_path, const char* r_path) {
   GrayImage l;
   GrayImage r;
-  if (!Load(l_path, &l) || !Load(r_path, &r)) return 1;
-  if (l.width != r.width || l.height != r.height) {
-    std::fprintf(stderr, "swf-track: %s is %dx%d but %s is %dx%d\n", r_path, r.width, r.height,
-                 l_path, l.width, l.height);
-    return 1;
-  }
   auto corners = std::make_unique<CornerList>();
-  if (!Detect(l_path, l, corners.get())) return 1;
+  if (!LoadPairAndDetect(l_path, r_path, &l, &r, corners.get())) return 1;
   swf::frontend::StereoMatcher matcher;
   swf::frontend::StereoMatcherOptions options;
   options.max_disparity = std::min(swf::frontend::kMaxDisparity, l.width / 4);
