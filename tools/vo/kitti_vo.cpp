@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -349,6 +350,14 @@ KittiVoPlan PlanKittiVo(const KittiVoCapacity& needs, std::uint64_t available_by
   }
   plan.error = BeyondEveryTier(needs);
   return plan;
+}
+
+bool ParseCount(const std::string& text, long long max, long long* out) {
+  char* end = nullptr;
+  const long long k = std::strtoll(text.c_str(), &end, 10);
+  if (end == text.c_str() || *end != '\0' || k < 1 || k > max) return false;
+  *out = k;
+  return true;
 }
 
 std::uint64_t AvailableMemoryBytes() {

@@ -7,7 +7,6 @@
 // usage error.
 #include <climits>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "kitti_vo.hpp"
@@ -27,14 +26,6 @@ constexpr const char* kUsage =
 int Usage(const std::string& why) {
   std::fprintf(stderr, "swf-vo: %s\n%s", why.c_str(), kUsage);
   return 2;
-}
-
-bool ParseWindow(const std::string& value, int* window) {
-  char* end = nullptr;
-  const long k = std::strtol(value.c_str(), &end, 10);
-  if (end == value.c_str() || *end != '\0' || k < 1 || k > INT_MAX) return false;
-  *window = static_cast<int>(k);
-  return true;
 }
 
 }  // namespace
@@ -59,7 +50,9 @@ int main(int argc, char** argv) {
     const std::string value = argv[++i];
     if (target != nullptr) {
       *target = value;
-    } else if (!ParseWindow(value, &window)) {
+    } else if (long long k = 0; swf::tools::ParseCount(value, INT_MAX, &k)) {
+      window = static_cast<int>(k);
+    } else {
       return Usage("--window takes a positive integer");
     }
   }

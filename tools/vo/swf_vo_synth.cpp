@@ -5,7 +5,6 @@
 // writes DIR/VO_calibration.txt, DIR/VO_camera_poses.txt and DIR/VO_stereo_factors.txt.
 #include <climits>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 
 #include "kitti_vo.hpp"
@@ -23,14 +22,6 @@ constexpr const char* kUsage =
 int Usage(const std::string& why) {
   std::fprintf(stderr, "swf-vo-synth: %s\n%s", why.c_str(), kUsage);
   return 2;
-}
-
-bool ParseCount(const std::string& value, long long max, long long* out) {
-  char* end = nullptr;
-  const long long k = std::strtoll(value.c_str(), &end, 10);
-  if (end == value.c_str() || *end != '\0' || k < 1 || k > max) return false;
-  *out = k;
-  return true;
 }
 
 }  // namespace
@@ -55,7 +46,7 @@ int main(int argc, char** argv) {
       calib = value;
     } else if (arg == "--out") {
       out = value;
-    } else if (!ParseCount(value, arg == "--seed" ? LLONG_MAX : INT_MAX, &k)) {
+    } else if (!swf::tools::ParseCount(value, arg == "--seed" ? LLONG_MAX : INT_MAX, &k)) {
       return Usage(arg + " takes a positive integer");
     } else if (arg == "--poses") {
       options.poses = static_cast<int>(k);
