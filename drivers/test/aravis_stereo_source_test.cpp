@@ -103,13 +103,18 @@ class AravisSource : public ::testing::Test {
     kill(kRight.pid, SIGCONT);  // a failed stall test must not leave the camera stopped
     EXPECT_TRUE(Command('d'));
   }
+  void ConfigureAndStart() {
+    ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
+    ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  }
+  // Called as the lost camera answers again: the source restarts and pairs flow.
+  void ExpectReconnects(const char* since_what);
   AravisStereoOptions options_;
   AravisStereoSource source_;
 };
 
 TEST_F(AravisSource, GrabsPairsFromTwoGigECamerasOverLoopback) {
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (std::uint64_t i = 0; i < 20; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
@@ -134,8 +139,7 @@ TEST_F(AravisSource, FreeRunningCamerasArePairedByArrivalTime) {
   options_.trigger = TriggerMode::kFreeRun;
   options_.frame_rate_hz = 100.0;
   options_.pair_tolerance_ns = 5 * core::kNsPerMs;  // half the period: nearest frame wins
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (int i = 0; i < 20; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
@@ -147,8 +151,7 @@ TEST_F(AravisSource, FreeRunningCamerasArePairedByArrivalTime) {
 TEST_F(AravisSource, PacketLossIsCountedAndBadFramesSkipped) {
   // About 3 GVSP data packets per 64x48 frame: 5% packet loss spoils roughly one frame in seven.
   ASSERT_TRUE(Command(kRight, 'l'));
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (int i = 0; i < 40; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
@@ -205,13 +208,21 @@ void ExpectRightCameraNamed(const AravisStereoSource& source) {
   EXPECT_EQ(std::strstr(source.LastError(), "127.0.0.1"), nullptr) << source.LastError();
 }
 
+void AravisSource::ExpectReconnects(const char* since_what) {
+  const core::Stopwatch since_back;
+  const int attempts = StartUntilOk(options_, &source_);
+  ASSERT_GT(attempts, 0) << source_.LastError();
+  std::printf("reconnected %.0f ms after %s (%d attempts)\n", core::NsToMs(since_back.ElapsedNs()),
+              since_what, attempts);
+  ExpectPairs(&source_, 5);
+}
+
 // GIVEN two streaming cameras WHEN the right one loses power (its camera destroyed) and comes back
 // 1.5 s later (a kill and restart of a camera process looks the same on the wire) THEN Next()
 // reports kDeviceLost naming 127.0.0.2, Stop() does not wait on the dead camera, Start() fails
 // naming it while it is away and succeeds once it is back, and pairs flow again.
 TEST_F(AravisSource, KilledCameraGivesDeviceLostAndReconnectsWhenRestarted) {
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   ExpectPairs(&source_, 2);
 
   ASSERT_TRUE(Command(kRight, 'd'));  // the right camera loses power
@@ -233,12 +244,7 @@ TEST_F(AravisSource, KilledCameraGivesDeviceLostAndReconnectsWhenRestarted) {
 
   while (since_loss.ElapsedNs() < 1500 * core::kNsPerMs) usleep(10 * 1000);
   ASSERT_TRUE(Command(kRight, 'c'));  // the camera restarts
-  const core::Stopwatch since_back;
-  const int attempts = StartUntilOk(options_, &source_);
-  ASSERT_GT(attempts, 0) << source_.LastError();
-  std::printf("reconnected %.0f ms after the camera came back (%d attempts)\n",
-              core::NsToMs(since_back.ElapsedNs()), attempts);
-  ExpectPairs(&source_, 5);
+  ExpectReconnects("the camera came back");
 }
 
 // GIVEN two streaming cameras WHEN the right camera's process is stopped (SIGSTOP) for 3 s and
@@ -246,8 +252,7 @@ TEST_F(AravisSource, KilledCameraGivesDeviceLostAndReconnectsWhenRestarted) {
 // the source reconnects and streams again (the stalled camera keeps its state: its old controller
 // is released by the helper thread once the camera answers again).
 TEST_F(AravisSource, StalledCameraGivesDeviceLostAndReconnectsAfterItResumes) {
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   ExpectPairs(&source_, 2);
 
   ASSERT_EQ(kill(kRight.pid, SIGSTOP), 0);
@@ -260,12 +265,7 @@ TEST_F(AravisSource, StalledCameraGivesDeviceLostAndReconnectsAfterItResumes) {
   source_.Stop();
   while (since_stall.ElapsedNs() < 3 * core::kNsPerS) usleep(10 * 1000);
   ASSERT_EQ(kill(kRight.pid, SIGCONT), 0);
-  const core::Stopwatch since_back;
-  const int attempts = StartUntilOk(options_, &source_);
-  ASSERT_GT(attempts, 0) << source_.LastError();
-  std::printf("reconnected %.0f ms after SIGCONT (%d attempts)\n",
-              core::NsToMs(since_back.ElapsedNs()), attempts);
-  ExpectPairs(&source_, 5);
+  ExpectReconnects("SIGCONT");
 }
 
 TEST_F(AravisSource, NextAndReleaseDoNotAllocate) {
@@ -277,8 +277,7 @@ TEST_F(AravisSource, NextAndReleaseDoNotAllocate) {
   options_.trigger = TriggerMode::kFreeRun;
   options_.frame_rate_hz = 100.0;
   options_.buffer_count = 64;
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   // 64 buffers fill in 640 ms at 100 fps; wait longer so a loaded machine still queues enough.
   usleep(1000 * 1000);
   ASSERT_TRUE(Command('d'));
@@ -308,8 +307,7 @@ TEST_F(AravisSource, NextAndReleaseDoNotAllocate) {
 }
 
 TEST_F(AravisSource, GenericGenICamFeatureAccess) {
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   char value[64] = "";
   ASSERT_EQ(source_.GetFeature(0, "DeviceID", value, sizeof(value)), core::Status::kOk)
       << source_.LastError();
@@ -328,8 +326,7 @@ TEST_F(AravisSource, StereoHeadSideBySideIsSplitInPlace) {
   options_.side_by_side = true;
   options_.right_id = nullptr;
   options_.width = 128;
-  ASSERT_EQ(source_.Configure(options_), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk) << source_.LastError();
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   StereoPair pair;
   ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
   EXPECT_EQ(pair.left.width, 64);

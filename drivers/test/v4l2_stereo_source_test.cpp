@@ -57,6 +57,10 @@ class V4l2Source : public ::testing::Test {
     left_ = kernel_.AddDevice(Device("/dev/video0", 64, 48, fourcc));
     right_ = kernel_.AddDevice(Device("/dev/video1", 64, 48, fourcc));
   }
+  void ConfigureAndStart(const V4l2StereoOptions& options = Options()) {
+    ASSERT_EQ(source_.Configure(options), core::Status::kOk);
+    ASSERT_EQ(source_.Start(), core::Status::kOk);
+  }
   void ExpectNoLeaks() {
     source_.Stop();
     EXPECT_EQ(kernel_.OpenFds(), 0);
@@ -70,8 +74,7 @@ class V4l2Source : public ::testing::Test {
 
 TEST_F(V4l2Source, NormalStreamingServesPairedZeroCopyGrayFrames) {
   AddPair();
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (std::uint64_t i = 0; i < 10; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
@@ -98,8 +101,7 @@ TEST_F(V4l2Source, NoAllocationInNextAndReleaseAfterStart) {
   AddPair(V4L2_PIX_FMT_Y16);
   kernel_.Script(right_, 20, KernelEvent::kTimeShift, -50'000'000);
   kernel_.Script(left_, 30, KernelEvent::kErrorFlag);
-  ASSERT_EQ(source_.Configure(Options(PixelFormat::kGray16Le)), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart(Options(PixelFormat::kGray16Le)));
   std::uint64_t allocations = 0;
   {
     swf::testing::AllocationScope scope;
@@ -121,8 +123,7 @@ TEST_F(V4l2Source, EagainAndEintrAreTransparent) {
   kernel_.Script(left_, 2, KernelEvent::kEagain);
   kernel_.Script(right_, 4, KernelEvent::kEintr, 2);   // retried inside one dequeue
   kernel_.Script(right_, 7, KernelEvent::kEintr, 10);  // more than the retry bound
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (std::uint64_t i = 0; i < 10; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
@@ -140,8 +141,7 @@ TEST_F(V4l2Source, PollInterruptedBySignalIsRetried) {
   kernel_.Script(left_, 0, KernelEvent::kEagain);  // two waits for the left frame
   kernel_.Script(left_, 1, KernelEvent::kEagain);
   kernel_.InjectPollEintr(2);
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   StereoPair pair;
   ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk) << source_.LastError();
   EXPECT_EQ(kernel_.PollEintrLeft(), 0);
@@ -154,8 +154,7 @@ TEST_F(V4l2Source, PollInterruptedBySignalIsRetried) {
 TEST_F(V4l2Source, ErrorFlaggedBufferIsRejectedAndStreamingContinues) {
   AddPair();
   kernel_.Script(left_, 3, KernelEvent::kErrorFlag);  // left frame 3 is corrupt
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   std::uint8_t expected[] = {0, 1, 2, 4, 5, 6};
   for (std::uint8_t frame : expected) {
     StereoPair pair;
@@ -176,8 +175,7 @@ TEST_F(V4l2Source, SingleEioIsTransientButPersistentEioStopsWithIoError) {
   AddPair();
   kernel_.Script(right_, 2, KernelEvent::kEio);
   for (int call = 6; call < 12; ++call) kernel_.Script(left_, call, KernelEvent::kEio);
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   core::Status status = core::Status::kOk;
   int served = 0;
   for (int i = 0; i < 20 && core::IsOk(status); ++i) {
@@ -199,8 +197,7 @@ TEST_F(V4l2Source, SingleEioIsTransientButPersistentEioStopsWithIoError) {
 TEST_F(V4l2Source, UnplugMidStreamGivesDeviceLostThenRecoversAfterReplug) {
   AddPair();
   kernel_.Script(right_, 5, KernelEvent::kUnplug);
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   StereoPair held;  // a pair the caller still holds when the camera vanishes
   ASSERT_EQ(source_.Next(kTimeout, &held), core::Status::kOk);
   core::Status status = core::Status::kOk;
@@ -227,8 +224,7 @@ TEST_F(V4l2Source, UnplugMidStreamGivesDeviceLostThenRecoversAfterReplug) {
 
 TEST_F(V4l2Source, SFmtAnsweringAnotherConvertibleFormatIsConverted) {
   AddPair(V4L2_PIX_FMT_YUYV);  // asks GREY, the device only does YUYV
-  ASSERT_EQ(source_.Configure(Options(PixelFormat::kGray8)), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart(Options(PixelFormat::kGray8)));
   for (std::uint8_t i = 0; i < 3; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk);
@@ -258,8 +254,7 @@ TEST_F(V4l2Source, CamerasOfDifferentSizesAndFormats) {
   right_ = kernel_.AddDevice(r);
   V4l2StereoOptions o = Options();
   o.right.format = PixelFormat::kGray16Le;
-  ASSERT_EQ(source_.Configure(o), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart(o));
   StereoPair pair;
   ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk);
   EXPECT_EQ(pair.left.width, 64);
@@ -273,8 +268,7 @@ TEST_F(V4l2Source, CamerasOfDifferentSizesAndFormats) {
 
 TEST_F(V4l2Source, HoldingEveryPairSlotGivesFullNotABlock) {
   AddPair();
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   StereoPair a, b, c;
   ASSERT_EQ(source_.Next(kTimeout, &a), core::Status::kOk);
   ASSERT_EQ(source_.Next(kTimeout, &b), core::Status::kOk);
@@ -293,8 +287,7 @@ TEST_F(V4l2Source, LostFramesAreCountedFromSequenceGaps) {
   AddPair();
   kernel_.Script(left_, 4, KernelEvent::kLoseFrames, 3);
   kernel_.Script(right_, 4, KernelEvent::kLoseFrames, 3);
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (int i = 0; i < 6; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk);
@@ -311,8 +304,7 @@ TEST_F(V4l2Source, PairsByTimestampAfterOneCameraSlips) {
   AddPair();
   // The right camera's clock jumps back one period: its frame 3 was exposed with left frame 2.
   kernel_.Script(right_, 3, KernelEvent::kTimeShift, -50'000'000);
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (int i = 0; i < 6; ++i) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk);
@@ -355,8 +347,7 @@ TEST_F(V4l2Source, DesynchronizedFramesAreRefusedAndCounted) {
 
 TEST_F(V4l2Source, StalledCameraTimesOutAndResumes) {
   AddPair();
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   kernel_.SetStalled(right_, true);
   StereoPair pair;
   EXPECT_EQ(source_.Next(5 * core::kNsPerMs, &pair), core::Status::kTimeout);
@@ -375,8 +366,7 @@ TEST_F(V4l2Source, StalledCameraTimesOutAndResumes) {
 TEST_F(V4l2Source, ShortFrameIsRejected) {
   AddPair();
   kernel_.Script(left_, 1, KernelEvent::kShortFrame);
-  ASSERT_EQ(source_.Configure(Options()), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart());
   for (std::uint8_t expected : {0, 2}) {
     StereoPair pair;
     ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk);
@@ -392,8 +382,7 @@ TEST_F(V4l2Source, SideBySideDeviceIsSplitInPlace) {
   V4l2StereoOptions o = Options();
   o.side_by_side = true;
   o.left.width = 128;
-  ASSERT_EQ(source_.Configure(o), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart(o));
   StereoPair pair;
   ASSERT_EQ(source_.Next(kTimeout, &pair), core::Status::kOk);
   EXPECT_EQ(pair.left.width, 64);
@@ -410,8 +399,7 @@ TEST_F(V4l2Source, ExposureAndGainControlsReachTheDevice) {
   AddPair();
   V4l2StereoOptions o = Options();
   o.left.exposure_100us = 42;
-  ASSERT_EQ(source_.Configure(o), core::Status::kOk);
-  ASSERT_EQ(source_.Start(), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndStart(o));
   EXPECT_EQ(kernel_.LastExposure(left_), 42);
   EXPECT_EQ(kernel_.LastExposure(right_), -1);
   source_.Stop();
