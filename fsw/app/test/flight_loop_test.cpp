@@ -36,9 +36,7 @@ struct Rig : FlightParts {
 
   explicit Rig(const std::string& text) {
     std::string error;
-    EXPECT_TRUE(ParseConfig(text, "test", &config, &error, sil::SimConfigExtension())) << error;
-    EXPECT_TRUE(world->Build(config, &error)) << error;
-    EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
+    EXPECT_TRUE(testing::BuildSimWorld(text, &config, world.get(), &error)) << error;
     source = std::make_unique<sim::PrerenderedStereoSource>(&world->Frames());
     PipelineOptions po = testing::SmallRigOptions(*world);
     po.process_sigma_m = 0.05;
@@ -411,10 +409,7 @@ TEST(SimWorldTest, IlluminationPhotometryAndCalibrationErrorReachTheImages) {
   auto build = [&](const std::string& extra, sil::SimWorld* world) {
     FswConfig config;
     std::string error;
-    ASSERT_TRUE(ParseConfig(base + extra, "test", &config, &error, sil::SimConfigExtension()))
-        << error;
-    ASSERT_TRUE(world->Build(config, &error)) << error;
-    ASSERT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
+    ASSERT_TRUE(testing::BuildSimWorld(base + extra, &config, world, &error)) << error;
   };
   const std::size_t n = 128 * 96;
   auto left = [&](const sil::SimWorld& w) {

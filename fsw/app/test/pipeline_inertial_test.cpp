@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "small_rig.hpp"
 #include "swf/app/config.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/sil/sil.hpp"
@@ -34,13 +35,11 @@ class InertialDescent {
  public:
   InertialDescent() {
     std::string error;
-    EXPECT_TRUE(
-        ParseConfig("source: sim\nsim.frames: 80\nsim.width_px: 256\nsim.height_px: 192\n"
-                    "sim.terrain_size: 1024\nrate_hz: 10\n",
-                    "test", &config_, &error, sil::SimConfigExtension()))
+    EXPECT_TRUE(testing::BuildSimWorld(
+        "source: sim\nsim.frames: 80\nsim.width_px: 256\nsim.height_px: 192\n"
+        "sim.terrain_size: 1024\nrate_hz: 10\n",
+        &config_, world_.get(), &error))
         << error;
-    EXPECT_TRUE(world_->Build(config_, &error)) << error;
-    EXPECT_TRUE(world_->RenderAll(2, nullptr, &error)) << error;
     sim::ImuModelOptions unit = sim::MemsImu();
     unit.camera_T_imu.t = Vec3<double>(0.1, -0.05, 0.02);
     unit.seed = 7;
@@ -49,15 +48,7 @@ class InertialDescent {
   }
 
   PipelineOptions Options(bool inertial) const {
-    PipelineOptions po;
-    po.camera = world_->Camera();
-    po.width_px = world_->Width();
-    po.height_px = world_->Height();
-    po.frontend.harris.bucket_cols = po.width_px / 40;
-    po.frontend.harris.bucket_rows = po.height_px / 40;
-    po.frontend.max_tracks = 100;
-    po.frontend.stereo.max_disparity = 64;
-    po.swf.window_size = 5;
+    PipelineOptions po = testing::SmallRigOptions(*world_);
     po.integrity.max_speed_mps = 50.0;
     po.initial_world_T_camera = world_->Trajectory().WorldTCamera(0);
     po.imu.enabled = inertial;
@@ -218,26 +209,18 @@ INSTANTIATE_TEST_SUITE_P(NoPairsOrBlackFrames, PipelineInertialBlind, ::testing:
 TEST(PipelineInertialTest, StaticStartLevelsTheAttitudeAndReadsTheGyroBias) {
   FswConfig config;
   std::string error;
-  ASSERT_TRUE(
-      ParseConfig("source: sim\nsim.scenario: hover\nsim.frames: 20\nsim.width_px: 256\n"
-                  "sim.height_px: 192\nsim.terrain_size: 1024\nrate_hz: 10\n"
-                  "sim.imu_unit: tactical\nimu.enabled: true\nimu.static_start: true\n",
-                  "test", &config, &error, sil::SimConfigExtension()))
-      << error;
   sil::SimWorld world;
-  ASSERT_TRUE(world.Build(config, &error)) << error;
-  ASSERT_TRUE(world.RenderAll(2, nullptr, &error)) << error;
+  ASSERT_TRUE(
+      testing::BuildSimWorld("source: sim\nsim.scenario: hover\nsim.frames: 20\nsim.width_px: 256\n"
+                             "sim.height_px: 192\nsim.terrain_size: 1024\nrate_hz: 10\n"
+                             "sim.imu_unit: tactical\nimu.enabled: true\nimu.static_start: true\n",
+                             &config, &world, &error))
+      << error;
   const sim::ImuModel& unit = *world.ImuUnit();
   const int first = 10;
   const estimator::Pose<double> truth = world.Trajectory().WorldTCamera(first);
   for (const bool static_start : {true, false}) {
-    PipelineOptions po;
-    po.camera = world.Camera();
-    po.width_px = world.Width();
-    po.height_px = world.Height();
-    po.frontend.harris.bucket_cols = po.width_px / 40;
-    po.frontend.harris.bucket_rows = po.height_px / 40;
-    po.swf.window_size = 5;
+    PipelineOptions po = testing::SmallRigOptions(world);
     po.imu = sil::SimImuOptions(config, &world.Trajectory());
     po.imu.static_start = static_start;
     po.initial_world_T_camera = truth;

@@ -31,13 +31,11 @@ struct Descent {
 
   explicit Descent(double baseline_sigma_m = 0.0, double disparity_sigma_px = 0.0) {
     std::string error;
-    EXPECT_TRUE(
-        ParseConfig("source: sim\nsim.frames: 60\nsim.width_px: 256\nsim.height_px: 192\n"
-                    "sim.terrain_size: 1024\nrate_hz: 10\n",
-                    "test", &config, &error, sil::SimConfigExtension()))
+    EXPECT_TRUE(testing::BuildSimWorld(
+        "source: sim\nsim.frames: 60\nsim.width_px: 256\nsim.height_px: 192\n"
+        "sim.terrain_size: 1024\nrate_hz: 10\n",
+        &config, world.get(), &error))
         << error;
-    EXPECT_TRUE(world->Build(config, &error)) << error;
-    EXPECT_TRUE(world->RenderAll(2, nullptr, &error)) << error;
     PipelineOptions po = testing::SmallRigOptions(*world);
     po.process_sigma_m = 0.02;  // the simulated motion input's noise
     po.process_sigma_rad = 0.0005;
