@@ -6,6 +6,7 @@
 //                                   epipolar lines (every 24 rows)
 // flow/stereo print one JSON object with a `features` array ({x, y, dx, dy} or
 // {x, y, disparity}, pixels) and exit 0; errors go to stderr with exit code 1 (usage: 2).
+#include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -88,6 +89,14 @@ bool LoadPairAndDetect(const char* a_path, const char* b_path, GrayImage* a, Gra
   return Detect(a_path, *a, corners);
 }
 
+// The printed JSON object up to its feature list: the mode, the image size, the detections.
+void PrintHeader(const char* mode, const GrayImage& image, std::size_t detected) {
+  std::printf(
+      "{\"mode\": \"%s\", \"width_px\": %d, \"height_px\": %d, \"detected\": %zu, "
+      "\"features\": [",
+      mode, image.width, image.height, detected);
+}
+
 int Flow(const char* a_path, const char* b_path) {
   GrayImage a;
   GrayImage b;
@@ -103,10 +112,7 @@ int Flow(const char* a_path, const char* b_path) {
     std::fprintf(stderr, "swf-track: %s, %s: tracker set-up failed\n", a_path, b_path);
     return 1;
   }
-  std::printf(
-      "{\"mode\": \"flow\", \"width_px\": %d, \"height_px\": %d, \"detected\": %zu, "
-      "\"features\": [",
-      a.width, a.height, corners->size());
+  PrintHeader("flow", a, corners->size());
   const char* sep = "";
   for (const auto& c : *corners) {
     float x = c.x;
@@ -135,10 +141,7 @@ int Stereo(const char* l_path, const char* r_path) {
     std::fprintf(stderr, "swf-track: %s, %s: stereo matching failed\n", l_path, r_path);
     return 1;
   }
-  std::printf(
-      "{\"mode\": \"stereo\", \"width_px\": %d, \"height_px\": %d, \"detected\": %zu, "
-      "\"features\": [",
-      l.width, l.height, corners->size());
+  PrintHeader("stereo", l, corners->size());
   const char* sep = "";
   for (const auto& m : *matches) {
     std::printf("%s\n  {\"x\": %.0f, \"y\": %.0f, \"disparity\": %.4f, \"quality\": %.4f}", sep,
