@@ -92,17 +92,24 @@ def digest(log, summary):
              'result %s' % s['result']]
     for field in SUMMARY_FIELDS:
         lines.append('summary %s %r' % (field, s[field]))
-    # Per channel, in the order of that channel: the hazard group runs on its own thread, so
-    # its records interleave with the frame group's differently from run to run.
+    messages = output_digests(log)
+    for c in CHANNELS:
+        lines += ['%s %d %s' % (c, i, h) for i, h in enumerate(messages[c])]
+    return '\n'.join(lines) + '\n'
+
+
+def output_digests(log):
+    """{channel: [SHA-256 prefix of each message]} of CHANNELS in a recording (also used by
+    tests/cross_isa). Per channel, in the order of that channel: the hazard group runs on its own
+    thread, so its records interleave with the frame group's differently from run to run."""
     messages = {c: [] for c in CHANNELS}
     for channel, payload in read_log(log):
         if channel in messages:
             messages[channel].append(hashlib.sha256(payload).hexdigest()[:24])
     for c in CHANNELS:
         if not messages[c]:
-            raise SystemExit('the recording holds no %s message' % c)
-        lines += ['%s %d %s' % (c, i, h) for i, h in enumerate(messages[c])]
-    return '\n'.join(lines) + '\n'
+            raise SystemExit('%s holds no %s message' % (log, c))
+    return messages
 
 
 def fields(text, kind):
