@@ -1,3 +1,4 @@
+cmake_minimum_required(VERSION 3.25)  # a -P script sets no policies (IN_LIST below)
 # Run by the `lint` target: clang-format must leave every tracked C++ file unchanged and
 # clang-tidy (rules in .clang-tidy) must pass on every tracked .cpp in the compile database.
 execute_process(COMMAND git ls-files "*.cpp" "*.hpp" WORKING_DIRECTORY ${SOURCE_DIR}
