@@ -27,6 +27,18 @@ using BigBatch = estimator::SlidingWindowFilter<estimator::StereoModel<double>, 
 using InverseDepthFilter =
     estimator::SlidingWindowFilter<estimator::InverseDepthStereoModel<double>, 40, 300, 200, 160>;
 
+}  // namespace swf::eval
+
+// Compiled once, in run_filter.cpp: each translation unit that compiles a filter instance pays a
+// minute of CPU for it (Eigen's machinery), and swf-eval's units and swf-hazard share these.
+namespace swf::estimator {
+extern template class SlidingWindowFilter<StereoModel<double>, 40, 300, 200, 160>;
+extern template class SlidingWindowFilter<StereoModel<double>, 160, 4000, 64, 1>;
+extern template class SlidingWindowFilter<InverseDepthStereoModel<double>, 40, 300, 200, 160>;
+}  // namespace swf::estimator
+
+namespace swf::eval {
+
 // Motion-input noise of the experiments: 10 cm and 2 mrad per frame (1 sigma).
 inline constexpr double kMotionSigmaM = scene::MotionInput::kSigmaM;
 inline constexpr double kMotionSigmaRad = scene::MotionInput::kSigmaRad;

@@ -20,8 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "swf/estimator/sliding_window_filter.hpp"
-#include "swf/estimator/stereo_model.hpp"
+#include "run_filter.hpp"
 #include "swf/evaluation/statistics.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/scene/runner.hpp"
@@ -499,9 +498,8 @@ struct SwfPoses {
   std::vector<Eigen::Matrix<double, 6, 6>> covariance;
   std::vector<double> nees;
 };
-// swf-eval's filter capacities (window up to 40, 300 landmarks active, 200 per frame).
-using SwfFilter =
-    swf::estimator::SlidingWindowFilter<swf::estimator::StereoModel<double>, 40, 300, 200, 160>;
+// swf-eval's filter (window up to 40, 300 landmarks active, 200 per frame), compiled there.
+using SwfFilter = swf::eval::Filter;
 
 bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* out) {
   swf::scene::SceneOptions so;
