@@ -239,13 +239,57 @@ void WriteHazard(std::FILE* f, std::int64_t hazard_maps, const ProcessExtension*
     std::fprintf(f, "  \"hazard\": null,\n  \"hazard_by_map\": [],\n  \"safe_site\": null\n");
 }
 
+// A stack's high-water in bytes, or null when the thread did not run (or its stack was unknown).
+void WriteStack(std::FILE* f, const char* name, const core::StackWatermark& stack, bool last) {
+  if (stack.Measured()) {
+    std::fprintf(f, "\"%s\": %lld%s", name, static_cast<long long>(stack.HighWaterBytes()),
+                 last ? "" : ", ");
+  } else {
+    std::fprintf(f, "\"%s\": null%s", name, last ? "" : ", ");
+  }
+}
+
+// The process's memory when the frame group started and when it stopped, the page faults in
+// between and each thread's stack high-water (core/memory_use.hpp); null where not measured.
+void WriteMemory(std::FILE* f, const FlightLoop::Memory& m, const core::StackWatermark& output) {
+  std::fprintf(f, "  \"memory\": {");
+  if (m.at_start.valid && m.at_end.valid) {
+    std::fprintf(f,
+                 "\"resident_bytes_at_start\": %lld, \"resident_bytes_at_end\": %lld, "
+                 "\"peak_resident_bytes\": %lld, \"minor_faults_after_start\": %lld, "
+                 "\"major_faults_after_start\": %lld,\n",
+                 static_cast<long long>(m.at_start.resident_bytes),
+                 static_cast<long long>(m.at_end.resident_bytes),
+                 static_cast<long long>(m.at_end.peak_resident_bytes),
+                 static_cast<long long>(m.at_end.minor_faults - m.at_start.minor_faults),
+                 static_cast<long long>(m.at_end.major_faults - m.at_start.major_faults));
+  } else {
+    std::fprintf(f,
+                 "\"resident_bytes_at_start\": null, \"resident_bytes_at_end\": null, "
+                 "\"peak_resident_bytes\": null, \"minor_faults_after_start\": null, "
+                 "\"major_faults_after_start\": null,\n");
+  }
+  const bool saturated = m.frame_group.Saturated() || m.hazard.Saturated() ||
+                         m.recovery.Saturated() || output.Saturated();
+  std::fprintf(f, "    \"stack_painted_bytes\": %lld, \"stack_saturated\": %s,\n",
+               static_cast<long long>(core::StackWatermark::kDefaultDepth),
+               saturated ? "true" : "false");
+  std::fprintf(f, "    \"stack_high_water_bytes\": {");
+  WriteStack(f, "frame_group", m.frame_group, false);
+  WriteStack(f, "hazard", m.hazard, false);
+  WriteStack(f, "recovery", m.recovery, false);
+  WriteStack(f, "output", output, true);
+  std::fprintf(f, "}},\n");
+}
+
 // False when the file could not be written whole (a full disk, an I/O error). `truth`: the
 // extension that evaluated the run (or nullptr).
 bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
                   const OutputCounters& output, const HealthRecord& health,
                   std::int64_t hazard_maps, bool locked, bool fifo, const Verdict& verdict,
                   const IntegrityCounters& integrity, const ProcessExtension* truth,
-                  const drivers::LogStreamStats* log, const ImuReport* imu) {
+                  const drivers::LogStreamStats* log, const ImuReport* imu,
+                  const FlightLoop::Memory& memory, const core::StackWatermark& output_stack) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr) return false;
   std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"result_reasons\": \"%s\",\n", verdict.result,
@@ -278,6 +322,7 @@ bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
       static_cast<long long>(health.frames_rejected), static_cast<long long>(counters.stage_errors),
       static_cast<long long>(output.record_errors + output.encode_errors), health.fault_bits,
       health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
+  WriteMemory(f, memory, output_stack);
   if (log != nullptr) {
     std::fprintf(f,
                  "  \"log\": {\"frames_missing\": %lld, \"duplicates_refused\": %lld, "
@@ -792,6 +837,24 @@ ImuReport ReportImu(FlightProcess* fp) {
   return report;
 }
 
+void PrintMemoryLine(const FlightProcess& fp) {
+  const FlightLoop::Memory& m = fp.loop.MemoryUse();
+  if (!m.at_start.valid || !m.at_end.valid) return;
+  constexpr double kMiB = 1024.0 * 1024.0;
+  std::fprintf(stderr,
+               "%s: memory: %.1f MiB resident at start, %.1f MiB at end (peak %.1f MiB), %lld "
+               "page faults after start; stack high-water: frame group %.1f KiB, hazard %.1f "
+               "KiB, output %.1f KiB\n",
+               fp.tool, static_cast<double>(m.at_start.resident_bytes) / kMiB,
+               static_cast<double>(m.at_end.resident_bytes) / kMiB,
+               static_cast<double>(m.at_end.peak_resident_bytes) / kMiB,
+               static_cast<long long>(m.at_end.minor_faults - m.at_start.minor_faults +
+                                      m.at_end.major_faults - m.at_start.major_faults),
+               static_cast<double>(m.frame_group.HighWaterBytes()) / 1024.0,
+               static_cast<double>(m.hazard.HighWaterBytes()) / 1024.0,
+               static_cast<double>(fp.parts.output.Stack().HighWaterBytes()) / 1024.0);
+}
+
 void PrintRunLine(const FlightProcess& fp) {
   const LoopCounters& counters = fp.loop.Counters();
   const HealthRecord& h = fp.last_health.last;
@@ -910,11 +973,13 @@ int Report(FlightProcess* fp) {
                             inertial ? &imu_report : nullptr);
   }
   PrintRunLine(*fp);
+  PrintMemoryLine(*fp);
   PrintIntegrityLine(*fp, verdict);
   if (!config.summary_path.empty() &&
       !WriteSummary(config.summary_path, config, counters, out, h, fp->hazard_counter.maps,
                     fp->locked, fp->fifo, verdict, integrity, truth, log_stream,
-                    inertial ? &imu_report : nullptr)) {
+                    inertial ? &imu_report : nullptr, fp->loop.MemoryUse(),
+                    fp->parts.output.Stack())) {
     std::fprintf(stderr, "%s: cannot write the summary %s: %s; exit 1\n", fp->tool,
                  config.summary_path.c_str(), std::strerror(errno));
     return kRunError;

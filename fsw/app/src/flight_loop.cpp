@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <latch>
 
 #include "swf/app/alloc_meter.hpp"
 #include "swf/app/realtime.hpp"
@@ -571,10 +572,26 @@ Status FlightLoop::Run() {
   if (!configured_) return Status::kNotConfigured;
   stop_.store(false);
   hazard_quit_.store(false);
-  hazard_thread_ = std::thread([this] { HazardMain(); });
   recovery_quit_.store(false);
   restart_busy_.store(false);
-  recovery_thread_ = std::thread([this] { RecoveryMain(); });
+  // Each thread paints its stack before the start figures are taken (the painting's page faults
+  // are part of starting, not of running).
+  memory_.frame_group.Paint();
+  std::latch painted(2);
+  hazard_thread_ = std::thread([this, &painted] {
+    memory_.hazard.Paint();
+    painted.count_down();
+    HazardMain();
+    memory_.hazard.Measure();
+  });
+  recovery_thread_ = std::thread([this, &painted] {
+    memory_.recovery.Paint();
+    painted.count_down();
+    RecoveryMain();
+    memory_.recovery.Measure();
+  });
+  painted.wait();
+  memory_.at_start = core::ReadProcessMemory();
   BeginRealtimeAllocationCounting();
   Status result = Status::kOk;
   TimeNs next = core::MonotonicNs();
@@ -609,6 +626,8 @@ Status FlightLoop::Run() {
   hazard_wake_.release();
   hazard_thread_.join();
   StopRecoveryThread();
+  memory_.frame_group.Measure();
+  memory_.at_end = core::ReadProcessMemory();
   PublishHealth();
   if (result == Status::kDeviceLost) {
     std::fprintf(stderr,

@@ -87,11 +87,13 @@ bool OutputThread::Open(const OutputOptions& options, OutputChannels* channels,
 void OutputThread::Start() {
   quit_.store(false);
   thread_ = std::thread([this] {
+    stack_.Paint();
     while (!quit_.load(std::memory_order_acquire)) {
       DrainOnce();
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     DrainOnce();
+    stack_.Measure();
   });
 }
 

@@ -46,6 +46,16 @@ samples=$($cmp --count SWF_IMU "$dir/imu.lcmlog")
 [ "$samples" -eq 1161 ] || fail "the log holds $samples IMU samples, expected 2.9 s at 400 Hz + 1"
 grep -q '"imu": {"unit": "mems", "accepted": 1161, "out_of_order": 0' "$dir/imu.json" ||
   fail "the summary does not count the IMU samples"
+# The memory figures: every flight thread's stack measured and not past its painted region.
+python3 - "$dir/imu.json" <<'PY' || fail "the summary's memory figures are missing or implausible"
+import json, sys
+m = json.load(open(sys.argv[1]))['memory']
+stacks = m['stack_high_water_bytes']
+assert all(isinstance(v, int) and 0 < v < m['stack_painted_bytes'] for v in stacks.values()), m
+assert not m['stack_saturated'], m
+assert 0 < m['resident_bytes_at_start'] <= m['peak_resident_bytes'], m
+assert m['minor_faults_after_start'] >= 0 and m['major_faults_after_start'] >= 0, m
+PY
 $cmp SWF_NAV "$dir/imu.lcmlog" "$dir/live.lcmlog" 2> /dev/null &&
   fail "the IMU run's navigation equals the stereo-only run's"
 

@@ -41,6 +41,7 @@
 #include "swf/app/pipeline.hpp"
 #include "swf/app/records.hpp"
 #include "swf/app/stage_timer.hpp"
+#include "swf/core/memory_use.hpp"
 #include "swf/core/status.hpp"
 #include "swf/drivers/process_input.hpp"
 #include "swf/drivers/stereo_source.hpp"
@@ -141,6 +142,16 @@ class FlightLoop {
   const char* SourceFault() const { return source_fault_; }
   std::int64_t HazardErrors() const { return hazard_errors_.load(); }
   StageSummary Summary(int stage) { return stages_[stage].Summarize(); }
+  // Memory figures of the last Run() (core/memory_use.hpp): its threads' stack high-water and
+  // the process's resident memory and page faults when allocation counting began and at the end.
+  struct Memory {
+    core::StackWatermark frame_group;
+    core::StackWatermark hazard;
+    core::StackWatermark recovery;
+    core::ProcessMemory at_start;
+    core::ProcessMemory at_end;
+  };
+  const Memory& MemoryUse() const { return memory_; }
 
  private:
   core::Status Cycle(core::TimeNs acquire_timeout_ns, bool synchronous_hazard,
@@ -212,6 +223,7 @@ class FlightLoop {
   std::counting_semaphore<1024> hazard_wake_{0};
   std::atomic<std::int64_t> hazard_outputs_dropped_{0};
   std::thread hazard_thread_;
+  Memory memory_;
 };
 
 }  // namespace swf::app

@@ -12,6 +12,7 @@
 
 #include "swf/app/flight_loop.hpp"
 #include "swf/app/records.hpp"
+#include "swf/core/memory_use.hpp"
 #include "swf/core/spsc_queue.hpp"
 #include "swf/drivers/log_stereo_source.hpp"
 #include "swf/drivers/stereo_source.hpp"
@@ -78,6 +79,8 @@ class OutputThread {
   // Drains what is queued now on the calling thread (tests and Step()-driven runs).
   void DrainOnce();
   const OutputCounters& Counters() const { return counters_; }
+  // The output thread's stack high-water (after StopAndDrain).
+  const core::StackWatermark& Stack() const { return stack_; }
 
  private:
   struct Impl;
@@ -94,6 +97,7 @@ class OutputThread {
   OutputCounters counters_;
   std::atomic<bool> quit_{false};
   std::thread thread_;
+  core::StackWatermark stack_;
 };
 
 // The IMU over LCM for a flight process on cameras: a normal-priority thread receives imu_t on
