@@ -449,7 +449,13 @@ int Configure(const CommandLine& cl, FlightProcess* fp) {
   if (fp->replay) {
     config.source = SourceKind::kLog;
     config.log_path = cl.log_path;
-    config.record_frames = false;
+    // The replayed frames are in the input log already, so a replay's recording holds only the
+    // outputs unless asked (--set 'record.frames: true'): then it holds the frames too and can be
+    // replayed again (swf-convert's round trip test).
+    const auto frames = config.origins.keys.find("record.frames");
+    if (frames == config.origins.keys.end() || frames->second != "--set") {
+      config.record_frames = false;
+    }
     const auto record = config.origins.keys.find("record.path");
     if (cl.record_given) {
       config.record_path = cl.record_override;
