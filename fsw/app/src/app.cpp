@@ -552,8 +552,10 @@ int OpenLogSource(FlightProcess* fp) {
     return kRunError;
   }
   if (log->NumFrames() == 0) {
-    std::fprintf(stderr, "%s: %s: no %s%s records\n", fp->tool, config.log_path.c_str(),
-                 config.channel_prefix.c_str(), kStereoSuffix);
+    std::fprintf(stderr,
+                 "%s: %s: no %s%s records (a replay records its frames only with --set "
+                 "'record.frames: true'; swf-convert makes logs of datasets)\n",
+                 fp->tool, config.log_path.c_str(), config.channel_prefix.c_str(), kStereoSuffix);
     return kRunError;
   }
   po.width_px = log->Width();

@@ -396,11 +396,12 @@ bool LogToPngs(const std::string& log_path, const std::string& channel, const st
 }
 
 bool LogToTrajectory(const std::string& log_path, const std::string& channel,
-                     const std::string& tum_path, const std::string& kitti_path,
+                     const std::string& tum_path, const std::string& kitti_path, bool anchor_first,
                      std::int64_t* poses, std::string* error) {
   *poses = 0;
   std::string tum = "# timestamp(s) tx ty tz qx qy qz qw (world_T_camera, rectified left camera)\n";
   std::string kitti;
+  PoseD first_T_world;
   const auto add = [&](const swf_msgs::nav_state_t& m, std::int64_t record, std::string* e) {
     const double* q = m.orientation_world_q;
     const double* p = m.position_world_m;
@@ -411,14 +412,19 @@ bool LogToTrajectory(const std::string& log_path, const std::string& channel,
            ": the pose is not finite or its quaternion not unit";
       return false;
     }
+    PoseD pose{quat.normalized().toRotationMatrix(), Eigen::Vector3d(p[0], p[1], p[2])};
+    if (anchor_first && *poses == 0) first_T_world = pose.Inverse();
+    if (anchor_first) pose = first_T_world * pose;
+    const Eigen::Matrix3d& r = pose.R;
+    const Eigen::Vector3d& t = pose.t;
+    const Eigen::Quaterniond out(r);
     char line[400];
     std::snprintf(line, sizeof line, "%s %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n",
-                  Seconds(m.utime).c_str(), p[0], p[1], p[2], q[1], q[2], q[3], q[0]);
+                  Seconds(m.utime).c_str(), t[0], t[1], t[2], out.x(), out.y(), out.z(), out.w());
     tum += line;
-    const Eigen::Matrix3d r = quat.toRotationMatrix();
     std::snprintf(line, sizeof line,
                   "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n", r(0, 0), r(0, 1),
-                  r(0, 2), p[0], r(1, 0), r(1, 1), r(1, 2), p[1], r(2, 0), r(2, 1), r(2, 2), p[2]);
+                  r(0, 2), t[0], r(1, 0), r(1, 1), r(1, 2), t[1], r(2, 0), r(2, 1), r(2, 2), t[2]);
     kitti += line;
     ++*poses;
     return true;

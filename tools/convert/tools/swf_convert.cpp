@@ -133,6 +133,9 @@ int main(int argc, char** argv) {
   traj_cmd->add_option("--tum", tum_path, "TUM file to write");
   traj_cmd->add_option("--kitti", kitti_path, "KITTI poses file to write");
   traj_cmd->add_option("--channel", nav_channel, "nav_state_t channel");
+  bool anchor_first = false;
+  traj_cmd->add_flag("--anchor-first", anchor_first,
+                     "poses in the first output's camera frame (KITTI: first pose = identity)");
 
   std::string euroc_dir;
   CLI::App* ate_cmd =
@@ -178,7 +181,8 @@ int main(int argc, char** argv) {
     if (tum_path.empty() && kitti_path.empty())
       return Fail("trajectory: give --tum and/or --kitti");
     std::int64_t poses = 0;
-    if (!swf::convert::LogToTrajectory(log_path, nav_channel, tum_path, kitti_path, &poses, &error))
+    if (!swf::convert::LogToTrajectory(log_path, nav_channel, tum_path, kitti_path, anchor_first,
+                                       &poses, &error))
       return Fail(error);
     std::printf("%s\n",
                 json({{"poses", poses}, {"tum", tum_path}, {"kitti", kitti_path}}).dump(2).c_str());

@@ -49,9 +49,11 @@ bool GrabToLog(const std::string& dir, const LogInputOptions& options, InputSumm
 bool LogToPngs(const std::string& log_path, const std::string& channel, const std::string& out_dir,
                std::int64_t* pairs, std::string* error);
 
-// nav_state_t on `channel` as TUM and/or KITTI trajectory files ("" = not written).
+// nav_state_t on `channel` as TUM and/or KITTI trajectory files ("" = not written), in the run's
+// world frame, or with `anchor_first` in the first output's camera frame (KITTI's convention:
+// the first pose is the identity).
 bool LogToTrajectory(const std::string& log_path, const std::string& channel,
-                     const std::string& tum_path, const std::string& kitti_path,
+                     const std::string& tum_path, const std::string& kitti_path, bool anchor_first,
                      std::int64_t* poses, std::string* error);
 
 struct AteResult {
