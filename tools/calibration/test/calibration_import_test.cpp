@@ -203,75 +203,78 @@ struct Malformed {
   const char* expect;  // in the error
 };
 
-// Each malformed case: the good file with one edit, imported with its partner file unchanged.
-TEST(CalibrationImport, RefusesEachMalformedFileNamingFileAndKey) {
-  const std::vector<Malformed> cases = {
-      {"euroc_left.yaml", "intrinsics: [458.0, ", "intrinsics: [",
-       "intrinsics: needs 4 numbers, has 3"},
-      {"euroc_left.yaml", "resolution: [752, 480]\n", "", "resolution: missing"},
-      {"euroc_left.yaml", "camera_model: pinhole", "camera_model: omni",
-       "camera_model: 'omni' is not supported"},
-      {"euroc_left.yaml", "0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 1.0, 1.0]", "T_BS: the last row"},
-      {"euroc_left.yaml", "[1.0, 0.0, 0.0, 0.0,", "[2.0, 0.0, 0.0, 0.0,",
-       "T_BS: the 3x3 block is not a rotation"},
-      {"euroc_left.yaml", "-0.28,", "abc,", "distortion_coefficients: is not a list of numbers"},
-      {"euroc_left.yaml", "-0.28,", ".nan,", "non-finite"},
-      {"euroc_left.yaml", "resolution: [752, 480]", "resolution: [752, 480", "not valid YAML"},
-      {"euroc_left.yaml", "intrinsics: [458.0, 457.0", "intrinsics: [-458.0, 457.0",
-       "focal lengths must be positive"},
-      {"ros_left.yaml", "image_width: 752\n", "", "image_width: missing"},
-      {"ros_left.yaml", "distortion_model: plumb_bob", "distortion_model: equidistant",
-       "'equidistant' is not supported"},
-      {"ros_left.yaml", "rows: 3\n  cols: 4", "rows: 3\n  cols: 3",
-       "rows x cols = 9 but data holds 12"},
-      {"ros_left.yaml", "data: [458.0, 0.0, 367.0", "data: [458.0, 1.0, 367.0",
-       "skew is not supported"},
-      {"kalibr_camchain.yaml", "distortion_model: radtan\n  intrinsics",
-       "distortion_model: equidistant\n  intrinsics",
-       "distortion_model: 'equidistant' is not supported"},
-      {"kalibr_camchain.yaml", "  - [1.0, 0.0, 0.0, -0.11]", "  - [1.0, 0.0, 0.0]",
-       "T_cn_cnm1: needs 16 numbers, has 15"},
-      {"kalibr_camchain.yaml", "cam1:", "camX:", "cam1: missing"},
-      {"kalibr_camchain.yaml", "-0.11]", "0.0]", "cannot rectify"},
-      {"opencv_stereo.yaml", "image_width: 752\nimage_height: 480\n", "", "no image size"},
-      {"opencv_stereo.yaml", "data: [ -0.11, 0., 0. ]", "data: [ -0.11, 0. ]",
-       "rows x cols = 3 but data holds 2"},
-      {"opencv_stereo.yaml", "T: !!opencv-matrix", "Q: !!opencv-matrix", "T: missing"},
-      {"kitti_calib.txt", "P1: 7.070912e+02 0.000000e+00 ", "P1: 7.070912e+02 ",
-       "P1: needs 12 finite numbers, has 11"},
-      {"kitti_calib.txt", "P1:", "P2:", "P1: missing"},
-      {"left.cahvor", "H = 458.0 0.0 367.0\n", "", "H: missing"},
-      {"left.cahvor", "A = 0.0 0.0 1.0", "A = 0.0 0.0 x",
-       ":5: A: needs 3 finite numbers, has text"},
-      {"left.cahvor", "R = 0.0 -0.28 0.074\n", "", "CAHVOR needs both O and R"},
-      {"left.cahvor", "C = 0.0 0.0 0.0\n", "C = 0.0 0.0 0.0\nC = 0.0 0.0 0.0\n", "C: given twice"},
-  };
+// One test per malformed case: the good file with one edit, imported with its partner file
+// unchanged; the refusal names the edited file and says what is wrong.
+class MalformedFile : public ::testing::TestWithParam<Malformed> {};
+
+TEST_P(MalformedFile, IsRefusedNamingFileAndKey) {
+  const Malformed& m = GetParam();
   const std::string d = DataDir();
   const std::map<std::string, std::string> partner = {{"euroc_left.yaml", "euroc_right.yaml"},
                                                       {"ros_left.yaml", "ros_right.yaml"},
                                                       {"left.cahvor", "right.cahvor"}};
-  for (const Malformed& m : cases) {
-    std::string text = ReadAll(d + m.name);
-    const std::size_t at = text.find(m.from);
-    ASSERT_NE(at, std::string::npos) << m.from;
-    text.replace(at, std::string(m.from).size(), m.to);
-    const std::string path = WriteTemp(std::string("bad_") + m.name, text);
-    std::vector<std::string> files = {path};
-    if (partner.count(m.name) != 0) files.push_back(d + partner.at(m.name));
-    ImportOptions options;
-    if (std::string(m.name) == "kitti_calib.txt") {
-      options.format = CalibrationFormat::kKitti;
-      options.width = 1242;
-      options.height = 375;
-    }
-    StereoCalibration c;
-    std::string error;
-    EXPECT_FALSE(ImportStereoCalibration(files, options, &c, &error)) << m.expect;
-    EXPECT_NE(error.find(m.expect), std::string::npos)
-        << "expected '" << m.expect << "' in: " << error;
-    EXPECT_NE(error.find(path), std::string::npos) << error;
+  std::string text = ReadAll(d + m.name);
+  const std::size_t at = text.find(m.from);
+  ASSERT_NE(at, std::string::npos) << m.from;
+  text.replace(at, std::string(m.from).size(), m.to);
+  const std::string path = WriteTemp(std::string("bad_") + m.name, text);
+  std::vector<std::string> files = {path};
+  if (partner.count(m.name) != 0) files.push_back(d + partner.at(m.name));
+  ImportOptions options;
+  if (std::string(m.name) == "kitti_calib.txt") {
+    options.format = CalibrationFormat::kKitti;
+    options.width = 1242;
+    options.height = 375;
   }
+  StereoCalibration c;
+  std::string error;
+  EXPECT_FALSE(ImportStereoCalibration(files, options, &c, &error)) << m.expect;
+  EXPECT_NE(error.find(m.expect), std::string::npos)
+      << "expected '" << m.expect << "' in: " << error;
+  EXPECT_NE(error.find(path), std::string::npos) << error;
 }
+
+const Malformed kMalformedCases[] = {
+    {"euroc_left.yaml", "intrinsics: [458.0, ", "intrinsics: [",
+     "intrinsics: needs 4 numbers, has 3"},
+    {"euroc_left.yaml", "resolution: [752, 480]\n", "", "resolution: missing"},
+    {"euroc_left.yaml", "camera_model: pinhole", "camera_model: omni",
+     "camera_model: 'omni' is not supported"},
+    {"euroc_left.yaml", "0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 1.0, 1.0]", "T_BS: the last row"},
+    {"euroc_left.yaml", "[1.0, 0.0, 0.0, 0.0,", "[2.0, 0.0, 0.0, 0.0,",
+     "T_BS: the 3x3 block is not a rotation"},
+    {"euroc_left.yaml", "-0.28,", "abc,", "distortion_coefficients: is not a list of numbers"},
+    {"euroc_left.yaml", "-0.28,", ".nan,", "non-finite"},
+    {"euroc_left.yaml", "resolution: [752, 480]", "resolution: [752, 480", "not valid YAML"},
+    {"euroc_left.yaml", "intrinsics: [458.0, 457.0", "intrinsics: [-458.0, 457.0",
+     "focal lengths must be positive"},
+    {"ros_left.yaml", "image_width: 752\n", "", "image_width: missing"},
+    {"ros_left.yaml", "distortion_model: plumb_bob", "distortion_model: equidistant",
+     "'equidistant' is not supported"},
+    {"ros_left.yaml", "rows: 3\n  cols: 4", "rows: 3\n  cols: 3",
+     "rows x cols = 9 but data holds 12"},
+    {"ros_left.yaml", "data: [458.0, 0.0, 367.0", "data: [458.0, 1.0, 367.0",
+     "skew is not supported"},
+    {"kalibr_camchain.yaml", "distortion_model: radtan\n  intrinsics",
+     "distortion_model: equidistant\n  intrinsics",
+     "distortion_model: 'equidistant' is not supported"},
+    {"kalibr_camchain.yaml", "  - [1.0, 0.0, 0.0, -0.11]", "  - [1.0, 0.0, 0.0]",
+     "T_cn_cnm1: needs 16 numbers, has 15"},
+    {"kalibr_camchain.yaml", "cam1:", "camX:", "cam1: missing"},
+    {"kalibr_camchain.yaml", "-0.11]", "0.0]", "cannot rectify"},
+    {"opencv_stereo.yaml", "image_width: 752\nimage_height: 480\n", "", "no image size"},
+    {"opencv_stereo.yaml", "data: [ -0.11, 0., 0. ]", "data: [ -0.11, 0. ]",
+     "rows x cols = 3 but data holds 2"},
+    {"opencv_stereo.yaml", "T: !!opencv-matrix", "Q: !!opencv-matrix", "T: missing"},
+    {"kitti_calib.txt", "P1: 7.070912e+02 0.000000e+00 ", "P1: 7.070912e+02 ",
+     "P1: needs 12 finite numbers, has 11"},
+    {"kitti_calib.txt", "P1:", "P2:", "P1: missing"},
+    {"left.cahvor", "H = 458.0 0.0 367.0\n", "", "H: missing"},
+    {"left.cahvor", "A = 0.0 0.0 1.0", "A = 0.0 0.0 x", ":5: A: needs 3 finite numbers, has text"},
+    {"left.cahvor", "R = 0.0 -0.28 0.074\n", "", "CAHVOR needs both O and R"},
+    {"left.cahvor", "C = 0.0 0.0 0.0\n", "C = 0.0 0.0 0.0\nC = 0.0 0.0 0.0\n", "C: given twice"}};
+
+INSTANTIATE_TEST_SUITE_P(EveryFormat, MalformedFile, ::testing::ValuesIn(kMalformedCases));
 
 TEST(CalibrationImport, RefusesWhatNoFormatReads) {
   const std::string d = DataDir();
