@@ -200,6 +200,10 @@ bool ReadJplModel(const std::string& path, const ImportOptions& options, JplMode
   }
   if (entries.count("Dimensions") != 0) {
     if (!Take(entries, path, "Dimensions", 2, &dims, error)) return false;
+    if (!(dims[0] >= 1 && dims[0] <= 1e6 && dims[1] >= 1 && dims[1] <= 1e6)) {
+      *error = Message(path, entries["Dimensions"].line, "Dimensions", "not an image size");
+      return false;
+    }
     m->width = static_cast<int>(dims[0]);
     m->height = static_cast<int>(dims[1]);
     if (dims[0] != m->width || dims[1] != m->height || m->width < 1 || m->height < 1) {

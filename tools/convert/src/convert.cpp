@@ -269,8 +269,8 @@ bool KittiToLog(const std::string& dir, const LogInputOptions& options, InputSum
 bool GrabToLog(const std::string& dir, const LogInputOptions& options, InputSummary* summary,
                std::string* error) {
   *summary = InputSummary{};
-  if (!(options.rate_hz > 0.0 && options.rate_hz <= 10000.0)) {
-    *error = "--rate-hz must be in (0, 10000]";
+  if (!(options.rate_hz >= 0.001 && options.rate_hz <= 10000.0)) {
+    *error = "--rate-hz must be in [0.001, 10000]";
     return false;
   }
   const std::regex name("left_([0-9]{1,12})\\.png");
@@ -300,7 +300,13 @@ bool GrabToLog(const std::string& dir, const LogInputOptions& options, InputSumm
       *error = right + ": missing (its left image " + left + " exists)";
       return false;
     }
-    const std::int64_t utime = std::llround(static_cast<double>(seq) * 1e6 / options.rate_hz);
+    const double utime_us = static_cast<double>(seq) * 1e6 / options.rate_hz;
+    if (utime_us > 1e15) {  // ~30 years: beyond any capture, and far inside int64 microseconds
+      *error = left + ": sequence number " + std::to_string(seq) + " at " +
+               std::to_string(options.rate_hz) + " Hz is beyond any recording's time";
+      return false;
+    }
+    const std::int64_t utime = std::llround(utime_us);
     const auto dropped = static_cast<std::int32_t>(previous < 0 ? 0 : seq - previous - 1);
     swf_msgs::stereo_frame_t msg;
     if (!FrameMessage(left, right, seq, utime, dropped, &msg, error) ||

@@ -2,6 +2,7 @@
 // files, calibrations into the form swf-fsw reads (tools/convert/README.md).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -62,7 +63,9 @@ int RunCalibration(const std::vector<std::string>& files, const std::string& for
     return Fail(error);
   }
   if (!out.empty()) {
-    std::filesystem::create_directories(out);
+    std::error_code ec;
+    std::filesystem::create_directories(out, ec);
+    if (ec) return Fail(out + ": cannot create the directory (" + ec.message() + ")");
     for (const auto& [name, camera] : {std::pair{"left", c.left}, std::pair{"right", c.right}}) {
       const std::string path = out + "/" + name + ".yaml";
       const std::string temp = path + ".tmp";
