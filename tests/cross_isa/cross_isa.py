@@ -11,6 +11,8 @@ first N frames: stereo pairs and IMU samples), makes it a camera log (camera_log
 both swf-fsw programs (flight.cfg beside this file: demo.cfg's flight settings, `source: log`),
 and compares every SWF_NAV, SWF_LANDMARKS and SWF_HAZARD message of the two recordings by its
 SHA-256, per channel and in order (tests/change_indication's digests). Bit-identical outputs pass.
+The aarch64 swf-fsw then replays its own recording, which must give its outputs again, bit for
+bit (a descent flown on the target is replayable there).
 Otherwise the first differing message of each channel is reported with its first differing
 byte, the messages are decoded (lcm-gen's Python types of messages/*.lcm) and compared field by
 field: the check passes when every integer field is equal and every floating-point field is within
@@ -212,7 +214,20 @@ def check(args):
                 cmd + ['--config', os.path.join(HERE, 'flight.cfg'),
                        '--set', 'log.path: ' + camera, '--set', 'record.path: ' + logs[name]],
                 env)
-        ok = True
+        # Every descent replayable on the flight computer: the target's recording (its frames and
+        # IMU samples with its outputs) flown again by the same binary gives the same outputs.
+        replay = os.path.join(workdir, 'aarch64_replay.lcmlog')
+        run('swf-fsw replaying its own recording (aarch64)',
+            args.target + ['--config', os.path.join(HERE, 'flight.cfg'),
+                           '--set', 'log.path: ' + logs['aarch64'],
+                           '--set', 'record.path: ' + replay], env)
+        replay_report = compare(logs['aarch64'], replay)
+        ok = not replay_report
+        if replay_report:
+            print('the aarch64 replay of its own recording differs:\n  ' +
+                  '\n  '.join(replay_report))
+        else:
+            print('aarch64: the replay of its own recording gives the same outputs, bit for bit')
         for channel in CHANNELS:
             flipped = os.path.join(workdir, 'flipped.lcmlog')
             flipped_copy(logs['aarch64'], flipped, channel)

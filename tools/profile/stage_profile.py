@@ -139,6 +139,11 @@ def write_calibration(path, side, width, height):
         f.write(text)
 
 
+def summary_memory(workdir, tag, size):
+    with open(os.path.join(workdir, '%s_%s.json' % (tag, size))) as f:
+        return json.load(f)['memory']
+
+
 def per_frame(counts, frames, maps):
     frame_group = sum(counts[s] for s in FRAME_GROUP)
     out = {s: counts[s] / frames for s in FRAME_GROUP}
@@ -186,6 +191,14 @@ def profile_size(args, width, height, workdir, env):
                 '--set', 'summary.path: ' + os.path.join(workdir, '%s_%s.json' % (tag, size))]
 
     result = {'size': size, 'frames': frames, 'hazard_maps': maps}
+    # Memory: the process's figures from a plain native run; the stacks also under the emulator
+    # (the guest's stacks are the flight computer's; its resident memory would be the emulator's).
+    # As in flight: memory locked (mlockall), so that the faults after start are the real ones.
+    cross_isa.run('swf-fsw natively (memory figures)',
+                  [args.fsw] + fsw_args('native') + ['--set', 'rt.mlockall: true'], env)
+    result['memory'] = {'x86-64': summary_memory(workdir, 'native', size)}
+    with open(os.path.join(workdir, 'native_%s.json' % size)) as f:
+        result['mlockall'] = json.load(f)['mlockall']
     counts = {'x86-64 callgrind': callgrind_counts(
         args.fsw, fsw_args('callgrind'), os.path.join(workdir, 'callgrind_%s.out' % size), env)}
     counts['x86-64 plugin'] = plugin_counts(
@@ -195,6 +208,8 @@ def profile_size(args, width, height, workdir, env):
         counts['aarch64 plugin'] = plugin_counts(
             shlex.split(args.emulator), args.target_fsw, 'aarch64-linux-gnu-nm', args.plugin,
             fsw_args('aarch64'), os.path.join(workdir, 'aarch64_%s.json' % size), env)
+        result['memory']['aarch64 stacks'] = summary_memory(
+            workdir, 'aarch64', size)['stack_high_water_bytes']
     result['instructions'] = counts
     result['per_frame'] = {k: per_frame(v, frames, maps) for k, v in counts.items()}
     flight = 'aarch64 plugin' if args.target_fsw else 'x86-64 callgrind'
@@ -229,6 +244,15 @@ def print_table(result):
     for s in FRAME_GROUP + ['frame_group', 'hazard_per_map']:
         print('| %s | ' % s + ' | '.join('%.2f' % (result['per_frame'][c][s] / 1e6)
                                         for c in columns) + ' |')
+    m = result['memory']['x86-64']
+    print('\nMemory (x86-64, native, mlockall %s): %.1f MiB resident at start, %.1f MiB at the end, peak %.1f '
+          'MiB, %d minor and %d major page faults after start; stack high-water (bytes): %s' %
+          (result['mlockall'], m['resident_bytes_at_start'] / 2**20, m['resident_bytes_at_end'] / 2**20,
+           m['peak_resident_bytes'] / 2**20, m['minor_faults_after_start'],
+           m['major_faults_after_start'], m['stack_high_water_bytes']))
+    if 'aarch64 stacks' in result['memory']:
+        print('Stack high-water on aarch64 (emulated; bytes): %s' %
+              result['memory']['aarch64 stacks'])
     print('\nEstimated times from the %s counts (IPC range per core; 15 Hz period %.1f ms; a map '
           'is due within %d periods):' % (result['estimates_from'], PERIOD_MS, HAZARD_EVERY))
     for e in result['estimates']:

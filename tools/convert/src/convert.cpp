@@ -15,6 +15,7 @@
 #include "euroc.hpp"
 #include "kitti.hpp"
 #include "swf/calibration/calibration_import.hpp"
+#include "swf/drivers/imu_message.hpp"
 #include "swf/drivers/log_stereo_source.hpp"
 #include "swf/image_io/image_io.hpp"
 #include "swf_msgs/imu_t.hpp"
@@ -179,18 +180,6 @@ swf_msgs::truth_state_t TruthMessage(const PoseD& world_T_camera, std::int64_t s
   return t;
 }
 
-swf_msgs::imu_t ImuMessage(const estimator::ImuSample<double>& s) {
-  swf_msgs::imu_t m{};
-  m.utime = s.t_us;
-  m.seq = s.seq;
-  for (int i = 0; i < 3; ++i) {
-    m.angular_rate_radps[i] = s.gyro_radps[i];
-    m.specific_force_mps2[i] = s.accel_mps2[i];
-  }
-  m.flags = static_cast<std::int32_t>(s.flags);
-  return m;
-}
-
 bool WriteCalibrations(const std::string& dir, const frontend::CameraCalibration& left,
                        const frontend::CameraCalibration& right, std::string* error) {
   if (dir.empty()) return true;
@@ -212,8 +201,9 @@ bool SequenceToLog(const eval::StereoSequence& s, const LogInputOptions& options
     const std::int64_t utime = f.stamp_ns / 1000;
     // The samples up to this exposure go before it, as the flight process records them.
     for (; next_imu < s.imu.size() && s.imu[next_imu].t_us <= utime; ++next_imu) {
-      if (!log.Write(kImuChannel, s.imu[next_imu].t_us, ImuMessage(s.imu[next_imu]), error))
-        return false;
+      swf_msgs::imu_t m{};
+      drivers::ImuMessageOf(s.imu[next_imu], &m);
+      if (!log.Write(kImuChannel, s.imu[next_imu].t_us, m, error)) return false;
       ++summary->imu_samples;
     }
     swf_msgs::stereo_frame_t msg;
