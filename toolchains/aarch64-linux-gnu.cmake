@@ -36,3 +36,9 @@ set(ENV{PKG_CONFIG_PATH} "")
 # Debian flight computer runs; its libm decides the transcendental functions' bits), found at its
 # real paths; liblcm through the run path CMake links into every program.
 set(CMAKE_CROSSCOMPILING_EMULATOR qemu-aarch64-static -L /)
+
+# Eigen's NEON multiply-add (pmadd) is fused when __ARM_FEATURE_FMA is defined, which it always is
+# on ARMv8; the host's SSE2 build multiplies and adds, rounding twice. With the macro undefined,
+# Eigen multiplies and adds on aarch64 too (kept apart by -ffp-contract=off): the same bits as the
+# host (docs/aarch64.md, tests/cross_isa).
+set(CMAKE_CXX_FLAGS_INIT "-U__ARM_FEATURE_FMA")

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "rectify_kernels.hpp"
+#include "swf/core/portable_math.hpp"
 
 namespace swf::frontend {
 
@@ -180,7 +181,7 @@ SegmentFit CheckQuadratic(const Quadratic& quad, const ExactSegment& exact,
     fit.identity = fit.identity && source && static_cast<int>(fx) == (u0 + k) * kWeightOne &&
                    static_cast<int>(fy) == v * kWeightOne;
     if (InRawImage(cal, exact.x[k], exact.y[k])) {
-      fit.error = std::max(fit.error, std::hypot(tx - exact.x[k], ty - exact.y[k]));
+      fit.error = std::max(fit.error, core::Hypot(tx - exact.x[k], ty - exact.y[k]));
     }
   }
   fit.kind = all_fast     ? SegmentKind::kInside
@@ -214,7 +215,7 @@ double WindowError(const WindowHalf* halves, const ExactSegment& exact,
     const double tx = half.column + (EvalHalf(half.x, k % kHalf) - 4.0) / kFineOne;
     const double ty = half.row + (EvalHalf(half.y, k % kHalf) - 4.0) / kFineOne;
     if (InRawImage(cal, exact.x[k], exact.y[k])) {
-      error = std::max(error, std::hypot(tx - exact.x[k], ty - exact.y[k]));
+      error = std::max(error, core::Hypot(tx - exact.x[k], ty - exact.y[k]));
     }
   }
   return error;

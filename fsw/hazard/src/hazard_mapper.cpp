@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 
+#include "swf/core/portable_math.hpp"
+
 namespace swf::hazard {
 namespace {
 
@@ -523,7 +525,7 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       const Plane pf = FitPlane(window(i, j, rf), min_f);
       const Plane pr = FitPlane(window(i, j, rr), min_r);
       if (!pf.ok || !pr.ok) continue;
-      const double g = std::hypot(pf.b, pf.c) / cell_m_;
+      const double g = core::Hypot(pf.b, pf.c) / cell_m_;
       const double var_g = (pf.var_b + pf.var_c) / (cell_m_ * cell_m_) + var_tilt;
       const double slope_deg = std::atan(g) * kRadToDeg;
       const double slope_sigma_deg = std::sqrt(var_g) / (1.0 + g * g) * kRadToDeg;
@@ -628,7 +630,7 @@ void HazardMapper::SelectSite() {
   const auto score_of = [&](std::size_t c, int i, int j) {
     const double x = corner_x_ + (i + 0.5) * cell_m_;
     const double y = corner_y_ + (j + 0.5) * cell_m_;
-    const double dist = std::hypot(x - target_.x(), y - target_.y());
+    const double dist = core::Hypot(x - target_.x(), y - target_.y());
     const double clear = std::min<double>(clearance_m_[c], options_.clearance_cap_m);
     const double conf = 1.0 - std::min(1.0, sigma_rel_[c] / options_.max_rock_height_m);
     const double near = 1.0 - std::min(1.0, dist / half_extent);

@@ -29,6 +29,7 @@
 #include <cstdint>
 
 #include "swf/core/status.hpp"
+#include "swf/estimator/chi_square.hpp"
 #include "swf/estimator/geometry.hpp"
 
 namespace swf::estimator {
@@ -144,17 +145,6 @@ struct IntegrityReport {
   double vpl_m = 0.0;
   bool restart = false;  // the evidence says the filter diverged: restart from a trusted state
 };
-
-// Standard normal upper quantile by bisection on erfc (configuration time only).
-inline double NormalUpperQuantile(double tail) {
-  double lo = 0.0;
-  double hi = 40.0;
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (0.5 * std::erfc(mid / std::sqrt(2.0)) > tail ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
 
 class IntegrityMonitor {
  public:
