@@ -1,0 +1,44 @@
+#!/bin/sh
+# swf-view driven by swf-replay: a short demo descent (10 frames) is flown and recorded without
+# publishing, then swf-replay re-runs the flight process on that log and publishes over LCM UDP
+# multicast in a private network namespace. The page, opened before the replay starts, must come
+# to show the 10 outputs, a status and a non-empty hazard map (a replay does not re-send the
+# log's frames on SWF_STEREO, so the image panel says so instead).
+# usage: view_replay_test.sh SWF-SIL SWF-REPLAY SWF-VIEW CONFIG PAGE_CHECK
+set -eu
+sil=$1 replay=$2 view=$3 cfg=$4 check=$5
+fail() { echo "FAIL: $*" >&2; exit 1; }
+if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
+$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged user namespaces)"
+dir=$(mktemp -d)
+trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
+frames=10
+"$sil" --config "$cfg" --set "pacing: lockstep" --set "rt.mlockall: false" --set "rt.priority: 0" \
+  --set "sim.frames: $frames" --set "lcm.publish: false" --set "record.path: $dir/flown.lcmlog" \
+  --set "summary.path: $dir/flown.json" 2> "$dir/sil.err" || { cat "$dir/sil.err" >&2; fail "swf-sil"; }
+$ns sh -c '
+  set -e
+  ip link set lo up
+  ip route add 239.0.0.0/8 dev lo
+  "$2" --port 0 --url-file "$5/url" > "$5/view.json" 2> "$5/view.err" &
+  v=$!
+  for i in $(seq 50); do [ -s "$5/url" ] && break; sleep 0.1; done
+  /usr/bin/python3 "$4" "$(cat "$5/url")" --frames "$6" --screenshot "$5/replay.png" \
+    --timeout 150 > "$5/page.json" 2> "$5/page.err" &
+  c=$!
+  "$1" --config "$3" --log "$5/flown.lcmlog" \
+       --set "pacing: lockstep" --set "rt.mlockall: false" --set "rt.priority: 0" \
+       --set "lcm.publish: true" --set "summary.path: $5/replayed.json" 2> "$5/replay.err" \
+    || echo "swf-replay exit $?" >&2
+  rc=0; wait $c || rc=$?
+  kill -TERM $v; wait $v
+  exit $rc
+' sh "$replay" "$view" "$cfg" "$check" "$dir" "$frames" || {
+  cat "$dir/page.err" "$dir/view.err" "$dir/replay.err" >&2; fail "the page did not show the replay"; }
+echo "page: $(cat "$dir/page.json")"
+echo "swf-view: $(cat "$dir/view.json")"
+json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
+[ "$(json "$dir/view.json" "d['frames']")" -eq $frames ] || fail "swf-view did not receive every nav_state_t"
+[ "$(json "$dir/view.json" "d['bus']['malformed_total'] + d['bus']['lost_total']")" -eq 0 ] || fail "messages malformed or lost"
+[ "$(json "$dir/page.json" "d['hazard_known_pixels']")" -gt 1000 ] || fail "hazard map (nearly) empty on the page"
+echo PASS
