@@ -50,6 +50,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Expect(map.num_observations.size() == map.id.size());
     ExpectSameBytes(map, data, size);
   }
+  swf_msgs::feature_set_t features;
+  if (CheckedDecode(data, size, &features).Ok()) {
+    Expect(features.num_features <= swf::messages::kMaxFeatures);
+    Expect(features.status.size() == static_cast<std::size_t>(features.num_features));
+    for (const std::int8_t s : features.status) {
+      Expect(s >= swf_msgs::feature_set_t::STATUS_TRACKED &&
+             s <= swf_msgs::feature_set_t::STATUS_GATED);
+    }
+    ExpectSameBytes(features, data, size);
+  }
   swf_msgs::hazard_map_t hazard;
   if (CheckedDecode(data, size, &hazard).Ok()) {
     Expect(hazard.num_cells == hazard.rows * hazard.cols);

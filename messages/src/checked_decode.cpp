@@ -17,6 +17,10 @@ constexpr std::size_t kStereoPrefixBytes = 32 + 4 + 2 + 48;
 // position (3 x 8), covariance (6 x 8), num_observations (4).
 constexpr std::size_t kLandmarkPrefixBytes = 24;
 constexpr std::int64_t kBytesPerLandmark = 8 + 24 + 48 + 4;
+// feature_set_t: utime, seq, frame_seq (3 x 8); then num_features. Per feature: id (8), u_px,
+// v_px (2 x 4), status (1).
+constexpr std::size_t kFeaturePrefixBytes = 24;
+constexpr std::int64_t kBytesPerFeature = 8 + 4 + 4 + 1;
 // hazard_map_t: utime, seq, frame_seq (3 x 8), origin_world_m (2 x 8), up_world (3 x 8),
 // cell_size_m (8); then rows, cols, num_cells (3 x 4). Per cell: four floats and a class (17).
 // After the cells: safe_site_valid (1), safe_site_world_m (2 x 8), safe_site_score (8).
@@ -130,6 +134,14 @@ DecodeError CheckStereoShape(WireReader* r, std::int32_t max_width, std::int32_t
     return Error(DecodeResult::kBadLength, "num_bytes", num_bytes);  // != width * height
   }
   return ExpectRemaining(*r, "left/right", 2 * std::int64_t{num_bytes});
+}
+
+DecodeError CheckFeatureShape(WireReader* r) {
+  if (!r->Skip(kFeaturePrefixBytes)) return Error(DecodeResult::kTruncated, "num_features", 0);
+  std::int32_t n = 0;
+  const DecodeError e = ReadCount(r, "num_features", kMaxFeatures, &n);
+  if (!e.Ok()) return e;
+  return ExpectRemaining(*r, "features", kBytesPerFeature * n);
 }
 
 DecodeError CheckLandmarkShape(WireReader* r) {
@@ -257,6 +269,17 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::truth_st
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::landmark_map_t* msg) {
   return Decode(data, size, msg, CheckLandmarkShape);
+}
+
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::feature_set_t* msg) {
+  DecodeError e = Decode(data, size, msg, CheckFeatureShape);
+  if (!e.Ok()) return e;
+  for (const std::int8_t s : msg->status) {
+    if (s < swf_msgs::feature_set_t::STATUS_TRACKED || s > swf_msgs::feature_set_t::STATUS_GATED) {
+      return Error(DecodeResult::kBadValue, "status", s);
+    }
+  }
+  return e;
 }
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_map_t* msg) {

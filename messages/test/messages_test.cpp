@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "swf/messages/checked_decode.hpp"
+#include "swf_msgs/feature_set_t.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/hazard_truth_t.hpp"
 #include "swf_msgs/health_t.hpp"
@@ -231,6 +232,32 @@ TEST(CheckedDecode, LandmarkMapCountIsCheckedAgainstTheBytesAndTheLimit) {
   EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, 1)).result,
             DecodeResult::kTrailingBytes);
   ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::landmark_map_t>(bytes);
+}
+
+TEST(CheckedDecode, FeatureSetCountAndStatusesAreChecked) {
+  swf_msgs::feature_set_t set{};
+  set.num_features = 2;
+  set.id = {5, 6};
+  set.u_px = {10.5f, 20.0f};
+  set.v_px = {3.0f, 4.0f};
+  set.status = {swf_msgs::feature_set_t::STATUS_TRACKED, swf_msgs::feature_set_t::STATUS_GATED};
+  const std::vector<std::uint8_t> bytes = Encode(set);
+  swf_msgs::feature_set_t out;
+  ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
+  EXPECT_EQ(out.u_px[0], 10.5f);
+  constexpr std::size_t kNumFeatures = 8 + 24;
+  EXPECT_EQ(Decode<swf_msgs::feature_set_t>(WithInt32(bytes, kNumFeatures, -1)).result,
+            DecodeResult::kBadLength);
+  EXPECT_EQ(Decode<swf_msgs::feature_set_t>(WithInt32(bytes, kNumFeatures, 1 << 30)).result,
+            DecodeResult::kOverLimit);
+  EXPECT_EQ(Decode<swf_msgs::feature_set_t>(WithInt32(bytes, kNumFeatures, 3)).result,
+            DecodeResult::kTruncated);
+  ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::feature_set_t>(bytes);
+  set.status[1] = 4;  // no such status
+  const std::vector<std::uint8_t> unknown = Encode(set);
+  const DecodeError e = CheckedDecode(unknown.data(), unknown.size(), &out);
+  EXPECT_EQ(e.result, DecodeResult::kBadValue);
+  EXPECT_STREQ(e.field, "status");
 }
 
 TEST(CheckedDecode, HazardMapCellsAndClassesAreChecked) {

@@ -279,6 +279,8 @@ void FlightLoop::PublishNav() {
   pipeline_->MakeNav(&r.nav);
   r.num_new_sightings = pipeline_->NumNewSightings();
   std::copy_n(pipeline_->NewSightings(), r.num_new_sightings, r.new_sightings);
+  r.num_features = pipeline_->NumFeatureMarks();
+  std::copy_n(pipeline_->FeatureMarks(), r.num_features, r.features);
   Push(&out_->frame_group, RecordRef{RecordKind::kNav, slot});
 }
 

@@ -12,6 +12,7 @@
 
 #include "swf/drivers/imu_message.hpp"
 #include "swf/messages/checked_decode.hpp"
+#include "swf_msgs/feature_set_t.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/health_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
@@ -32,6 +33,8 @@ struct OutputThread::Impl {
   swf_msgs::landmark_map_t map;
   swf_msgs::health_t health;
   swf_msgs::hazard_map_t hazard;
+  swf_msgs::feature_set_t features;
+  std::int64_t features_seq = 0;
 };
 
 OutputThread::OutputThread() : impl_(new Impl()) {}
@@ -69,6 +72,10 @@ bool OutputThread::Open(const OutputOptions& options, OutputChannels* channels,
   impl_->map.position_world_m.reserve(kMaxMapLandmarks);
   impl_->map.covariance_m2.reserve(kMaxMapLandmarks);
   impl_->map.num_observations.reserve(kMaxMapLandmarks);
+  impl_->features.id.reserve(kMaxFeatureMarks);
+  impl_->features.u_px.reserve(kMaxFeatureMarks);
+  impl_->features.v_px.reserve(kMaxFeatureMarks);
+  impl_->features.status.reserve(kMaxFeatureMarks);
   impl_->health.stage_name.reserve(kNumStages);
   impl_->health.stage_p50_ms.reserve(kNumStages);
   impl_->health.stage_p99_ms.reserve(kNumStages);
@@ -209,6 +216,23 @@ void FillMap(const MapRecord& r, swf_msgs::landmark_map_t* m) {
   }
 }
 
+void FillFeatures(const NavRecord& r, std::int64_t seq, swf_msgs::feature_set_t* m) {
+  m->utime = r.nav.utime;
+  m->seq = seq;
+  m->frame_seq = r.nav.frame_seq;
+  m->num_features = r.num_features;
+  m->id.resize(r.num_features);
+  m->u_px.resize(r.num_features);
+  m->v_px.resize(r.num_features);
+  m->status.resize(r.num_features);
+  for (int i = 0; i < r.num_features; ++i) {
+    m->id[i] = r.features[i].id;
+    m->u_px[i] = r.features[i].u_px;
+    m->v_px[i] = r.features[i].v_px;
+    m->status[i] = static_cast<std::int8_t>(r.features[i].fate);
+  }
+}
+
 void FillHazard(const HazardRecord& r, swf_msgs::hazard_map_t* m) {
   m->utime = r.utime;
   m->seq = r.seq;
@@ -325,9 +349,18 @@ void OutputThread::Handle(const RecordRef& ref) {
       channels_->imus.Release(ref.slot);
       return;
     }
-    case RecordKind::kNav:
+    case RecordKind::kNav: {
+      // The frame's features go out after its estimate (filled before the slot is released).
+      FillFeatures(channels_->navs[ref.slot], impl_->features_seq++, &impl_->features);
       observe_and_publish(channels_->navs, FillNav, &OutputObserver::OnNav, impl_->nav, kNavSuffix);
+      const int n = impl_->features.encode(buf, 0, max);
+      if (n < 0) {
+        ++counters_.encode_errors;
+        return;
+      }
+      Emit(kFeaturesSuffix, impl_->features.utime, buf, n);
       return;
+    }
     case RecordKind::kMap:
       observe_and_publish(channels_->maps, FillMap, &OutputObserver::OnMap, impl_->map,
                           kLandmarksSuffix);

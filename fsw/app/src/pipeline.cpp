@@ -38,9 +38,11 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   }
   estimates_.reset(new (std::nothrow) frontend::LandmarkEstimate[kMaxLandmarks]);
   new_sightings_.reset(new (std::nothrow) NewSighting[kMaxNewSightings]);
+  feature_marks_.reset(new (std::nothrow) FeatureMark[kMaxFeatureMarks]);
+  fused_ids_.reset(new (std::nothrow) std::int64_t[kMaxMeasurementsPerPose]);
   disparities_.reset(new (std::nothrow) float[2 * frontend::kMaxTracks]);
   if (!frontend_ || !output_ || (!swf_ && !inertial_) || !estimates_ || !new_sightings_ ||
-      !disparities_)
+      !disparities_ || !feature_marks_ || !fused_ids_)
     return Status::kFull;
   if (options.rectify) {
     rectifier_.reset(new (std::nothrow) frontend::StereoRectifier());
@@ -82,6 +84,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   q_sqrt_.diagonal() << Vec3<double>::Constant(1.0 / options_.process_sigma_m),
       Vec3<double>::Constant(1.0 / options_.process_sigma_rad);
   num_new_sightings_ = 0;
+  num_feature_marks_ = 0;
   has_previous_pose_ = false;
   has_before_previous_ = false;
   frames_estimated_ = 0;
@@ -165,6 +168,7 @@ Status Pipeline::Track() {
 
 Status Pipeline::Estimate(const Pose<double>* motion_input) {
   if (!configured_) return Status::kNotConfigured;
+  num_feature_marks_ = 0;
   // Stereo-inertial: a frame whose images gave (next to) nothing to measure (black, blinded,
   // a lens cap) is a camera outage, the IMU carries the state; not a solve on nothing.
   const std::size_t features = output_->measurements.size() + output_->new_landmarks.size();
@@ -192,6 +196,7 @@ Status Pipeline::Estimate(const Pose<double>* motion_input) {
   }
   AddMeasurements();
   s = Visit([](auto& filter) { return filter.Update(); });
+  MarkUnfused();
   last_status_ = s;
   covariance_valid_ = false;
   const bool filter_reset = NumPoses() == 0;  // its local recovery from a non-finite state
@@ -412,6 +417,7 @@ Status Pipeline::Coast(const Pose<double>* motion_input) {
 // The coasted state of the cycle stamped utime_, seq_ (a missing pair, or a blind frame).
 Status Pipeline::CoastCycle(const Pose<double>* motion_input) {
   num_new_sightings_ = 0;  // no measurement of this cycle was fused
+  num_feature_marks_ = 0;
   const Pose<double>* motion = inertial_ ? nullptr : AcceptMotion(motion_input);
   double inflation = 1.0;
   last_motion_ = FrameMotion(motion, &inflation);
@@ -579,18 +585,27 @@ void Pipeline::AddMeasurements() {
     disparities_[num_disparities_++] = static_cast<float>(u_left - u_right);
   };
   for (const frontend::StereoMeasurement& m : output_->measurements) {
-    if (m.quality < options_.min_quality) continue;
+    if (m.quality < options_.min_quality) {
+      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected);
+      continue;
+    }
     if (AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v))) {
       note(m.u_left, m.u_right, m.v);
+      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kTracked);
+    } else {
+      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected);
     }
   }
   for (const frontend::NewLandmark& n : output_->new_landmarks) {
     if (AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v))) {
       note(n.u_left, n.u_right, n.v);
+      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kNew);
       if (num_new_sightings_ < kMaxNewSightings) {
         new_sightings_[num_new_sightings_++] =
             NewSighting{n.landmark_id, seq_, static_cast<float>(n.u_left), static_cast<float>(n.v)};
       }
+    } else {
+      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kRejected);
     }
   }
   image_spread_px_ = 0.0;
@@ -603,6 +618,32 @@ void Pipeline::AddMeasurements() {
     const double half_trace = 0.5 * (cuu + cvv);
     const double root = std::sqrt(std::max(0.0, half_trace * half_trace - (cuu * cvv - cuv * cuv)));
     image_spread_px_ = std::sqrt(std::max(0.0, half_trace - root));
+  }
+}
+
+void Pipeline::Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate) {
+  if (num_feature_marks_ >= kMaxFeatureMarks) return;
+  feature_marks_[num_feature_marks_++] =
+      FeatureMark{id, static_cast<float>(u_px), static_cast<float>(v_px), fate};
+}
+
+// After the update: a measurement added this frame that is no longer among the newest pose's
+// observations was taken out by a gate (a new landmark: not kept). Sorting a fixed array does
+// not allocate; at most M ids.
+void Pipeline::MarkUnfused() {
+  if (NumPoses() == 0) return;  // the filter reset itself: nothing was fused, nothing to tell
+  int n = 0;
+  Visit([&](const auto& filter) {
+    filter.ForEachNewestObservation([&](std::int64_t id) {
+      if (n < kMaxMeasurementsPerPose) fused_ids_[n++] = id;
+    });
+  });
+  std::sort(fused_ids_.get(), fused_ids_.get() + n);
+  for (int i = 0; i < num_feature_marks_; ++i) {
+    FeatureMark& m = feature_marks_[i];
+    if (m.fate == FeatureFate::kRejected) continue;
+    if (std::binary_search(fused_ids_.get(), fused_ids_.get() + n, m.id)) continue;
+    m.fate = m.fate == FeatureFate::kNew ? FeatureFate::kRejected : FeatureFate::kGated;
   }
 }
 

@@ -339,6 +339,13 @@ class SlidingWindowFilter {
   int WindowSize() const { return window_; }
   const PoseType& PoseAt(int j) const { return Slot(j).pose; }  // 0 = oldest
   const PoseType& NewestPose() const { return Slot(num_poses_ - 1).pose; }
+  // f(landmark id) for each measurement of the newest pose still in the window: after Update(),
+  // the ones the prediction and residual gates let through (a display of what was fused).
+  template <typename F>
+  void ForEachNewestObservation(F&& f) const {
+    if (num_poses_ == 0) return;
+    for (const Observation& o : Slot(num_poses_ - 1).obs) f(landmarks_[o.landmark].id);
+  }
   int NumLandmarks() const { return num_landmarks_; }
   int NumPriorLandmarks() const { return static_cast<int>(prior_landmarks_.size()); }
 

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "swf_msgs/feature_set_t.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/hazard_truth_t.hpp"
 #include "swf_msgs/health_t.hpp"
@@ -31,6 +32,7 @@ namespace swf::messages {
 inline constexpr std::int32_t kMaxImageSidePx = 4096;                              // width, height
 inline constexpr std::int32_t kMaxImageBytes = kMaxImageSidePx * kMaxImageSidePx;  // per image
 inline constexpr std::int32_t kMaxMapLandmarks = 65536;
+inline constexpr std::int32_t kMaxFeatures = 65536;        // feature_set_t (a display message)
 inline constexpr std::int32_t kMaxHazardSideCells = 1024;  // rows, cols
 inline constexpr std::int32_t kMaxHazardCells = kMaxHazardSideCells * kMaxHazardSideCells;
 inline constexpr std::int32_t kMaxTruthRocks = 65536;   // hazard_truth_t (a ground message)
@@ -86,6 +88,8 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::health_t
 // and non-finite values are the stream checker's to judge (estimator/imu_stream.hpp), not the
 // decoder's: they are counted there.
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::imu_t* msg);
+// Refuses a status outside the schema's STATUS_* (kBadValue, "status").
+DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::feature_set_t* msg);
 // Fixed size (truth channels: a simulator's or a test range's).
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::truth_state_t* msg);
 

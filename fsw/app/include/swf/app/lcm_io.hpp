@@ -25,6 +25,8 @@ inline constexpr const char* kNavSuffix = "NAV";
 inline constexpr const char* kLandmarksSuffix = "LANDMARKS";
 inline constexpr const char* kHazardSuffix = "HAZARD";
 inline constexpr const char* kHealthSuffix = "HEALTH";
+// The frame's features with their fate (feature_set_t), beside each estimate: for display only.
+inline constexpr const char* kFeaturesSuffix = "FEATURES";
 // The IMU stream (imu_t): subscribed to by a flight process on cameras, recorded (not
 // re-published) with the samples the pipeline used, replayed from a log.
 inline constexpr const char* kImuSuffix = "IMU";

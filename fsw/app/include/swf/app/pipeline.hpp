@@ -173,6 +173,20 @@ struct NewSighting {
 };
 inline constexpr int kMaxNewSightings = static_cast<int>(frontend::kMaxTracks);
 
+// A feature of the frame on the rectified left image and what became of it (feature_set_t, for
+// display on the ground). kGated: measured and added, but the filter's prediction or residual
+// gate took it out; kRejected: below min_quality, refused by the filter, or a new landmark the
+// filter did not keep.
+enum class FeatureFate : std::int8_t { kTracked = 0, kNew = 1, kRejected = 2, kGated = 3 };
+struct FeatureMark {
+  std::int64_t id = 0;
+  float u_px = 0.0f;
+  float v_px = 0.0f;
+  FeatureFate fate = FeatureFate::kTracked;
+};
+inline constexpr int kMaxFeatureMarks =
+    static_cast<int>(frontend::kMaxTracks + frontend::kMaxNewLandmarks);
+
 // One stereo pair as the pipeline consumes it.
 struct PipelineFrame {
   frontend::GrayView left;
@@ -238,6 +252,9 @@ class Pipeline {
   // The landmarks started by the last frame estimated (its measurements were fused).
   int NumNewSightings() const { return num_new_sightings_; }
   const NewSighting* NewSightings() const { return new_sightings_.get(); }
+  // The last frame's features with their fate (none after a coasted cycle).
+  int NumFeatureMarks() const { return num_feature_marks_; }
+  const FeatureMark* FeatureMarks() const { return feature_marks_.get(); }
   const estimator::StereoCamera<double>& Camera() const { return options_.camera; }
   std::int64_t FramesEstimated() const { return frames_estimated_; }
   bool Rectifies() const { return options_.rectify; }
@@ -272,6 +289,11 @@ class Pipeline {
   std::unique_ptr<frontend::LandmarkEstimate[]> estimates_;
   std::unique_ptr<NewSighting[]> new_sightings_;
   int num_new_sightings_ = 0;
+  void Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate);
+  void MarkUnfused();
+  std::unique_ptr<FeatureMark[]> feature_marks_;
+  int num_feature_marks_ = 0;
+  std::unique_ptr<std::int64_t[]> fused_ids_;  // MarkUnfused's workspace (kMaxMeasurementsPerPose)
   frontend::StereoFrame current_{};
   std::int64_t utime_ = 0;
   std::int64_t seq_ = 0;

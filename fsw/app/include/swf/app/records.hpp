@@ -65,6 +65,9 @@ struct NavRecord {
   // The landmarks the frame started (not published: for observers of the output thread).
   std::int32_t num_new_sightings = 0;
   NewSighting new_sightings[kMaxNewSightings];
+  // The frame's features and their fate (feature_set_t, published beside the estimate).
+  std::int32_t num_features = 0;
+  FeatureMark features[kMaxFeatureMarks];
 };
 
 struct MapRecord {
