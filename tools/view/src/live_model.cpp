@@ -19,7 +19,17 @@ using Clock = std::chrono::steady_clock;
 using Json = nlohmann::json;
 
 // Message kinds by the channel they come on (the flight process's prefix + suffix, the truth).
-enum class Kind { kNav, kLandmarks, kHazard, kHealth, kStereo, kTruth, kTruthLandmarks, kOther };
+enum class Kind {
+  kNav,
+  kLandmarks,
+  kHazard,
+  kHealth,
+  kStereo,
+  kFeatures,
+  kTruth,
+  kTruthLandmarks,
+  kOther
+};
 
 struct TrackPoint {
   std::int64_t frame_seq = 0;
@@ -117,7 +127,8 @@ Json CountersJson(const ChannelCounters& c) {
 
 struct LiveModel::State {
   ViewOptions options;
-  std::string nav_channel, landmarks_channel, hazard_channel, health_channel, stereo_channel;
+  std::string nav_channel, landmarks_channel, hazard_channel, health_channel, stereo_channel,
+      features_channel;
   std::string truth_channel, truth_landmarks_channel;
 
   // Decode targets, touched by the ingesting thread only (decoding happens outside the lock).
@@ -126,6 +137,7 @@ struct LiveModel::State {
   swf_msgs::hazard_map_t scratch_hazard;
   swf_msgs::health_t scratch_health;
   swf_msgs::stereo_frame_t scratch_frame;
+  swf_msgs::feature_set_t scratch_features;
   swf_msgs::truth_state_t scratch_truth;
   std::vector<std::uint8_t> scratch_image;
 
@@ -151,6 +163,8 @@ struct LiveModel::State {
   swf_msgs::hazard_map_t hazard;
   bool has_truth = false;
   swf_msgs::truth_state_t truth;
+  bool has_features = false;
+  swf_msgs::feature_set_t features;
   std::deque<TrackPoint> track;
   std::map<std::int64_t, TrackPoint> truth_by_frame;  // truth that came before its estimate
 
@@ -176,6 +190,7 @@ struct LiveModel::State {
     if (channel == hazard_channel) return Kind::kHazard;
     if (channel == health_channel) return Kind::kHealth;
     if (channel == stereo_channel) return Kind::kStereo;
+    if (channel == features_channel) return Kind::kFeatures;
     if (channel == truth_channel) return Kind::kTruth;
     if (channel == truth_landmarks_channel) return Kind::kTruthLandmarks;
     return Kind::kOther;
@@ -215,6 +230,7 @@ LiveModel::LiveModel(ViewOptions options) : state_(std::make_unique<State>()) {
   s.hazard_channel = p + "HAZARD";
   s.health_channel = p + "HEALTH";
   s.stereo_channel = p + "STEREO";
+  s.features_channel = p + "FEATURES";
   s.truth_channel = s.options.truth_prefix;
   s.truth_landmarks_channel = s.options.truth_prefix + "_LANDMARKS";
 }
@@ -222,7 +238,8 @@ LiveModel::LiveModel(ViewOptions options) : state_(std::make_unique<State>()) {
 LiveModel::~LiveModel() = default;
 
 const char* LiveModel::PartName(Part part) {
-  static const char* const kNames[] = {"status", "trajectory", "landmarks", "hazard", "image"};
+  static const char* const kNames[] = {"status", "trajectory", "landmarks",
+                                       "hazard", "image",      "features"};
   return part >= 0 && part < kNumParts ? kNames[part] : "unknown";
 }
 
@@ -237,6 +254,7 @@ void LiveModel::Ingest(const std::string& channel, const void* data, std::size_t
     case Kind::kHazard: error = messages::CheckedDecode(data, size, &s.scratch_hazard); break;
     case Kind::kHealth: error = messages::CheckedDecode(data, size, &s.scratch_health); break;
     case Kind::kStereo: error = messages::CheckedDecode(data, size, &s.scratch_frame); break;
+    case Kind::kFeatures: error = messages::CheckedDecode(data, size, &s.scratch_features); break;
     case Kind::kTruth: error = messages::CheckedDecode(data, size, &s.scratch_truth); break;
     case Kind::kOther: break;
   }
@@ -335,6 +353,12 @@ void LiveModel::Ingest(const std::string& channel, const void* data, std::size_t
       std::swap(s.health, s.scratch_health);
       s.has_health = true;
       s.Bump(kStatus);
+      break;
+    case Kind::kFeatures:
+      if (!s.Sequence(&c, s.scratch_features.seq)) break;
+      std::swap(s.features, s.scratch_features);
+      s.has_features = true;
+      s.Bump(kFeatures);
       break;
     case Kind::kStereo:
       if (!s.Sequence(&c, s.scratch_frame.seq)) break;
@@ -636,8 +660,31 @@ std::shared_ptr<const std::string> LiveModel::Json(Part part) {
              {"source_width", s.source_width},
              {"source_height", s.source_height},
              {"rectified", s.image_rectified},
-             {"gray_base64", Base64(s.image)},
-             {"features", nullptr}};
+             {"gray_base64", Base64(s.image)}};
+        break;
+      }
+      case kFeatures: {
+        if (!s.has_features) {
+          j = {{"frame_seq", nullptr}};
+          break;
+        }
+        const swf_msgs::feature_set_t& f = s.features;
+        std::string status(f.status.size(), '0');
+        std::int64_t counts[4] = {};
+        for (std::size_t i = 0; i < f.status.size(); ++i) {
+          const int k = std::clamp<int>(f.status[i], 0, 3);  // the decoder checked 0..3
+          status[i] = static_cast<char>('0' + k);
+          ++counts[k];
+        }
+        j = {{"frame_seq", f.frame_seq},
+             {"u_px", f.u_px},
+             {"v_px", f.v_px},
+             {"status", status},
+             {"counts",
+              {{"tracked", counts[0]},
+               {"new", counts[1]},
+               {"rejected", counts[2]},
+               {"gated", counts[3]}}}};
         break;
       }
       case kNumParts: break;

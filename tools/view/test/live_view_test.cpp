@@ -10,6 +10,7 @@
 
 #include "gtest/gtest.h"
 #include "swf/view/live_view.hpp"
+#include "swf_msgs/feature_set_t.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
@@ -126,6 +127,28 @@ TEST(LiveModel, PairsTruthWithItsEstimateInEitherOrder) {
   EXPECT_DOUBLE_EQ(state["trajectory"]["truth_m"][0][2].get<double>(), 100.5);
   EXPECT_DOUBLE_EQ(state["trajectory"]["truth_m"][1][2].get<double>(), 99.25);
   EXPECT_NEAR(state["status"]["truth"]["error_m"].get<double>(), 0.25, 1e-12);
+}
+
+TEST(LiveModel, ShowsFeatureSetsAndCountsUnknownStatuses) {
+  LiveModel model;
+  swf_msgs::feature_set_t set{};
+  set.frame_seq = 3;
+  set.num_features = 3;
+  set.id = {1, 2, 3};
+  set.u_px = {1.0f, 2.0f, 3.0f};
+  set.v_px = {4.0f, 5.0f, 6.0f};
+  set.status = {swf_msgs::feature_set_t::STATUS_TRACKED, swf_msgs::feature_set_t::STATUS_GATED,
+                swf_msgs::feature_set_t::STATUS_TRACKED};
+  Send(&model, "SWF_FEATURES", Encode(set));
+  set.seq = 1;
+  set.status[0] = 9;  // no such status: refused, counted, the previous set stays
+  Send(&model, "SWF_FEATURES", Encode(set));
+  EXPECT_EQ(model.Counters("FEATURES").malformed, 1);
+  const nlohmann::json features = nlohmann::json::parse(*model.Json(LiveModel::kFeatures));
+  EXPECT_EQ(features["frame_seq"], 3);
+  EXPECT_EQ(features["status"], "030");
+  EXPECT_EQ(features["counts"]["tracked"], 2);
+  EXPECT_EQ(features["counts"]["gated"], 1);
 }
 
 TEST(LiveModel, JsonStaysValidWithNonFiniteNumbers) {

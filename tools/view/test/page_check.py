@@ -2,10 +2,10 @@
 """Loads swf-view's page in headless Chromium (through chromedriver's WebDriver HTTP interface,
 no client library needed) and waits until the page itself shows what the test expects: the number
 of navigation outputs, a navigation status, a hazard map with known cells (counted from the
-canvas's pixels, not only from a label) and, when asked, a drawn image. Saves a screenshot and
+canvas's pixels, not only from a label) and, when asked, a drawn image and tracked features. Saves a screenshot and
 prints what the page showed as one JSON object. Exit 0 when everything was seen in time.
 
-usage: page_check.py URL --frames N --screenshot OUT.png [--image] [--timeout S]
+usage: page_check.py URL --frames N --screenshot OUT.png [--image] [--features] [--timeout S]
 """
 import argparse
 import base64
@@ -22,7 +22,7 @@ import urllib.request
 # What the page shows, read from the DOM and from the hazard canvas's pixels (cells of a class
 # other than "unknown", whose colour is #333).
 PAGE_STATE = r"""
-const text = (id) => document.getElementById(id).textContent;
+const text = (id) => (document.getElementById(id) || {textContent: null}).textContent;
 const canvas = document.getElementById('hazard');
 const data = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
 let known = 0;
@@ -37,7 +37,10 @@ return {frames: text('frames'), status: text('nav-status'), hazard_frame: text('
         hazard_known_label: text('hazard-known'), hazard_known_pixels: known,
         safe_site: text('safe-site'), image_seq: text('image-seq'), image_lit_pixels: lit,
         landmarks: text('landmark-count'), connection: text('connection'),
-        publisher: text('publisher'), malformed: text('malformed-total'), lost: text('lost-total')};
+        publisher: text('publisher'), malformed: text('malformed-total'), lost: text('lost-total'),
+        features_frame: text('features-frame'), features_tracked: text('features-tracked'),
+        features_new: text('features-new'), features_rejected: text('features-rejected'),
+        features_gated: text('features-gated')};
 """
 
 
@@ -61,6 +64,7 @@ def main():
     ap.add_argument('--frames', type=int, required=True)
     ap.add_argument('--screenshot', required=True)
     ap.add_argument('--image', action='store_true', help='require a drawn image')
+    ap.add_argument('--features', action='store_true', help='require tracked features')
     ap.add_argument('--timeout', type=float, default=120)
     a = ap.parse_args()
 
@@ -95,7 +99,8 @@ def main():
                   seen['status'] in ('VALID', 'DEGRADED', 'INVALID') and
                   seen['hazard_frame'] != '-' and int(seen['hazard_known_label']) > 0 and
                   seen['hazard_known_pixels'] > 0 and
-                  (not a.image or seen['image_lit_pixels'] > 0))
+                  (not a.image or seen['image_lit_pixels'] > 0) and
+                  (not a.features or int(seen['features_tracked'] or 0) > 0))
             if ok:
                 break
             time.sleep(0.25)

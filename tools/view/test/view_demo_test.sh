@@ -3,7 +3,8 @@
 # stereo frames go out on SWF_STEREO too) and swf-view as separate processes over LCM UDP
 # multicast in a private network namespace whose only interface is loopback (RECIPES.md). The
 # page is opened in headless Chromium BEFORE the flight starts and must, by itself, come to show
-# the 20 navigation outputs, a navigation status, a non-empty hazard map and the image; the
+# the 20 navigation outputs, a navigation status, a non-empty hazard map, the image and its
+# tracked features; the
 # screenshot is kept (argument 5). Then swf-view is stopped and its counters checked: nothing
 # malformed or lost, every output received.
 # usage: view_demo_test.sh SWF-SIL SWF-VIEW CONFIG PAGE_CHECK SCREENSHOT_OUT
@@ -14,7 +15,7 @@ if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
 $ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged user namespaces)"
 command -v chromium >/dev/null || fail "chromium is not installed (tools/run installs it)"
 dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
+trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
 frames=20
 $ns sh -c '
   set -e
@@ -24,7 +25,7 @@ $ns sh -c '
   v=$!
   for i in $(seq 50); do [ -s "$5/url" ] && break; sleep 0.1; done
   url=$(cat "$5/url")
-  /usr/bin/python3 "$4" "$url" --frames "$7" --image --screenshot "$6" --timeout 150 \
+  /usr/bin/python3 "$4" "$url" --frames "$7" --image --features --screenshot "$6" --timeout 150 \
     > "$5/page.json" 2> "$5/page.err" &
   c=$!
   "$1" --config "$3" --set "pacing: lockstep" --set "rt.mlockall: false" --set "rt.priority: 0" \
@@ -43,6 +44,7 @@ json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); p
 [ "$(json "$dir/view.json" "d['bus']['channels']['SWF_HAZARD']['received']")" -ge 1 ] || fail "no hazard map"
 [ "$(json "$dir/view.json" "d['bus']['channels']['SWF_STEREO']['received']")" -eq $frames ] || fail "not every image"
 [ "$(json "$dir/view.json" "d['bus']['channels']['SIM_TRUTH']['received']")" -eq $frames ] || fail "truth missing"
+[ "$(json "$dir/view.json" "d['bus']['channels']['SWF_FEATURES']['received']")" -eq $frames ] || fail "feature sets missing"
 [ "$(json "$dir/page.json" "d['hazard_known_pixels']")" -gt 1000 ] || fail "hazard map (nearly) empty on the page"
 [ -s "$shot" ] || fail "no screenshot"
 echo PASS

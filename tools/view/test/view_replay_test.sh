@@ -2,8 +2,9 @@
 # swf-view driven by swf-replay: a short demo descent (10 frames) is flown and recorded without
 # publishing, then swf-replay re-runs the flight process on that log and publishes over LCM UDP
 # multicast in a private network namespace. The page, opened before the replay starts, must come
-# to show the 10 outputs, a status and a non-empty hazard map (a replay does not re-send the
-# log's frames on SWF_STEREO, so the image panel says so instead).
+# to show the 10 outputs, a status, tracked features and a non-empty hazard map (a replay does
+# not re-send the
+# log's frames on SWF_STEREO, so the image panel says so instead of drawing the image).
 # usage: view_replay_test.sh SWF-SIL SWF-REPLAY SWF-VIEW CONFIG PAGE_CHECK
 set -eu
 sil=$1 replay=$2 view=$3 cfg=$4 check=$5
@@ -23,7 +24,7 @@ $ns sh -c '
   "$2" --port 0 --url-file "$5/url" > "$5/view.json" 2> "$5/view.err" &
   v=$!
   for i in $(seq 50); do [ -s "$5/url" ] && break; sleep 0.1; done
-  /usr/bin/python3 "$4" "$(cat "$5/url")" --frames "$6" --screenshot "$5/replay.png" \
+  /usr/bin/python3 "$4" "$(cat "$5/url")" --frames "$6" --features --screenshot "$5/replay.png" \
     --timeout 150 > "$5/page.json" 2> "$5/page.err" &
   c=$!
   "$1" --config "$3" --log "$5/flown.lcmlog" \

@@ -39,7 +39,7 @@ json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); p
 [ "$(cat "$dir/healthz")" = ok ] || fail "swf-view did not answer at the end"
 sent_bad=$(json "$dir/publisher.json" "d['malformed']")
 [ "$(json "$dir/view.json" "d['bus']['malformed_total']")" -eq "$sent_bad" ] || fail "malformed messages not all counted ($sent_bad sent)"
-for ch in SWF_NAV SWF_STEREO SWF_HAZARD; do
+for ch in SWF_NAV SWF_STEREO SWF_HAZARD SWF_FEATURES; do
   [ "$(json "$dir/view.json" "d['bus']['channels']['$ch']['restarts']")" -eq 1 ] || fail "$ch: the restart was not seen"
 done
 frames=$(json "$dir/publisher.json" "d['frames']")

@@ -1,8 +1,9 @@
 // view_stress_publisher: what swf-view must survive, as a flight process would send it and worse.
 // Two flights separated by a silence (a publisher that stops and restarts: sequence numbers start
-// again at 0), each a 20 Hz stream of 1024 x 768 stereo frames with a navigation output per frame
-// and a hazard map every fifth, and malformed messages mixed in (junk bytes, truncated frames, a
-// hazard map with an unknown class, a negative sequence number). Prints what it sent and how long
+// again at 0), each a 20 Hz stream of 1024 x 768 stereo frames with a navigation output and a
+// feature set per frame and a hazard map every fifth, and malformed messages mixed in (junk
+// bytes, truncated frames, a hazard map with an unknown class, a feature with an unknown status,
+// a negative sequence number). Prints what it sent and how long
 // its publish calls took as one JSON object.
 //   view_stress_publisher [--url URL] [--frames N] [--rate HZ] [--pause S] [--width W] [--height H]
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "swf_msgs/feature_set_t.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/nav_state_t.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
@@ -95,6 +97,20 @@ swf_msgs::nav_state_t Nav(std::int64_t seq) {
   return n;
 }
 
+swf_msgs::feature_set_t Features(const Settings& s, std::int64_t seq) {
+  swf_msgs::feature_set_t f{};
+  f.seq = seq;
+  f.frame_seq = seq;
+  f.num_features = 150;
+  for (int i = 0; i < f.num_features; ++i) {
+    f.id.push_back(i);
+    f.u_px.push_back(static_cast<float>((i * 37) % s.width));
+    f.v_px.push_back(static_cast<float>((i * 53) % s.height));
+    f.status.push_back(static_cast<std::int8_t>(i % 4));
+  }
+  return f;
+}
+
 swf_msgs::hazard_map_t Hazard(std::int64_t seq, std::int64_t frame_seq) {
   swf_msgs::hazard_map_t h{};
   h.seq = seq;
@@ -127,6 +143,7 @@ void Fly(const Settings& s, Publisher* pub, Sent* sent) {
     ++sent->frames;
     pub->Bytes("SWF_NAV", pub->Encode(Nav(i)));
     ++sent->navs;
+    pub->Bytes("SWF_FEATURES", pub->Encode(Features(s, i)));
     if (i % 5 == 4) {
       pub->Bytes("SWF_HAZARD", pub->Encode(Hazard(hazard_seq++, i)));
       ++sent->hazards;
@@ -144,7 +161,11 @@ void Fly(const Settings& s, Publisher* pub, Sent* sent) {
     pub->Bytes("SWF_HAZARD", pub->Encode(bad));
     // A navigation output with a negative sequence number.
     pub->Bytes("SWF_NAV", pub->Encode(Nav(-5)));
-    sent->malformed += 4;
+    // A feature set with a status the schema does not have.
+    swf_msgs::feature_set_t features = Features(s, 999);
+    features.status[3] = 9;
+    pub->Bytes("SWF_FEATURES", pub->Encode(features));
+    sent->malformed += 5;
   }
 }
 

@@ -62,7 +62,7 @@ class LiveModel {
 
   // The page's parts as JSON text. Each part has a version that changes when it changes, so a
   // client sends only what is new; the text is built once per version and shared.
-  enum Part : int { kStatus = 0, kTrajectory, kLandmarks, kHazard, kImage, kNumParts };
+  enum Part : int { kStatus = 0, kTrajectory, kLandmarks, kHazard, kImage, kFeatures, kNumParts };
   static const char* PartName(Part part);
   std::uint64_t Version(Part part) const;
   std::shared_ptr<const std::string> Json(Part part);
