@@ -79,6 +79,7 @@ def main():
     base = f'http://127.0.0.1:{port}'
     seen = {}
     ok = False
+    session = None
     try:
         for _ in range(100):
             try:
@@ -108,8 +109,16 @@ def main():
         png = base64.b64decode(call(base, 'GET', s + '/screenshot'))
         with open(a.screenshot, 'wb') as f:
             f.write(png)
-        call(base, 'DELETE', s)
+    except OSError as e:  # the page or the driver failed: report it, still close the browser
+        print(f'page_check: {e}', file=sys.stderr)
+        ok = False
     finally:
+        # Closing the session closes the browser; a driver stopped first would orphan it.
+        if session is not None:
+            try:
+                call(base, 'DELETE', f'/session/{session}')
+            except OSError:
+                pass
         proc.terminate()
         proc.wait(timeout=10)
         shutil.rmtree(profile, ignore_errors=True)
