@@ -203,11 +203,11 @@ def profile_size(args, width, height, workdir, env):
         args.fsw, fsw_args('callgrind'), os.path.join(workdir, 'callgrind_%s.out' % size), env)}
     counts['x86-64 plugin'] = plugin_counts(
         [shutil.which('qemu-x86_64') or 'qemu-x86_64'], args.fsw, 'nm', args.plugin,
-        fsw_args('x86'), os.path.join(workdir, 'x86_%s.json' % size), env)
+        fsw_args('x86'), os.path.join(workdir, 'counts_x86_%s.json' % size), env)
     if args.target_fsw:
         counts['aarch64 plugin'] = plugin_counts(
             shlex.split(args.emulator), args.target_fsw, 'aarch64-linux-gnu-nm', args.plugin,
-            fsw_args('aarch64'), os.path.join(workdir, 'aarch64_%s.json' % size), env)
+            fsw_args('aarch64'), os.path.join(workdir, 'counts_aarch64_%s.json' % size), env)
         result['memory']['aarch64 stacks'] = summary_memory(
             workdir, 'aarch64', size)['stack_high_water_bytes']
     result['instructions'] = counts
