@@ -31,8 +31,9 @@ VERDICT_EXIT = {'ok': 0, 'degraded': 3, 'failed': 1}
 CAMPAIGN_SETS = [('pacing', 'lockstep'), ('lcm.publish', 'false'), ('rt.mlockall', 'false'),
                  ('rt.priority', '0')]
 LOG_NAME = 'descent.lcmlog'
-# Summary fields that are measured times, not results: they differ between any two flights.
-TIMING_KEYS = ('stages', 'mlockall', 'sched_fifo', 'overruns')
+# Summary fields measured on the machine (times, memory use), not results: they differ between
+# any two flights.
+TIMING_KEYS = ('stages', 'mlockall', 'sched_fifo', 'overruns', 'memory')
 
 
 class CampaignError(Exception):
