@@ -167,21 +167,24 @@ bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult*
     poses.resize(static_cast<std::size_t>(options.max_frames));
   }
   if (!ImageSize(dir, &s.width, &s.height, error)) return false;
-  // The rectified pair, held to the same bounds as a EuRoC camera (no distortion left).
-  frontend::CameraCalibration k;
-  k.width = s.width;
-  k.height = s.height;
-  k.fx = s.camera.fx;
-  k.fy = s.camera.fy;
-  k.cx = s.camera.cx;
-  k.cy = s.camera.cy;
-  if (!CheckCalibration(k, dir + "/calib.txt", error)) return false;
+  // The rectified pair as calibrations (no distortion left, the right camera at +b along x),
+  // held to the same bounds as a EuRoC camera; what a log of this sequence is flown with.
+  frontend::CameraCalibration& left = s.calibration[0];
+  left.width = s.width;
+  left.height = s.height;
+  left.fx = s.camera.fx;
+  left.fy = s.camera.fy;
+  left.cx = s.camera.cx;
+  left.cy = s.camera.cy;
+  if (!CheckCalibration(left, dir + "/calib.txt", error)) return false;
   if (s.camera.baseline_m > kMaxKittiBaselineM) {
     *error = dir + "/calib.txt" +
              Format(": baseline %g m is beyond %g m (a P1[0,3] in millimetres?)",
                     s.camera.baseline_m, kMaxKittiBaselineM);
     return false;
   }
+  s.calibration[1] = left;
+  s.calibration[1].body_T_camera.t = Vec3D(s.camera.baseline_m, 0.0, 0.0);
   for (std::size_t k = 0; k < poses.size(); ++k) {
     SequenceFrame f;
     f.left_path = FramePath(dir, 0, static_cast<int>(k));

@@ -231,14 +231,9 @@ bool RectifyCalibration(const StereoCalibration& calibration, RectifiedPair* pai
     *error = text;
     return false;
   }
-  const estimator::StereoCamera<double>& camera = rectifier->Camera();
   pair->width = rectifier->Width();
   pair->height = rectifier->Height();
-  pair->fx = camera.fx;
-  pair->fy = camera.fy;
-  pair->cx = camera.cx;
-  pair->cy = camera.cy;
-  pair->baseline_m = camera.baseline_m;
+  pair->camera = rectifier->Camera();
   pair->body_T_rectified = rectifier->RectifiedInBody();
   return true;
 }

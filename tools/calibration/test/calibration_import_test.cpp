@@ -43,11 +43,11 @@ RectifiedPair Rectified(const std::vector<std::string>& files, const ImportOptio
 
 void ExpectSamePair(const RectifiedPair& a, const RectifiedPair& b, const std::string& what) {
   EXPECT_EQ(a.width, b.width) << what;
-  EXPECT_NEAR(a.fx, b.fx, 1e-6) << what;
-  EXPECT_NEAR(a.fy, b.fy, 1e-6) << what;
-  EXPECT_NEAR(a.cx, b.cx, 1e-6) << what;
-  EXPECT_NEAR(a.cy, b.cy, 1e-6) << what;
-  EXPECT_NEAR(a.baseline_m, b.baseline_m, 1e-9) << what;
+  EXPECT_NEAR(a.camera.fx, b.camera.fx, 1e-6) << what;
+  EXPECT_NEAR(a.camera.fy, b.camera.fy, 1e-6) << what;
+  EXPECT_NEAR(a.camera.cx, b.camera.cx, 1e-6) << what;
+  EXPECT_NEAR(a.camera.cy, b.camera.cy, 1e-6) << what;
+  EXPECT_NEAR(a.camera.baseline_m, b.camera.baseline_m, 1e-9) << what;
   EXPECT_LT((a.body_T_rectified.R - b.body_T_rectified.R).norm(), 1e-9) << what;
   EXPECT_LT((a.body_T_rectified.t - b.body_T_rectified.t).norm(), 1e-9) << what;
 }
@@ -69,7 +69,7 @@ TEST(CalibrationImport, ReadsTheRealEurocSensorYamlAsTheFlightReaderDoes) {
   EXPECT_EQ(c.right.body_T_camera.Matrix(), flight.body_T_camera.Matrix());
   RectifiedPair pair;
   ASSERT_TRUE(RectifyCalibration(c, &pair, &error)) << error;
-  EXPECT_NEAR(pair.baseline_m, 0.110, 0.001);  // the VI-sensor's 11 cm
+  EXPECT_NEAR(pair.camera.baseline_m, 0.110, 0.001);  // the VI-sensor's 11 cm
 }
 
 TEST(CalibrationImport, ReadsTheRealKittiCalibTxt) {
@@ -77,8 +77,8 @@ TEST(CalibrationImport, ReadsTheRealKittiCalibTxt) {
   o.width = 1226;
   o.height = 370;
   const RectifiedPair pair = Rectified({SharedDir() + "kitti-odometry-excerpt/calib.txt"}, o);
-  EXPECT_NEAR(pair.fx, 707.0912, 1e-3);
-  EXPECT_NEAR(pair.baseline_m, 0.537, 0.001);
+  EXPECT_NEAR(pair.camera.fx, 707.0912, 1e-3);
+  EXPECT_NEAR(pair.camera.baseline_m, 0.537, 0.001);
 }
 
 TEST(CalibrationImport, DetectsEveryFormat) {
@@ -104,7 +104,7 @@ TEST(CalibrationImport, DetectsEveryFormat) {
 TEST(CalibrationImport, OneRigInFiveFormatsGivesOneRectifiedPair) {
   const std::string d = DataDir();
   const RectifiedPair euroc = Rectified({d + "euroc_left.yaml", d + "euroc_right.yaml"});
-  EXPECT_NEAR(euroc.baseline_m, 0.11, 1e-12);
+  EXPECT_NEAR(euroc.camera.baseline_m, 0.11, 1e-12);
   ExpectSamePair(euroc, Rectified({d + "kalibr_camchain.yaml"}), "kalibr");
   ExpectSamePair(euroc, Rectified({d + "opencv_stereo.yaml"}), "opencv");
   ExpectSamePair(euroc, Rectified({d + "ros_left.yaml", d + "ros_right.yaml"}), "ros");
@@ -165,13 +165,14 @@ TEST(CalibrationImport, RealEurocRigAsRosCameraInfoGivesTheSameRectifiedPair) {
       << c.p1 << ", " << c.p2 << ", " << c.k3 << "]}\nrectification_matrix: {rows: 3, cols: 3, "
       << "data: [";
     for (int i = 0; i < 9; ++i) s << (i ? ", " : "") << r(i / 3, i % 3);
-    s << "]}\nprojection_matrix: {rows: 3, cols: 4, data: [" << pair.fx << ", 0, " << pair.cx
-      << ", " << tx << ", 0, " << pair.fy << ", " << pair.cy << ", 0, 0, 0, 1, 0]}\n";
+    s << "]}\nprojection_matrix: {rows: 3, cols: 4, data: [" << pair.camera.fx << ", 0, "
+      << pair.camera.cx << ", " << tx << ", 0, " << pair.camera.fy << ", " << pair.camera.cy
+      << ", 0, 0, 0, 1, 0]}\n";
     return s.str();
   };
   const std::string left = WriteTemp("euroc_left_info.yaml", camera_info(euroc.left, 0.0));
-  const std::string right =
-      WriteTemp("euroc_right_info.yaml", camera_info(euroc.right, -pair.fx * pair.baseline_m));
+  const std::string right = WriteTemp(
+      "euroc_right_info.yaml", camera_info(euroc.right, -pair.camera.fx * pair.camera.baseline_m));
   RectifiedPair ros = Rectified({left, right});
   RectifiedPair expected = pair;
   expected.body_T_rectified = euroc.left.body_T_camera.Inverse() * pair.body_T_rectified;

@@ -240,19 +240,9 @@ bool KittiToLog(const std::string& dir, const LogInputOptions& options, InputSum
   eval::KittiOptions ko;
   ko.max_frames = options.max_frames;
   if (!eval::LoadKitti(dir, ko, &kitti, error)) return false;
-  eval::StereoSequence& s = kitti.sequence;
-  // Already rectified: a pinhole pair without distortion, the right camera at +b along x.
-  frontend::CameraCalibration left;
-  left.width = s.width;
-  left.height = s.height;
-  left.fx = s.camera.fx;
-  left.fy = s.camera.fy;
-  left.cx = s.camera.cx;
-  left.cy = s.camera.cy;
-  frontend::CameraCalibration right = left;
-  right.body_T_camera.t = Eigen::Vector3d(s.camera.baseline_m, 0.0, 0.0);
+  const eval::StereoSequence& s = kitti.sequence;
   // KITTI's frames are 10 Hz; the excerpt's list has no times, so LoadKitti numbers them.
-  return WriteCalibrations(options.calib_dir, left, right, error) &&
+  return WriteCalibrations(options.calib_dir, s.calibration[0], s.calibration[1], error) &&
          SequenceToLog(s, options, summary, error);
 }
 

@@ -64,8 +64,8 @@ TEST(Convert, KittiExcerptBecomesARawLogWithItsRectifiedCalibration) {
       << error;
   calibration::RectifiedPair pair;
   ASSERT_TRUE(calibration::RectifyCalibration(c, &pair, &error)) << error;
-  EXPECT_NEAR(pair.fx, 707.0912, 1e-6);
-  EXPECT_NEAR(pair.baseline_m, 0.537, 0.001);
+  EXPECT_NEAR(pair.camera.fx, 707.0912, 1e-6);
+  EXPECT_NEAR(pair.camera.baseline_m, 0.537, 0.001);
 }
 
 // EuRoC -> log -> PNG pairs (swf-grab's names) -> log: the same pixels, the IMU before its frame.

@@ -81,11 +81,11 @@ int RunCalibration(const std::vector<std::string>& files, const std::string& for
   const json report = {{"format", swf::calibration::FormatName(c.format)},
                        {"width", pair.width},
                        {"height", pair.height},
-                       {"rectified_fx", pair.fx},
-                       {"rectified_fy", pair.fy},
-                       {"rectified_cx", pair.cx},
-                       {"rectified_cy", pair.cy},
-                       {"baseline_m", pair.baseline_m},
+                       {"rectified_fx", pair.camera.fx},
+                       {"rectified_fy", pair.camera.fy},
+                       {"rectified_cx", pair.camera.cx},
+                       {"rectified_cy", pair.camera.cy},
+                       {"baseline_m", pair.camera.baseline_m},
                        {"linearization_error_px", c.linearization_error_px},
                        {"written_to", out}};
   std::printf("%s\n", report.dump(2).c_str());

@@ -53,11 +53,7 @@ struct StereoCalibration {
 struct RectifiedPair {
   int width = 0;
   int height = 0;
-  double fx = 0.0;
-  double fy = 0.0;
-  double cx = 0.0;
-  double cy = 0.0;
-  double baseline_m = 0.0;
+  estimator::StereoCamera<double> camera;    // the rectifier's (fx, fy, cx, cy, baseline)
   estimator::Pose<double> body_T_rectified;  // rectified left camera in the body frame
 };
 
