@@ -1,5 +1,6 @@
 #!/bin/sh
-# swf-view live during the demo: swf-sil (demo.cfg, lockstep, 20 frames, recording so that the
+# swf-view live during the demo: swf-sil (demo.cfg at its real rate, as a flight publishes: in
+# lockstep a loaded machine can starve the view's receiver; 20 frames, recording so that the
 # stereo frames go out on SWF_STEREO too) and swf-view as separate processes over LCM UDP
 # multicast in a private network namespace whose only interface is loopback (RECIPES.md). The
 # page is opened in headless Chromium BEFORE the flight starts and must, by itself, come to show
@@ -28,7 +29,7 @@ $ns sh -c '
   /usr/bin/python3 "$4" "$url" --frames "$7" --image --features --screenshot "$6" --timeout 150 \
     > "$5/page.json" 2> "$5/page.err" &
   c=$!
-  "$1" --config "$3" --set "pacing: lockstep" --set "rt.mlockall: false" --set "rt.priority: 0" \
+  "$1" --config "$3" --set "pacing: realtime" --set "rt.mlockall: false" --set "rt.priority: 0" \
        --set "sim.frames: $7" --set "lcm.publish: true" --set "record.path: $5/descent.lcmlog" \
        --set "summary.path: $5/summary.json" 2> "$5/sil.err" || echo "swf-sil exit $?" >&2
   rc=0; wait $c || rc=$?
