@@ -1,8 +1,9 @@
 """swf-lcmlog: what an LCM log holds, or every message in it as JSON (python3 -m swf_lcmlog).
 
 Exit codes: 0 the whole log read and decoded; 1 a damaged log or a payload that does not decode
-(the message names the record and its byte offset; what was printed before it stands); 2 a
-usage error."""
+(the message names the record and its byte offset; what was printed before it stands), or a
+summary with nothing in it (an empty log, a channel given with --channel that has no messages);
+2 a usage error."""
 import argparse
 import json
 import os
@@ -56,7 +57,13 @@ def main(argv=None):
         if args.dump:
             dump(args.log, channels, sys.stdout)
         else:
-            print(json.dumps(summary(args.log, channels), indent=2, allow_nan=False))
+            found = summary(args.log, channels)
+            print(json.dumps(found, indent=2, allow_nan=False))
+            # Nothing to read deserves an exit code: a logger that recorded nothing, a channel
+            # misspelt.
+            missing = sorted(channels - set(found)) if channels else [] if found else ['any channel']
+            if missing:
+                raise swf_lcmlog.LogError('%s: no messages on %s' % (args.log, ', '.join(missing)))
     except BrokenPipeError:
         # The reader of our output stopped early (`| head`): not an error of the log.
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
