@@ -26,12 +26,18 @@ Eigen::Matrix3d RotationOf(const double* q) {
   return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
 }
 
-// The angle of est_R^T true_R in degrees (both from w, x, y, z quaternions).
-double AttitudeErrorDeg(const double* estimate_q, const double* truth_q) {
+// est_R^T true_R (both from w, x, y, z quaternions) as angle and rotation vector in degrees;
+// NaN when either quaternion is zero.
+double AttitudeErrorDeg(const double* estimate_q, const double* truth_q, double* axes_deg) {
   const Eigen::Quaterniond est(estimate_q[0], estimate_q[1], estimate_q[2], estimate_q[3]);
   const Eigen::Quaterniond truth(truth_q[0], truth_q[1], truth_q[2], truth_q[3]);
-  if (!(est.norm() > 0.0) || !(truth.norm() > 0.0)) return NAN;
+  if (!(est.norm() > 0.0) || !(truth.norm() > 0.0)) {
+    std::fill(axes_deg, axes_deg + 3, NAN);
+    return NAN;
+  }
   const Eigen::AngleAxisd d(RotationOf(estimate_q).transpose() * RotationOf(truth_q));
+  const Eigen::Vector3d phi_deg = d.axis() * (d.angle() * 180.0 / M_PI);
+  std::copy(phi_deg.data(), phi_deg.data() + 3, axes_deg);
   return d.angle() * 180.0 / M_PI;
 }
 
@@ -85,20 +91,26 @@ bool RunJudge::Add(const std::string& channel, const void* data, std::size_t siz
 
 void RunJudge::AddNav(const swf_msgs::nav_state_t& m) {
   Nav n{m.frame_seq,
+        m.utime,
         {m.position_world_m[0], m.position_world_m[1], m.position_world_m[2]},
         {m.orientation_world_q[0], m.orientation_world_q[1], m.orientation_world_q[2],
          m.orientation_world_q[3]},
         m.status,
         m.horizontal_protection_m,
         m.vertical_protection_m,
+        {},
         {}};
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) n.position_covariance[3 * i + j] = m.covariance[6 * i + j];
+  for (int i = 0; i < 6; ++i) {
+    const double variance = m.covariance[7 * i];
+    n.sigma[i] = variance > 0.0 ? std::sqrt(variance) : NAN;
+  }
   navs_.push_back(n);
 }
 
 void RunJudge::AddLandmarks(const swf_msgs::landmark_map_t& m) {
-  Map map{m.frame_seq, {}};
+  Map map{m.frame_seq, m.utime, {}};
   map.landmarks.reserve(m.id.size());
   for (std::size_t i = 0; i < m.id.size(); ++i) {
     const double* p = m.position_world_m[i].data();
@@ -170,13 +182,18 @@ RunScore RunJudge::Score() const {
     const Eigen::Vector3d t(truth.p[0], truth.p[1], truth.p[2]);
     OutputScore o;
     o.frame_seq = n.frame_seq;
+    o.utime = n.utime;
     std::copy(n.p, n.p + 3, o.estimate_m);
     std::copy(truth.p, truth.p + 3, o.truth_m);
     o.error_m = (estimate - t).norm();
     o.altitude_m = truth.altitude_m;
     o.horizontal_error_m = std::hypot(n.p[0] - t.x(), n.p[1] - t.y());
     o.vertical_error_m = std::abs(n.p[2] - t.z());
-    o.attitude_error_deg = AttitudeErrorDeg(n.q, truth.q);
+    o.attitude_error_deg = AttitudeErrorDeg(n.q, truth.q, o.attitude_error_axes_deg);
+    for (int i = 0; i < 3; ++i) {
+      o.position_sigma_m[i] = n.sigma[i];
+      o.attitude_sigma_deg[i] = n.sigma[3 + i] * 180.0 / M_PI;
+    }
     o.status = n.status;
     o.hpl_m = n.hpl_m;
     o.vpl_m = n.vpl_m;
@@ -223,7 +240,7 @@ RunScore RunJudge::Score() const {
       errors.push_back(s.error_m);
       score.last_map.push_back(s);
     }
-    score.maps.push_back(MapScore{m.frame_seq, static_cast<std::int64_t>(errors.size()),
+    score.maps.push_back(MapScore{m.frame_seq, m.utime, static_cast<std::int64_t>(errors.size()),
                                   Rms(errors), Quantile(errors, 0.5)});
   }
 

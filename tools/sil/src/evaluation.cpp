@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 namespace swf::sil {
 
@@ -160,34 +159,16 @@ void Evaluation::OnMessage(const std::string& channel, const std::uint8_t* data,
   judge_.Add(channel, data, static_cast<std::size_t>(size));
 }
 
-void Evaluation::WritePlots(const evaluation::RunScore& score, const std::string& plot_dir) {
-  if (plot_dir.empty()) return;
-  if (std::FILE* f = std::fopen((plot_dir + "/trajectory.dat").c_str(), "w")) {
-    std::fprintf(f, "# frame est_x est_y est_z true_x true_y true_z error_m\n");
-    for (const evaluation::OutputScore& o : score.outputs) {
-      std::fprintf(f, "%lld %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n",
-                   static_cast<long long>(o.frame_seq), o.estimate_m[0], o.estimate_m[1],
-                   o.estimate_m[2], o.truth_m[0], o.truth_m[1], o.truth_m[2], o.error_m);
-    }
-    std::fclose(f);
-  }
-  if (std::FILE* f = std::fopen((plot_dir + "/landmark_error.dat").c_str(), "w")) {
-    std::fprintf(f, "# frame rms_error_m median_error_m landmarks\n");
-    for (const evaluation::MapScore& m : score.maps) {
-      std::fprintf(f, "%lld %.6f %.6f %lld\n", static_cast<long long>(m.frame_seq), m.rms_error_m,
-                   m.median_error_m, static_cast<long long>(m.landmarks_evaluated));
-    }
-    std::fclose(f);
-  }
-  if (score.maps.empty()) return;
-  if (std::FILE* f = std::fopen((plot_dir + "/map.dat").c_str(), "w")) {
-    std::fprintf(f, "# est_x est_y est_z true_x true_y true_z error_m\n");
-    for (const evaluation::LandmarkScore& l : score.last_map) {
-      std::fprintf(f, "%.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", l.estimate_m[0], l.estimate_m[1],
-                   l.estimate_m[2], l.truth_m[0], l.truth_m[1], l.truth_m[2], l.error_m);
-    }
-    std::fclose(f);
-  }
+plot::HeightGrid Evaluation::TerrainTruth() const {
+  plot::HeightGrid grid;
+  if (hazard_truth_.size != terrain_->Size()) return grid;
+  grid.size = terrain_->Size();
+  grid.cell_m = terrain_->CellM();
+  grid.x0_m = terrain_->NodeX(0);
+  grid.y0_m = terrain_->NodeY(0);
+  grid.height_m = terrain_->Heights();
+  grid.hazard_bits = hazard_truth_.hazard;
+  return grid;
 }
 
 }  // namespace swf::sil

@@ -88,6 +88,33 @@ void WriteHazardMaps(std::FILE* f, const std::vector<evaluation::HazardScore>& e
 
 }  // namespace
 
+void SimulatedDescent::DrawPlots(const std::string& dir, const app::MapperHazardStage& hazard,
+                                 app::Verdict* verdict) const {
+  // The picture of what guidance received: the last published map, not the mapper's state.
+  const app::HazardRecord* last = evaluation_.LastHazardMap();
+  const evaluation::HazardMapView view =
+      last != nullptr ? hazard_eval::ViewOf(*last) : evaluation::HazardMapView{};
+  plot::RunPictures pictures;
+  pictures.last_hazard_map = last != nullptr ? &view : nullptr;
+  pictures.footprint_radius_m = hazard.Mapper().Options().footprint_radius_m;
+  std::vector<std::string> errors;
+  (void)plot::DrawRun(score_, pictures, dir, &errors);
+  const plot::HeightGrid terrain = evaluation_.TerrainTruth();
+  const sim::Trajectory& trajectory = world_->Trajectory();
+  if (terrain.size > 0 && trajectory.NumFrames() > 0) {
+    const double target[2] = {trajectory.WorldTCamera(0).t.x(), trajectory.WorldTCamera(0).t.y()};
+    std::string error;
+    if (!plot::DrawTerrainHazard(terrain, true, target,
+                                 "Terrain '" + config_->sim.terrain + "' and its hazard truth",
+                                 dir + "/terrain_hazard.png", &error))
+      errors.push_back(error);
+  }
+  for (const std::string& e : errors) {
+    std::fprintf(stderr, "swf-sil: cannot draw %s\n", e.c_str());
+    app::Fail(verdict, "summary.plot_dir: cannot draw " + e);
+  }
+}
+
 const app::ConfigExtension* SimulatedDescent::Config() const { return SimConfigExtension(); }
 
 bool SimulatedDescent::OpenSource(const app::FswConfig& config, bool progress,
@@ -160,16 +187,7 @@ void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightP
                                 app::Verdict* verdict, app::ImuReport* imu) {
   const SimWorld& world = *world_;
   score_ = evaluation_.Score();
-  Evaluation::WritePlots(score_, config.plot_dir);
-  // The picture of what guidance received: the last published map, not the mapper's state.
-  const app::HazardRecord* last = evaluation_.LastHazardMap();
-  if (!config.plot_dir.empty() && !score_.hazard_maps.empty() && last != nullptr) {
-    const std::string png = config.plot_dir + "/hazard.png";
-    if (hazard_eval::WriteHazardMapPng(hazard_eval::ViewOf(*last),
-                                       parts.hazard->Mapper().Options().footprint_radius_m,
-                                       png) != core::Status::kOk)
-      std::fprintf(stderr, "swf-sil: cannot write %s\n", png.c_str());
-  }
+  if (!config.plot_dir.empty()) DrawPlots(config.plot_dir, *parts.hazard, verdict);
   if (score_.protection_violations > 0) {
     app::Fail(verdict, std::to_string(score_.protection_violations) +
                            " VALID outputs erred beyond their protection level");

@@ -35,6 +35,7 @@ struct JudgeChannels {
 // One navigation output against the truth of its frame. The world is z-up (horizontal = x, y).
 struct OutputScore {
   std::int64_t frame_seq = 0;
+  std::int64_t utime = 0;  // the estimate's frame time (nav_state_t.utime), microseconds
   double estimate_m[3] = {0.0, 0.0, 0.0};
   double truth_m[3] = {0.0, 0.0, 0.0};
   double error_m = 0.0;
@@ -42,7 +43,14 @@ struct OutputScore {
   double horizontal_error_m = 0.0;
   double vertical_error_m = 0.0;
   double attitude_error_deg = 0.0;  // angle of est_R^T true_R
-  std::int8_t status = 0;           // nav_state_t.STATUS_*
+  // The same rotation as Log(est_R^T true_R) about the estimate's camera axes, degrees: the phi
+  // of nav_state_t.covariance (geometry.hpp: R <- R Exp(phi)).
+  double attitude_error_axes_deg[3] = {0.0, 0.0, 0.0};
+  // 1-sigma of the output's own covariance: position per world axis (m), rotation per camera
+  // axis (deg); NaN where the output had no usable covariance (all zero, or not positive).
+  double position_sigma_m[3] = {0.0, 0.0, 0.0};
+  double attitude_sigma_deg[3] = {0.0, 0.0, 0.0};
+  std::int8_t status = 0;  // nav_state_t.STATUS_*
   double hpl_m = 0.0;
   double vpl_m = 0.0;
   // e^T P^-1 e against the output's 3x3 position covariance; NaN without a usable covariance.
@@ -52,6 +60,7 @@ struct OutputScore {
 // One published landmark map: its landmarks with a true position.
 struct MapScore {
   std::int64_t frame_seq = 0;
+  std::int64_t utime = 0;  // landmark_map_t.utime, microseconds
   std::int64_t landmarks_evaluated = 0;
   double rms_error_m = 0.0;     // NaN when none was evaluated
   double median_error_m = 0.0;  // the upper median; NaN when none was evaluated
@@ -120,12 +129,14 @@ class RunJudge {
  private:
   struct Nav {
     std::int64_t frame_seq;
+    std::int64_t utime;
     double p[3];
     double q[4];  // world_R_camera (w, x, y, z)
     std::int8_t status;
     double hpl_m;
     double vpl_m;
     double position_covariance[9];
+    double sigma[6];  // sqrt of the covariance's diagonal, NaN where not positive
   };
   struct Truth {
     double p[3];
@@ -138,6 +149,7 @@ class RunJudge {
   };
   struct Map {
     std::int64_t frame_seq;
+    std::int64_t utime;
     std::vector<Landmark> landmarks;
   };
 

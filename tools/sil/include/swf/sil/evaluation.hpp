@@ -21,6 +21,7 @@
 #include "swf/evaluation/run_judge.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
 #include "swf/hazard_eval/map_metrics.hpp"
+#include "swf/plot/plot.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/imu_model.hpp"
 #include "swf/sim/terrain.hpp"
@@ -57,8 +58,9 @@ class Evaluation : public app::OutputObserver {
   // (false: never seen, or the ray misses the terrain).
   bool FirstSeen(std::int64_t id, app::NewSighting* sighting) const;
   bool TrueLandmark(std::int64_t id, Eigen::Vector3d* position);
-  // Gnuplot data of a judged run into plot_dir: trajectory.dat, landmark_error.dat, map.dat.
-  static void WritePlots(const evaluation::RunScore& score, const std::string& plot_dir);
+  // The terrain with the hazard truth maps are judged against (the mapper's thresholds), for
+  // plot::DrawTerrainHazard; empty when the truth could not be drawn.
+  plot::HeightGrid TerrainTruth() const;
   // The last published hazard map (a copy kept after the run); null when none was published.
   const app::HazardRecord* LastHazardMap() const {
     return last_hazard_map_.capacity_cells > 0 ? &last_hazard_map_ : nullptr;

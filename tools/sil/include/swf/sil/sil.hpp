@@ -48,6 +48,9 @@ class SimulatedDescent final : public app::ProcessExtension {
 
  private:
   std::int64_t LandmarksEvaluated() const;  // in the last published map
+  // The run's plots into summary.plot_dir (swf::plot); a plot that fails fails the run.
+  void DrawPlots(const std::string& dir, const app::MapperHazardStage& hazard,
+                 app::Verdict* verdict) const;
 
   const app::FswConfig* config_ = nullptr;
   std::unique_ptr<SimWorld> world_;

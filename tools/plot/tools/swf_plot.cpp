@@ -1,0 +1,100 @@
+// swf-plot: the plots of a run drawn from its LCM logs (a replay's output log with the simulated
+// descent's log that holds the truth, or a campaign run's log): the messages go to
+// evaluation::RunJudge, the judge swf-sil runs live, and the pictures are swf::plot's, the same
+// swf-sil draws into summary.plot_dir.
+//   swf-plot RUN.lcmlog [MORE.lcmlog ...] --out DIR [--footprint-radius M]
+// Exit: 0 every plot the logs allow was drawn; 1 a plot failed (each failure named on stderr);
+// 2 nothing to draw (usage, an unreadable log, no navigation output with its truth).
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "swf/drivers/log_stereo_source.hpp"
+#include "swf/evaluation/run_judge.hpp"
+#include "swf/hazard/hazard_mapper.hpp"
+#include "swf/messages/checked_decode.hpp"
+#include "swf/plot/plot.hpp"
+
+namespace {
+
+struct Run {
+  swf::evaluation::RunJudge judge;
+  swf_msgs::hazard_map_t last_hazard_map;
+  bool has_hazard_map = false;
+};
+
+// Every event of one log to the judge, keeping the last hazard map that decodes; false with the
+// error naming the file and record.
+bool Feed(const std::string& path, const std::string& hazard_channel, Run* run,
+          std::string* error) {
+  swf::drivers::LogReader reader;
+  if (!reader.Open(path, error)) return false;
+  swf::drivers::LogEvent event;
+  for (;;) {
+    const int r = reader.Next(&event, error);
+    if (r == 0) return true;
+    if (r < 0) return false;
+    run->judge.Add(event.channel, event.data.data(), event.data.size());
+    if (event.channel == hazard_channel &&
+        swf::messages::CheckedDecode(event.data.data(), event.data.size(), &run->last_hazard_map)
+            .Ok()) {
+      run->has_hazard_map = true;
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "swf-plot: a run's plots (trajectory, attitude error, landmark error, landmark map, hazard "
+      "map) from its LCM logs: the estimates and the truth recorded beside them"};
+  std::vector<std::string> logs;
+  std::string out;
+  double footprint_radius_m = swf::hazard::HazardMapperOptions{}.footprint_radius_m;
+  swf::evaluation::JudgeChannels channels;
+  app.add_option("logs", logs, "LCM logs: the run's outputs and the truth (any order)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  app.add_option("--out", out, "directory the PNGs are written to")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--footprint-radius", footprint_radius_m,
+                 "lander footprint radius drawn around the safe site (m; 0: none)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+
+  Run run{swf::evaluation::RunJudge(channels), {}, false};
+  for (const std::string& path : logs) {
+    std::string error;
+    if (!Feed(path, channels.hazard, &run, &error)) {
+      std::fprintf(stderr, "swf-plot: %s\n", error.c_str());
+      return 2;
+    }
+  }
+  const swf::evaluation::RunScore score = run.judge.Score();
+  if (score.outputs.empty()) {
+    std::fprintf(stderr, "swf-plot: %s\n",
+                 score.navs_without_truth > 0
+                     ? "no navigation output has the truth of its frame: give the log with the "
+                       "truth (SIM_TRUTH) too"
+                     : "no navigation output in the logs");
+    return 2;
+  }
+  const swf::evaluation::HazardMapView hazard = swf::evaluation::ViewOf(run.last_hazard_map);
+  swf::plot::RunPictures pictures;
+  pictures.last_hazard_map = run.has_hazard_map ? &hazard : nullptr;
+  pictures.footprint_radius_m = footprint_radius_m;
+  std::vector<std::string> errors;
+  const std::vector<std::string> written = swf::plot::DrawRun(score, pictures, out, &errors);
+  for (const std::string& png : written) std::printf("%s\n", png.c_str());
+  for (const std::string& e : errors) std::fprintf(stderr, "swf-plot: cannot draw %s\n", e.c_str());
+  return errors.empty() ? 0 : 1;
+}
