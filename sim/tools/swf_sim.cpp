@@ -4,8 +4,9 @@
 //           [--lcm URL] [--no-png]
 // Writes DIR/left_NNNN.png, right_NNNN.png, poses.csv (t_ns, position, quaternion x y z w of
 // world_T_camera), landmarks.csv + observations.csv (measurement-level truth on the same terrain),
-// craters.csv, rocks.csv, terrain_hazard.png (shaded terrain | hazard truth) and
-// contact_sheet.png (12 left frames). Progress goes to stderr.
+// craters.csv, rocks.csv, terrain_hazard.png (terrain height | hazard truth) and
+// contact_sheet.png (12 left frames labelled with frame and altitude), drawn by swf::plot.
+// Progress goes to stderr.
 // --lcm URL also publishes every rendered pair as it is rendered: STEREO (stereo_frame_t), TRUTH
 // (truth_state_t) and TRUTH_LANDMARKS (landmark_map_t), see swf/sim/lcm_publisher.hpp; --no-png
 // skips the per-frame PNG files (streaming only).
@@ -17,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "swf/plot/plot.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/image_io.hpp"
 #include "swf/sim/lcm_publisher.hpp"
@@ -33,35 +35,23 @@ int Fail(const char* what, Status s) {
   return 1;
 }
 
-void WriteHazardPicture(const swf::sim::Terrain& terrain, const swf::sim::Appearance& appearance,
-                        const swf::sim::HazardMap& hazard, const std::string& path) {
-  const std::int32_t n = terrain.Size();
-  const std::int32_t panel = std::min<std::int32_t>(512, n);
-  const double step = static_cast<double>(n - 1) / (panel - 1);
-  std::vector<std::uint8_t> rgb(static_cast<size_t>(2 * panel) * panel * 3, 0);
-  for (std::int32_t r = 0; r < panel; ++r) {
-    for (std::int32_t c = 0; c < panel; ++c) {
-      const auto i = static_cast<std::int32_t>(c * step);
-      const auto j = static_cast<std::int32_t>((panel - 1 - r) * step);  // north up
-      const size_t k = static_cast<size_t>(j) * n + i;
-      const auto g =
-          static_cast<std::uint8_t>(std::clamp(appearance.Shaded()[k] * 110.0f, 0.0f, 255.0f));
-      std::uint8_t* left = &rgb[(static_cast<size_t>(r) * 2 * panel + c) * 3];
-      left[0] = left[1] = left[2] = g;
-      std::uint8_t* right = &rgb[(static_cast<size_t>(r) * 2 * panel + panel + c) * 3];
-      const std::uint8_t bits = hazard.hazard[k];
-      const std::uint8_t dim = static_cast<std::uint8_t>(g / 2);
-      if (bits & swf::sim::kHazardRock) {
-        right[0] = 255, right[1] = 40, right[2] = 40;
-      } else if (bits & swf::sim::kHazardSlope) {
-        right[0] = 255, right[1] = 200, right[2] = 0;
-      } else {
-        right[0] = dim, right[1] = static_cast<std::uint8_t>(std::min(255, dim + 60)),
-        right[2] = dim;
-      }
-    }
-  }
-  (void)swf::sim::WritePng(path, rgb.data(), 2 * panel, panel, 3, 2 * panel * 3);
+// The terrain and its hazard truth (swf::plot); false with the reason on stderr.
+bool DrawTerrainHazard(const swf::sim::Terrain& terrain, const swf::sim::HazardMap& hazard,
+                       const std::string& terrain_name, const std::string& path) {
+  swf::plot::HeightGrid grid;
+  grid.size = terrain.Size();
+  grid.cell_m = terrain.CellM();
+  grid.x0_m = terrain.NodeX(0);
+  grid.y0_m = terrain.NodeY(0);
+  grid.height_m = terrain.Heights();
+  grid.hazard_bits = hazard.hazard;
+  const double origin[2] = {0.0, 0.0};
+  std::string error;
+  if (swf::plot::DrawTerrainHazard(
+          grid, false, origin, "Terrain '" + terrain_name + "' and its hazard truth", path, &error))
+    return true;
+  std::fprintf(stderr, "swf-sim: cannot draw %s\n", error.c_str());
+  return false;
 }
 
 }  // namespace
@@ -169,7 +159,7 @@ int main(int argc, char** argv) {
   if (Status s = swf::sim::ComputeHazardTruth(terrain, hazard_options, &hazard); s != Status::kOk) {
     return Fail("hazard truth", s);
   }
-  WriteHazardPicture(terrain, appearance, hazard, out + "/terrain_hazard.png");
+  if (!DrawTerrainHazard(terrain, hazard, terrain_name, out + "/terrain_hazard.png")) return 1;
   if (std::FILE* f = std::fopen((out + "/rocks.csv").c_str(), "w")) {
     std::fprintf(f, "x_m,y_m,diameter_m,height_m,base_z_m\n");
     for (const auto& r : terrain.Rocks()) {
@@ -238,16 +228,13 @@ int main(int argc, char** argv) {
   for (int k = 0; k < trajectory.NumFrames(); k += every) frames.push_back(k);
   if (max_frames >= 0 && static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
 
-  constexpr int kSheetCols = 4;
-  constexpr int kSheetRows = 3;
-  const int tile_w = rig.width_px / 4;
-  const int tile_h = rig.height_px / 4;
-  std::vector<std::uint8_t> sheet(static_cast<size_t>(kSheetCols * tile_w) * kSheetRows * tile_h,
-                                  0);
+  // The contact sheet: 12 left frames spread over the run.
+  constexpr int kSheetFrames = 12;
   std::vector<int> sheet_frames;
-  for (int s = 0; s < kSheetCols * kSheetRows && !frames.empty(); ++s) {
-    sheet_frames.push_back(frames[(frames.size() - 1) * s / (kSheetCols * kSheetRows - 1)]);
+  for (int s = 0; s < kSheetFrames && !frames.empty(); ++s) {
+    sheet_frames.push_back(frames[(frames.size() - 1) * s / (kSheetFrames - 1)]);
   }
+  std::vector<swf::plot::ContactFrame> sheet;
 
   std::FILE* poses = std::fopen((out + "/poses.csv").c_str(), "w");
   if (poses == nullptr) return Fail("poses.csv", Status::kIoError);
@@ -307,21 +294,9 @@ int main(int argc, char** argv) {
     std::fprintf(poses, "%d,%lld,%.9f,%.9f,%.9f,%.12f,%.12f,%.12f,%.12f\n", k,
                  static_cast<long long>(trajectory.FrameTimeNs(k)), pose.t.x(), pose.t.y(),
                  pose.t.z(), q.x(), q.y(), q.z(), q.w());
-    for (size_t s = 0; s < sheet_frames.size(); ++s) {
-      if (sheet_frames[s] != k) continue;
-      const int ox = static_cast<int>(s % kSheetCols) * tile_w;
-      const int oy = static_cast<int>(s / kSheetCols) * tile_h;
-      for (int y = 0; y < tile_h; ++y) {
-        for (int x = 0; x < tile_w; ++x) {
-          int sum = 0;
-          for (int dy = 0; dy < 4; ++dy) {
-            for (int dx = 0; dx < 4; ++dx)
-              sum += images.left[(4 * y + dy) * images.width + 4 * x + dx];
-          }
-          sheet[static_cast<size_t>(oy + y) * kSheetCols * tile_w + ox + x] =
-              static_cast<std::uint8_t>(sum / 16);
-        }
-      }
+    if (std::find(sheet_frames.begin(), sheet_frames.end(), k) != sheet_frames.end()) {
+      sheet.push_back({k, pose.t.z() - terrain.HeightAt(pose.t.x(), pose.t.y()), images.width,
+                       images.height, images.left});
     }
     const double elapsed_s = (swf::core::MonotonicNs() - start) * 1e-9;
     std::fprintf(stderr, "\rswf-sim: frame %d (%zu/%zu), altitude %.1f m, %.2f s/pair", k, n + 1,
@@ -329,8 +304,13 @@ int main(int argc, char** argv) {
   }
   std::fprintf(stderr, "\n");
   std::fclose(poses);
-  (void)swf::sim::WritePng(out + "/contact_sheet.png", sheet.data(), kSheetCols * tile_w,
-                           kSheetRows * tile_h, 1, kSheetCols * tile_w);
+  std::string sheet_error;
+  if (!swf::plot::DrawContactSheet(
+          sheet, "Left camera, scenario '" + scenario + "' over terrain '" + terrain_name + "'",
+          out + "/contact_sheet.png", &sheet_error)) {
+    std::fprintf(stderr, "swf-sim: cannot draw %s\n", sheet_error.c_str());
+    return 1;
+  }
   std::fprintf(stderr, "swf-sim: wrote %zu pairs, %d landmarks, %zu rocks, %zu craters to %s\n",
                frames.size(), measurements.Summary().num_landmarks, terrain.Rocks().size(),
                terrain.Craters().size(), out.c_str());

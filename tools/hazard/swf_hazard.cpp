@@ -5,7 +5,7 @@
 //       altitude sweep (single-frame maps, fresh mapper per altitude) over the three terrain
 //       presets: rock detection probability / false-alarm rate, slope error, elevation error vs
 //       sigma against altitude; then N seeded fused descents per preset with the safe-site check.
-//       Writes OUTDIR/hazard_eval.json, *.dat, hazard_*.png (gnuplot) and hazard_map_*.png.
+//       Writes OUTDIR/hazard_eval.json, *.dat, hazard_*.png and hazard_map_*.png (swf::plot).
 //   swf-hazard map OUT.png [--preset plains|craters|rocks] [--seed S] [--shared DIR]
 //       one fused descent, the final hazard map as PNG.
 // Every failure prints one line "swf-hazard: ..." naming the file (or option) and the cause, and
@@ -23,6 +23,7 @@
 #include "run_filter.hpp"
 #include "swf/evaluation/statistics.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
+#include "swf/plot/plot.hpp"
 #include "swf/scene/runner.hpp"
 #include "swf/sim/rng.hpp"
 #include "swf/sim/trajectory.hpp"
@@ -140,15 +141,20 @@ std::string StepFailure(int frame, double altitude_m, swf::core::Status s) {
   return buf;
 }
 
-std::string WriteFailure(const std::string& path) {
-  return path + ": cannot write the hazard map PNG";
+// The world's published map (World::Publish / Evaluate) drawn by swf::plot; false with the reason
+// (naming the PNG) in `error`.
+bool DrawPublished(const World& world, const EvalOptions& eo, const std::string& title,
+                   const std::string& path, std::string* error) {
+  return swf::plot::DrawHazardMap(swf::hazard_eval::ViewOf(world.Published()),
+                                  eo.footprint_radius_m, title, path, error);
 }
 
-// The world's published map (World::Publish / Evaluate) as a PNG; failures are the caller's.
-swf::core::Status WritePublishedPng(const World& world, const EvalOptions& eo,
-                                    const std::string& path) {
-  return swf::hazard_eval::WriteHazardMapPng(swf::hazard_eval::ViewOf(world.Published()),
-                                             eo.footprint_radius_m, path);
+// A picture kept for inspection while an evaluation goes on: a failure is said, not fatal.
+void DrawForInspection(const World& world, const EvalOptions& eo, const std::string& title,
+                       const std::string& path) {
+  std::string error;
+  if (!DrawPublished(world, eo, title, path, &error))
+    std::fprintf(stderr, "swf-hazard: cannot draw %s\n", error.c_str());
 }
 
 std::string EvaluateFailure(swf::core::Status s) {
@@ -197,9 +203,9 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
         sweep[p][a].Add(m, ms);
         all_alt[a].Add(m, ms);
         if (p == 2 && s == 0 && (a == 5 || a == 7)) {
-          (void)WritePublishedPng(
-              world, eo,
-              out + "/hazard_map_rocks_" + std::to_string(int(kSweepAltitudes[a])) + "m.png");
+          const std::string altitude = std::to_string(int(kSweepAltitudes[a]));
+          DrawForInspection(world, eo, "Hazard map, rocks terrain, static at " + altitude + " m",
+                            out + "/hazard_map_rocks_" + altitude + "m.png");
         }
       }
       std::fprintf(stderr, "sweep %s seed %d done\n", kPresetNames[p], s);
@@ -247,11 +253,15 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
       results.push_back({p, s, m.site_valid, m.site_on_hazard, m.site_clearance_m,
                          mapper->Site().stable_updates});
       if (s == 0) {
-        (void)WritePublishedPng(world, eo, out + "/hazard_map_descent_" + kPresetNames[p] + ".png");
+        DrawForInspection(
+            world, eo, std::string("Hazard map after a descent, ") + kPresetNames[p] + " terrain",
+            out + "/hazard_map_descent_" + kPresetNames[p] + ".png");
       }
       if (m.site_valid && m.site_on_hazard) {  // every failure kept for inspection
-        (void)WritePublishedPng(
+        DrawForInspection(
             world, eo,
+            std::string("Safe site on a true hazard: ") + kPresetNames[p] + " terrain, seed " +
+                std::to_string(s),
             out + "/hazard_map_failed_" + kPresetNames[p] + "_" + std::to_string(s) + ".png");
       }
     }
@@ -363,34 +373,62 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
   }
   std::fprintf(json, "]\n  }\n}\n");
   if (std::fclose(json) != 0) return Fail(out + "/hazard_eval.json: write failed");
-  // Plots.
-  const std::string gp = out + "/hazard_plots.gp";
-  FILE* g = std::fopen(gp.c_str(), "w");
-  if (g == nullptr) return Fail(gp + ": cannot write");
-  std::fprintf(g,
-               "set terminal pngcairo size 900,600\nset grid\nset key bottom right\n"
-               "set xlabel 'altitude (m)'\n"
-               "set output '%s/hazard_detection.png'\nset ylabel 'probability / rate'\n"
-               "set title 'Rocks >= %.2f m: detection probability and false-alarm rate'\n"
-               "plot '%s/hazard_sweep.dat' u 1:2 w lp lw 2 t 'P_d (all)', '' u 1:14 w lp lw 2 t "
-               "'P(flagged: rock or uncertain)', '' u 1:4 w lp t "
-               "'P_d plains', '' u 1:5 w lp t 'P_d craters', '' u 1:6 w lp t 'P_d rocks', '' u "
-               "1:($3*100) w lp lw 2 t 'false-alarm rate x100'\n"
-               "set output '%s/hazard_elevation.png'\nset key top left\n"
-               "set title 'Elevation error vs predicted sigma'\nset ylabel 'fraction / metres'\n"
-               "plot '%s/hazard_sweep.dat' u 1:9 w lp lw 2 t 'fraction within 1 sigma', '' u "
-               "1:10 w lp t 'within 2 sigma', '' u 1:11 w lp t 'median sigma (m)', '' u 1:13 w l "
-               "dt 2 t 'dZ = Z^2 0.25 px / (f B)', 0.683 w l dt 3 t '68.3 %%'\n"
-               "set output '%s/hazard_slope.png'\nset title 'Slope error (footprint plane)'\n"
-               "set ylabel 'deg'\nplot '%s/hazard_sweep.dat' u 1:7 w lp lw 2 t 'median', '' u "
-               "1:8 w lp t '90th percentile'\n",
-               out.c_str(), eo.max_rock_height_m, out.c_str(), out.c_str(), out.c_str(),
-               out.c_str(), out.c_str());
-  std::fclose(g);
-  const std::string cmd = "gnuplot " + gp + " 2>/dev/null";
-  if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "gnuplot failed (plots skipped)\n");
+  // Plots, by altitude of the static sweep.
+  const auto series = [&](const std::string& title, auto&& value) {
+    swf::plot::Series line{title, {}, {}};
+    for (int a = 0; a < kNumAlt; ++a) {
+      line.x.push_back(kSweepAltitudes[a]);
+      line.y.push_back(value(a));
+    }
+    return line;
+  };
+  const auto pd_of = [&](int p) {
+    return series(std::string("P_d ") + kPresetNames[p],
+                  [&, p](int a) { return sweep[p][a].Pd(); });
+  };
+  char rocks[96];
+  std::snprintf(rocks, sizeof rocks,
+                "Rocks >= %.2f m: detection probability and false-alarm rate by altitude",
+                eo.max_rock_height_m);
+  const swf::plot::LineChart charts[] = {
+      {rocks,
+       "camera altitude (m)",
+       "probability or rate",
+       false,
+       {series("P_d (all terrains)", [&](int a) { return all_alt[a].Pd(); }),
+        series("P(flagged: rock or uncertain)", [&](int a) { return all_alt[a].Pf(); }), pd_of(0),
+        pd_of(1), pd_of(2),
+        series("false-alarm rate x 100", [&](int a) { return 100.0 * all_alt[a].Far(); })}},
+      {"Elevation error against the mapper's own sigma, by altitude",
+       "camera altitude (m)",
+       "fraction of cells, or metres",
+       false,
+       {series("fraction of cells within 1 sigma (expected 0.683)",
+               [&](int a) { return all_alt[a].WithinSigma(1.0); }),
+        series("fraction within 2 sigma (expected 0.954)",
+               [&](int a) { return all_alt[a].WithinSigma(2.0); }),
+        series("median sigma (m)", [&](int a) { return Quantile(all_alt[a].elev_sigma, 0.5); }),
+        series("dZ = Z^2 0.25 px / (f B) (m)",
+               [&](int a) { return kSweepAltitudes[a] * kSweepAltitudes[a] * 0.25 / fx; })}},
+      {"Slope error of the footprint plane, by altitude",
+       "camera altitude (m)",
+       "slope error (deg)",
+       false,
+       {series("median", [&](int a) { return Quantile(all_alt[a].slope_err, 0.5); }),
+        series("90th percentile", [&](int a) { return Quantile(all_alt[a].slope_err, 0.9); })}}};
+  const char* const chart_files[] = {"hazard_detection.png", "hazard_elevation.png",
+                                     "hazard_slope.png"};
+  bool drawn = true;
+  for (int c = 0; c < 3; ++c) {
+    std::string error;
+    if (!swf::plot::DrawLineChart(charts[c], out + "/" + chart_files[c], &error)) {
+      std::fprintf(stderr, "swf-hazard: cannot draw %s\n", error.c_str());
+      drawn = false;
+    }
+  }
   std::printf("%s/hazard_eval.json: %d descents, site found %d, on true hazard %d\n", out.c_str(),
               static_cast<int>(results.size()), valid, on_hazard);
+  if (!drawn) return 1;
   return on_hazard == 0 ? 0 : 2;
 }
 
@@ -411,7 +449,13 @@ int Map(const std::string& path, const EvalOptions& eo, swf::sim::TerrainPreset 
   }
   if (const swf::core::Status st = world.Publish(*mapper); st != swf::core::Status::kOk)
     return Fail(path + ": " + EvaluateFailure(st));
-  if (WritePublishedPng(world, eo, path) != swf::core::Status::kOk) return Fail(WriteFailure(path));
+  std::string error;
+  if (!DrawPublished(world, eo,
+                     "Hazard map after a descent, " +
+                         std::string(kPresetNames[static_cast<int>(preset)]) + " terrain, seed " +
+                         std::to_string(seed),
+                     path, &error))
+    return Fail(error);
   return 0;
 }
 
@@ -664,8 +708,10 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
                 rock.center_m.x(), rock.center_m.y(), rock.height_m, rock.diameter_m,
                 mapper->Sigma()[c], static_cast<int>(mapper->Classes()[c]));
   }
-  if (WritePublishedPng(world, eo, out + "/flight_map.png") != swf::core::Status::kOk)
-    return Fail(WriteFailure(out + "/flight_map.png"));
+  std::string error;
+  if (!DrawPublished(world, eo, "Hazard map of the flight descent", out + "/flight_map.png",
+                     &error))
+    return Fail(error);
   return 0;
 }
 

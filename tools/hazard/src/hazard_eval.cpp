@@ -7,7 +7,6 @@
 
 #include "swf/app/hazard_stage.hpp"
 #include "swf/sim/appearance.hpp"
-#include "swf/sim/image_io.hpp"
 #include "swf/sim/rng.hpp"
 
 namespace swf::hazard_eval {
@@ -134,96 +133,6 @@ core::Status World::Evaluate(const hazard::HazardMapper& mapper, HazardMapMetric
   o.footprint_radius_m = options_.footprint_radius_m;
   *metrics = EvaluateHazardMap(ViewOf(published_), terrain_, terrain_.Rocks(), truth_, o);
   return core::Status::kOk;
-}
-
-void RenderHazardMap(const HazardMapView& m, double footprint_radius_m, int scale,
-                     std::vector<std::uint8_t>* rgb, int* width, int* height) {
-  const int n = m.cells_per_side;
-  const double cell = m.cell_m;
-  *width = n * scale;
-  *height = n * scale;
-  rgb->assign(static_cast<std::size_t>(*width) * *height * 3, 0);
-  const auto elev = [&](int i, int j) {
-    i = std::clamp(i, 0, n - 1);
-    j = std::clamp(j, 0, n - 1);
-    return m.elevation_m[static_cast<std::size_t>(j) * n + i];
-  };
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const std::size_t c = static_cast<std::size_t>(j) * n + i;
-      double r = 20;
-      double g = 30;
-      double b = 70;  // unknown
-      if (!std::isnan(m.elevation_m[c])) {
-        float ex = elev(i + 1, j) - elev(i - 1, j);
-        float ey = elev(i, j + 1) - elev(i, j - 1);
-        if (std::isnan(ex)) ex = 0.0f;
-        if (std::isnan(ey)) ey = 0.0f;
-        // Lambertian hill shade, light from the north-west, 45 deg elevation.
-        const Eigen::Vector3d normal =
-            Eigen::Vector3d(-ex / (2 * cell), -ey / (2 * cell), 1.0).normalized();
-        const Eigen::Vector3d light = Eigen::Vector3d(-1.0, 1.0, 1.414).normalized();
-        const double shade = 0.25 + 0.75 * std::max(0.0, normal.dot(light));
-        // The tint of each published class code (app::HazardClassCode); other codes untinted.
-        struct Tint {
-          hazard::HazardClass hazard_class;
-          double rgb[3];
-        };
-        static constexpr Tint kTints[] = {
-            {hazard::HazardClass::kSafe, {0.75, 1.0, 0.75}},
-            {hazard::HazardClass::kUncertain, {1.0, 0.9, 0.3}},
-            {hazard::HazardClass::kSlope, {1.0, 0.55, 0.1}},
-            {hazard::HazardClass::kRock, {1.0, 0.1, 0.1}},
-            {hazard::HazardClass::kUnknown, {0.6, 0.6, 0.8}},
-        };
-        static constexpr double kUntinted[3] = {1.0, 1.0, 1.0};
-        const double* tint = kUntinted;
-        for (const Tint& t : kTints) {
-          if (m.hazard_class[c] == app::HazardClassCode(t.hazard_class)) tint = t.rgb;
-        }
-        r = 255.0 * shade * tint[0];
-        g = 255.0 * shade * tint[1];
-        b = 255.0 * shade * tint[2];
-      }
-      for (int y = 0; y < scale; ++y) {
-        const int py = (n - 1 - j) * scale + y;  // north up
-        for (int x = 0; x < scale; ++x) {
-          std::uint8_t* p =
-              rgb->data() + (static_cast<std::size_t>(py) * *width + i * scale + x) * 3;
-          p[0] = static_cast<std::uint8_t>(std::clamp(r, 0.0, 255.0));
-          p[1] = static_cast<std::uint8_t>(std::clamp(g, 0.0, 255.0));
-          p[2] = static_cast<std::uint8_t>(std::clamp(b, 0.0, 255.0));
-        }
-      }
-    }
-  }
-  if (!m.site_valid) return;
-  const double px = (m.site_world_m[0] - m.origin_world_m[0]) / cell * scale;
-  const double py = *height - (m.site_world_m[1] - m.origin_world_m[1]) / cell * scale;
-  const double rad = footprint_radius_m / cell * scale;
-  const auto put = [&](int x, int y) {
-    if (x < 0 || y < 0 || x >= *width || y >= *height) return;
-    std::uint8_t* p = rgb->data() + (static_cast<std::size_t>(y) * *width + x) * 3;
-    p[0] = p[1] = p[2] = 255;
-  };
-  for (int k = 0; k < 720; ++k) {
-    const double a = k * M_PI / 360.0;
-    put(static_cast<int>(px + rad * std::cos(a)), static_cast<int>(py + rad * std::sin(a)));
-  }
-  const int arm = std::max(3, static_cast<int>(rad / 3));
-  for (int d = -arm; d <= arm; ++d) {
-    put(static_cast<int>(px) + d, static_cast<int>(py));
-    put(static_cast<int>(px), static_cast<int>(py) + d);
-  }
-}
-
-core::Status WriteHazardMapPng(const HazardMapView& map, double footprint_radius_m,
-                               const std::string& path) {
-  std::vector<std::uint8_t> rgb;
-  int w = 0;
-  int h = 0;
-  RenderHazardMap(map, footprint_radius_m, 2, &rgb, &w, &h);
-  return sim::WritePng(path, rgb.data(), w, h, 3, w * 3);
 }
 
 }  // namespace swf::hazard_eval

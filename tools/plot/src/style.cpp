@@ -8,8 +8,7 @@ namespace swf::plot {
 std::string Preamble() {
   return "set grid lc rgb '#e0e0e0' lt 1\n"
          "set border lc rgb '#404040'\n"
-         "set key opaque box lc rgb '#c0c0c0'\n"
-         "set datafile missing 'NaN'\n";
+         "set key opaque box lc rgb '#c0c0c0'\n";
 }
 
 std::int64_t TimeOriginUs(const evaluation::RunScore& score) {

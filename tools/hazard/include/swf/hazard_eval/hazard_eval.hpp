@@ -74,12 +74,4 @@ class World {
   app::HazardRecord published_;
 };
 
-// A published hazard map as RGB (3 x scale^2 bytes per cell, north up): hill-shaded elevation,
-// classes tinted (rock red, slope orange, uncertain yellow, safe green, unknown dark blue), the
-// safe site as a white footprint circle (footprint_radius_m) with a cross.
-void RenderHazardMap(const HazardMapView& map, double footprint_radius_m, int scale,
-                     std::vector<std::uint8_t>* rgb, int* width, int* height);
-core::Status WriteHazardMapPng(const HazardMapView& map, double footprint_radius_m,
-                               const std::string& path);
-
 }  // namespace swf::hazard_eval
