@@ -1,0 +1,193 @@
+// Every plot of swf::plot drawn from small inputs built here, checked as an image (png_check.hpp),
+// and every way a plot can fail reported with the PNG and the cause: gnuplot missing, gnuplot
+// failing, an unwritable destination, nothing to draw.
+#include "swf/plot/plot.hpp"
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "png_check.hpp"
+#include "swf_msgs/hazard_map_t.hpp"
+
+namespace swf::plot {
+namespace {
+
+class PlotTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("swf_plot_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::create_directories(dir_);
+    ::unsetenv("SWF_GNUPLOT");
+  }
+  void TearDown() override {
+    std::filesystem::remove_all(dir_);
+    ::unsetenv("SWF_GNUPLOT");
+  }
+  std::string Png(const std::string& name) const { return (dir_ / name).string(); }
+
+  // A drawn plot: decodes, has the canvas's size, is not blank.
+  static void ExpectPlot(const std::string& path, int width, int height) {
+    const test::PngStats s = test::StatsOf(path);
+    ASSERT_TRUE(s.decoded) << s.error;
+    EXPECT_EQ(s.width, width);
+    EXPECT_EQ(s.height, height);
+    EXPECT_GT(s.gray_stddev, 5.0) << path << " looks blank";
+  }
+
+  std::filesystem::path dir_;
+};
+
+// GIVEN a descent of 40 outputs at 10 Hz whose error grows inside a growing covariance, and
+// landmark maps every 5 outputs with a few far-off landmarks.
+evaluation::RunScore Descent() {
+  evaluation::RunScore score;
+  for (int k = 0; k < 40; ++k) {
+    evaluation::OutputScore o;
+    o.frame_seq = k;
+    o.utime = 5'000'000 + k * 100'000;
+    for (int i = 0; i < 3; ++i) {
+      o.truth_m[i] = i == 2 ? 100.0 - 2.0 * k : 0.1 * i;
+      o.estimate_m[i] = o.truth_m[i] + 0.01 * std::sin(0.3 * k + i) * (1 + 0.1 * k);
+      o.position_sigma_m[i] = k < 3 ? NAN : 0.01 * (1 + 0.1 * k);  // none at first
+      o.attitude_error_axes_deg[i] = 0.02 * std::cos(0.2 * k + i);
+      o.attitude_sigma_deg[i] = 0.02 + 0.001 * k;
+    }
+    o.attitude_error_deg = 0.03;
+    score.outputs.push_back(o);
+  }
+  for (int m = 0; m < 8; ++m) {
+    score.maps.push_back({5 * m, 5'000'000 + 500'000 * m, 50, 0.2 / (m + 1), 0.15 / (m + 1)});
+  }
+  for (int l = 0; l < 60; ++l) {
+    evaluation::LandmarkScore s;
+    s.id = l;
+    s.truth_m[0] = (l % 10) - 5.0;
+    s.truth_m[1] = (l / 10) - 3.0;
+    const double e = l < 3 ? 1.0 : 0.01 * (l % 7);  // three outliers beyond the colour key
+    s.estimate_m[0] = s.truth_m[0] + e;
+    s.estimate_m[1] = s.truth_m[1];
+    s.error_m = e;
+    score.last_map.push_back(s);
+  }
+  return score;
+}
+
+TEST_F(PlotTest, DrawsEveryPlotOfARun) {
+  const evaluation::RunScore score = Descent();
+  std::string error;
+  ASSERT_TRUE(DrawTrajectory(score, Png("trajectory.png"), &error)) << error;
+  ExpectPlot(Png("trajectory.png"), 1300, 950);
+  ASSERT_TRUE(DrawAttitudeError(score, Png("attitude.png"), &error)) << error;
+  ExpectPlot(Png("attitude.png"), 1100, 800);
+  ASSERT_TRUE(DrawLandmarkError(score, Png("landmark_error.png"), &error)) << error;
+  ExpectPlot(Png("landmark_error.png"), 1000, 600);
+  ASSERT_TRUE(DrawLandmarkMap(score, Png("map.png"), &error)) << error;
+  ExpectPlot(Png("map.png"), 900, 950);
+}
+
+TEST_F(PlotTest, DrawsAHazardMapWithUnknownCellsAndItsSite) {
+  constexpr int n = 40;
+  std::vector<float> elevation(n * n), sigma(n * n, 0.05f);
+  std::vector<std::int8_t> classes(n * n);
+  for (int c = 0; c < n * n; ++c) {
+    const int i = c % n, j = c / n;
+    elevation[c] = i < 4 ? NAN : 0.02f * static_cast<float>(i + j);
+    classes[c] =
+        static_cast<std::int8_t>(i < 4 ? swf_msgs::hazard_map_t::CLASS_UNKNOWN : (i * j) % 6);
+  }
+  evaluation::HazardMapView map;
+  map.frame_seq = 9;
+  map.origin_world_m[0] = -2.0;
+  map.origin_world_m[1] = -2.0;
+  map.cell_m = 0.1;
+  map.cells_per_side = n;
+  map.elevation_m = elevation.data();
+  map.sigma_m = sigma.data();
+  map.hazard_class = classes.data();
+  map.site_valid = true;
+  map.site_world_m[0] = 0.5;
+  map.site_world_m[1] = 0.2;
+  map.site_score = 0.7;
+  std::string error;
+  ASSERT_TRUE(DrawHazardMap(map, 0.5, "hazard at frame 9", Png("hazard.png"), &error)) << error;
+  ExpectPlot(Png("hazard.png"), 1240, 680);
+}
+
+TEST_F(PlotTest, DrawsTerrainWithHazardTruthReducedToBlocks) {
+  HeightGrid terrain;
+  terrain.size = 700;  // more than 300 a side: drawn as 3x3 blocks
+  terrain.cell_m = 0.1;
+  terrain.x0_m = terrain.y0_m = -35.0;
+  terrain.height_m.resize(700 * 700);
+  terrain.hazard_bits.resize(700 * 700);
+  for (std::size_t c = 0; c < terrain.height_m.size(); ++c) {
+    terrain.height_m[c] = static_cast<float>(std::sin(0.01 * static_cast<double>(c % 700)));
+    terrain.hazard_bits[c] = c % 997 == 0 ? 2 : (c % 700 < 50 ? 1 : 0);
+  }
+  const double target[2] = {1.0, 2.0};
+  std::string error;
+  ASSERT_TRUE(DrawTerrainHazard(terrain, true, target, "terrain", Png("terrain.png"), &error))
+      << error;
+  ExpectPlot(Png("terrain.png"), 1240, 680);
+}
+
+TEST_F(PlotTest, DrawsAContactSheetAndALineChart) {
+  std::vector<ContactFrame> frames;
+  for (int k = 0; k < 6; ++k) {
+    ContactFrame f{k * 10, 100.0 - 10 * k, 64, 48, std::vector<std::uint8_t>(64 * 48)};
+    for (std::size_t p = 0; p < f.gray.size(); ++p) f.gray[p] = static_cast<std::uint8_t>(p * 7);
+    frames.push_back(f);
+  }
+  std::string error;
+  ASSERT_TRUE(DrawContactSheet(frames, "sheet", Png("sheet.png"), &error)) << error;
+  ExpectPlot(Png("sheet.png"), 4 * 320, 2 * (320 * 48 / 64 + 40) + 50);
+  LineChart chart{"chart",
+                  "altitude (m)",
+                  "rate",
+                  true,
+                  {{"a", {10, 20, 30}, {0.1, 0.0, 0.3}}, {"b", {10, 20, 30}, {1, 2, NAN}}}};
+  ASSERT_TRUE(DrawLineChart(chart, Png("chart.png"), &error)) << error;
+  ExpectPlot(Png("chart.png"), 1000, 600);
+}
+
+TEST_F(PlotTest, MissingGnuplotIsNamed) {
+  ::setenv("SWF_GNUPLOT", "/nonexistent/gnuplot", 1);
+  std::string error;
+  EXPECT_FALSE(DrawTrajectory(Descent(), Png("t.png"), &error));
+  EXPECT_EQ(error.rfind(Png("t.png") + ": cannot run /nonexistent/gnuplot: ", 0), 0u) << error;
+  EXPECT_FALSE(std::filesystem::exists(Png("t.png")));
+}
+
+TEST_F(PlotTest, FailingGnuplotIsNamedWithItsStatus) {
+  ::setenv("SWF_GNUPLOT", "false", 1);
+  std::string error;
+  EXPECT_FALSE(DrawLandmarkMap(Descent(), Png("m.png"), &error));
+  EXPECT_EQ(error.rfind(Png("m.png") + ": false exited with status 1", 0), 0u) << error;
+  EXPECT_FALSE(std::filesystem::exists(Png("m.png")));
+  // A program that succeeds without drawing is no plot either.
+  ::setenv("SWF_GNUPLOT", "true", 1);
+  EXPECT_FALSE(DrawLandmarkMap(Descent(), Png("m.png"), &error));
+  EXPECT_NE(error.find("drew no image"), std::string::npos) << error;
+}
+
+TEST_F(PlotTest, UnwritableDestinationAndEmptyRunsAreNamed) {
+  std::string error;
+  EXPECT_FALSE(DrawLandmarkError(Descent(), Png("no/such/dir/e.png"), &error));
+  EXPECT_NE(error.find("no/such/dir/e.png: cannot write the PNG"), std::string::npos) << error;
+  const evaluation::RunScore empty;
+  EXPECT_FALSE(DrawTrajectory(empty, Png("t.png"), &error));
+  EXPECT_NE(error.find("no navigation output"), std::string::npos) << error;
+  std::vector<std::string> errors;
+  EXPECT_TRUE(DrawRun(empty, {}, dir_.string(), &errors).empty());  // nothing to draw: no file
+  EXPECT_TRUE(errors.empty());
+}
+
+}  // namespace
+}  // namespace swf::plot
