@@ -39,9 +39,11 @@ def refly_worst(out, spec, sil, rep):
 
 
 def write_report(out, spec, sil, refly, plots):
-    rep = report.write(out, spec, with_plots=False)
+    rep, _ = report.write(out, spec, with_plots=False)
     reproduced = refly_worst(out, spec, sil, rep) if refly and spec.keep_worst > 0 else {}
-    rep = report.write(out, spec, reproduced, with_plots=plots)
+    # The worst runs' own plots come from swf-plot, built beside swf-sil.
+    plot_tool = os.path.join(os.path.dirname(os.path.abspath(sil)), 'swf-plot')
+    rep, plot_errors = report.write(out, spec, reproduced, with_plots=plots, plot_tool=plot_tool)
     n = rep['navigation']['final_position_error_m']
     print('campaign %s: %d/%d runs completed %s; final position error p50 %s m, p95 %s m, max '
           '%s m; report %s' % (
@@ -54,7 +56,9 @@ def write_report(out, spec, sil, refly, plots):
     bad_repro = [k for k, v in reproduced.items() if not v]
     if bad_repro:
         print('  re-flown runs differ from the campaign: %s' % bad_repro, file=sys.stderr)
-    return 0 if not rep['not_completed'] and not bad_repro else 1
+    for e in plot_errors:
+        print('  the worst runs\' plots: %s' % e, file=sys.stderr)
+    return 0 if not rep['not_completed'] and not bad_repro and not plot_errors else 1
 
 
 def cmd_run(a):

@@ -1,4 +1,6 @@
-"""Aggregating a campaign's runs into report.json, report.md and PNG plots (OUT/report/).
+"""Aggregating a campaign's runs into report.json, report.md and PNG plots (OUT/report/): the
+campaign's own plots (matplotlib) and each re-flown worst run's plots, drawn by swf-plot from its
+LCM log (tools/plot: the pictures swf-sil draws for the demo).
 
 Everything in report.json except "timing" is a function of the runs' estimates, so two engines
 that flew the same campaign give the same report apart from the measured times.
@@ -6,6 +8,7 @@ that flew the same campaign give the same report apart from the measured times.
 import json
 import math
 import os
+import subprocess
 
 from . import engine
 from . import spec as specmod
@@ -385,6 +388,30 @@ def plots(report, outputs, edges, done, report_dir):
     return written
 
 
+def run_plots(out, report, reproduced, report_dir, plot_tool):
+    """The worst runs' own plots (trajectory, attitude and landmark error, landmark map, hazard
+    map): swf-plot on the LCM log each re-flight kept, into report/run_NNNNN/. Returns
+    ({run: [PNG paths relative to report_dir]}, [errors])."""
+    drawn, errors = {}, []
+    for w in report['worst_runs']:
+        if w['run'] not in reproduced:
+            continue
+        log = os.path.join(engine.run_dir(out, w['run']), 'reproduce', engine.LOG_NAME)
+        dest = os.path.join(report_dir, 'run_%05d' % w['run'])
+        os.makedirs(dest, exist_ok=True)
+        try:
+            p = subprocess.run([plot_tool, log, '--out', dest], capture_output=True, text=True,
+                               check=False)
+        except OSError as e:
+            errors.append('run %d: cannot run %s: %s' % (w['run'], plot_tool, e.strerror))
+            continue
+        if p.returncode != 0:
+            errors.append('run %d: swf-plot exited %d: %s' % (w['run'], p.returncode,
+                                                               p.stderr.strip()))
+        drawn[w['run']] = [os.path.relpath(line, report_dir) for line in p.stdout.split()]
+    return drawn, errors
+
+
 def fmt(v, digits=3):
     if v is None:
         return 'n/a'
@@ -402,7 +429,7 @@ def positive(values):
     return [v if v is not None and v > 0 else float('nan') for v in values]
 
 
-def markdown(report, pngs, reproduced):
+def markdown(report, pngs, reproduced, worst_plots=None):
     n = report['navigation']
     c = report['consistency']
     i = report['integrity']
@@ -487,6 +514,10 @@ def markdown(report, pngs, reproduced):
             fmt(w['pose_rms_error_m']), (' (%s)' % w['reasons']) if w['reasons'] else '',
             '' if rep is None else ('; re-flown: summary identical' if rep
                                     else '; re-flown: SUMMARY DIFFERS'), w['reproduce']))
+        if (worst_plots or {}).get(w['run']):
+            lines.append('  plots of the re-flown run (swf-plot on its log): ' + ', '.join(
+                '[%s](%s)' % (os.path.splitext(os.path.basename(p))[0], p)
+                for p in worst_plots[w['run']]))
     if report['failed_runs']:
         lines += ['', 'Runs whose verdict was failed (their LCM logs are kept in the run '
                   'directories):', '']
@@ -504,17 +535,26 @@ def markdown(report, pngs, reproduced):
                                 fmt(t['wall_s_per_run']['p50'])), '']
     if pngs:
         lines += ['## Plots', ''] + ['![%s](%s)' % (p, p) for p in pngs] + ['']
+    if worst_plots and report['worst_runs'] and worst_plots.get(report['worst_runs'][0]['run']):
+        w = report['worst_runs'][0]['run']
+        lines += ['## The worst run (%d), drawn by swf-plot from its log' % w, ''] + [
+            '![%s](%s)' % (p, p) for p in worst_plots[w]] + ['']
     return '\n'.join(lines)
 
 
-def write(out, spec, reproduced=None, with_plots=True):
+def write(out, spec, reproduced=None, with_plots=True, plot_tool=None):
+    """Writes report.json and report.md (with the plots when with_plots; the worst re-flown runs'
+    own plots too when plot_tool names swf-plot). Returns (report, errors of the run plots)."""
     report, outputs, edges, done = aggregate(out, spec)
     report['worst_reproduced'] = {str(k): v for k, v in sorted((reproduced or {}).items())}
     report_dir = os.path.join(out, 'report')
     os.makedirs(report_dir, exist_ok=True)
     pngs = plots(report, outputs, edges, done, report_dir) if with_plots and done else []
+    worst_plots, errors = {}, []
+    if with_plots and plot_tool and reproduced:
+        worst_plots, errors = run_plots(out, report, reproduced, report_dir, plot_tool)
     engine.write_atomically(os.path.join(report_dir, 'report.json'),
                             json.dumps(report, indent=1, sort_keys=True, allow_nan=False) + '\n')
     engine.write_atomically(os.path.join(report_dir, 'report.md'),
-                            markdown(report, pngs, reproduced or {}))
-    return report
+                            markdown(report, pngs, reproduced or {}, worst_plots))
+    return report, errors

@@ -246,6 +246,13 @@ class LocalEngine(unittest.TestCase):
             with open(os.path.join(self.out, 'report', png), 'rb') as f:
                 self.assertEqual(f.read(8), b'\x89PNG\r\n\x1a\n', png)
             self.assertIn('](%s)' % png, md)
+        # The worst run's own plots, drawn by swf-plot from the log its re-flight kept.
+        for png in ('trajectory.png', 'attitude_error.png', 'landmark_error.png', 'map.png',
+                    'hazard.png'):
+            path = 'run_%05d/%s' % (worst['run'], png)
+            with open(os.path.join(self.out, 'report', path), 'rb') as f:
+                self.assertEqual(f.read(8), b'\x89PNG\r\n\x1a\n', path)
+            self.assertIn('](%s)' % path, md)
 
     def test_a_missing_binary_is_refused_before_anything_is_written(self):
         r = campaign('run', TINY, '--out', self.out, sil=os.path.join(self.dir, 'no-swf-sil'))

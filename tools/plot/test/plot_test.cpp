@@ -69,7 +69,7 @@ evaluation::RunScore Descent() {
     evaluation::LandmarkScore s;
     s.id = l;
     s.truth_m[0] = (l % 10) - 5.0;
-    s.truth_m[1] = (l / 10) - 3.0;
+    s.truth_m[1] = std::floor(l / 10.0) - 3.0;      // rows of 10
     const double e = l < 3 ? 1.0 : 0.01 * (l % 7);  // three outliers beyond the colour key
     s.estimate_m[0] = s.truth_m[0] + e;
     s.estimate_m[1] = s.truth_m[1];
@@ -93,11 +93,11 @@ TEST_F(PlotTest, DrawsEveryPlotOfARun) {
 }
 
 TEST_F(PlotTest, DrawsAHazardMapWithUnknownCellsAndItsSite) {
-  constexpr int n = 40;
-  std::vector<float> elevation(n * n), sigma(n * n, 0.05f);
-  std::vector<std::int8_t> classes(n * n);
-  for (int c = 0; c < n * n; ++c) {
-    const int i = c % n, j = c / n;
+  constexpr int kSide = 40;
+  std::vector<float> elevation(kSide * kSide), sigma(kSide * kSide, 0.05f);
+  std::vector<std::int8_t> classes(kSide * kSide);
+  for (int c = 0; c < kSide * kSide; ++c) {
+    const int i = c % kSide, j = c / kSide;
     elevation[c] = i < 4 ? NAN : 0.02f * static_cast<float>(i + j);
     classes[c] =
         static_cast<std::int8_t>(i < 4 ? swf_msgs::hazard_map_t::CLASS_UNKNOWN : (i * j) % 6);
@@ -107,7 +107,7 @@ TEST_F(PlotTest, DrawsAHazardMapWithUnknownCellsAndItsSite) {
   map.origin_world_m[0] = -2.0;
   map.origin_world_m[1] = -2.0;
   map.cell_m = 0.1;
-  map.cells_per_side = n;
+  map.cells_per_side = kSide;
   map.elevation_m = elevation.data();
   map.sigma_m = sigma.data();
   map.hazard_class = classes.data();
