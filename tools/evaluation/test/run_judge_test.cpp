@@ -130,6 +130,34 @@ TEST(RunJudge, PairsEstimatesWithTheTruthOfTheirFrame) {
   EXPECT_NEAR(s.max_error_over_protection, 0.4 / 0.3, 1e-12);
 }
 
+// What the plots show per output: its time, the sigmas of its own covariance, and the attitude
+// error about the estimate's camera axes in the covariance's convention (true R = est R Exp(phi)).
+TEST(RunJudge, KeepsTimeSigmasAndAttitudeErrorPerCameraAxis) {
+  RunJudge judge;
+  swf_msgs::nav_state_t nav = Nav(4, 0.0, 30.0, swf_msgs::nav_state_t::STATUS_VALID, 0.2, 1.0);
+  nav.utime = 1'234'567;
+  nav.covariance[6 * 4 + 4] = 0.01 * 0.01;  // phi_y sigma 0.01 rad; phi_x, phi_z have none
+  // The estimate is the truth turned by 0.02 rad about the camera's y axis: est R = true R
+  // Exp(0.02 y), so Log(est R^T true R) = -0.02 y.
+  const double half = 0.5 * 0.02;
+  nav.orientation_world_q[0] = std::cos(half);
+  nav.orientation_world_q[2] = std::sin(half);
+  judge.AddNav(nav);
+  judge.AddTruth(Truth(4, 30.0, 29.0));
+  const RunScore s = judge.Score();
+  ASSERT_EQ(s.outputs.size(), 1u);
+  const OutputScore& o = s.outputs[0];
+  EXPECT_EQ(o.utime, 1'234'567);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(o.position_sigma_m[i], 0.2, 1e-12);
+  EXPECT_TRUE(std::isnan(o.attitude_sigma_deg[0]));
+  EXPECT_NEAR(o.attitude_sigma_deg[1], 0.01 * 180.0 / M_PI, 1e-12);
+  EXPECT_TRUE(std::isnan(o.attitude_sigma_deg[2]));
+  EXPECT_NEAR(o.attitude_error_axes_deg[0], 0.0, 1e-12);
+  EXPECT_NEAR(o.attitude_error_axes_deg[1], -0.02 * 180.0 / M_PI, 1e-9);
+  EXPECT_NEAR(o.attitude_error_axes_deg[2], 0.0, 1e-12);
+  EXPECT_NEAR(o.attitude_error_deg, 0.02 * 180.0 / M_PI, 1e-9);
+}
+
 TEST(RunJudge, JudgesLandmarksOfEachMapAgainstTheirTruthById) {
   RunJudge judge;
   judge.AddLandmarks(Map(5, {7, 8, 9}, {1.0, 2.0, 3.0}));

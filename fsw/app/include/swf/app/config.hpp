@@ -205,7 +205,7 @@ struct FswConfig {
   std::string record_path;  // LCM log of every input frame and output ("" = none)
   bool record_frames = true;
   std::string summary_path;  // JSON summary (sim: errors against truth) ("" = none)
-  std::string plot_dir;      // gnuplot data files for the demo pictures ("" = none)
+  std::string plot_dir;      // the run's plots (tools/plot; "" = none)
 
   // Camera and log sources: the closest range (metres along the optical axis; for a nadir rig the
   // lowest altitude above the ground) the flight reaches. With the rectified rig's f x baseline it
