@@ -199,6 +199,8 @@ void BmSgm(benchmark::State& state, const PairData& (*pair)(), const char* prefi
   o.max_width = p.hw;
   o.max_height = p.hh;
   o.max_disparities = p.num_d;
+  o.paths = static_cast<int>(state.range(0));
+  o.kernel = static_cast<swf::hazard::SgmKernel>(state.range(1));
   if (sgm->Configure(o) != swf::core::Status::kOk) {
     state.SkipWithError("configure failed");
     return;
@@ -246,11 +248,22 @@ void BmSgmSim(benchmark::State& s) { BmSgm(s, SimPair, "sim"); }
 void BmOpenCvSgbmSim(benchmark::State& s) { BmOpenCv(s, SimPair, "sim"); }
 void BmSgmAloe(benchmark::State& s) { BmSgm(s, AloePair, "aloe"); }
 void BmOpenCvSgbmAloe(benchmark::State& s) { BmOpenCv(s, AloePair, "aloe"); }
-BENCHMARK(BmSgmSim)->Unit(benchmark::kMillisecond);
-// range(0): cv::StereoSGBM mode (0 = MODE_SGBM, 5 paths; 1 = MODE_HH, 8 paths).
-BENCHMARK(BmOpenCvSgbmSim)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BmSgmAloe)->Unit(benchmark::kMillisecond);
-BENCHMARK(BmOpenCvSgbmAloe)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+// Ours: paths (8 or 4) x kernel (swf::hazard::SgmKernel: 0 = auto, 1 = portable 128-bit).
+void SgmArgs(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"paths", "kernel"});
+  for (int paths : {8, 4}) b->Args({paths, 0});
+  b->Args({8, 1});
+  b->Unit(benchmark::kMillisecond);
+}
+// range(0): cv::StereoSGBM mode (0 = MODE_SGBM, 5 paths; 1 = MODE_HH, 8 paths; 2 =
+// MODE_SGBM_3WAY; 3 = MODE_HH4, 4 paths).
+void OpenCvArgs(benchmark::internal::Benchmark* b) {
+  b->ArgName("mode")->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+}
+BENCHMARK(BmSgmSim)->Apply(SgmArgs);
+BENCHMARK(BmOpenCvSgbmSim)->Apply(OpenCvArgs);
+BENCHMARK(BmSgmAloe)->Apply(SgmArgs);
+BENCHMARK(BmOpenCvSgbmAloe)->Apply(OpenCvArgs);
 
 }  // namespace
 

@@ -3,9 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
+#include <random>
 #include <vector>
 
+#include "sgm_reference.hpp"
 #include "swf/hazard/dense_stereo.hpp"
 #include "swf/testing/allocation_counter.hpp"
 #include "synthetic_pair.hpp"
@@ -135,6 +138,104 @@ TEST(SgmMatcherTest, BoxAndOcclusion) {
   }
   // Occluded pixels are either rejected or given the background (correct ground) disparity.
   EXPECT_GT(invalid, checked * 8 / 10);
+}
+
+// Every kernel this CPU runs (x86-64: portable 128-bit and AVX2; AArch64: portable and NEON).
+std::vector<SgmKernel> Kernels() {
+  std::vector<SgmKernel> k;
+  for (SgmKernel c : {SgmKernel::kPortable, SgmKernel::kAvx2, SgmKernel::kNeon}) {
+    if (SgmKernelSupported(c)) k.push_back(c);
+  }
+  return k;
+}
+
+// A pair with the right image shifted by a disparity that varies across the image, noise added to
+// both and a band of constant grey (no texture: ambiguous costs, ties).
+void NoisyPair(int w, int h, std::uint32_t seed, std::vector<std::uint8_t>* l,
+               std::vector<std::uint8_t>* r) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> grey(0, 255);
+  std::uniform_int_distribution<int> noise(-6, 6);
+  std::vector<int> texture(static_cast<std::size_t>(w + 64) * h);
+  for (int& t : texture) t = grey(rng);
+  l->assign(static_cast<std::size_t>(w) * h, 0);
+  r->assign(l->size(), 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const int d = 6 + (x * 13) / w + (y * 7) / h;
+      const bool flat = y > h / 3 && y < h / 3 + 6;
+      const int lv = flat ? 128 : texture[static_cast<std::size_t>(y) * (w + 64) + x + 32];
+      const int rv = flat ? 128 : texture[static_cast<std::size_t>(y) * (w + 64) + x + 32 + d];
+      (*l)[static_cast<std::size_t>(y) * w + x] =
+          static_cast<std::uint8_t>(std::clamp(lv + noise(rng), 0, 255));
+      (*r)[static_cast<std::size_t>(y) * w + x] =
+          static_cast<std::uint8_t>(std::clamp(rv + noise(rng), 0, 255));
+    }
+  }
+}
+
+// GIVEN pairs of several sizes, disparity ranges (multiples of 16 and not), offsets and path counts
+// WHEN every kernel matches them THEN disparities and confidences equal those of the plain scalar
+// SGM (sgm_reference.hpp) bit for bit, so results do not depend on the CPU or the instruction set.
+TEST(SgmMatcherTest, EveryKernelMatchesTheScalarReferenceBitForBit) {
+  struct Case {
+    int w, h, min_d, num_d, paths, p1, p2;
+  };
+  const Case cases[] = {{97, 41, 0, 32, 8, 8, 96},
+                        {64, 37, 3, 21, 8, 8, 96},
+                        {53, 30, 0, 4, 4, 8, 96},
+                        {120, 33, 5, 48, 4, 12, 300},
+                        {70, 29, 1, 37, 8, 30, 1000}};
+  const std::vector<SgmKernel> kernels = Kernels();
+  ASSERT_GE(kernels.size(), 2u);  // the portable kernel and the ISA's own
+  std::uint32_t seed = 1;
+  for (const Case& c : cases) {
+    std::vector<std::uint8_t> l;
+    std::vector<std::uint8_t> r;
+    NoisyPair(c.w, c.h, seed++, &l, &r);
+    SgmOptions o;
+    o.max_width = 128;
+    o.max_height = 48;
+    o.max_disparities = 64;
+    o.paths = c.paths;
+    o.p1 = c.p1;
+    o.p2 = c.p2;
+    const testing::ReferenceSgm reference(o, View(l, c.w, c.h), View(r, c.w, c.h), c.min_d,
+                                          c.num_d);
+    const testing::ReferenceResult& ref = reference.Result();
+    ASSERT_GT(ref.num_valid, c.w * c.h / 4);
+    for (SgmKernel k : kernels) {
+      o.kernel = k;
+      auto m = std::make_unique<SgmMatcher>();
+      ASSERT_EQ(m->Configure(o), core::Status::kOk);
+      ASSERT_EQ(m->Kernel(), k);
+      ASSERT_EQ(m->Compute(View(l, c.w, c.h), View(r, c.w, c.h), c.min_d, c.num_d),
+                core::Status::kOk);
+      const std::size_t n = static_cast<std::size_t>(c.w) * c.h;
+      EXPECT_EQ(m->NumValid(), ref.num_valid) << "kernel " << static_cast<int>(k);
+      EXPECT_EQ(std::memcmp(m->Disparity(), ref.disparity.data(), n * sizeof(float)), 0)
+          << "kernel " << static_cast<int>(k) << " w " << c.w << " d " << c.num_d;
+      EXPECT_EQ(std::memcmp(m->Confidence(), ref.confidence.data(), n * sizeof(float)), 0)
+          << "kernel " << static_cast<int>(k);
+    }
+  }
+}
+
+TEST(SgmMatcherTest, AutoPicksASupportedKernelAndRejectsAnUnsupportedOne) {
+  SgmOptions o;
+  o.max_width = 64;
+  o.max_height = 32;
+  o.max_disparities = 16;
+  SgmMatcher m;
+  ASSERT_EQ(m.Configure(o), core::Status::kOk);
+  EXPECT_NE(m.Kernel(), SgmKernel::kAuto);
+  EXPECT_TRUE(SgmKernelSupported(m.Kernel()));
+#if defined(__x86_64__)
+  o.kernel = SgmKernel::kNeon;
+#else
+  o.kernel = SgmKernel::kAvx2;
+#endif
+  EXPECT_EQ(m.Configure(o), core::Status::kInvalidArgument);
 }
 
 }  // namespace

@@ -11,6 +11,14 @@
 // combines the uniqueness margin (second best outside +-1 vs best) and the left-right agreement.
 // Disparities are searched in [min_disparity, min_disparity + num_disparities).
 //
+// Implementation: census planes of the whole pair, then two passes over the rows. The forward pass
+// (top-down, left to right) runs the paths that come from above and from the left and stores their
+// sum; the backward pass runs the others, adds the stored sum and selects the row's disparities at
+// once, so only the forward sum is a full volume. Costs are recomputed per row in each pass, not
+// stored. Every pixel's path vectors are 16-bit lanes, padded to a multiple of 16 disparities; the
+// kernels (SgmKernel) compute the same integers in the same order and give bit-identical results
+// (tested against a plain scalar SGM).
+//
 // Memory: every buffer is sized once by Configure() for the largest image and disparity count;
 // Compute() never allocates.
 #pragma once
@@ -23,6 +31,15 @@
 
 namespace swf::hazard {
 
+// Instruction-set kernel of the matcher: every kernel gives the same bits. kPortable: 128-bit GCC
+// vector extensions (SSE2 on x86-64, NEON on AArch64); kAvx2: 256-bit (x86-64 with AVX2, picked at
+// run time); kNeon: 128-bit with NEON's horizontal minimum and byte popcount (AArch64). kAuto:
+// the fastest the CPU supports.
+enum class SgmKernel : std::uint8_t { kAuto, kPortable, kAvx2, kNeon };
+
+// True when this build and CPU can run `kernel` (kAuto: always).
+bool SgmKernelSupported(SgmKernel kernel);
+
 struct SgmOptions {
   int max_width = 1024;  // capacity: largest image Compute() accepts
   int max_height = 768;
@@ -32,6 +49,7 @@ struct SgmOptions {
   int p2 = 96;                // large-change penalty (divided by 1 + |dI| / 16 at edges)
   float uniqueness = 0.05f;   // second best must exceed best by this fraction
   float lr_max_diff = 1.0f;   // left-right consistency tolerance (px)
+  SgmKernel kernel = SgmKernel::kAuto;
 };
 
 // Halves an image with a [1 2 1] x [1 2 1] / 16 low-pass: dst (row-major, (width + 1) / 2 x
@@ -44,7 +62,7 @@ class SgmMatcher {
   static constexpr float kInvalid = -1.0f;
 
   // Allocates every buffer. kInvalidArgument for sizes < 8, paths not 4 or 8, non-positive
-  // penalties, p2 < p1 or disparities outside [4, 256].
+  // penalties, p2 < p1 or p2 > 1000, disparities outside [4, 256] or a kernel this CPU cannot run.
   core::Status Configure(const SgmOptions& options);
 
   // Matches a rectified pair (same size, at most the configured capacity, width > min + num
@@ -67,28 +85,37 @@ class SgmMatcher {
   // Pixels with a valid disparity after the last Compute().
   int NumValid() const { return num_valid_; }
   const SgmOptions& Options() const { return options_; }
+  // The kernel Configure() picked (never kAuto once configured).
+  SgmKernel Kernel() const { return kernel_; }
 
  private:
-  void Census(const frontend::GrayView& image, std::uint32_t* out) const;
-  void MatchingCost(int min_disparity);
-  void Aggregate(const frontend::GrayView& left);
-  void SelectDisparities(int min_disparity);
+  void CensusPair(const frontend::GrayView& left, const frontend::GrayView& right);
+  void CostRow(int y, int min_disparity);
+  void PassRow(int y, bool forward, bool first_row, const frontend::GrayView& left);
+  void SelectRow(int y, int min_disparity);
 
   SgmOptions options_;
+  SgmKernel kernel_ = SgmKernel::kPortable;
   bool configured_ = false;
   int width_ = 0;
   int height_ = 0;
   int num_d_ = 0;
+  int padded_d_ = 0;       // num_d_ rounded up to 16: the lanes of every path vector
+  int path_stride_ = 0;    // int16 per pixel in the path rows: padded_d_ + 2 * 16 of sentinels
+  int census_stride_ = 0;  // bytes per row of a census plane: capacity width + 16 of padding
   int num_valid_ = 0;
-  std::vector<std::uint32_t> census_left_;
-  std::vector<std::uint32_t> census_right_;
-  std::vector<std::uint8_t> cost_;       // C(p, d): width * height * num_d
-  std::vector<std::int16_t> sum_;        // S(p, d)
-  std::vector<std::int16_t> path_prev_;  // previous row of L_r, one block per vertical path
-  std::vector<std::int16_t> path_cur_;
-  std::vector<std::int16_t> path_min_prev_;  // min_k L_r(p-r, k) for the previous row
-  std::vector<std::int16_t> path_min_cur_;
-  std::vector<std::int16_t> row_path_;  // horizontal paths: one pixel's L_r
+  std::vector<std::int16_t> p2_table_;         // adaptive P2 by |dI| (0..255)
+  std::vector<std::uint8_t> census_left_;      // 3 planes of 8 bits per pixel
+  std::vector<std::uint8_t> census_right_;     // the same, each row reversed (x -> w - 1 - x)
+  std::vector<std::uint8_t> cost_row_;         // C(x, d) of one row: width * padded_d
+  std::vector<std::int16_t> forward_sum_;      // S of the forward paths: height * width * padded_d
+  std::vector<std::int16_t> row_sum_;          // S of one row (backward pass): width * padded_d
+  std::vector<std::int16_t> path_rows_;        // L_r of the vertical paths: previous and current
+  std::vector<std::int16_t> path_mins_;        // min_k L_r per pixel of those rows
+  std::vector<std::int16_t> path_horizontal_;  // L_r of the horizontal path: two pixels
+  std::vector<std::int16_t> path_start_;       // zeros: the 'previous' vector where a path starts
+  std::vector<std::int16_t> pad_floor_;        // 0 for d < num_d, the sentinel in padding lanes
+  std::vector<std::int16_t> right_window_;     // right-image winners: sliding costs and indices
   std::vector<float> disparity_;
   std::vector<float> confidence_;
   std::vector<float> right_disparity_;
