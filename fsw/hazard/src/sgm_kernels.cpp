@@ -313,7 +313,7 @@ template <class K>
     S others = highest;
     for (int d0 = 0; d0 < dp; d0 += kN) {
       const S idx = lane + static_cast<std::int16_t>(d0);
-      others = Min(others, (idx >= lo) & (idx <= hi) ? highest : Load<S>(s + d0));
+      others = Min(others, ((idx >= lo) & (idx <= hi)) ? highest : Load<S>(s + d0));
     }
     const int second = K::MinAll(others)[0];
     const float margin =
