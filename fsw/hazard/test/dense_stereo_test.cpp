@@ -176,7 +176,8 @@ void NoisyPair(int w, int h, std::uint32_t seed, std::vector<std::uint8_t>* l,
 
 // GIVEN pairs of several sizes, disparity ranges (multiples of 16 and not), offsets and path counts
 // WHEN every kernel matches them THEN disparities and confidences equal those of the plain scalar
-// SGM (sgm_reference.hpp) bit for bit, so results do not depend on the CPU or the instruction set.
+// SGM (sgm_reference.hpp) bit for bit, so results do not depend on the CPU or the instruction set;
+// no kernel allocates.
 TEST(SgmMatcherTest, EveryKernelMatchesTheScalarReferenceBitForBit) {
   struct Case {
     int w, h, min_d, num_d, paths, p1, p2;
@@ -209,8 +210,12 @@ TEST(SgmMatcherTest, EveryKernelMatchesTheScalarReferenceBitForBit) {
       auto m = std::make_unique<SgmMatcher>();
       ASSERT_EQ(m->Configure(o), core::Status::kOk);
       ASSERT_EQ(m->Kernel(), k);
-      ASSERT_EQ(m->Compute(View(l, c.w, c.h), View(r, c.w, c.h), c.min_d, c.num_d),
-                core::Status::kOk);
+      {
+        swf::testing::AllocationScope scope;
+        ASSERT_EQ(m->Compute(View(l, c.w, c.h), View(r, c.w, c.h), c.min_d, c.num_d),
+                  core::Status::kOk);
+        EXPECT_EQ(scope.Count(), 0u) << "kernel " << static_cast<int>(k);
+      }
       const std::size_t n = static_cast<std::size_t>(c.w) * c.h;
       EXPECT_EQ(m->NumValid(), ref.num_valid) << "kernel " << static_cast<int>(k);
       EXPECT_EQ(std::memcmp(m->Disparity(), ref.disparity.data(), n * sizeof(float)), 0)
