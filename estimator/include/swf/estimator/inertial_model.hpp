@@ -42,6 +42,7 @@
 
 #include "swf/estimator/geometry.hpp"
 #include "swf/estimator/imu_preintegration.hpp"
+#include "swf/estimator/small_factorizations.hpp"
 #include "swf/estimator/stereo_model.hpp"
 
 namespace swf::estimator {
@@ -104,8 +105,8 @@ struct InertialStereoModel {
     Mat15<S> j_prev;
     Mat15<S> j_next;
     (void)ProcessResidual(x, *next, u, &j_prev, &j_next);
-    const Mat15<S> a = j_next.partialPivLu().solve(j_prev);
-    const Mat15<S> b = j_next.partialPivLu().solve(Mat15<S>::Identity());
+    const Mat15<S> a = PartialPivSolve(j_next, j_prev);
+    const Mat15<S> b = PartialPivSolve<S, 15>(j_next, Mat15<S>::Identity());
     *next_covariance = a * covariance * a.transpose() + b * ProcessCovariance(u) * b.transpose();
     *next_covariance = S(0.5) * (*next_covariance + next_covariance->transpose());
     return next_covariance->allFinite() && next->world_T_imu.t.allFinite() &&
@@ -223,9 +224,7 @@ struct InertialStereoModel {
   // the covariance is not positive definite (an IMU without noise or random walk, an empty
   // interval).
   static bool ProcessSqrtInformation(const MotionType& u, Mat15<S>* sqrt_information) {
-    const Eigen::LLT<Mat15<S>> llt(ProcessCovariance(u));
-    if (llt.info() != Eigen::Success) return false;
-    *sqrt_information = llt.matrixL().solve(Mat15<S>::Identity());
+    if (!InverseCholeskyFactor<S, 15>(ProcessCovariance(u), sqrt_information)) return false;
     return sqrt_information->allFinite();
   }
 

@@ -24,13 +24,13 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdint>
 
 #include "swf/core/status.hpp"
 #include "swf/estimator/chi_square.hpp"
 #include "swf/estimator/geometry.hpp"
+#include "swf/estimator/small_factorizations.hpp"
 
 namespace swf::estimator {
 
@@ -324,9 +324,9 @@ class IntegrityMonitor {
     h << h1, h2;
     const Eigen::Matrix2d ph = h.transpose() * p * h;
     const double pv = up.dot(p * up);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(ph, Eigen::EigenvaluesOnly);
-    const double major = eig.eigenvalues()(1);
-    const double minor = eig.eigenvalues()(0);
+    const Vec2<double> eigenvalues = SymmetricEigenvalues(ph);
+    const double major = eigenvalues(1);
+    const double minor = eigenvalues(0);
     if (!p.allFinite() || !(pv >= 0.0) || !(minor >= 0.0) || !std::isfinite(major))
       return kFlagCovarianceBad;
     const double scale = options_.pl_inflation * std::max(1.0, e.inlier_sigma);

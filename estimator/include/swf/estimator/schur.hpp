@@ -8,8 +8,9 @@
 // that update inside one variable, dropping the fill-in between variables.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
+
+#include "swf/estimator/small_factorizations.hpp"
 
 namespace swf::estimator {
 
@@ -33,9 +34,8 @@ bool EliminateVariable(S* lambda, int ld, S* g, int dim, int o, S* x, int ld_x, 
   static_assert(D % 3 == 0, "variables are whole 3-wide chunks");
   using Block = Eigen::Matrix<S, D, D>;
   const Block aa = DenseBlock<S, D, D>(lambda, ld, o, o);
-  const Eigen::LLT<Block> llt(aa);
-  if (llt.info() != Eigen::Success) return false;
-  const Block t = llt.solve(Block::Identity());
+  Block t;
+  if (!SpdInverse(aa, &t)) return false;
   const Eigen::Matrix<S, D, 1> go = DenseBlock<S, D, 1>(g, ld, o, 0);
   const int chunks = dim / 3;
   const auto eliminated = [o](int chunk) { return 3 * chunk >= o && 3 * chunk < o + D; };

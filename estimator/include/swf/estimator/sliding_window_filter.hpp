@@ -73,6 +73,7 @@
 #include "swf/estimator/dense_cholesky.hpp"
 #include "swf/estimator/geometry.hpp"
 #include "swf/estimator/schur.hpp"
+#include "swf/estimator/small_factorizations.hpp"
 
 namespace swf::estimator {
 

@@ -4,7 +4,6 @@
 // it leaves behind. Included by sliding_window_filter.hpp; not a header to include alone.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <cstdint>
 
 #include "swf/estimator/chi_square.hpp"
@@ -54,12 +53,11 @@ template <typename Model, int K, int N, int M, int P>
 core::Status SlidingWindowFilter<Model, K, N, M, P>::AddFirstPose(const PoseType& estimate,
                                                                   const StateMat& covariance) {
   if (num_poses_ != 0) return core::Status::kInvalidArgument;
-  const Eigen::LLT<StateMat> llt(covariance);
-  if (!covariance.allFinite() || llt.info() != Eigen::Success)
+  StateMat information;
+  if (!covariance.allFinite() || !SpdInverse(covariance, &information))
     return core::Status::kInvalidArgument;
   const core::Status status = PushPose(estimate, nullptr, nullptr);
   if (status != core::Status::kOk || Slot(0).fixed) return status;
-  const StateMat information = llt.solve(StateMat::Identity());
   for (int c = 0; c < kStateDim; ++c)
     for (int r = 0; r < kStateDim; ++r) prior_[c * kMaxPriorDim + r] = information(r, c);
   return core::Status::kOk;

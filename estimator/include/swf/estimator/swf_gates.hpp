@@ -4,9 +4,6 @@
 // sliding_window_filter.hpp; not a header to include alone.
 #pragma once
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-#include <Eigen/LU>
 #include <cmath>
 
 #include "swf/estimator/sliding_window_filter.hpp"
@@ -24,11 +21,9 @@ bool SlidingWindowFilter<Model, K, N, M, P>::PredictPoseCovariance(
   StateMat a;
   StateMat b;
   (void)model_.ProcessResidual(prev, next, u, &a, &b);
-  const Eigen::FullPivLU<StateMat> w(sqrt_info);
-  const Eigen::FullPivLU<StateMat> lu(b);
-  if (!w.isInvertible() || !lu.isInvertible()) return false;
-  const StateMat w_inv = w.inverse();
-  const StateMat b_inv = lu.inverse();
+  StateMat w_inv;
+  StateMat b_inv;
+  if (!FullPivInverse(sqrt_info, &w_inv) || !FullPivInverse(b, &b_inv)) return false;
   *covariance = b_inv * (a * newest_state_cov_ * a.transpose() + w_inv * w_inv.transpose()) *
                 b_inv.transpose();
   *transition = -b_inv * a;
@@ -56,20 +51,19 @@ bool SlidingWindowFilter<Model, K, N, M, P>::FailsPredictionGate(const PoseType&
     ++pending_.gate_unchecked;
     return false;
   }
-  const Eigen::FullPivLU<Mat3<S>> w(sqrt_info);
-  if (!w.isInvertible()) return true;
-  const Mat3<S> w_inv = w.inverse();
+  Mat3<S> w_inv;
+  if (!FullPivInverse(sqrt_info, &w_inv)) return true;
   const Mat3<S> coupling =
       jp * prediction_transition_.template topRows<6>() * l.cross_newest * jl.transpose();
   const Mat3<S> innovation_cov =
       w_inv * w_inv.transpose() +
       jp * predicted_pose_cov_.template topLeftCorner<6, 6>() * jp.transpose() +
       jl * l.covariance * jl.transpose() + coupling + coupling.transpose();
-  const Eigen::LDLT<Mat3<S>> ldlt(innovation_cov);
   ++pending_.gate_checked;
   const Vec3<S> e = z - h;
-  const S d2 = e.dot(ldlt.solve(e));
-  return !(ldlt.info() == Eigen::Success && std::isfinite(d2) && d2 <= gate_threshold_);
+  S d2;
+  const bool factored = LdltMahalanobis(innovation_cov, e, &d2);
+  return !(factored && std::isfinite(d2) && d2 <= gate_threshold_);
 }
 
 // A new landmark's single stereo sighting must determine it: the 3x3 information J^T R^-1 J
@@ -83,15 +77,14 @@ bool SlidingWindowFilter<Model, K, N, M, P>::TriangulationAcceptable(
   Mat3<S> jl;
   if (!model_.Predict(pose, anchor, params, &h, &jp, &jl)) return false;
   const Mat3<S> jw = sqrt_info * jl;
-  const Eigen::LLT<Mat3<S>> llt(jw.transpose() * jw);
-  if (llt.info() != Eigen::Success) return false;
+  Mat3<S> params_cov;
+  if (!SpdInverse<S, 3>(jw.transpose() * jw, &params_cov)) return false;
   if (options_.max_init_sigma_m <= 0.0) return true;
   Vec3<S> position;
   Mat3<S> dl_dm;
   if (!Model::LandmarkPosition(anchor, params, &position, &dl_dm)) return false;
-  const Mat3<S> world_cov = dl_dm * llt.solve(Mat3<S>::Identity()) * dl_dm.transpose();
-  const Eigen::SelfAdjointEigenSolver<Mat3<S>> eig(world_cov, Eigen::EigenvaluesOnly);
-  const S largest = eig.eigenvalues()(2);
+  const Mat3<S> world_cov = dl_dm * params_cov * dl_dm.transpose();
+  const S largest = SymmetricEigenvalues(world_cov)(2);
   return std::isfinite(largest) &&
          largest <= S(options_.max_init_sigma_m * options_.max_init_sigma_m);
 }
@@ -191,15 +184,14 @@ auto SlidingWindowFilter<Model, K, N, M, P>::GateNewestMotion() -> MotionGateRes
   if (predicted_cov_valid_) {
     covariance = predicted_pose_cov_.template topLeftCorner<6, 6>();
   } else {
-    const StateMat w_inv = p.process_sqrt_info.inverse();
+    const StateMat w_inv = PlainInverse(p.process_sqrt_info);
     covariance = (w_inv * w_inv.transpose()).template topLeftCorner<6, 6>();
   }
-  const Eigen::LDLT<Mat6<S>> fit(information);
-  if (fit.info() != Eigen::Success) return result;
-  covariance += fit.solve(Mat6<S>::Identity());
-  const Eigen::LDLT<Mat6<S>> ldlt(covariance);
-  if (ldlt.info() != Eigen::Success) return result;
-  const S chi2 = d.dot(ldlt.solve(d));
+  Mat6<S> fit_covariance;
+  if (!LdltInverse(information, &fit_covariance)) return result;
+  covariance += fit_covariance;
+  S chi2;
+  if (!LdltMahalanobis(covariance, d, &chi2)) return result;
   result.chi2 = static_cast<double>(chi2);
   result.failed = !(chi2 <= motion_gate_threshold_);
   if (!result.failed || inliers < options_.motion_gate_min_inliers ||
@@ -248,10 +240,10 @@ int SlidingWindowFilter<Model, K, N, M, P>::FitNewestPose(PoseType* pose, Mat6<S
       g += w * j.transpose() * r;
     }
     *information = h;
-    const Eigen::LDLT<Mat6<S>> ldlt(h);
-    if (ldlt.info() != Eigen::Success) return 0;
+    Vec6<S> step;
+    if (!LdltSolve(h, g, &step)) return 0;
     StateVec delta = StateVec::Zero();
-    delta.template head<6>() = ldlt.solve(g);
+    delta.template head<6>() = step;
     if (!delta.allFinite()) return 0;
     *pose = Model::Retract(*pose, delta);
     if (delta.norm() < S(1e-9)) break;
@@ -271,10 +263,11 @@ auto SlidingWindowFilter<Model, K, N, M, P>::FitWhitening(const PoseType& predic
   Mat3<S> jl;
   if (!l.covariance_valid || !model_.Predict(prediction, l.anchor, l.params, &z_hat, &jp, &jl))
     return o.sqrt_info;
-  const Mat3<S> r_inv = (o.sqrt_info.transpose() * o.sqrt_info).inverse();
-  const Eigen::LLT<Mat3<S>> llt(r_inv + jl * l.covariance * jl.transpose());
-  if (llt.info() != Eigen::Success) return o.sqrt_info;
-  return llt.matrixL().solve(Mat3<S>::Identity());
+  const Mat3<S> r_inv = PlainInverse<S, 3>(o.sqrt_info.transpose() * o.sqrt_info);
+  Mat3<S> whitening;
+  if (!InverseCholeskyFactor<S, 3>(r_inv + jl * l.covariance * jl.transpose(), &whitening))
+    return o.sqrt_info;
+  return whitening;
 }
 
 }  // namespace swf::estimator

@@ -5,7 +5,6 @@
 // to include alone.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 
@@ -274,12 +273,12 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::BuildAndFactor() {
     LandmarkSlot& l = landmarks_[i];
     l.invertible = false;
     if (!l.used || l.prior_index >= 0 || lm_begin_[i] == lm_begin_[i + 1]) continue;
-    const Eigen::LLT<Mat3<S>> llt(l.h);
-    if (llt.info() != Eigen::Success || !(l.h.trace() > S(0))) {
+    Mat3<S> h_inv;
+    if (!SpdInverse(l.h, &h_inv) || !(l.h.trace() > S(0))) {
       fault_bits_ |= kFaultDegenerateLandmark;
       continue;  // held at its current estimate for this iteration
     }
-    l.h_inv = llt.solve(Mat3<S>::Identity());
+    l.h_inv = h_inv;
     l.invertible = true;
     for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
       const Observation& oa = ObsAt(adj_[a]);
