@@ -23,8 +23,9 @@ using evaluation::Median;
 
 // What one command hands to the common writer.
 struct Evaluation {
-  std::string prefix;  // file names: OUT/<prefix>.json, .md, _error.dat, _swf_tum.txt, ...
-  std::string title;   // markdown heading
+  std::string prefix;   // file names: OUT/<prefix>.json, .md, _error.dat, _swf_tum.txt, ...
+  std::string title;    // markdown heading
+  std::string dataset;  // plain, for the figure's title: "EuRoC V1_01", ...
   const StereoSequence* sequence = nullptr;
   const std::vector<RunRecord>* runs = nullptr;
   const std::vector<RunRecord>* diagnostics = nullptr;  // re-runs of failed runs, may be empty
@@ -133,7 +134,9 @@ bool WriteErrorSeries(const std::string& out, const Evaluation& e) {
     for (std::size_t j = 0; j < r.frames.size(); ++j) anchored.y[j] = r.frames[j].anchored_error_m;
     series.push_back(anchored);
   }
-  return WriteExperiment(out, e.prefix + "_error", "frame", series,
+  const Figure figure{e.dataset + ": position error of each run, frame by frame", "frame number",
+                      "position error (m)", false};
+  return WriteExperiment(out, e.prefix + "_error", figure, series,
                          "  \"dataset\": " + JsonString(e.sequence->dir));
 }
 
@@ -507,6 +510,8 @@ int RunEurocCommand(int argc, char** argv) {
                          "--loop-seconds %g`)",
                          options.loop_seconds, options.loop_seconds)
                    : "Real data: EuRoC (`swf-eval euroc DIR`)";
+  e.dataset = looped ? Format("EuRoC V1_01 looped, %.0f s at rest", options.loop_seconds)
+                     : std::string("EuRoC V1_01");
   e.sequence = &result.sequence;
   e.runs = &result.runs;
   e.diagnostics = &result.diagnostics;
@@ -574,6 +579,7 @@ int RunKittiCommand(int argc, char** argv) {
   Evaluation e;
   e.prefix = "kitti_odometry";
   e.title = "Real data: KITTI odometry excerpt, the whole pipeline (`swf-eval kitti DIR`)";
+  e.dataset = "KITTI odometry excerpt";
   e.sequence = &result.sequence;
   e.runs = &result.runs;
   e.diagnostics = &result.diagnostics;

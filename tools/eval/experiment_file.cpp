@@ -1,5 +1,6 @@
 #include "experiment_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -7,43 +8,54 @@
 #include <system_error>
 
 #include "json.hpp"
+#include "swf/plot/plot.hpp"
 
 namespace swf::eval {
 namespace {
 
-bool WriteDat(const std::string& path, const std::string& x_label,
-              const std::vector<Series>& series, const std::vector<double>& x) {
-  std::ofstream dat(path);
-  dat << "# " << x_label;
-  for (const Series& s : series) dat << " \"" << s.name << "\"";
-  dat << "\n";
-  const std::size_t n = series.empty() ? 0 : series[0].y.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    if (k < x.size()) {
-      dat << x[k];
-    } else {
-      dat << k + 1;
-    }
-    // gnuplot reads "nan" as a missing point; JSON gets null instead.
-    for (const Series& s : series) dat << " " << (k < s.y.size() ? s.y[k] : NAN);
-    dat << "\n";
+// The series as a line chart over x (1, 2, 3, ... when x is empty), each padded with NaN to the
+// longest; false when x is given and does not have a value per row.
+bool ChartOf(const Figure& figure, const std::vector<Series>& series, const std::vector<double>& x,
+             plot::LineChart* chart, std::string* error) {
+  std::size_t rows = 0;
+  for (const Series& s : series) rows = std::max(rows, s.y.size());
+  if (!x.empty() && x.size() != rows) {
+    *error = std::to_string(x.size()) + " x values for series of up to " + std::to_string(rows);
+    return false;
   }
-  dat.close();
-  return static_cast<bool>(dat);
+  std::vector<double> abscissa = x;
+  for (std::size_t k = abscissa.size(); k < rows; ++k) {
+    abscissa.push_back(static_cast<double>(k + 1));
+  }
+  *chart = {figure.title, figure.x_label, figure.y_label, figure.log_y, {}};
+  for (const Series& s : series) {
+    std::vector<double> y = s.y;
+    y.resize(rows, NAN);
+    chart->series.push_back({s.name, abscissa, y});
+  }
+  return true;
 }
 
 }  // namespace
 
-bool WriteExperiment(const std::string& out, const std::string& name, const std::string& x_label,
+bool WriteExperiment(const std::string& out, const std::string& name, const Figure& figure,
                      const std::vector<Series>& series, const std::string& extra_json,
                      const std::vector<double>& x) {
   const std::string dat = out + "/" + name + ".dat";
-  if (!WriteDat(dat, x_label, series, x)) {
-    std::fprintf(stderr, "swf-eval: %s: cannot write\n", dat.c_str());
+  plot::LineChart chart;
+  std::string error;
+  if (!ChartOf(figure, series, x, &chart, &error)) {
+    std::fprintf(stderr, "swf-eval: %s: %s\n", dat.c_str(), error.c_str());
     return false;
   }
-  std::string json =
-      "{\n  \"experiment\": " + JsonString(name) + ",\n  \"x\": " + JsonString(x_label) + ",\n";
+  if (!plot::WriteLineChart(chart, dat, &error)) {
+    std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
+    return false;
+  }
+  std::string json = "{\n  \"experiment\": " + JsonString(name) +
+                     ",\n  \"title\": " + JsonString(figure.title) +
+                     ",\n  \"x\": " + JsonString(figure.x_label) +
+                     ",\n  \"y\": " + JsonString(figure.y_label) + ",\n";
   if (!extra_json.empty()) json += extra_json + ",\n";
   if (!x.empty()) json += "  \"x_values\": " + JsonArray(x) + ",\n";
   json += "  \"series\": {\n";
@@ -52,7 +64,6 @@ bool WriteExperiment(const std::string& out, const std::string& name, const std:
             (i + 1 < series.size() ? ",\n" : "\n");
   }
   json += "  }\n}\n";
-  std::string error;
   if (!WriteJsonFile(out + "/" + name + ".json", json, &error)) {
     std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
     return false;

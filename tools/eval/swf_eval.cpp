@@ -43,11 +43,19 @@ using swf::eval::RunFilter;
 using swf::eval::Series;
 using swf::eval::Trace;
 using swf::eval::WriteExperiment;
+using Figure = swf::eval::Figure;
 using swf::evaluation::Mean;
 using swf::evaluation::Median;
 using swf::evaluation::SampleStd;
 using swf::scene::SceneOptions;
 using swf::scene::SyntheticScene;
+
+// The y axis of the landmark-error figures: the MSE over every landmark seen so far, averaged
+// over the Monte Carlo runs.
+constexpr const char* kLandmarkMse = "landmark mean squared error (m^2)";
+
+// "1 run", "5 runs": how many Monte Carlo runs a figure averages.
+std::string RunsText(int runs) { return std::to_string(runs) + (runs == 1 ? " run" : " runs"); }
 
 // Cramer-Rao bound of the landmark MSE after m frames: trace of the landmark marginal
 // covariances of the batch problem evaluated at the true state (noise-free measurements keep the
@@ -225,8 +233,13 @@ bool AddNees(const std::string& out, int runs, std::string* md) {
   pose.push_back({"95% upper", std::vector<double>(frames, first.pose_upper)});
   landmark.push_back({"95% lower", std::vector<double>(frames, first.landmark_lower)});
   landmark.push_back({"95% upper", std::vector<double>(frames, first.landmark_upper)});
-  if (!WriteExperiment(out, "nees_pose", "frame", pose, summary, frame_numbers)) return false;
-  if (!WriteExperiment(out, "nees_landmark", "frame", landmark, summary, frame_numbers)) {
+  const std::string of_runs = ", mean of " + RunsText(runs) + ", with its 95% bounds";
+  const Figure pose_figure{"Consistency: NEES of the newest pose (6 dof)" + of_runs, "frame number",
+                           "pose NEES (6 when consistent)", true};
+  const Figure landmark_figure{"Consistency: NEES of the active landmarks (3 dof)" + of_runs,
+                               "frame number", "landmark NEES (3 when consistent)", true};
+  if (!WriteExperiment(out, "nees_pose", pose_figure, pose, summary, frame_numbers)) return false;
+  if (!WriteExperiment(out, "nees_landmark", landmark_figure, landmark, summary, frame_numbers)) {
     return false;
   }
   auto add = [md](const std::string& line) { *md += line + "\n"; };
@@ -343,8 +356,12 @@ bool AddFig16(const std::string& out, int runs, std::string* md) {
                 "  \"max_ratio_across_windows\": %.4g, \"max_ratio_across_track_lengths\": %.4g,\n"
                 "  \"points\": [",
                 runs, o.frames, windows.c_str(), across_windows, across_tracks);
-  if (!WriteExperiment(out, "fig16_track_length", "average track length (frames)", series,
-                       std::string(buf) + rows + "\n  ]", x)) {
+  const Figure figure{"Fig. 16: final landmark error against track length, per window size (" +
+                          RunsText(runs) + ")",
+                      "average track length (frames)", "final landmark mean squared error (m^2)",
+                      true};
+  if (!WriteExperiment(out, "fig16_track_length", figure, series, std::string(buf) + rows + "\n  ]",
+                       x)) {
     return false;
   }
   auto add = [md](const std::string& line) { *md += line + "\n"; };
@@ -489,7 +506,10 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof(buf),
                   "  \"runs\": %d, \"mse_m2_at_40\": %.6g, \"crlb_m2_at_40\": %.6g", runs,
                   swf5.y.back(), crlb.y.back());
-    if (!WriteExperiment(out, "fig12_static", "frame", {swf5, one_over_m, crlb}, buf)) return 1;
+    const Figure figure{
+        "Fig. 12: landmark error with static cameras, 30 landmarks (" + RunsText(runs) + ")",
+        "frame number", kLandmarkMse, true};
+    if (!WriteExperiment(out, "fig12_static", figure, {swf5, one_over_m, crlb}, buf)) return 1;
     add_figure("## Fig. 12: static cameras, 30 landmarks", "![fig12](eval/fig12_static.png)");
     const double vs_one_over_m = swf5.y.back() / one_over_m.y.back();
     std::snprintf(
@@ -533,7 +553,12 @@ int main(int argc, char** argv) {
         SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12), Mean(rms_vo2),
         100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
         SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12));
-    if (!WriteExperiment(out, "fig13_descent", "frame", s, buf)) return 1;
+    const Figure figure{
+        "Fig. 13: landmark error against window size on the descent, 150 "
+        "landmarks, 100 m to 41.5 m (" +
+            RunsText(runs) + ")",
+        "frame number", kLandmarkMse, true};
+    if (!WriteExperiment(out, "fig13_descent", figure, s, buf)) return 1;
     add_figure("## Fig. 13: descent, 150 landmarks tracked throughout (100 m to 41.5 m)",
                "![fig13](eval/fig13_descent.png)");
     std::snprintf(
@@ -582,8 +607,10 @@ int main(int argc, char** argv) {
     const Trace s10 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 10, 1);
     const Trace s20 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 20, 1);
     std::snprintf(buf, sizeof(buf), "  \"note\": \"wall-clock ms of Update() on the 2-core VM\"");
+    const Figure runtime{"Fig. 14a: time of one filter update, sideways motion (one run)",
+                         "frame number", "Update() wall-clock time (ms)", true};
     if (!WriteExperiment(
-            out, "fig14a_runtime", "frame",
+            out, "fig14a_runtime", runtime,
             {{"batch", batch.update_ms}, {"SWF(10)", s10.update_ms}, {"SWF(20)", s20.update_ms}},
             buf))
       return 1;
@@ -596,7 +623,9 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof(buf),
                   "  \"mean_state_dim_swf2\": %.4g, \"final_state_dim_batch\": %.4g",
                   Mean(with.state_dim), without.state_dim.back());
-    if (!WriteExperiment(out, "fig14b_state_size", "frame",
+    const Figure state{"Fig. 14b: state-vector size with and without marginalization",
+                       "frame number", "state dimension (scalars)", false};
+    if (!WriteExperiment(out, "fig14b_state_size", state,
                          {{"SWF(2) with marginalization", with.state_dim},
                           {"without marginalization", without.state_dim}},
                          buf))
@@ -638,7 +667,10 @@ int main(int argc, char** argv) {
     s.push_back(MonteCarlo("SWF(2) relinearized, inverse depth", so, runs,
                            plain(SwfMode::kSlidingWindow, 2, true)));
     std::snprintf(buf, sizeof(buf), "  \"runs\": %d", runs);
-    if (!WriteExperiment(out, "fig15_sideways", "frame", s, buf)) return 1;
+    const Figure figure{
+        "Fig. 15: landmark error with sideways motion, ~85% overlap (" + RunsText(runs) + ")",
+        "frame number", kLandmarkMse, true};
+    if (!WriteExperiment(out, "fig15_sideways", figure, s, buf)) return 1;
     add_figure("## Fig. 15: sideways motion, ~85% overlap", "![fig15](eval/fig15_sideways.png)");
     std::snprintf(
         buf, sizeof(buf),
@@ -667,7 +699,12 @@ int main(int argc, char** argv) {
     s.push_back(MonteCarlo("VSDF(3)", so, runs, swf(SwfMode::kVsdf, 3)));
     s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40)));
     std::snprintf(buf, sizeof(buf), "  \"runs\": %d", runs);
-    if (!WriteExperiment(out, "fig17_vsdf", "frame", s, buf)) return 1;
+    const Figure figure{
+        "Fig. 17: landmark error of VSDF and SWF, 3 active frames, 100 "
+        "landmarks (" +
+            RunsText(runs) + ")",
+        "frame number", kLandmarkMse, true};
+    if (!WriteExperiment(out, "fig17_vsdf", figure, s, buf)) return 1;
     add_figure("## Fig. 17: VSDF against SWF, 3 active frames", "![fig17](eval/fig17_vsdf.png)");
     std::snprintf(
         buf, sizeof(buf),
@@ -706,7 +743,9 @@ int main(int argc, char** argv) {
     Series cost{"final cost", {}};
     Series dpos{"max position difference to batch (m)", {}};
     std::string list;
+    std::vector<double> windows;
     for (int k : {2, 3, 5, 10, 20}) {
+      windows.push_back(k);
       const auto r = solver.Solve(problem, k);
       double worst = 0;
       for (std::size_t j = 0; j < r.poses.size(); ++j)
@@ -721,8 +760,11 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof(buf),
                   "  \"initial_cost\": %.10g, \"batch_final_cost\": %.10g,\n  \"windows\": [",
                   batch.initial_cost, batch.final_cost);
-    if (!WriteExperiment(out, "kitti_windows", "window index (2,3,5,10,20)", {cost, dpos},
-                         std::string(buf) + list + "]"))
+    const Figure figure{"kitti-vo: sliding windows against batch on the same global cost",
+                        "window size (frames)",
+                        "final cost (unitless), position difference to batch (m)", true};
+    if (!WriteExperiment(out, "kitti_windows", figure, {cost, dpos}, std::string(buf) + list + "]",
+                         windows))
       return 1;
     add("## Real data: kitti-vo, batch against sliding windows");
     add("");

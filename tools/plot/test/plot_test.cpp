@@ -8,7 +8,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "png_check.hpp"
@@ -155,6 +157,77 @@ TEST_F(PlotTest, DrawsAContactSheetAndALineChart) {
                   {{"a", {10, 20, 30}, {0.1, 0.0, 0.3}}, {"b", {10, 20, 30}, {1, 2, NAN}}}};
   ASSERT_TRUE(DrawLineChart(chart, Png("chart.png"), &error)) << error;
   ExpectPlot(Png("chart.png"), 1000, 600);
+}
+
+// GIVEN a chart of two series over one x, with a gap: written as text, read back the same and
+// drawn; what the file cannot hold is refused when writing.
+TEST_F(PlotTest, LineChartFileRoundTripsAndIsDrawn) {
+  const LineChart chart{
+      "Fig. 1: error: growing",
+      "frame number",
+      "position error (m)",
+      true,
+      {{"SWF(5)", {1, 2, 3}, {0.5, NAN, 0.125}}, {"1/m", {1, 2, 3}, {1, 0.5, 1e-7}}}};
+  std::string error;
+  ASSERT_TRUE(WriteLineChart(chart, Png("chart.dat"), &error)) << error;
+  LineChart read;
+  ASSERT_TRUE(ReadLineChart(Png("chart.dat"), &read, &error)) << error;
+  EXPECT_EQ(read.title, chart.title);
+  EXPECT_EQ(read.x_label, chart.x_label);
+  EXPECT_EQ(read.y_label, chart.y_label);
+  EXPECT_TRUE(read.log_y);
+  ASSERT_EQ(read.series.size(), 2u);
+  EXPECT_EQ(read.series[1].title, "1/m");
+  EXPECT_EQ(read.series[1].x, chart.series[1].x);
+  EXPECT_EQ(read.series[1].y, chart.series[1].y);
+  EXPECT_TRUE(std::isnan(read.series[0].y[1]));
+  ASSERT_TRUE(DrawLineChart(read, Png("chart.png"), &error)) << error;
+  ExpectPlot(Png("chart.png"), 1000, 600);
+
+  LineChart unshared = chart;
+  unshared.series[1].x = {1, 2, 4};
+  EXPECT_FALSE(WriteLineChart(unshared, Png("u.dat"), &error));
+  EXPECT_NE(error.find("series '1/m' does not share the x of 'SWF(5)'"), std::string::npos)
+      << error;
+  LineChart quoted = chart;
+  quoted.series[0].title = "say \"hi\"";
+  EXPECT_FALSE(WriteLineChart(quoted, Png("q.dat"), &error));
+  EXPECT_EQ(error.rfind(Png("q.dat") + ": series name", 0), 0u) << error;
+}
+
+// GIVEN files that each break one rule: the error names the file, the line where it is one
+// line's fault, and what is wrong.
+TEST_F(PlotTest, MalformedLineChartFilesAreNamedWithTheirLine) {
+  const std::string header =
+      "# title: t\n# x: frame number\n# y: error (m)\n# y scale: linear\n# series: \"a\"\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {header + "1 2\n# title: again\n", ":7: a header line after the data rows"},
+      {"# title: t\n# title: u\n", ":2: a second 'title' line"},
+      {"# title: t\n# y scale: cubic\n", ":2: y scale 'cubic': expected log or linear"},
+      {"# series: a b\n", ":1: series: expected quoted names"},
+      {"# colour: red\n", ":1: unknown header 'colour'"},
+      {"1 2\n", ":1: a data row before the '# series:' line"},
+      {header + "inf 2\n", ":6: column 1: 'inf' is not finite"},
+      {header + "nan 2\n", ":6: column 1: 'nan' is not finite"},
+      {header, ": no data rows"},
+      {"# title: t\n# x: f\n# y scale: log\n# series: \"a\"\n1 2\n",
+       ": the header has no '# y:' line"},
+  };
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const std::string path = Png("bad" + std::to_string(k) + ".dat");
+    {
+      std::ofstream out(path);
+      out << cases[k].first;
+    }
+    LineChart chart;
+    std::string error;
+    EXPECT_FALSE(ReadLineChart(path, &chart, &error)) << cases[k].first;
+    EXPECT_EQ(error.rfind(path + cases[k].second, 0), 0u) << error;
+  }
+  LineChart chart;
+  std::string error;
+  EXPECT_FALSE(ReadLineChart(Png("none.dat"), &chart, &error));
+  EXPECT_EQ(error.rfind(Png("none.dat") + ": cannot read: ", 0), 0u) << error;
 }
 
 TEST_F(PlotTest, MissingGnuplotIsNamed) {

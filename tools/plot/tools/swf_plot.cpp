@@ -5,8 +5,16 @@
 //   swf-plot RUN.lcmlog [MORE.lcmlog ...] --out DIR [--footprint-radius M]
 // Exit: 0 every plot the logs allow was drawn; 1 a plot failed (each failure named on stderr);
 // 2 nothing to draw (usage, an unreadable log, no navigation output with its truth).
+//
+// `swf-plot curves` draws line charts stored as text (swf::plot::ReadLineChart: swf-eval's
+// OUT/NAME.dat, which carry their title, axis labels and scale), each as NAME.png:
+//   swf-plot curves FILE.dat [MORE.dat ...] [--out DIR]     (default: beside each file)
+// Exit: 0 every chart drawn; 1 a chart failed to draw; 2 a file is unreadable or malformed (named
+// with its line). Every file is tried either way.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -44,6 +52,31 @@ bool Feed(const std::string& path, const std::string& hazard_channel, Run* run,
   }
 }
 
+// `swf-plot curves`: each file's chart into DIR/NAME.png (beside the file when DIR is empty).
+int DrawCurves(const std::vector<std::string>& files, const std::string& out_dir) {
+  int rc = 0;
+  for (const std::string& file : files) {
+    std::string error;
+    swf::plot::LineChart chart;
+    if (!swf::plot::ReadLineChart(file, &chart, &error)) {
+      std::fprintf(stderr, "swf-plot curves: %s\n", error.c_str());
+      rc = 2;
+      continue;
+    }
+    const std::filesystem::path path(file);
+    const std::filesystem::path dir =
+        out_dir.empty() ? path.parent_path() : std::filesystem::path(out_dir);
+    const std::string png = (dir / path.stem()).string() + ".png";
+    if (!swf::plot::DrawLineChart(chart, png, &error)) {
+      std::fprintf(stderr, "swf-plot curves: cannot draw %s\n", error.c_str());
+      rc = std::max(rc, 1);
+      continue;
+    }
+    std::printf("%s\n", png.c_str());
+  }
+  return rc;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -54,22 +87,37 @@ int main(int argc, char** argv) {
   std::string out;
   double footprint_radius_m = swf::hazard::HazardMapperOptions{}.footprint_radius_m;
   swf::evaluation::JudgeChannels channels;
-  app.add_option("logs", logs, "LCM logs: the run's outputs and the truth (any order)")
-      ->required()
+  // Not ->required(): a required option of the app would be required with `curves` too.
+  app.add_option("logs", logs, "LCM logs: the run's outputs and the truth (any order; required)")
       ->check(CLI::ExistingFile);
-  app.add_option("--out", out, "directory the PNGs are written to")
-      ->required()
+  app.add_option("--out", out, "directory the PNGs are written to (required)")
       ->check(CLI::ExistingDirectory);
   app.add_option("--footprint-radius", footprint_radius_m,
                  "lander footprint radius drawn around the safe site (m; 0: none)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  CLI::App* curves = app.add_subcommand(
+      "curves", "line charts stored as text (swf-eval's OUT/NAME.dat), each drawn as NAME.png");
+  std::vector<std::string> dat_files;
+  std::string curves_out;
+  curves->add_option("files", dat_files, "the charts' text files (.dat)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  curves
+      ->add_option("--out", curves_out,
+                   "directory the PNGs are written to (default: beside "
+                   "each file)")
+      ->check(CLI::ExistingDirectory);
   try {
     app.parse(argc, argv);
+    if (!curves->parsed() && (logs.empty() || out.empty())) {
+      throw CLI::RequiredError("the run's logs and --out");
+    }
   } catch (const CLI::ParseError& e) {
     const int rc = app.exit(e);
     return rc == 0 ? 0 : 2;
   }
+  if (curves->parsed()) return DrawCurves(dat_files, curves_out);
 
   Run run{swf::evaluation::RunJudge(channels), {}, false};
   for (const std::string& path : logs) {

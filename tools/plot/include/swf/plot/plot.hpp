@@ -100,6 +100,22 @@ struct LineChart {
 // Lines with points, the legend outside the plot on the right.
 bool DrawLineChart(const LineChart& chart, const std::string& png, std::string* error);
 
+// A line chart whose series share one x, as a text file that says everything the plot needs
+// (swf-eval's OUT/NAME.dat; `swf-plot curves` draws it). Every header line starts with '#', so
+// gnuplot reads the rows as they are:
+//   # title: Fig. 13: landmark error on the descent
+//   # x: frame number
+//   # y: landmark mean squared error (m^2)
+//   # y scale: log                          ("linear" or "log")
+//   # series: "batch" "SWF(3)" "CRLB"
+//   1 0.0123 0.0131 0.0101                  x, then one value per series (NaN: no value)
+// Write: false with `error` naming the file when the series do not share the first one's x, a
+// title holds a '"' or a line break, or the file cannot be written.
+bool WriteLineChart(const LineChart& chart, const std::string& path, std::string* error);
+// Read: false with `error` naming the file and, where it is one line's fault, the line
+// ("out/eval/fig13_descent.dat:7: expected 9 numbers (x and 8 series), found 8").
+bool ReadLineChart(const std::string& path, LineChart* chart, std::string* error);
+
 // --- All of a run --------------------------------------------------------------------------
 
 // What DrawRun draws beside the score: the last published hazard map (null: none).
