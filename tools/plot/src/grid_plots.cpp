@@ -269,6 +269,18 @@ bool DrawContactSheet(const std::vector<ContactFrame>& frames, const std::string
   return job.Render(png, error);
 }
 
+namespace {
+
+// The k-th series' colour, point and dash: 8 colours against 7 point shapes, dashed after the
+// first 8 series, so no two of a chart's series look alike (NEES plots have a dozen).
+std::string SeriesStyle(std::size_t k) {
+  static const int kPoints[] = {5, 7, 9, 11, 13, 4, 6};  // filled square, circle, triangles, ...
+  return "lc " + std::to_string(k % 8 + 1) + " pt " + std::to_string(kPoints[k % 7]) + " dt " +
+         std::to_string(k / 8 % 5 + 1);
+}
+
+}  // namespace
+
 bool DrawLineChart(const LineChart& chart, const std::string& png, std::string* error) {
   if (chart.series.empty()) {
     *error = png + ": no series to plot";
@@ -279,7 +291,7 @@ bool DrawLineChart(const LineChart& chart, const std::string& png, std::string* 
   s << Preamble() << "set key outside right top\nset title " << Quoted(chart.title)
     << " font ',12'\nset xlabel " << Quoted(chart.x_label) << "\nset ylabel "
     << Quoted(chart.y_label) << "\n"
-    << (chart.log_y ? "set logscale y\n" : "") << "plot ";
+    << (chart.log_y ? "set logscale y\nset format y '%g'\n" : "") << "plot ";
   for (std::size_t k = 0; k < chart.series.size(); ++k) {
     const Series& series = chart.series[k];
     std::ostringstream data;
@@ -289,8 +301,7 @@ bool DrawLineChart(const LineChart& chart, const std::string& png, std::string* 
       data << Number(series.x[i]) << ' ' << Number(y) << '\n';
     }
     s << (k > 0 ? ", \\\n  " : "") << job.Data("series" + std::to_string(k) + ".dat", data.str())
-      << " using 1:2 with linespoints lw 2 pt " << 5 + 2 * (k % 4) << " title "
-      << Quoted(series.title);
+      << " using 1:2 with linespoints lw 2 " << SeriesStyle(k) << " title " << Quoted(series.title);
   }
   s << "\n";
   job.Script(s.str());

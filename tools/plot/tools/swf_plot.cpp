@@ -111,7 +111,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
     if (!curves->parsed() && (logs.empty() || out.empty())) {
-      throw CLI::RequiredError("the run's logs and --out");
+      throw CLI::RequiredError(
+          "give the run's LCM logs and --out DIR (or: swf-plot curves FILE.dat)",
+          static_cast<int>(CLI::ExitCodes::RequiredError));
     }
   } catch (const CLI::ParseError& e) {
     const int rc = app.exit(e);
