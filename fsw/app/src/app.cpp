@@ -22,6 +22,7 @@
 #include "swf/app/lcm_io.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/app/realtime.hpp"
+#include "swf/cli/cli.hpp"
 #include "swf/drivers/lcm_stereo_source.hpp"
 #if SWF_APP_HAVE_ARAVIS
 #include <arv.h>
@@ -41,22 +42,6 @@ namespace {
 FlightLoop* g_loop = nullptr;
 void OnSignal(int /*sig*/) {
   if (g_loop != nullptr) g_loop->RequestStop();
-}
-
-int Usage(const Program& program) {
-  if (program.replay) {
-    std::fprintf(stderr,
-                 "usage: %s --config FILE --log IN.lcmlog [--record OUT.lcmlog] "
-                 "[--set 'key: value']... [--progress]\n",
-                 program.tool);
-  } else {
-    std::fprintf(stderr,
-                 "usage: %s --config FILE [--set 'key: value']... [--progress] [--check]\n"
-                 "  --check  validate the configuration (the file, every --set, the output paths) "
-                 "and exit 0 without running (2: refused)\n",
-                 program.tool);
-  }
-  return 2;
 }
 
 // Progress on stderr: one line rewritten in place (a terminal) or every 10th frame (a file).
@@ -284,16 +269,46 @@ void WriteMemory(std::FILE* f, const FlightLoop::Memory& m, const core::StackWat
 
 // False when the file could not be written whole (a full disk, an I/O error). `truth`: the
 // extension that evaluated the run (or nullptr).
-bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounters& counters,
-                  const OutputCounters& output, const HealthRecord& health,
-                  std::int64_t hazard_maps, bool locked, bool fifo, const Verdict& verdict,
-                  const IntegrityCounters& integrity, const ProcessExtension* truth,
-                  const drivers::LogStreamStats* log, const ImuReport* imu,
-                  const FlightLoop::Memory& memory, const core::StackWatermark& output_stack) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) return false;
-  std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"result_reasons\": \"%s\",\n", verdict.result,
-               verdict.reasons.c_str());
+// The run as given, echoed into the summary: the program, its version and commit, its arguments
+// and every configuration key given (file line or --set) with its value as written; the keys not
+// given are that version's defaults (fsw/app/README.md).
+struct RunEcho {
+  const char* tool = "";
+  std::vector<std::string> arguments;
+};
+
+void WriteRunEcho(std::FILE* f, const RunEcho& run, const FswConfig& c) {
+  std::fprintf(f, "  \"run\": {\"tool\": %s, \"version\": %s, \"commit\": %s, \"arguments\": [",
+               JsonString(run.tool).c_str(), JsonString(cli::Version()).c_str(),
+               JsonString(cli::Commit()).c_str());
+  for (std::size_t i = 0; i < run.arguments.size(); ++i)
+    std::fprintf(f, "%s%s", i > 0 ? ", " : "", JsonString(run.arguments[i]).c_str());
+  std::fprintf(f, "],\n    \"config\": {\"file\": %s, \"keys\": {",
+               JsonString(c.origins.file).c_str());
+  const char* separator = "";
+  for (const auto& [key, value] : c.origins.values) {
+    const auto where = c.origins.keys.find(key);
+    std::fprintf(f, "%s\n      %s: {\"value\": %s, \"from\": %s}", separator,
+                 JsonString(key).c_str(), JsonString(value).c_str(),
+                 JsonString(where != c.origins.keys.end() ? where->second : "").c_str());
+    separator = ",";
+  }
+  std::fprintf(f, "}}},\n");
+}
+
+bool WriteSummary(const std::string& path, const RunEcho& run, const FswConfig& c,
+                  const LoopCounters& counters, const OutputCounters& output,
+                  const HealthRecord& health, std::int64_t hazard_maps, bool locked, bool fifo,
+                  const Verdict& verdict, const IntegrityCounters& integrity,
+                  const ProcessExtension* truth, const drivers::LogStreamStats* log,
+                  const ImuReport* imu, const FlightLoop::Memory& memory,
+                  const core::StackWatermark& output_stack, std::string* error) {
+  cli::OutputFile out;
+  if (!out.Open(path, error)) return false;
+  std::FILE* f = out.Stream();
+  std::fprintf(f, "{\n  \"result\": \"%s\",\n  \"result_reasons\": %s,\n", verdict.result,
+               JsonString(verdict.reasons).c_str());
+  WriteRunEcho(f, run, c);
   std::fprintf(f, "  \"source\": \"%s\",\n", SourceName(c.source));
   std::fprintf(f, "  \"frames\": %lld,\n", static_cast<long long>(counters.frames));
   std::fprintf(f, "  \"rate_hz\": %.3f,\n  \"window\": %d,\n  \"mode\": \"%s\",\n", c.rate_hz,
@@ -333,48 +348,52 @@ bool WriteSummary(const std::string& path, const FswConfig& c, const LoopCounter
   }
   WriteHazard(f, hazard_maps, truth);
   std::fprintf(f, "}\n");
-  const bool written = std::ferror(f) == 0;
-  return std::fclose(f) == 0 && written;
+  return out.Commit(error);
 }
 
 struct CommandLine {
   std::string config_path;
   std::string log_path;
   std::string record_override;
-  bool record_given = false;
   bool progress = false;
-  bool check = false;  // swf-fsw --check: validate, run nothing
+  bool check = false;  // --check: validate, run nothing
   std::vector<std::string> sets;
+  std::vector<std::string> arguments;  // as given, echoed into the summary
 };
 
-bool ParseCommandLine(int argc, char** argv, bool replay, CommandLine* cl) {
-  for (int a = 1; a < argc; ++a) {
-    const std::string arg = argv[a];
-    const bool has_value = a + 1 < argc;
-    if (arg == "--config" && has_value) {
-      cl->config_path = argv[++a];
-    } else if (arg == "--set" && has_value) {
-      cl->sets.emplace_back(argv[++a]);
-    } else if (replay && arg == "--log" && has_value) {
-      cl->log_path = argv[++a];
-    } else if (replay && arg == "--record" && has_value) {
-      cl->record_override = argv[++a];
-      cl->record_given = true;
-    } else if (arg == "--progress") {
-      cl->progress = true;
-    } else if (!replay && arg == "--check") {
-      cl->check = true;
-    } else {
-      return false;
-    }
+// The flight processes' options (swf::cli's parser: the convention of docs/cli.md without CLI11
+// in the flight binary). A replay takes its frames from --log and may name its recording.
+// cli::kContinue or the exit code.
+int ParseCommandLine(int argc, char** argv, const Program& program, CommandLine* cl) {
+  cli::CommandLine parser(
+      program.tool,
+      program.replay ? "--config FILE --log IN.lcmlog [--record OUT.lcmlog] [--set 'key: value']..."
+                       " [--progress] [--check]"
+                     : "--config FILE [--set 'key: value']... [--progress] [--check]",
+      program.replay ? "The flight pipeline on the stereo frames of a recorded LCM log."
+                     : "The flight process: configuration -> source -> rate groups -> outputs "
+                       "(fsw/app/README.md).");
+  parser.Value("--config", "FILE", "the configuration file", &cl->config_path, true);
+  parser.Repeated("--set", "'key: value'", "override one key of the file", &cl->sets);
+  if (program.replay) {
+    parser.Value("--log", "IN.lcmlog", "the recorded log to replay", &cl->log_path, true);
+    parser.Value("--record", "OUT.lcmlog", "record the replay's outputs here",
+                 &cl->record_override);
   }
-  return !cl->config_path.empty() && (!replay || !cl->log_path.empty());
+  parser.Flag("--progress", "a progress line on stderr", &cl->progress);
+  parser.Flag("--check",
+              "validate the configuration (the file, every --set, the output paths) and exit 0 "
+              "without running (2: refused)",
+              &cl->check);
+  const int code = parser.Parse(argc, argv);
+  cl->arguments = parser.Arguments();
+  return code;
 }
 
 // Exit codes of the phases below: kContinue, or what the process exits with.
-constexpr int kContinue = -1;
-constexpr int kRefused = 2;
-constexpr int kRunError = 1;
+constexpr int kContinue = cli::kContinue;
+constexpr int kRefused = cli::kExitUsage;
+constexpr int kRunError = cli::kExitFailed;
 
 // Everything one run of the flight process holds, built phase by phase before real time starts
 // and read by the report after it.
@@ -384,6 +403,7 @@ struct FlightProcess {
   ProcessExtension* extension = nullptr;
   bool extension_source = false;  // the extension opened the source: it has the run's truth
   bool progress = false;
+  RunEcho run;
   FswConfig config;
   std::string error;
   // The source and what it told about the run.
@@ -457,7 +477,7 @@ int Configure(const CommandLine& cl, FlightProcess* fp) {
       config.record_frames = false;
     }
     const auto record = config.origins.keys.find("record.path");
-    if (cl.record_given) {
+    if (!cl.record_override.empty()) {
       config.record_path = cl.record_override;
     } else if (record == config.origins.keys.end() || record->second != "--set") {
       config.record_path = "";
@@ -984,12 +1004,11 @@ int Report(FlightProcess* fp) {
   PrintMemoryLine(*fp);
   PrintIntegrityLine(*fp, verdict);
   if (!config.summary_path.empty() &&
-      !WriteSummary(config.summary_path, config, counters, out, h, fp->hazard_counter.maps,
+      !WriteSummary(config.summary_path, fp->run, config, counters, out, h, fp->hazard_counter.maps,
                     fp->locked, fp->fifo, verdict, integrity, truth, log_stream,
                     inertial ? &imu_report : nullptr, fp->loop.MemoryUse(),
-                    fp->parts.output.Stack())) {
-    std::fprintf(stderr, "%s: cannot write the summary %s: %s; exit 1\n", fp->tool,
-                 config.summary_path.c_str(), std::strerror(errno));
+                    fp->parts.output.Stack(), &fp->error)) {
+    std::fprintf(stderr, "%s: cannot write the summary: %s; exit 1\n", fp->tool, fp->error.c_str());
     return kRunError;
   }
   return verdict.exit_code;
@@ -999,16 +1018,34 @@ int Report(FlightProcess* fp) {
 
 void Fail(Verdict* v, const std::string& reason) {
   v->result = "failed";
-  v->exit_code = 1;
+  v->exit_code = cli::kExitFailed;
   v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
 }
 
 void Degrade(Verdict* v, const std::string& reason) {
   if (v->exit_code == 0) {
     v->result = "degraded";
-    v->exit_code = 3;
+    v->exit_code = cli::kExitDegraded;
   }
   v->reasons += (v->reasons.empty() ? "" : ", ") + reason;
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (c < 0x20) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
+      out += escaped;
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
 }
 
 std::string JsonNumber(double v) {
@@ -1097,12 +1134,17 @@ core::Status AssembleFlightParts(const PipelineOptions& po,
 
 int RunFlightProcess(int argc, char** argv, const Program& program) {
   CommandLine command_line;
-  if (!ParseCommandLine(argc, argv, program.replay, &command_line)) return Usage(program);
+  if (const int code = ParseCommandLine(argc, argv, program, &command_line);
+      code != cli::kContinue) {
+    return code;
+  }
   auto fp = std::make_unique<FlightProcess>();
   fp->tool = program.tool;
   fp->replay = program.replay;
   fp->extension = program.extension;
   fp->progress = command_line.progress;
+  fp->run.tool = program.tool;
+  fp->run.arguments = command_line.arguments;
   if (const int code = Configure(command_line, fp.get()); code != kContinue) return code;
   if (command_line.check) {
     // Everything a run refuses before it builds anything has been said: the file and every --set
@@ -1110,6 +1152,7 @@ int RunFlightProcess(int argc, char** argv, const Program& program) {
     std::fprintf(stderr, "%s: configuration accepted (--check: nothing run)\n", fp->tool);
     return 0;
   }
+  if (!MakeOutputDirectories(fp->config, &fp->error)) return fp->RunError();
   // Each phase either continues or gives the exit code: nothing runs before all are done.
   using Phase = int (*)(FlightProcess*);
   for (const Phase phase :

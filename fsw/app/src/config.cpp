@@ -18,6 +18,7 @@
 
 #include "swf/app/config_fields.hpp"
 #include "swf/app/lcm_io.hpp"
+#include "swf/cli/cli.hpp"
 #include "swf/drivers/lcm_stereo_source.hpp"
 
 namespace swf::app {
@@ -376,6 +377,7 @@ bool ApplyFileText(const std::string& text, const std::string& file, FswConfig* 
     }
     if (!SetField(key, value, where, c, error)) return false;
     c->origins.keys[key] = where;
+    c->origins.values[key] = value;
     ++settings;
   }
   // An empty or comments-only file would fly every default (a simulated descent publishing on the
@@ -411,6 +413,7 @@ bool ApplyOverride(const std::string& key_value, FswConfig* c, std::string* erro
   }
   if (!SetField(key, value, where, c, error)) return false;
   c->origins.keys[key] = where;
+  c->origins.values[key] = value;
   return true;
 }
 
@@ -620,8 +623,47 @@ bool CheckEnvelopeDisparity(const FswConfig& c, double fx_px, double baseline_m,
 
 namespace {
 
-// stat(2) and access(2) on `path`: "" when this process may write it (an existing non-directory
-// file, or a new file in an existing directory), otherwise why not.
+// "" when the directory `dir` exists and this process may write it, or does not exist yet and can
+// be created (its nearest existing ancestor is a directory this process may write: the run
+// creates the missing ones, docs/cli.md); otherwise why not. stat(2) and access(2) only.
+std::string WhyNotWritableDirectory(const std::string& dir) {
+  std::string probe = dir;
+  for (;;) {
+    struct stat st {};
+    if (::stat(probe.c_str(), &st) == 0) {
+      if (!S_ISDIR(st.st_mode)) {
+        return probe == dir ? std::string("is not a directory")
+                            : Quoted(probe).append(" is not a directory");
+      }
+      if (::access(probe.c_str(), W_OK | X_OK) != 0) {
+        const int e = errno;
+        std::string why;
+        if (probe != dir) {
+          why = Quoted(probe);
+          why.append(" cannot be written (to create ").append(Quoted(dir)).append(" in it): ");
+        } else {
+          why = "cannot be written: ";
+        }
+        return why.append(std::strerror(e));
+      }
+      return "";
+    }
+    // ENOTDIR: a component is a file (found when the walk reaches it).
+    if ((errno != ENOENT && errno != ENOTDIR) || probe == "." || probe == "/") {
+      return Quoted(probe).append(" cannot be examined: ").append(std::strerror(errno));
+    }
+    // Up one level: "a/b" -> "a", "/a" -> "/", "a" -> ".".
+    const auto slash = probe.find_last_of('/');
+    if (slash == std::string::npos) {
+      probe.assign(1, '.');
+    } else {
+      probe.resize(slash == 0 ? 1 : slash);
+    }
+  }
+}
+
+// "" when this process may write the file `path` (an existing non-directory file, or a new file
+// in a directory WhyNotWritableDirectory accepts), otherwise why not.
 std::string WhyNotWritableFile(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) == 0) {
@@ -630,38 +672,17 @@ std::string WhyNotWritableFile(const std::string& path) {
       return std::string("cannot be written: ") + std::strerror(errno);
     return "";
   }
-  // ENOTDIR: a component of the directory is a file (said below about the directory).
   if (errno != ENOENT && errno != ENOTDIR) {
     return std::string("cannot be examined: ") + std::strerror(errno);
   }
   const auto slash = path.find_last_of('/');
   const std::string dir =
       slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
-  if (::stat(dir.c_str(), &st) != 0) {
-    const int e = errno;  // before anything else can change it
-    return std::string("its directory ") + Quoted(dir) + " " +
-           (e == ENOENT ? std::string("does not exist")
-                        : std::string("cannot be examined: ") + std::strerror(e));
-  }
-  if (!S_ISDIR(st.st_mode)) return Quoted(dir) + " is not a directory";
-  if (::access(dir.c_str(), W_OK | X_OK) != 0) {
-    const int e = errno;
-    return std::string("its directory ") + Quoted(dir) + " cannot be written: " + std::strerror(e);
-  }
-  return "";
-}
-
-std::string WhyNotWritableDirectory(const std::string& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
-    return errno == ENOENT ? std::string("does not exist")
-                           : std::string("cannot be examined: ") + std::strerror(errno);
-  }
-  if (!S_ISDIR(st.st_mode)) return "is not a directory";
-  if (::access(path.c_str(), W_OK | X_OK) != 0) {
-    return std::string("cannot be written: ") + std::strerror(errno);
-  }
-  return "";
+  const std::string why = WhyNotWritableDirectory(dir);
+  if (why.empty()) return why;
+  // The directory itself ("its directory 'd' is not a directory") or an ancestor named in `why`.
+  return why[0] == '\'' ? std::string("its directory: ").append(why)
+                        : std::string("its directory ").append(Quoted(dir)).append(" ").append(why);
 }
 
 // Reads a configuration file: a regular file of at most kMaxConfigBytes (a directory opens and
@@ -724,6 +745,12 @@ bool CheckOutputPaths(const FswConfig& c, std::string* error) {
     if (!why.empty()) return fail("summary.plot_dir", c.plot_dir, why);
   }
   return true;
+}
+
+bool MakeOutputDirectories(const FswConfig& c, std::string* error) {
+  return cli::MakeParentDirectories(c.summary_path, error) &&
+         cli::MakeParentDirectories(c.record_path, error) &&
+         cli::MakeDirectories(c.plot_dir, error);
 }
 
 bool ParseConfig(const std::string& text, const std::string& origin, FswConfig* config,

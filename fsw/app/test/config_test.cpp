@@ -508,9 +508,13 @@ TEST(ConfigTest, CheckValidatesAsARunWouldAndRunsNothing) {
             0);
   EXPECT_FALSE(Exists(summary));  // a run writes it at its end
   EXPECT_EQ(run({"--check", "--config", config, "--set", "sim.attitude_deg: 80 0 0"}), 2);
+  // A missing directory is created by a run, not by --check; one under a file is refused.
   EXPECT_EQ(
       run({"--config", config, "--set", "summary.path: " + dir.Path() + "/no/s.json", "--check"}),
-      2);
+      0);
+  EXPECT_FALSE(Exists(dir.Path() + "/no"));
+  EXPECT_EQ(run({"--config", config, "--set", "summary.path: " + config + "/s.json", "--check"}),
+            2);
   EXPECT_EQ(run({"--config", dir.Path() + "/missing.cfg", "--check"}), 2);
   EXPECT_FALSE(Exists(summary));
 }
@@ -566,30 +570,38 @@ TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
     EXPECT_FALSE(CheckOutputPaths(bad, &why)) << expect;
     EXPECT_NE(why.find(expect), std::string::npos) << "error was: " << why;
   };
+  // A directory that does not exist yet is accepted when it can be created (the run creates it,
+  // docs/cli.md); the check creates nothing.
+  FswConfig deep = c;
+  deep.summary_path = d + "/missing/deeper/s.json";
+  deep.plot_dir = d + "/plots";
+  EXPECT_TRUE(CheckOutputPaths(deep, &error)) << error;
+  EXPECT_FALSE(Exists(d + "/missing"));
+  EXPECT_FALSE(Exists(d + "/plots"));
+  ASSERT_TRUE(MakeOutputDirectories(deep, &error)) << error;
+  EXPECT_TRUE(Exists(d + "/missing/deeper"));
+  EXPECT_TRUE(Exists(d + "/plots"));
   FswConfig bad = c;
-  bad.summary_path = d + "/missing/s.json";
-  refused(bad, "t.cfg:2: summary.path: '" + d + "/missing/s.json' its directory '" + d +
-                   "/missing' does not exist");
-  bad = c;
   bad.summary_path = d;
   refused(bad, "t.cfg:2: summary.path: '" + d + "' is a directory");
   bad = c;
   bad.record_path = a_file + "/r.lcmlog";
-  refused(bad,
-          "t.cfg:3: record.path: '" + a_file + "/r.lcmlog' '" + a_file + "' is not a directory");
+  refused(bad, "t.cfg:3: record.path: '" + a_file + "/r.lcmlog' its directory '" + a_file +
+                   "' is not a directory");
+  bad = c;
+  bad.record_path = a_file + "/sub/r.lcmlog";
+  refused(bad, "record.path: '" + a_file + "/sub/r.lcmlog' its directory: '" + a_file +
+                   "' is not a directory");
   bad = c;
   bad.record_path = bad.summary_path;
   refused(bad, "record.path: '" + a_file + "' is also summary.path");
-  bad = c;
-  bad.plot_dir = d + "/plots";
-  refused(bad, "t.cfg:4: summary.plot_dir: '" + d + "/plots' does not exist");
   bad = c;
   bad.plot_dir = a_file;
   refused(bad, "summary.plot_dir: '" + a_file + "' is not a directory");
   // A path given by --set is named as such.
   FswConfig over = c;
-  ASSERT_TRUE(OverrideConfig("summary.path: /nonexistent/s.json", &over, &error)) << error;
-  refused(over, "--set: summary.path: '/nonexistent/s.json' its directory '/nonexistent'");
+  ASSERT_TRUE(OverrideConfig("summary.path: " + a_file + "/s.json", &over, &error)) << error;
+  refused(over, "--set: summary.path: '" + a_file + "/s.json' its directory '" + a_file + "'");
   // Permissions (meaningless for root, who may write anywhere on a writable file system).
   if (::geteuid() != 0) {
     const std::string ro = d + "/ro";
@@ -597,6 +609,9 @@ TEST(ConfigTest, OutputPathsAreCheckedBeforeTheRun) {
     bad = c;
     bad.summary_path = ro + "/s.json";
     refused(bad, "summary.path: '" + ro + "/s.json' its directory '" + ro + "' cannot be written");
+    bad.summary_path = ro + "/sub/s.json";
+    refused(bad, "summary.path: '" + ro + "/sub/s.json' its directory: '" + ro +
+                     "' cannot be written (to create '" + ro + "/sub' in it)");
   }
 }
 

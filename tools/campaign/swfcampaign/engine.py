@@ -32,8 +32,9 @@ CAMPAIGN_SETS = [('pacing', 'lockstep'), ('lcm.publish', 'false'), ('rt.mlockall
                  ('rt.priority', '0')]
 LOG_NAME = 'descent.lcmlog'
 # Summary fields measured on the machine (times, memory use), not results: they differ between
-# any two flights.
-TIMING_KEYS = ('stages', 'mlockall', 'sched_fifo', 'overruns', 'memory')
+# any two flights. 'run' echoes the command line (its output paths differ between a run and its
+# reproduction), not a result either.
+TIMING_KEYS = ('stages', 'mlockall', 'sched_fifo', 'overruns', 'memory', 'run')
 
 
 class CampaignError(Exception):

@@ -74,6 +74,8 @@ void Degrade(Verdict* v, const std::string& reason);
 
 // A JSON number, or null when not finite (JSON has no inf/nan).
 std::string JsonNumber(double v);
+// A JSON string: `s` in quotes, with quotes, backslashes and control characters escaped.
+std::string JsonString(const std::string& s);
 
 // The IMU of a stereo-inertial run: its stream's counts, the biases the filter ended with, what
 // an LCM subscription lost, and (a ProcessExtension with truth) the unit's true biases.
@@ -139,8 +141,8 @@ struct Program {
   ProcessExtension* extension = nullptr;
 };
 
-// Exit codes: 0 ok, 3 degraded, 1 failed or a run-time error (source, damaged log record), 2 bad
-// command line or configuration.
+// Exit codes (swf::cli, docs/cli.md): 0 ok, 3 degraded, 1 failed or a run-time error (source,
+// damaged log record), 2 bad command line or configuration; --help and --version exit 0.
 int RunFlightProcess(int argc, char** argv, const Program& program);
 
 }  // namespace swf::app

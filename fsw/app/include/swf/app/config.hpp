@@ -144,6 +144,8 @@ struct LcmSourceConfig {
 struct ConfigOrigins {
   std::string file;
   std::map<std::string, std::string> keys;
+  std::map<std::string, std::string>
+      values;  // each given key's value as written (the summary's echo)
 };
 
 // What a program built on the flight process adds to its configuration: tools/sil's simulator
@@ -269,10 +271,14 @@ bool CheckEnvelopeDisparity(const FswConfig& config, double fx_px, double baseli
 
 // Before the run: every output can be written, so that a run is never lost to a path found bad only
 // at its end. summary.path and record.path: an existing regular file this process may write, or a
-// new file in an existing directory it may write (not a directory, not the same file as the other);
-// summary.plot_dir: an existing directory it may write. Uses stat(2)/access(2) only: creates,
-// truncates and deletes nothing. False with "<where>: <field>: <problem>".
+// new file (not a directory, not the same file as the other); summary.plot_dir: a directory. A
+// directory that does not exist yet is accepted when it can be created (its nearest existing
+// ancestor is a directory this process may write): the run creates it (MakeOutputDirectories).
+// Uses stat(2)/access(2) only: creates, truncates and deletes nothing. False with
+// "<where>: <field>: <problem>".
 bool CheckOutputPaths(const FswConfig& config, std::string* error);
+// Creates the missing directories of summary.path, record.path and summary.plot_dir.
+bool MakeOutputDirectories(const FswConfig& config, std::string* error);
 
 const char* SourceName(SourceKind kind);
 int StageIndex(const std::string& name);  // -1 when unknown

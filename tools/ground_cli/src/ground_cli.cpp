@@ -1,0 +1,84 @@
+#include "swf/ground_cli/ground_cli.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace swf::ground_cli {
+
+void Adopt(CLI::App* app, const char* tool) {
+  app->set_version_flag("--version", cli::VersionLine(tool), "the version and the commit");
+  app->footer("exit: 0 ok, 1 failed, 2 usage or configuration refused, 3 degraded (docs/cli.md)");
+}
+
+int Parse(CLI::App* app, int argc, char** argv) {
+  try {
+    app->parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::fputs(app->help().c_str(), stdout);
+    return cli::kExitOk;
+  } catch (const CLI::CallForAllHelp&) {
+    std::fputs(app->help("", CLI::AppFormatMode::All).c_str(), stdout);
+    return cli::kExitOk;
+  } catch (const CLI::CallForVersion& e) {
+    std::printf("%s\n", e.what());
+    return cli::kExitOk;
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "%s: %s (usage: %s --help)\n", app->get_name().c_str(), e.what(),
+                 app->get_name().c_str());
+    return cli::kExitUsage;
+  }
+  return cli::kContinue;
+}
+
+namespace {
+
+nlohmann::json OptionsOf(const CLI::App& app) {
+  nlohmann::json options = nlohmann::json::object();
+  for (const CLI::Option* o : app.get_options()) {
+    const std::string name = o->get_single_name();
+    if (name == "help" || name == "version" || name == "help-all") continue;
+    if (o->count() > 0) {
+      const std::vector<std::string>& given = o->results();
+      if (o->get_expected_max() > 1) {
+        options[name] = given;
+      } else if (o->get_type_size() == 0) {
+        options[name] = true;  // a flag
+      } else {
+        options[name] = given.empty() ? "" : given.back();
+      }
+    } else if (!o->get_default_str().empty()) {
+      options[name] = o->get_default_str();
+    } else if (o->get_type_size() == 0) {
+      options[name] = false;
+    } else {
+      options[name] = nullptr;
+    }
+  }
+  for (const CLI::App* sub : app.get_subcommands()) {
+    options[sub->get_name()] = OptionsOf(*sub);
+  }
+  return options;
+}
+
+}  // namespace
+
+nlohmann::json RunEcho(const CLI::App& app, const char* tool, int argc, char** argv) {
+  nlohmann::json arguments = nlohmann::json::array();
+  for (int a = 1; a < argc; ++a) arguments.push_back(argv[a]);
+  return {{"tool", tool},
+          {"version", cli::Version()},
+          {"commit", cli::Commit()},
+          {"arguments", arguments},
+          {"options", OptionsOf(app)}};
+}
+
+bool WriteJson(const std::string& path, const nlohmann::json& document, std::string* error,
+               int indent) {
+  return cli::WriteFileAtomically(path, document.dump(indent) + "\n", error);
+}
+
+nlohmann::json Number(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
+}  // namespace swf::ground_cli
