@@ -1,6 +1,9 @@
 #include "png_writer.hpp"
 
 #include <cstdio>
+#include <string>
+
+#include "swf/cli/cli.hpp"
 
 namespace swf::drivers {
 namespace {
@@ -79,10 +82,10 @@ void EncodeGrayPng(const core::ImageView<const std::uint8_t>& image,
 bool WriteGrayPng(const char* path, const core::ImageView<const std::uint8_t>& image) {
   std::vector<std::uint8_t> bytes;
   EncodeGrayPng(image, &bytes);
-  std::FILE* f = std::fopen(path, "wb");
-  if (f == nullptr) return false;
-  const bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-  return std::fclose(f) == 0 && ok;
+  // Whole or not at all (a grab stopped by a signal leaves no truncated PNG).
+  std::string error;
+  return cli::WriteFileAtomically(
+      path, std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()), &error);
 }
 
 }  // namespace swf::drivers

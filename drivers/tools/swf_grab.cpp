@@ -2,14 +2,14 @@
 //   swf-grab list
 //   swf-grab grab --source aravis --left 192.168.1.10 --right 192.168.1.11 --pairs 50 --out cap/
 //   swf-grab grab --source v4l2 --left /dev/video0 --right /dev/video2 --format GREY --pairs 50
-// Run `swf-grab help` for every option. Not flight code: it allocates, prints and writes files.
+// Run `swf-grab grab --help` for every option. Not flight code: it allocates, prints and writes
+// files (a ground tool: CLI11 and nlohmann-json, docs/cli.md).
 #include <arv.h>
 #include <linux/videodev2.h>
 #include <sys/stat.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -19,6 +19,7 @@
 #include "png_writer.hpp"
 #include "swf/drivers/aravis_stereo_source.hpp"
 #include "swf/drivers/v4l2_stereo_source.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 
 namespace swf::drivers {
 namespace {
@@ -44,24 +45,6 @@ struct GrabArgs {
   bool fake_gv = false;  // start Aravis GigE fake cameras in-process at --left/--right
   double fake_loss = 0.0;
 };
-
-void PrintHelp() {
-  std::printf(
-      "usage: swf-grab list\n"
-      "       swf-grab grab [options]\n"
-      "  --source aravis|v4l2     camera driver (default aravis)\n"
-      "  --left ID --right ID     Aravis id/serial/IP, or V4L2 device node\n"
-      "  --side-by-side           one device delivers [left|right] (--right unused)\n"
-      "  --width W --height H     requested size / region of interest\n"
-      "  --format F               V4L2: GREY|Y16|YUYV; Aravis: Mono8|Mono10|Mono12|Mono16\n"
-      "  --pairs N --out DIR      pairs to grab, output directory (left_NNNNNN.png, ...)\n"
-      "  --timeout-ms T           per-pair timeout (default 1000)\n"
-      "  --trigger free|software|hardware   Aravis trigger mode (hardware uses Line1)\n"
-      "  --fps F --exposure-us E --gain G --packet-size P --tolerance-ms T\n"
-      "  --features \"Name=Value ...\"        extra GenICam features (Aravis)\n"
-      "  --fake-gv [--fake-loss R]          serve Aravis GigE fake cameras at --left/--right\n"
-      "                                     (run inside `unshare -n`, see drivers/README.md)\n");
-}
 
 int List() {
   arv_update_device_list();
@@ -103,58 +86,45 @@ int List() {
   return 0;
 }
 
-bool ParseArgs(int argc, char** argv, GrabArgs* a) {
-  for (int i = 2; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto value = [&]() -> const char* { return i + 1 < argc ? argv[++i] : ""; };
-    if (k == "--source")
-      a->source = value();
-    else if (k == "--left")
-      a->left = value();
-    else if (k == "--right")
-      a->right = value();
-    else if (k == "--side-by-side")
-      a->side_by_side = true;
-    else if (k == "--width")
-      a->width = std::atoi(value());
-    else if (k == "--height")
-      a->height = std::atoi(value());
-    else if (k == "--format")
-      a->format = value();
-    else if (k == "--pairs")
-      a->pairs = std::atoi(value());
-    else if (k == "--out")
-      a->out = value();
-    else if (k == "--timeout-ms")
-      a->timeout_ns = std::atoll(value()) * core::kNsPerMs;
-    else if (k == "--trigger")
-      a->trigger = value();
-    else if (k == "--fps")
-      a->fps = std::atof(value());
-    else if (k == "--exposure-us")
-      a->exposure_us = std::atof(value());
-    else if (k == "--gain")
-      a->gain = std::atof(value());
-    else if (k == "--packet-size")
-      a->packet_size = std::atoi(value());
-    else if (k == "--features")
-      a->features = value();
-    else if (k == "--tolerance-ms")
-      a->tolerance_ms = std::atof(value());
-    else if (k == "--fake-gv")
-      a->fake_gv = true;
-    else if (k == "--fake-loss")
-      a->fake_loss = std::atof(value());
-    else {
-      std::fprintf(stderr, "swf-grab: unknown option %s\n", k.c_str());
-      return false;
-    }
-  }
-  if (a->left.empty() || (a->right.empty() && !a->side_by_side) || a->pairs <= 0) {
-    std::fprintf(stderr, "swf-grab: need --left, --right (or --side-by-side) and --pairs > 0\n");
-    return false;
-  }
-  return true;
+// The grab subcommand's options.
+void AddGrabOptions(CLI::App* grab, GrabArgs* a, double* timeout_ms) {
+  grab->add_option("--source", a->source, "camera driver")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"aravis", "v4l2"}));
+  grab->add_option("--left", a->left, "Aravis id, serial or IP address, or V4L2 device node")
+      ->required();
+  grab->add_option("--right", a->right, "the right camera (not with --side-by-side)");
+  grab->add_flag("--side-by-side", a->side_by_side, "one device delivers [left|right]");
+  grab->add_option("--width", a->width, "requested width / region of interest")
+      ->check(CLI::NonNegativeNumber);
+  grab->add_option("--height", a->height, "requested height")->check(CLI::NonNegativeNumber);
+  grab->add_option("--format", a->format,
+                   "V4L2: GREY|Y16|YUYV; Aravis: Mono8|Mono10|Mono12|Mono16");
+  grab->add_option("--pairs", a->pairs, "pairs to grab")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  grab->add_option("--out", a->out, "output directory (left_NNNNNN.png, ...; created)")
+      ->capture_default_str();
+  grab->add_option("--timeout-ms", *timeout_ms, "per-pair timeout")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  grab->add_option("--trigger", a->trigger, "Aravis trigger mode (hardware uses Line1)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"free", "software", "hardware"}));
+  grab->add_option("--fps", a->fps, "frame rate (free run)")->check(CLI::NonNegativeNumber);
+  grab->add_option("--exposure-us", a->exposure_us, "exposure time");
+  grab->add_option("--gain", a->gain, "gain");
+  grab->add_option("--packet-size", a->packet_size, "GigE packet size (0: negotiated)")
+      ->check(CLI::NonNegativeNumber);
+  grab->add_option("--features", a->features, "extra GenICam features \"Name=Value ...\" (Aravis)");
+  grab->add_option("--tolerance-ms", a->tolerance_ms, "pairing tolerance")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  grab->add_flag("--fake-gv", a->fake_gv,
+                 "serve Aravis GigE fake cameras at --left/--right (inside `unshare -n`, "
+                 "drivers/README.md)");
+  grab->add_option("--fake-loss", a->fake_loss, "the right fake camera's packet loss ratio")
+      ->check(CLI::Range(0.0, 1.0));
 }
 
 std::unique_ptr<StereoSource> MakeSource(const GrabArgs& a, core::Status* status,
@@ -204,7 +174,11 @@ std::unique_ptr<StereoSource> MakeSource(const GrabArgs& a, core::Status* status
   return src;
 }
 
-int Grab(const GrabArgs& a) {
+int Grab(const GrabArgs& a, const nlohmann::json& run) {
+  if (a.right.empty() && !a.side_by_side) {
+    std::fprintf(stderr, "swf-grab: grab: --right is required (or --side-by-side)\n");
+    return cli::kExitUsage;
+  }
   std::vector<ArvGvFakeCamera*> fakes;
   if (a.fake_gv) {
     for (const std::string& address : {a.left, a.right}) {
@@ -212,7 +186,9 @@ int Grab(const GrabArgs& a) {
       ArvGvFakeCamera* fake = arv_gv_fake_camera_new(address.c_str(), nullptr);
       if (fake == nullptr || !arv_gv_fake_camera_is_running(fake)) {
         std::fprintf(stderr, "swf-grab: cannot serve a fake camera on %s\n", address.c_str());
-        return 2;
+        for (ArvGvFakeCamera* f : fakes) g_object_unref(f);
+        if (fake != nullptr) g_object_unref(fake);
+        return cli::kExitFailed;
       }
       if (address == a.right && a.fake_loss > 0) {
         g_object_set(fake, "gvsp-lost-ratio", a.fake_loss, nullptr);
@@ -226,9 +202,14 @@ int Grab(const GrabArgs& a) {
   if (!core::IsOk(status)) {
     std::fprintf(stderr, "swf-grab: start failed: %s: %s\n", core::ToString(status), error.c_str());
     for (ArvGvFakeCamera* f : fakes) g_object_unref(f);
-    return 1;
+    return cli::kExitFailed;
   }
-  std::filesystem::create_directories(a.out);
+  if (!cli::MakeDirectories(a.out, &error)) {
+    std::fprintf(stderr, "swf-grab: --out: %s\n", error.c_str());
+    source->Stop();
+    for (ArvGvFakeCamera* f : fakes) g_object_unref(f);
+    return cli::kExitFailed;
+  }
   std::vector<double> next_ms;
   int written = 0;
   int failures = 0;
@@ -265,29 +246,40 @@ int Grab(const GrabArgs& a) {
   std::sort(next_ms.begin(), next_ms.end());
   const double p50 = next_ms.empty() ? 0 : next_ms[next_ms.size() / 2];
   const double max = next_ms.empty() ? 0 : next_ms.back();
-  std::printf(
-      "{\"source\": \"%s\", \"pairs_written\": %d, \"elapsed_s\": %.3f, \"pairs_per_s\": %.2f, "
-      "\"next_p50_ms\": %.3f, \"next_max_ms\": %.3f, \"frames_dropped\": %llu, "
-      "\"frames_rejected\": %llu, \"pairing_failures\": %llu, \"timeouts\": %llu}\n",
-      source->Name(), written, elapsed_s, elapsed_s > 0 ? written / elapsed_s : 0.0, p50, max,
-      static_cast<unsigned long long>(s.frames_dropped),
-      static_cast<unsigned long long>(s.frames_rejected),
-      static_cast<unsigned long long>(s.pairing_failures),
-      static_cast<unsigned long long>(s.timeouts));
-  return written == a.pairs ? 0 : 1;
+  const nlohmann::json summary = {{"source", source->Name()},
+                                  {"pairs_written", written},
+                                  {"elapsed_s", ground_cli::Number(elapsed_s)},
+                                  {"pairs_per_s", elapsed_s > 0 ? written / elapsed_s : 0.0},
+                                  {"next_p50_ms", ground_cli::Number(p50)},
+                                  {"next_max_ms", ground_cli::Number(max)},
+                                  {"frames_dropped", s.frames_dropped},
+                                  {"frames_rejected", s.frames_rejected},
+                                  {"pairing_failures", s.pairing_failures},
+                                  {"timeouts", s.timeouts},
+                                  {"run", run}};
+  std::printf("%s\n", summary.dump().c_str());
+  return written == a.pairs ? cli::kExitOk : cli::kExitFailed;
 }
 
 }  // namespace
 }  // namespace swf::drivers
 
 int main(int argc, char** argv) {
-  const std::string verb = argc > 1 ? argv[1] : "help";
-  if (verb == "list") return swf::drivers::List();
-  if (verb == "grab") {
-    swf::drivers::GrabArgs args;
-    if (!swf::drivers::ParseArgs(argc, argv, &args)) return 2;
-    return swf::drivers::Grab(args);
+  CLI::App app{
+      "swf-grab: lists cameras and grabs stereo pairs to PNG with timing and drop "
+      "statistics (a JSON summary on stdout)"};
+  swf::ground_cli::Adopt(&app, "swf-grab");
+  app.require_subcommand(1);
+  CLI::App* list = app.add_subcommand("list", "the Aravis cameras and V4L2 nodes found");
+  CLI::App* grab = app.add_subcommand("grab", "grab --pairs stereo pairs into --out");
+  swf::drivers::GrabArgs args;
+  double timeout_ms = 1000.0;
+  swf::drivers::AddGrabOptions(grab, &args, &timeout_ms);
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
   }
-  swf::drivers::PrintHelp();
-  return verb == "help" ? 0 : 2;
+  if (list->parsed()) return swf::drivers::List();
+  args.timeout_ns = static_cast<swf::core::TimeNs>(timeout_ms * 1e6);
+  swf::cli::RemovePartialOutputsOnSignal();
+  return swf::drivers::Grab(args, swf::ground_cli::RunEcho(app, "swf-grab", argc, argv));
 }

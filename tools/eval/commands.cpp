@@ -13,6 +13,7 @@
 #include "json.hpp"
 #include "kitti.hpp"
 #include "report.hpp"
+#include "swf/cli/cli.hpp"
 #include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/config.hpp"
 
@@ -218,60 +219,11 @@ int WriteEvaluation(const std::string& out, const Evaluation& e) {
   return AllOk(*e.runs) ? 0 : kExitRunFailed;
 }
 
-// Strict number parsing: the whole argument must be a finite number.
-bool ParseNumber(const char* text, double* value) {
-  char* end = nullptr;
-  *value = std::strtod(text, &end);
-  return end != text && *end == '\0' && std::isfinite(*value);
-}
-
-bool ParsePair(const char* text, double* a, double* b) {
-  const std::string s = text;
-  const std::size_t comma = s.find(',');
-  return comma != std::string::npos && ParseNumber(s.substr(0, comma).c_str(), a) &&
-         ParseNumber(s.substr(comma + 1).c_str(), b) && *a > 0.0 && *b > 0.0;
-}
-
-int Usage(const std::string& why) {
-  std::fprintf(stderr, "swf-eval: %s\n%s", why.c_str(), SequenceUsage());
-  return 2;
-}
-
-// The options both commands share; false for an unknown flag or a malformed value.
-struct CommonArgs {
-  std::string out = "out/eval";
-  double window = 5;
-  double max_tracks = 150;
-  double sigma_m = 0.0;  // 0: the command's default
-  double sigma_rad = 0.0;
-  double divergence_m = 0.0;
-};
-
-bool ParseCommon(const std::string& flag, const char* value, CommonArgs* a, std::string* why) {
-  bool ok = true;
-  if (flag == "--out") {
-    a->out = value;
-  } else if (flag == "--window") {
-    ok = ParseNumber(value, &a->window);
-  } else if (flag == "--max-tracks") {
-    ok = ParseNumber(value, &a->max_tracks);
-  } else if (flag == "--motion-sigma") {
-    ok = ParsePair(value, &a->sigma_m, &a->sigma_rad);
-  } else if (flag == "--divergence-m") {
-    ok = ParseNumber(value, &a->divergence_m) && a->divergence_m > 0.0;
-  } else {
-    *why = "unknown option " + flag;
-    return false;
-  }
-  if (!ok) *why = "bad value for " + flag + ": " + value;
-  return ok;
-}
-
 // Creates the output directory and runs the dataset; false, after saying why, when either fails.
 template <typename Run>
 bool PrepareAndRun(const char* tool, const std::string& out, const Run& run) {
   std::string error;
-  if (!MakeDirectories(out, &error) || !run(&error)) {
+  if (!cli::MakeDirectories(out, &error) || !run(&error)) {
     std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
     return false;
   }
@@ -280,26 +232,14 @@ bool PrepareAndRun(const char* tool, const std::string& out, const Run& run) {
 
 // The flags every dataset command shares, onto its options (the same field names).
 template <typename DatasetOptions>
-void ApplyCommon(const CommonArgs& a, DatasetOptions* options) {
-  options->window = static_cast<int>(a.window);
+void ApplyCommon(const SequenceArgs& a, DatasetOptions* options) {
+  options->window = a.window;
   options->max_tracks = static_cast<std::size_t>(a.max_tracks);
-  if (a.sigma_m > 0.0) {
-    options->motion_sigma_m = a.sigma_m;
-    options->motion_sigma_rad = a.sigma_rad;
+  if (a.motion_sigma_m > 0.0) {
+    options->motion_sigma_m = a.motion_sigma_m;
+    options->motion_sigma_rad = a.motion_sigma_rad;
   }
   if (a.divergence_m > 0.0) options->divergence_m = a.divergence_m;
-}
-
-bool CheckCommon(const CommonArgs& a, std::string* why) {
-  if (a.window < 2 || a.window > 10 || a.window != std::floor(a.window)) {
-    *why = "--window must be an integer in [2, 10] (the flight filter's capacity)";
-    return false;
-  }
-  if (a.max_tracks < 10 || a.max_tracks > static_cast<double>(frontend::kMaxTracks)) {
-    *why = "--max-tracks must be in [10, " + std::to_string(frontend::kMaxTracks) + "]";
-    return false;
-  }
-  return true;
 }
 
 // Shared paragraph: what ran.
@@ -469,33 +409,10 @@ std::string KittiNotes(const KittiResult& r) {
 
 }  // namespace
 
-const char* SequenceUsage() {
-  return "usage: swf-eval euroc DIR [--out OUT] [--window K] [--max-tracks N]\n"
-         "                      [--motion-sigma M,RAD] [--loop-seconds S] [--divergence-m M]\n"
-         "       swf-eval kitti DIR [--out OUT] [--window K] [--max-tracks N] [--max-disparity D]\n"
-         "                      [--motion-sigma M,RAD] [--divergence-m M] [--frames N]\n"
-         "  exit status: 0 every run scored, 1 unusable input/output, 2 bad arguments,\n"
-         "  3 a run failed (non-finite, diverged, or a frame without tracked landmarks)\n";
-}
-
-int RunEurocCommand(int argc, char** argv) {
-  const std::string dir = argv[2];
-  CommonArgs a;
+int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
+  const std::string& dir = a.dir;
   EurocOptions options;
-  std::string why;
-  for (int i = 3; i < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (i + 1 >= argc) return Usage(flag + " needs a value");
-    if (flag == "--loop-seconds") {
-      if (!ParseNumber(argv[i + 1], &options.loop_seconds) || options.loop_seconds <= 0.0 ||
-          options.loop_seconds > 3600.0) {
-        return Usage("--loop-seconds must be in (0, 3600]");
-      }
-    } else if (!ParseCommon(flag, argv[i + 1], &a, &why)) {
-      return Usage(why);
-    }
-  }
-  if (!CheckCommon(a, &why)) return Usage(why);
+  options.loop_seconds = loop_seconds;
   ApplyCommon(a, &options);
   EurocResult result;
   if (!PrepareAndRun("swf-eval euroc", a.out,
@@ -516,6 +433,8 @@ int RunEurocCommand(int argc, char** argv) {
   e.runs = &result.runs;
   e.diagnostics = &result.diagnostics;
   e.header.String("experiment", e.prefix)
+      .String("version", cli::Version())
+      .String("commit", cli::Commit())
       .String("dataset", dir)
       .Integer("recorded_frames", result.recorded_frames)
       .Integer("frames", static_cast<long long>(result.sequence.frames.size()))
@@ -543,33 +462,11 @@ int RunEurocCommand(int argc, char** argv) {
   return WriteEvaluation(a.out, e);
 }
 
-int RunKittiCommand(int argc, char** argv) {
-  const std::string dir = argv[2];
-  CommonArgs a;
-  a.max_tracks = 300;
+int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames) {
+  const std::string& dir = a.dir;
   KittiOptions options;
-  std::string why;
-  for (int i = 3; i < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (i + 1 >= argc) return Usage(flag + " needs a value");
-    if (flag == "--max-disparity") {
-      double d = 0.0;
-      if (!ParseNumber(argv[i + 1], &d) || d < 16 || d > frontend::kMaxDisparity) {
-        return Usage("--max-disparity must be in [16, " + std::to_string(frontend::kMaxDisparity) +
-                     "]");
-      }
-      options.max_disparity_px = static_cast<int>(d);
-    } else if (flag == "--frames") {
-      double n = 0.0;
-      if (!ParseNumber(argv[i + 1], &n) || n < 3 || n != std::floor(n)) {
-        return Usage("--frames must be an integer >= 3");
-      }
-      options.max_frames = static_cast<int>(n);
-    } else if (!ParseCommon(flag, argv[i + 1], &a, &why)) {
-      return Usage(why);
-    }
-  }
-  if (!CheckCommon(a, &why)) return Usage(why);
+  options.max_disparity_px = max_disparity_px;
+  options.max_frames = max_frames;
   ApplyCommon(a, &options);
   KittiResult result;
   if (!PrepareAndRun("swf-eval kitti", a.out,
@@ -584,6 +481,8 @@ int RunKittiCommand(int argc, char** argv) {
   e.runs = &result.runs;
   e.diagnostics = &result.diagnostics;
   e.header.String("experiment", e.prefix)
+      .String("version", cli::Version())
+      .String("commit", cli::Commit())
       .String("dataset", dir)
       .Integer("frames", static_cast<long long>(result.sequence.frames.size()))
       .Integer("window", options.window)

@@ -7,18 +7,30 @@
 // "<key>_reason"), OUT/<prefix>.md (text computed from the same numbers), OUT/<prefix>_error.dat
 // and .json (per-frame errors) and the estimated trajectories. Exit status: 0 when every run
 // is scored, 1 for unusable input or unwritable output (with the reason on stderr), 2 for bad
-// arguments, 3 when a run failed (non-finite, diverged, or frames without a tracked landmark;
+// arguments (swf-eval's command line), 3 when a run failed (non-finite, diverged, or frames without a tracked landmark;
 // the reason names the frame and the line of the input it came from).
 #pragma once
+
+#include <string>
 
 namespace swf::eval {
 
 inline constexpr int kExitRunFailed = 3;
 
-int RunEurocCommand(int argc, char** argv);
-int RunKittiCommand(int argc, char** argv);
+// The options both commands share (swf-eval's command line checks their ranges).
+struct SequenceArgs {
+  std::string dir;
+  std::string out = "out/eval";
+  int window = 5;
+  int max_tracks = 150;
+  double motion_sigma_m = 0.0;  // 0: the command's default (with motion_sigma_rad)
+  double motion_sigma_rad = 0.0;
+  double divergence_m = 0.0;  // 0: the command's default
+};
 
-// The usage lines of both commands.
-const char* SequenceUsage();
+// `loop_seconds` > 0: the recorded frames played forwards and backwards for that long.
+int RunEurocCommand(const SequenceArgs& args, double loop_seconds);
+// `max_frames` 0: every frame.
+int RunKittiCommand(const SequenceArgs& args, int max_disparity_px, int max_frames);
 
 }  // namespace swf::eval

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <system_error>
 
@@ -69,17 +68,6 @@ bool WriteExperiment(const std::string& out, const std::string& name, const Figu
     return false;
   }
   std::printf("swf-eval: wrote %s/%s.json\n", out.c_str(), name.c_str());
-  return true;
-}
-
-bool MakeDirectories(const std::string& dir, std::string* error) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) {
-    *error = dir + ": cannot create the output directory (" +
-             (ec ? ec.message() : std::string("exists and is not a directory")) + ")";
-    return false;
-  }
   return true;
 }
 

@@ -32,7 +32,4 @@ struct Figure {
                                    const std::string& extra_json,
                                    const std::vector<double>& x = {});
 
-// Creates `dir` and its parents (mkdir -p); false with *error naming it.
-bool MakeDirectories(const std::string& dir, std::string* error);
-
 }  // namespace swf::eval

@@ -1,5 +1,7 @@
 #include "json.hpp"
 
+#include "swf/cli/cli.hpp"
+
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -229,15 +231,9 @@ bool WriteJsonFile(const std::string& path, const std::string& text, std::string
     *error = path + ": not written, " + why;
     return false;
   }
-  std::ofstream file(path);
-  file << text;
-  if (text.empty() || text.back() != '\n') file << '\n';
-  file.close();
-  if (!file) {
-    *error = path + ": cannot write";
-    return false;
-  }
-  return true;
+  // Whole or not at all, in a directory created when missing (docs/cli.md).
+  return cli::WriteFileAtomically(path, text.empty() || text.back() != '\n' ? text + "\n" : text,
+                                  error);
 }
 
 }  // namespace swf::eval

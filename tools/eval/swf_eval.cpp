@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "experiment_file.hpp"
 #include "experiments.hpp"
 #include "kitti_vo.hpp"
@@ -117,14 +118,6 @@ Series MonteCarlo(const std::string& name, SceneOptions so, int runs,
   return s;
 }
 
-int Usage(std::FILE* to = stderr) {
-  std::fprintf(
-      to,
-      "usage: swf-eval paper OUT [--runs N] [--nees-runs N] [--shared DIR] [--only LIST]\n"
-      "  LIST: comma-separated subset of fig12,fig13,fig14,fig15,fig16,fig17,nees,kitti\n%s",
-      swf::eval::SequenceUsage());
-  return 2;
-}
 
 // "consistent" / "overconfident" / "conservative" from the frame-averaged NEES against the
 // 95% band of a single frame's run average.
@@ -429,39 +422,77 @@ bool AddFig16(const std::string& out, int runs, std::string* md) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  for (int a = 1; a < argc; ++a) {
-    if (std::string(argv[a]) == "--help" || std::string(argv[a]) == "-h") {
-      Usage(stdout);
-      return 0;
-    }
-  }
-  if (argc >= 3 && argv[2][0] == '-') return Usage();  // an option where the path belongs
-  if (argc >= 3 && std::string(argv[1]) == "euroc") return swf::eval::RunEurocCommand(argc, argv);
-  if (argc >= 3 && std::string(argv[1]) == "kitti") return swf::eval::RunKittiCommand(argc, argv);
-  if (argc < 3 || std::string(argv[1]) != "paper") return Usage();
-  const std::string out = argv[2];
+  CLI::App app{
+      "swf-eval: reruns the paper's experiments (paper) and the flight pipeline on real image "
+      "sequences (euroc, kitti); exit 3 when a run failed (non-finite, diverged, or a frame "
+      "without tracked landmarks)"};
+  swf::ground_cli::Adopt(&app, "swf-eval");
+  app.require_subcommand(1);
+  swf::eval::SequenceArgs sequence;
+  std::vector<double> motion_sigma;
+  // The options both sequence commands take.
+  const auto add_sequence = [&](CLI::App* cmd) {
+    cmd->add_option("DIR", sequence.dir, "the dataset folder")
+        ->required()
+        ->check(CLI::ExistingDirectory);
+    cmd->add_option("--out", sequence.out, "output directory (created)")->capture_default_str();
+    cmd->add_option("--window", sequence.window, "poses in the window (the flight capacity)")
+        ->capture_default_str()
+        ->check(CLI::Range(2, 10));
+    cmd->add_option("--max-tracks", sequence.max_tracks, "tracked features")
+        ->check(CLI::Range(10, static_cast<int>(swf::frontend::kMaxTracks)));
+    cmd->add_option("--motion-sigma", motion_sigma, "motion input sigma M,RAD")
+        ->delimiter(',')
+        ->expected(2)
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--divergence-m", sequence.divergence_m,
+                    "error without fit that calls a run diverged")
+        ->check(CLI::PositiveNumber);
+  };
+  double loop_seconds = 0.0;
+  CLI::App* euroc = app.add_subcommand("euroc", "a EuRoC ASL sequence through the pipeline");
+  add_sequence(euroc);
+  euroc->add_option("--loop-seconds", loop_seconds,
+                    "play the frames forwards and backwards for this long")
+      ->check(CLI::Range(0.0, 3600.0));
+  int max_disparity_px = 128;
+  int max_frames = 0;
+  CLI::App* kitti = app.add_subcommand("kitti", "a KITTI odometry excerpt through the pipeline");
+  add_sequence(kitti);
+  kitti->add_option("--max-disparity", max_disparity_px, "the front end's disparity search")
+      ->capture_default_str()
+      ->check(CLI::Range(16, swf::frontend::kMaxDisparity));
+  kitti->add_option("--frames", max_frames, "only the first N frames")->check(CLI::Range(3, 1000000));
+  std::string out;
   int runs = 5;
   int nees_runs = 50;
   std::string shared = "../shared";
-  std::string only;
-  for (int i = 3; i < argc; i += 2) {
-    const std::string a = argv[i];
-    if (i + 1 >= argc) return Usage();
-    if (a == "--runs") {
-      runs = std::atoi(argv[i + 1]);
-    } else if (a == "--nees-runs") {
-      nees_runs = std::atoi(argv[i + 1]);
-    } else if (a == "--shared") {
-      shared = argv[i + 1];
-    } else if (a == "--only") {
-      only = "," + std::string(argv[i + 1]) + ",";
-    } else {
-      return Usage();
-    }
+  std::string only_list;
+  CLI::App* paper = app.add_subcommand("paper", "the paper's experiments -> OUT/*.json, results.md");
+  paper->add_option("OUT", out, "output directory (created)")->required();
+  paper->add_option("--runs", runs, "Monte Carlo runs")->capture_default_str()->check(
+      CLI::PositiveNumber);
+  paper->add_option("--nees-runs", nees_runs, "runs of the NEES section")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 100000));
+  paper->add_option("--shared", shared, "the shared data directory")->capture_default_str();
+  paper->add_option("--only", only_list,
+                    "comma-separated subset of fig12,fig13,fig14,fig15,fig16,fig17,nees,kitti");
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
   }
-  if (runs < 1 || nees_runs < 2) return Usage();
+  if (motion_sigma.size() == 2) {
+    sequence.motion_sigma_m = motion_sigma[0];
+    sequence.motion_sigma_rad = motion_sigma[1];
+  }
+  if (euroc->parsed()) return swf::eval::RunEurocCommand(sequence, loop_seconds);
+  if (kitti->parsed()) {
+    if (kitti->count("--max-tracks") == 0) sequence.max_tracks = 300;
+    return swf::eval::RunKittiCommand(sequence, max_disparity_px, max_frames);
+  }
+  const std::string only = only_list.empty() ? "" : "," + only_list + ",";
   std::string dir_error;
-  if (!swf::eval::MakeDirectories(out, &dir_error)) {
+  if (!swf::cli::MakeDirectories(out, &dir_error)) {
     std::fprintf(stderr, "swf-eval paper: %s\n", dir_error.c_str());
     return 1;
   }

@@ -6,11 +6,23 @@
 //                [--map-out FILE]   (the last landmark map as "x y z" lines, for plotting)
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <string>
 
 #include "guidance_monitor.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
+
+namespace {
+
+using nlohmann::json;
+using swf::ground_cli::Number;
+
+json Counts(const swf::guidance::ChannelStats& c, bool ordered) {
+  json counts = {{"received", c.received}, {"lost", c.lost}, {"malformed", c.malformed}};
+  if (ordered) counts["out_of_order"] = c.out_of_order;
+  return counts;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // The receive buffer holds a whole hazard map (~1.1 MB in fragments).
@@ -20,27 +32,22 @@ int main(int argc, char** argv) {
   double idle_s = 2.0;
   double timeout_s = 120.0;
   bool quiet = false;
-  for (int a = 1; a < argc; ++a) {
-    const std::string arg = argv[a];
-    const bool v = a + 1 < argc;
-    if (arg == "--url" && v)
-      url = argv[++a];
-    else if (arg == "--prefix" && v)
-      prefix = argv[++a];
-    else if (arg == "--idle" && v)
-      idle_s = std::atof(argv[++a]);
-    else if (arg == "--timeout" && v)
-      timeout_s = std::atof(argv[++a]);
-    else if (arg == "--map-out" && v)
-      map_out = argv[++a];
-    else if (arg == "--quiet")
-      quiet = true;
-    else {
-      std::fprintf(stderr,
-                   "usage: swf-guidance [--url URL] [--prefix P] [--idle S] [--timeout S] "
-                   "[--quiet] [--map-out FILE]\n");
-      return 2;
-    }
+  CLI::App app{
+      "swf-guidance: the guidance-side consumer of the flight process's LCM outputs; prints a "
+      "JSON summary on stdout at the end"};
+  swf::ground_cli::Adopt(&app, "swf-guidance");
+  app.add_option("--url", url, "LCM URL to listen on")->capture_default_str();
+  app.add_option("--prefix", prefix, "the flight process's channel prefix")->capture_default_str();
+  app.add_option("--idle", idle_s, "exit after this many seconds without traffic (once any)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--timeout", timeout_s, "exit after this many seconds in all")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--quiet", quiet, "print only the summary");
+  app.add_option("--map-out", map_out, "write the last landmark map here as \"id x y z\" lines");
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
   }
   lcm::LCM lcm(url);
   if (!lcm.good()) {
@@ -66,41 +73,39 @@ int main(int argc, char** argv) {
     if (std::chrono::duration<double>(now - start).count() > timeout_s) break;
     std::fflush(stdout);
   }
+  int code = swf::cli::kExitOk;
   if (!map_out.empty()) {
-    if (std::FILE* f = std::fopen(map_out.c_str(), "w")) {
-      const auto& m = monitor.LastMap();
-      for (int i = 0; i < m.num_landmarks; ++i) {
-        std::fprintf(f, "%lld %.6f %.6f %.6f\n", static_cast<long long>(m.id[i]),
-                     m.position_world_m[i][0], m.position_world_m[i][1], m.position_world_m[i][2]);
-      }
-      std::fclose(f);
+    std::string text;
+    const auto& m = monitor.LastMap();
+    char line[160];
+    for (int i = 0; i < m.num_landmarks; ++i) {
+      std::snprintf(line, sizeof line, "%lld %.6f %.6f %.6f\n", static_cast<long long>(m.id[i]),
+                    m.position_world_m[i][0], m.position_world_m[i][1], m.position_world_m[i][2]);
+      text += line;
+    }
+    std::string error;
+    if (!swf::cli::WriteFileAtomically(map_out, text, &error)) {
+      std::fprintf(stderr, "swf-guidance: %s\n", error.c_str());
+      code = swf::cli::kExitFailed;
     }
   }
-  const auto& n = monitor.Nav();
-  const auto& l = monitor.Landmarks();
-  const auto& h = monitor.Health();
-  const auto& z = monitor.Hazard();
-  std::printf(
-      "{\"nav\": {\"received\": %lld, \"lost\": %lld, \"out_of_order\": %lld, \"malformed\": "
-      "%lld},\n \"landmarks\": {\"received\": %lld, \"lost\": %lld, \"out_of_order\": %lld, "
-      "\"malformed\": %lld},\n \"health\": {\"received\": %lld, \"lost\": %lld, \"malformed\": "
-      "%lld},\n \"hazard\": {\"received\": %lld, \"lost\": %lld, \"out_of_order\": %lld, "
-      "\"malformed\": %lld, \"last_frame\": %lld, \"last_site_valid\": %s},\n"
-      " \"last_frame\": %lld, \"last_position_m\": [%.3f, %.3f, %.3f], "
-      "\"last_map_landmarks\": %d, \"overruns\": %lld, \"allocations_after_start\": %lld}\n",
-      static_cast<long long>(n.received), static_cast<long long>(n.lost),
-      static_cast<long long>(n.out_of_order), static_cast<long long>(n.malformed),
-      static_cast<long long>(l.received), static_cast<long long>(l.lost),
-      static_cast<long long>(l.out_of_order), static_cast<long long>(l.malformed),
-      static_cast<long long>(h.received), static_cast<long long>(h.lost),
-      static_cast<long long>(h.malformed), static_cast<long long>(z.received),
-      static_cast<long long>(z.lost), static_cast<long long>(z.out_of_order),
-      static_cast<long long>(z.malformed),
-      static_cast<long long>(z.received > 0 ? monitor.LastHazard().frame_seq : -1),
-      monitor.LastHazard().safe_site_valid ? "true" : "false",
-      static_cast<long long>(monitor.LastNav().frame_seq), monitor.LastNav().position_world_m[0],
-      monitor.LastNav().position_world_m[1], monitor.LastNav().position_world_m[2],
-      monitor.LastMap().num_landmarks, static_cast<long long>(monitor.LastHealth().overruns),
-      static_cast<long long>(monitor.LastHealth().allocations_after_start));
-  return 0;
+  const auto& nav = monitor.LastNav();
+  json hazard = Counts(monitor.Hazard(), true);
+  hazard["last_frame"] =
+      monitor.Hazard().received > 0 ? static_cast<long long>(monitor.LastHazard().frame_seq) : -1LL;
+  hazard["last_site_valid"] = monitor.LastHazard().safe_site_valid != 0;
+  const json summary = {{"nav", Counts(monitor.Nav(), true)},
+                        {"landmarks", Counts(monitor.Landmarks(), true)},
+                        {"health", Counts(monitor.Health(), false)},
+                        {"hazard", hazard},
+                        {"last_frame", nav.frame_seq},
+                        {"last_position_m",
+                         {Number(nav.position_world_m[0]), Number(nav.position_world_m[1]),
+                          Number(nav.position_world_m[2])}},
+                        {"last_map_landmarks", monitor.LastMap().num_landmarks},
+                        {"overruns", monitor.LastHealth().overruns},
+                        {"allocations_after_start", monitor.LastHealth().allocations_after_start},
+                        {"run", swf::ground_cli::RunEcho(app, "swf-guidance", argc, argv)}};
+  std::printf("%s\n", summary.dump().c_str());
+  return code;
 }

@@ -9,7 +9,9 @@
 //   swf-hazard map OUT.png [--preset plains|craters|rocks] [--seed S] [--shared DIR]
 //       one fused descent, the final hazard map as PNG.
 // Every failure prints one line "swf-hazard: ..." naming the file (or option) and the cause, and
-// exits 1; `eval` exits 2 when a selected site lies on a true hazard.
+// exits 1; `eval` exits 1 too when a selected site lies on a true hazard (a failed result); a
+// command line refused exits 2 (docs/cli.md). Output directories are created; every file is
+// written under a temporary name and renamed when whole (SIGINT / SIGTERM remove it).
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include "run_filter.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/evaluation/statistics.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/plot/plot.hpp"
@@ -76,13 +79,6 @@ swf::estimator::Pose<double> CameraPose(const World& w, double x, double y, doub
   return p;
 }
 
-const char* Arg(int argc, char** argv, const char* name, const char* fallback) {
-  for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], name) == 0) return argv[i + 1];
-  }
-  return fallback;
-}
-
 // Every failure: one line naming what failed (and the file), exit status 1.
 int Fail(const std::string& why) {
   std::fprintf(stderr, "swf-hazard: %s\n", why.c_str());
@@ -93,26 +89,6 @@ int Fail(const std::string& why) {
 // renderer would produce them: refused up front with the reason instead of as a configuration
 // failure.
 constexpr int kMinImageSide = 32;
-
-// A whole decimal number within [lo, hi] from --flag, or false with *why.
-bool IntArg(int argc, char** argv, const char* name, long fallback, long lo, long hi, long* value,
-            std::string* why) {
-  const char* text = Arg(argc, argv, name, nullptr);
-  if (text == nullptr) {
-    *value = fallback;
-    return true;
-  }
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || errno != 0 || v < lo || v > hi) {
-    *why = std::string(name) + " takes a whole number in " + std::to_string(lo) + ".." +
-           std::to_string(hi) + ", not '" + std::string(text).substr(0, 40) + "'";
-    return false;
-  }
-  *value = v;
-  return true;
-}
 
 // Configures the world and the mapper, or says which failed and why.
 bool Prepare(World* world, swf::hazard::HazardMapper* mapper, swf::sim::TerrainPreset preset,
@@ -172,8 +148,10 @@ void Json(FILE* f, double v) {
 
 int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_seeds,
          int only_preset) {
-  FILE* json = std::fopen((out + "/hazard_eval.json").c_str(), "w");
-  if (json == nullptr) return Fail(out + "/hazard_eval.json: cannot write");
+  std::string error;
+  swf::cli::OutputFile json_file;
+  if (!json_file.Open(out + "/hazard_eval.json", &error)) return Fail(error);
+  FILE* json = json_file.Stream();
   constexpr int kNumAlt = sizeof(kSweepAltitudes) / sizeof(kSweepAltitudes[0]);
   std::vector<std::vector<Acc>> sweep(3, std::vector<Acc>(kNumAlt));
   std::vector<Acc> all_alt(kNumAlt);
@@ -273,10 +251,10 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
   std::fprintf(json, "  \"max_rock_height_m\": %g, \"max_slope_deg\": %g,\n", eo.max_rock_height_m,
                eo.max_slope_deg);
   std::fprintf(json, "  \"sweep_seeds_per_preset\": %d,\n  \"sweep\": [\n", sweep_seeds);
-  FILE* dat = std::fopen((out + "/hazard_sweep.dat").c_str(), "w");
+  swf::cli::OutputFile dat_file;
+  FILE* dat = dat_file.Open(out + "/hazard_sweep.dat", &error) ? dat_file.Stream() : nullptr;
   if (dat == nullptr) {
-    std::fclose(json);
-    return Fail(out + "/hazard_sweep.dat: cannot write");
+    return Fail(error);
   }
   std::fprintf(dat,
                "# altitude pd_all far_all pd_plains pd_craters pd_rocks slope_med slope_p90 "
@@ -321,7 +299,7 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
                  Quantile(t.slope_err, 0.9), t.WithinSigma(1.0), t.WithinSigma(2.0),
                  Quantile(t.elev_sigma, 0.5), t.cell_m / std::max(1, t.frames), dz, t.Pf());
   }
-  std::fclose(dat);
+  if (!dat_file.Commit(&error)) return Fail(error);
   int valid = 0;
   int on_hazard = 0;
   double min_clear = 1e9;
@@ -372,7 +350,7 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
                  r.valid ? "true" : "false", r.on_hazard ? "true" : "false", clearance, r.stable);
   }
   std::fprintf(json, "]\n  }\n}\n");
-  if (std::fclose(json) != 0) return Fail(out + "/hazard_eval.json: write failed");
+  if (!json_file.Commit(&error)) return Fail(error);
   // Plots, by altitude of the static sweep.
   const auto series = [&](const std::string& title, auto&& value) {
     swf::plot::Series line{title, {}, {}};
@@ -428,8 +406,8 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
   }
   std::printf("%s/hazard_eval.json: %d descents, site found %d, on true hazard %d\n", out.c_str(),
               static_cast<int>(results.size()), valid, on_hazard);
-  if (!drawn) return 1;
-  return on_hazard == 0 ? 0 : 2;
+  if (!drawn) return swf::cli::kExitFailed;
+  return on_hazard == 0 ? swf::cli::kExitOk : swf::cli::kExitFailed;
 }
 
 int Map(const std::string& path, const EvalOptions& eo, swf::sim::TerrainPreset preset,
@@ -594,8 +572,9 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
   auto mapper = std::make_unique<swf::hazard::HazardMapper>();
   std::string why;
   if (!Prepare(&world, mapper.get(), preset, seed, eo, &why)) return Fail(why);
-  FILE* dat = std::fopen((out + "/flight.dat").c_str(), "w");
-  if (dat == nullptr) return Fail(out + "/flight.dat: cannot write");
+  swf::cli::OutputFile dat_file;
+  if (!dat_file.Open(out + "/flight.dat", &why)) return Fail(why);
+  FILE* dat = dat_file.Stream();
   const char* head =
       "# alt cell known safe unc slope rock in1s in2s sig_med err_med slope_err_med "
       "sgm_valid sgm_med_abs sgm_robust_sigma sgm_rms_clip sgm_over1 site clear rocks_res "
@@ -614,7 +593,6 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
             world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms, swf ? &poses.error[f] : nullptr,
                        swf ? &poses.covariance[f] : nullptr);
         st != swf::core::Status::kOk) {
-      std::fclose(dat);
       return Fail(StepFailure(f, alt, st));
     }
     if (swf) {
@@ -631,7 +609,6 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     const double agl = alt - world.Terrain().HeightAt(x0, y0);
     HazardMapMetrics m;
     if (const swf::core::Status st2 = world.Evaluate(*mapper, &m); st2 != swf::core::Status::kOk) {
-      std::fclose(dat);
       return Fail(EvaluateFailure(st2));
     }
     Acc acc;
@@ -658,7 +635,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     std::fputs(line.c_str(), stdout);
     std::fflush(stdout);
   }
-  std::fclose(dat);
+  if (!dat_file.Commit(&why)) return Fail(why);
   // Truth: how much of the final grid is a possible site (no truth hazard node within the
   // footprint radius, at least a footprint radius inside the grid).
   {
@@ -718,66 +695,86 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
 }  // namespace
 
 int main(int argc, char** argv) {
-  const auto usage = [](std::FILE* to) {
-    std::fprintf(to,
-                 "usage: swf-hazard eval OUTDIR [--descents N] [--sweep-seeds S] [--shared DIR] "
-                 "[--width W] [--height H] [--downsample D]\n"
-                 "       swf-hazard map OUT.png [--preset plains|craters|rocks] [--seed S] "
-                 "[--shared DIR]\n");
-  };
-  for (int a = 1; a < argc; ++a) {
-    if (std::strcmp(argv[a], "--help") == 0 || std::strcmp(argv[a], "-h") == 0) {
-      usage(stdout);
-      return 0;
-    }
-  }
-  if (argc < 3 || argv[2][0] == '-') {  // an option where the output path belongs
-    usage(stderr);
-    return 1;
-  }
+  CLI::App app{
+      "swf-hazard: hazard mapping evaluated on seeded simulated descents against the simulator's "
+      "truth"};
+  swf::ground_cli::Adopt(&app, "swf-hazard");
+  app.require_subcommand(1);
   EvalOptions eo;
   const char* env = std::getenv("SWF_SHARED_DIR");
-  eo.shared_dir = Arg(argc, argv, "--shared", env != nullptr ? env : "../shared");
-  long width = 0;
-  long height = 0;
-  long downsample = 0;
-  std::string why;
-  if (!IntArg(argc, argv, "--width", 512, 1, 16384, &width, &why) ||
-      !IntArg(argc, argv, "--height", 384, 1, 16384, &height, &why) ||
-      !IntArg(argc, argv, "--downsample", 1, 1, 4, &downsample, &why)) {
-    return Fail(why);
+  eo.shared_dir = env != nullptr ? env : "../shared";
+  // The options every command takes.
+  const auto add_common = [&eo](CLI::App* cmd) {
+    cmd->add_option("--shared", eo.shared_dir, "the shared data directory")->capture_default_str();
+    cmd->add_option("--width", eo.image_width, "image width, px")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--height", eo.image_height, "image height, px")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 16384));
+    cmd->add_option("--downsample", eo.downsample, "the hazard mapper's image reduction")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 4));
+  };
+  eo.image_width = 512;
+  eo.image_height = 384;
+  eo.downsample = 1;
+  std::string out;
+  int descents = 17;
+  int sweep_seeds = 3;
+  std::string only_name;
+  CLI::App* eval = app.add_subcommand(
+      "eval", "altitude sweep over the three terrain presets, then seeded fused descents with the "
+              "safe-site check -> OUTDIR/hazard_eval.json, *.dat, PNGs");
+  eval->add_option("OUTDIR", out, "output directory (created)")->required();
+  eval->add_option("--descents", descents, "fused descents per preset")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  eval->add_option("--sweep-seeds", sweep_seeds, "seeds of the altitude sweep")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  eval->add_option("--descent-preset", only_name, "fly the descents over this preset only")
+      ->check(CLI::IsMember({"plains", "craters", "rocks"}));
+  add_common(eval);
+  std::string preset_name = "rocks";
+  std::uint64_t seed = 1;
+  CLI::App* map = app.add_subcommand("map", "one fused descent, the final hazard map as PNG");
+  map->add_option("OUT", out, "the PNG to write (its directory is created)")->required();
+  map->add_option("--preset", preset_name, "plains, craters or rocks")->capture_default_str();
+  map->add_option("--seed", seed)->capture_default_str();
+  add_common(map);
+  double x = 0.0;
+  double y = 0.0;
+  double step = 5.0;
+  int swf = 0;
+  CLI::App* flight =
+      app.add_subcommand("flight", "one descent flown with the mapper -> OUTDIR/flight.dat, PNG");
+  flight->add_option("OUTDIR", out, "output directory (created)")->required();
+  flight->add_option("--preset", preset_name, "plains, craters or rocks");
+  flight->add_option("--seed", seed)->capture_default_str();
+  flight->add_option("--terrain-size", eo.terrain_size, "terrain grid nodes a side (default 2048)")
+      ->check(CLI::PositiveNumber);
+  flight->add_option("--x", x, "landing point x, m")->capture_default_str();
+  flight->add_option("--y", y, "landing point y, m")->capture_default_str();
+  flight->add_option("--step", step, "descent step, m")->capture_default_str();
+  flight->add_option("--swf", swf, "1: poses from swf-eval's filter")->capture_default_str();
+  add_common(flight);
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
   }
-  eo.image_width = static_cast<int>(width);
-  eo.image_height = static_cast<int>(height);
-  eo.downsample = static_cast<int>(downsample);
-  const std::string verb = argv[1];
-  if (verb == "eval") {
+  swf::cli::RemovePartialOutputsOnSignal();
+  if (eval->parsed()) {
     swf::sim::TerrainPreset only = swf::sim::TerrainPreset::kCraterField;
-    const char* only_name = Arg(argc, argv, "--descent-preset", "");
-    const bool restrict = only_name[0] != '\0' && swf::sim::ParseTerrainPreset(only_name, &only);
-    return Eval(argv[2], eo, std::atoi(Arg(argc, argv, "--descents", "17")),
-                std::atoi(Arg(argc, argv, "--sweep-seeds", "3")),
-                restrict ? static_cast<int>(only) : -1);
+    const bool restrict =
+        !only_name.empty() && swf::sim::ParseTerrainPreset(only_name.c_str(), &only);
+    return Eval(out, eo, descents, sweep_seeds, restrict ? static_cast<int>(only) : -1);
   }
-  if (verb == "map") {
-    swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kRockField;
-    if (!swf::sim::ParseTerrainPreset(Arg(argc, argv, "--preset", "rocks"), &preset)) {
-      return Fail(std::string("unknown --preset ") + Arg(argc, argv, "--preset", "") +
-                  " (plains, craters or rocks)");
-    }
-    return Map(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10));
+  if (flight->parsed() && flight->count("--preset") == 0) preset_name = "craters";
+  if (flight->parsed() && flight->count("--terrain-size") == 0) eo.terrain_size = 2048;
+  swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kRockField;
+  if (!swf::sim::ParseTerrainPreset(preset_name.c_str(), &preset)) {
+    return Fail("unknown --preset " + preset_name.substr(0, 40) + " (plains, craters or rocks)");
   }
-  if (verb == "flight") {
-    swf::sim::TerrainPreset preset = swf::sim::TerrainPreset::kCraterField;
-    if (!swf::sim::ParseTerrainPreset(Arg(argc, argv, "--preset", "craters"), &preset)) {
-      return Fail(std::string("unknown --preset ") + Arg(argc, argv, "--preset", "") +
-                  " (plains, craters or rocks)");
-    }
-    eo.terrain_size = std::atoi(Arg(argc, argv, "--terrain-size", "2048"));
-    return Flight(argv[2], eo, preset, std::strtoull(Arg(argc, argv, "--seed", "1"), nullptr, 10),
-                  std::atof(Arg(argc, argv, "--x", "0")), std::atof(Arg(argc, argv, "--y", "0")),
-                  std::atof(Arg(argc, argv, "--step", "5")),
-                  std::atoi(Arg(argc, argv, "--swf", "0")) != 0);
-  }
-  return Fail("unknown verb " + verb.substr(0, 40) + " (eval, map or flight)");
+  if (map->parsed()) return Map(out, eo, preset, seed);
+  return Flight(out, eo, preset, seed, x, y, step, swf != 0);
 }

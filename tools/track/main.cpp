@@ -5,10 +5,10 @@
 //                                   rectifies a raw pair and writes it side by side with
 //                                   epipolar lines (every 24 rows)
 // flow/stereo print one JSON object with a `features` array ({x, y, dx, dy} or
-// {x, y, disparity}, pixels) and exit 0; errors go to stderr with exit code 1 (usage: 2).
+// {x, y, disparity}, pixels) and exit 0; errors go to stderr with exit code 1 (usage: 2;
+// docs/cli.md). rectify creates OUT.png's directory.
 #include <cstddef>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <string>
 
@@ -16,23 +16,18 @@
 #include "swf/frontend/rectify.hpp"
 #include "swf/frontend/stereo_matcher.hpp"
 #include "swf/frontend/tracker.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/image_io/image_io.hpp"
 
 namespace {
 
+using nlohmann::json;
 using swf::core::Status;
 using swf::frontend::CornerList;
 using swf::frontend::HarrisDetector;
 using swf::frontend::HarrisOptions;
+using swf::ground_cli::Number;
 using swf::image_io::GrayImage;
-
-int Usage() {
-  std::fprintf(stderr,
-               "usage: swf-track flow IMG1 IMG2\n"
-               "       swf-track stereo LEFT RIGHT\n"
-               "       swf-track rectify CAM0.yaml CAM1.yaml LEFT RIGHT OUT.png\n");
-  return 2;
-}
 
 bool Load(const char* path, GrayImage* image) {
   std::string error;
@@ -89,15 +84,14 @@ bool LoadPairAndDetect(const char* a_path, const char* b_path, GrayImage* a, Gra
   return Detect(a_path, *a, corners);
 }
 
-// The printed JSON object up to its feature list: the mode, the image size, the detections.
-void PrintHeader(const char* mode, const GrayImage& image, std::size_t detected) {
-  std::printf(
-      "{\"mode\": \"%s\", \"width_px\": %d, \"height_px\": %d, \"detected\": %zu, "
-      "\"features\": [",
-      mode, image.width, image.height, detected);
+// The printed JSON object around its feature list: the mode, the image size, the detections and
+// the run (docs/cli.md).
+json Report(const char* mode, const GrayImage& image, std::size_t detected, const json& run) {
+  return {{"mode", mode},         {"width_px", image.width},   {"height_px", image.height},
+          {"detected", detected}, {"features", json::array()}, {"run", run}};
 }
 
-int Flow(const char* a_path, const char* b_path) {
+int Flow(const char* a_path, const char* b_path, const json& run) {
   GrayImage a;
   GrayImage b;
   auto corners = std::make_unique<CornerList>();
@@ -112,22 +106,23 @@ int Flow(const char* a_path, const char* b_path) {
     std::fprintf(stderr, "swf-track: %s, %s: tracker set-up failed\n", a_path, b_path);
     return 1;
   }
-  PrintHeader("flow", a, corners->size());
-  const char* sep = "";
+  json report = Report("flow", a, corners->size(), run);
   for (const auto& c : *corners) {
     float x = c.x;
     float y = c.y;
     float q = 0.0f;
     if (!tracker.TrackFlow(*prev, *cur, c.x, c.y, &x, &y, &q)) continue;
-    std::printf("%s\n  {\"x\": %.0f, \"y\": %.0f, \"dx\": %.4f, \"dy\": %.4f, \"quality\": %.4f}",
-                sep, c.x, c.y, x - c.x, y - c.y, q);
-    sep = ",";
+    report["features"].push_back({{"x", Number(c.x)},
+                                  {"y", Number(c.y)},
+                                  {"dx", Number(x - c.x)},
+                                  {"dy", Number(y - c.y)},
+                                  {"quality", Number(q)}});
   }
-  std::printf("\n]}\n");
+  std::printf("%s\n", report.dump(1).c_str());
   return 0;
 }
 
-int Stereo(const char* l_path, const char* r_path) {
+int Stereo(const char* l_path, const char* r_path, const json& run) {
   GrayImage l;
   GrayImage r;
   auto corners = std::make_unique<CornerList>();
@@ -141,19 +136,19 @@ int Stereo(const char* l_path, const char* r_path) {
     std::fprintf(stderr, "swf-track: %s, %s: stereo matching failed\n", l_path, r_path);
     return 1;
   }
-  PrintHeader("stereo", l, corners->size());
-  const char* sep = "";
+  json report = Report("stereo", l, corners->size(), run);
   for (const auto& m : *matches) {
-    std::printf("%s\n  {\"x\": %.0f, \"y\": %.0f, \"disparity\": %.4f, \"quality\": %.4f}", sep,
-                m.x, m.y, m.disparity, m.quality);
-    sep = ",";
+    report["features"].push_back({{"x", Number(m.x)},
+                                  {"y", Number(m.y)},
+                                  {"disparity", Number(m.disparity)},
+                                  {"quality", Number(m.quality)}});
   }
-  std::printf("\n]}\n");
+  std::printf("%s\n", report.dump(1).c_str());
   return 0;
 }
 
 int Rectify(const char* cam0, const char* cam1, const char* l_path, const char* r_path,
-            const char* out_path) {
+            const char* out_path, const json& run) {
   swf::frontend::CameraCalibration c0;
   swf::frontend::CameraCalibration c1;
   std::string error;
@@ -195,25 +190,55 @@ int Rectify(const char* cam0, const char* cam1, const char* l_path, const char* 
       p[2] = line ? 0 : g;
     }
   }
-  if (!swf::image_io::SavePng(out_path, out, &error)) {
+  if (!swf::cli::MakeParentDirectories(out_path, &error) ||
+      !swf::image_io::SavePng(out_path, out, &error)) {
     std::fprintf(stderr, "swf-track: %s\n", error.c_str());
     return 1;
   }
   const auto& cam = rectifier->Camera();
-  std::printf(
-      "{\"mode\": \"rectify\", \"fx_px\": %.3f, \"cx_px\": %.3f, \"cy_px\": %.3f, "
-      "\"baseline_m\": %.5f, \"out\": \"%s\"}\n",
-      cam.fx, cam.cx, cam.cy, cam.baseline_m, out_path);
+  const json report = {{"mode", "rectify"},
+                       {"fx_px", Number(cam.fx)},
+                       {"cx_px", Number(cam.cx)},
+                       {"cy_px", Number(cam.cy)},
+                       {"baseline_m", Number(cam.baseline_m)},
+                       {"out", out_path},
+                       {"run", run}};
+  std::printf("%s\n", report.dump(1).c_str());
   return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc == 4 && std::strcmp(argv[1], "flow") == 0) return Flow(argv[2], argv[3]);
-  if (argc == 4 && std::strcmp(argv[1], "stereo") == 0) return Stereo(argv[2], argv[3]);
-  if (argc == 7 && std::strcmp(argv[1], "rectify") == 0) {
-    return Rectify(argv[2], argv[3], argv[4], argv[5], argv[6]);
+  CLI::App app{"swf-track: the flight front end's components on image files"};
+  swf::ground_cli::Adopt(&app, "swf-track");
+  app.require_subcommand(1);
+  std::string a;
+  std::string b;
+  CLI::App* flow = app.add_subcommand("flow", "Harris features of IMG1 tracked into IMG2 (LK)");
+  flow->add_option("IMG1", a)->required()->check(CLI::ExistingFile);
+  flow->add_option("IMG2", b)->required()->check(CLI::ExistingFile);
+  CLI::App* stereo =
+      app.add_subcommand("stereo", "Harris features of a rectified pair matched along rows");
+  stereo->add_option("LEFT", a)->required()->check(CLI::ExistingFile);
+  stereo->add_option("RIGHT", b)->required()->check(CLI::ExistingFile);
+  std::string cam0;
+  std::string cam1;
+  std::string out;
+  CLI::App* rectify = app.add_subcommand(
+      "rectify", "a raw pair rectified, side by side with epipolar lines every 24 rows");
+  rectify->add_option("CAM0", cam0, "left calibration (sensor.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  rectify->add_option("CAM1", cam1, "right calibration")->required()->check(CLI::ExistingFile);
+  rectify->add_option("LEFT", a)->required()->check(CLI::ExistingFile);
+  rectify->add_option("RIGHT", b)->required()->check(CLI::ExistingFile);
+  rectify->add_option("OUT", out, "the PNG to write (its directory is created)")->required();
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
   }
-  return Usage();
+  const json run = swf::ground_cli::RunEcho(app, "swf-track", argc, argv);
+  if (flow->parsed()) return Flow(a.c_str(), b.c_str(), run);
+  if (stereo->parsed()) return Stereo(a.c_str(), b.c_str(), run);
+  return Rectify(cam0.c_str(), cam1.c_str(), a.c_str(), b.c_str(), out.c_str(), run);
 }

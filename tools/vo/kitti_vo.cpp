@@ -352,14 +352,6 @@ KittiVoPlan PlanKittiVo(const KittiVoCapacity& needs, std::uint64_t available_by
   return plan;
 }
 
-bool ParseCount(const std::string& text, long long max, long long* out) {
-  char* end = nullptr;
-  const long long k = std::strtoll(text.c_str(), &end, 10);
-  if (end == text.c_str() || *end != '\0' || k < 1 || k > max) return false;
-  *out = k;
-  return true;
-}
-
 std::uint64_t AvailableMemoryBytes() {
   std::ifstream in("/proc/meminfo");
   std::string key;

@@ -95,10 +95,6 @@ KittiVoPlan PlanKittiVo(const KittiVoCapacity& needs, std::uint64_t available_by
 // for memory).
 std::uint64_t AvailableMemoryBytes();
 
-// A count given on swf-vo's and swf-vo-synth's command lines: a whole number in [1, max] and
-// nothing else. False otherwise, *out untouched.
-bool ParseCount(const std::string& text, long long max, long long* out);
-
 struct KittiVoResult {
   bool ok = false;
   std::string error;

@@ -9,6 +9,7 @@
 
 #include "swf/calibration/calibration_import.hpp"
 #include "swf/convert/convert.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 
 namespace {
 
@@ -45,7 +46,8 @@ CLI::App* AddInput(CLI::App& app, const char* name, const char* what, InputComma
 }
 
 int RunCalibration(const std::vector<std::string>& files, const std::string& format_name,
-                   const std::string& size, double max_error_px, const std::string& out) {
+                   const std::string& size, double max_error_px, const std::string& out,
+                   const json& run) {
   swf::calibration::ImportOptions options;
   if (!swf::calibration::ParseFormatName(format_name, &options.format)) {
     return Fail("--format " + format_name +
@@ -63,18 +65,10 @@ int RunCalibration(const std::vector<std::string>& files, const std::string& for
     return Fail(error);
   }
   if (!out.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(out, ec);
-    if (ec) return Fail(out + ": cannot create the directory (" + ec.message() + ")");
     for (const auto& [name, camera] : {std::pair{"left", c.left}, std::pair{"right", c.right}}) {
-      const std::string path = out + "/" + name + ".yaml";
-      const std::string temp = path + ".tmp";
-      std::FILE* f = std::fopen(temp.c_str(), "w");
-      const std::string text = swf::calibration::EurocSensorYaml(camera);
-      if (f == nullptr || std::fwrite(text.data(), 1, text.size(), f) != text.size() ||
-          std::fclose(f) != 0 || std::rename(temp.c_str(), path.c_str()) != 0) {
-        std::remove(temp.c_str());
-        return Fail(path + ": cannot write");
+      if (!swf::cli::WriteFileAtomically(out + "/" + name + ".yaml",
+                                         swf::calibration::EurocSensorYaml(camera), &error)) {
+        return Fail(error);
       }
     }
   }
@@ -87,7 +81,8 @@ int RunCalibration(const std::vector<std::string>& files, const std::string& for
                        {"rectified_cy", pair.camera.cy},
                        {"baseline_m", pair.camera.baseline_m},
                        {"linearization_error_px", c.linearization_error_px},
-                       {"written_to", out}};
+                       {"written_to", out},
+                       {"run", run}};
   std::printf("%s\n", report.dump(2).c_str());
   return 0;
 }
@@ -98,8 +93,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "swf-convert: datasets to LCM logs for swf-replay, logs to PNG pairs and trajectories, "
       "calibrations to swf-fsw's form"};
-  app.set_version_flag("--version", std::string("swf-convert ") + SWF_CONVERT_VERSION +
-                                        " (commit " + SWF_CONVERT_COMMIT + ")");
+  swf::ground_cli::Adopt(&app, "swf-convert");
   app.require_subcommand(1);
 
   InputCommand euroc;
@@ -162,7 +156,15 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   calib_cmd->add_option("--out", out_dir, "write left.yaml / right.yaml here");
 
-  CLI11_PARSE(app, argc, argv);
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
+  }
+  // Every summary printed echoes the run (docs/cli.md).
+  const json run = swf::ground_cli::RunEcho(app, "swf-convert", argc, argv);
+  const auto print = [&run](json summary) {
+    summary["run"] = run;
+    std::printf("%s\n", summary.dump(2).c_str());
+  };
 
   std::string error;
   for (auto [cmd, c, run] : {std::tuple{euroc_cmd, &euroc, &swf::convert::EurocToLog},
@@ -171,13 +173,13 @@ int main(int argc, char** argv) {
     if (!cmd->parsed()) continue;
     swf::convert::InputSummary summary;
     if (!run(c->dir, c->options, &summary, &error)) return Fail(error);
-    std::printf("%s\n", SummaryJson(summary, c->options).dump(2).c_str());
+    print(SummaryJson(summary, c->options));
     return 0;
   }
   if (pngs_cmd->parsed()) {
     std::int64_t pairs = 0;
     if (!swf::convert::LogToPngs(log_path, channel, out_dir, &pairs, &error)) return Fail(error);
-    std::printf("%s\n", json({{"pairs", pairs}, {"out", out_dir}}).dump(2).c_str());
+    print({{"pairs", pairs}, {"out", out_dir}});
     return 0;
   }
   if (traj_cmd->parsed()) {
@@ -187,19 +189,16 @@ int main(int argc, char** argv) {
     if (!swf::convert::LogToTrajectory(log_path, nav_channel, tum_path, kitti_path, anchor_first,
                                        &poses, &error))
       return Fail(error);
-    std::printf("%s\n",
-                json({{"poses", poses}, {"tum", tum_path}, {"kitti", kitti_path}}).dump(2).c_str());
+    print({{"poses", poses}, {"tum", tum_path}, {"kitti", kitti_path}});
     return 0;
   }
   if (ate_cmd->parsed()) {
     swf::convert::AteResult r;
     if (!swf::convert::TumAteAgainstEuroc(tum_path, euroc_dir, &r, &error)) return Fail(error);
-    std::printf(
-        "%s\n",
-        json({{"matched", r.matched}, {"ate_rmse_m", r.ate_rmse_m}, {"ate_max_m", r.ate_max_m}})
-            .dump(2)
-            .c_str());
+    print({{"matched", r.matched},
+           {"ate_rmse_m", swf::ground_cli::Number(r.ate_rmse_m)},
+           {"ate_max_m", swf::ground_cli::Number(r.ate_max_m)}});
     return 0;
   }
-  return RunCalibration(calib_files, format, size, max_error_px, out_dir);
+  return RunCalibration(calib_files, format, size, max_error_px, out_dir, run);
 }

@@ -47,11 +47,11 @@ assert judge["hazard"]["maps_judged"] > 0 and judge["hazard"]["maps_without_trut
 assert judge["result"] == "ok", judge["result"]
 sys.exit(1 if bad else 0)
 PY
-# A log cut inside a record: exit 2, the message names the file and the record.
+# A log cut inside a record: exit 1, the message names the file and the record.
 head -c 5000 "$dir/run.lcmlog" > "$dir/cut.lcmlog"
 if "$judge" "$dir/cut.lcmlog" 2> "$dir/cut.txt"; then echo "a cut log was judged"; exit 1; fi
 grep -q "cut.lcmlog" "$dir/cut.txt" || { cat "$dir/cut.txt"; exit 1; }
-# Estimates without truth (a flight log): exit 2, "not judged", never a score.
+# Estimates without truth (a flight log): exit 1, "not judged", never a score.
 python3 - "$dir/run.lcmlog" "$dir/notruth.lcmlog" <<'PY'
 import struct, sys
 data = open(sys.argv[1], "rb").read()
@@ -67,6 +67,6 @@ open(sys.argv[2], "wb").write(out)
 PY
 rc=0
 "$judge" "$dir/notruth.lcmlog" --json "$dir/notruth.json" 2> /dev/null || rc=$?
-[ "$rc" -eq 2 ] || { echo "a log without truth gave exit $rc"; exit 1; }
+[ "$rc" -eq 1 ] || { echo "a log without truth gave exit $rc"; exit 1; }
 grep -q '"not judged"' "$dir/notruth.json"
 echo "swf-judge: the log gives the live figures; cut and truthless logs refused"

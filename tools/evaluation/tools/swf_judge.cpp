@@ -2,11 +2,11 @@
 // the logs goes to RunJudge (the evaluation swf-sil runs live); the estimates and the truth may
 // come from different logs (a replay's output log and the simulated descent's log it replayed).
 //   swf-judge RUN.lcmlog [MORE.lcmlog ...] [--json FILE] [--outputs]
-// Exit: 0 judged, no VALID output beyond its protection level; 1 judged, with integrity failures;
-// 2 nothing judged (usage, an unreadable or damaged log, no estimate with its truth).
+// Exit (docs/cli.md): 0 judged, no VALID output beyond its protection level; 1 judged with
+// integrity failures, or nothing judged (an unreadable or damaged log, no estimate with its
+// truth: the report says which); 2 usage.
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -14,6 +14,7 @@
 
 #include "swf/drivers/log_stereo_source.hpp"
 #include "swf/evaluation/run_judge.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 
 namespace {
 
@@ -117,6 +118,7 @@ int main(int argc, char** argv) {
       "swf-judge: judges a run's navigation, landmark and hazard outputs (SWF_NAV, SWF_LANDMARKS, "
       "SWF_HAZARD) against the truth recorded beside them (SIM_TRUTH, SIM_TRUTH_LANDMARKS, "
       "SIM_TRUTH_HAZARD)"};
+  swf::ground_cli::Adopt(&app, "swf-judge");
   std::vector<std::string> logs;
   std::string json_path;
   bool with_outputs = false;
@@ -138,11 +140,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--truth-hazard-channel", channels.truth_hazard, "hazard maps' truth channel")
       ->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return rc == 0 ? 0 : 2;
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
   }
 
   swf::evaluation::RunJudge judge(channels);
@@ -151,7 +150,7 @@ int main(int argc, char** argv) {
     std::string error;
     if (!Feed(path, &judge, &events, &error)) {
       std::fprintf(stderr, "swf-judge: %s\n", error.c_str());
-      return 2;
+      return swf::cli::kExitFailed;
     }
   }
   const RunScore score = judge.Score();
@@ -169,15 +168,12 @@ int main(int argc, char** argv) {
     report["reason"] = std::to_string(score.protection_violations) +
                        " VALID outputs erred beyond their protection level";
   }
-  const std::string text = report.dump(2) + "\n";
+  report["run"] = swf::ground_cli::RunEcho(app, "swf-judge", argc, argv);
   if (json_path.empty()) {
-    std::cout << text;
-  } else {
-    std::ofstream out(json_path);
-    if (!(out << text)) {
-      std::fprintf(stderr, "swf-judge: cannot write %s\n", json_path.c_str());
-      return 2;
-    }
+    std::cout << report.dump(2) << "\n";
+  } else if (std::string error; !swf::ground_cli::WriteJson(json_path, report, &error)) {
+    std::fprintf(stderr, "swf-judge: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
   }
   std::fprintf(stderr,
                "swf-judge: %s: %zu outputs judged, pose RMS %.3f m, %lld of %lld VALID "
@@ -186,6 +182,5 @@ int main(int argc, char** argv) {
                score.pose_rms_error_m, static_cast<long long>(score.protection_violations),
                static_cast<long long>(score.valid_navs), score.hazard_maps.size(),
                score.undecodable > 0 ? " (some messages did not decode: see the report)" : "");
-  if (!judged) return 2;
-  return failed ? 1 : 0;
+  return judged && !failed ? swf::cli::kExitOk : swf::cli::kExitFailed;
 }

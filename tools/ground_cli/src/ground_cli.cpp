@@ -1,14 +1,42 @@
 #include "swf/ground_cli/ground_cli.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 
 namespace swf::ground_cli {
 
 void Adopt(CLI::App* app, const char* tool) {
+  app->name(tool);  // messages name the program, not the path it was started by
   app->set_version_flag("--version", cli::VersionLine(tool), "the version and the commit");
   app->footer("exit: 0 ok, 1 failed, 2 usage or configuration refused, 3 degraded (docs/cli.md)");
 }
+
+namespace {
+
+bool Knows(const CLI::App& app, const std::string& name) {
+  if (app.get_option_no_throw(name) != nullptr) return true;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    if (Knows(*sub, name)) return true;
+  }
+  return false;
+}
+
+// The first option on the command line that neither the program nor any subcommand declares:
+// named before a missing required option (CLI11 checks requirements first), since it is usually
+// the cause. "" when there is none.
+std::string UnknownOption(const CLI::App& app, int argc, char** argv) {
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if (arg == "--") break;
+    if (arg.size() < 2 || arg[0] != '-' || (arg[1] != '-' && std::isdigit(arg[1]) != 0)) continue;
+    const std::string name = arg.substr(0, arg.find('='));
+    if (!Knows(app, name)) return name;
+  }
+  return "";
+}
+
+}  // namespace
 
 int Parse(CLI::App* app, int argc, char** argv) {
   try {
@@ -23,7 +51,9 @@ int Parse(CLI::App* app, int argc, char** argv) {
     std::printf("%s\n", e.what());
     return cli::kExitOk;
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "%s: %s (usage: %s --help)\n", app->get_name().c_str(), e.what(),
+    const std::string unknown = UnknownOption(*app, argc, argv);
+    const std::string why = unknown.empty() ? e.what() : "unknown option " + unknown;
+    std::fprintf(stderr, "%s: %s (usage: %s --help)\n", app->get_name().c_str(), why.c_str(),
                  app->get_name().c_str());
     return cli::kExitUsage;
   }

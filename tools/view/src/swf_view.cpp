@@ -5,11 +5,11 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/view/live_view.hpp"
 
 namespace {
@@ -29,12 +29,14 @@ struct Arguments {
 };
 
 // The final counters (what a test or a log keeps of the run).
-std::string SummaryJson(swf::view::LiveModel* model, const swf::view::BusListener& bus) {
+std::string SummaryJson(swf::view::LiveModel* model, const swf::view::BusListener& bus,
+                        const nlohmann::json& run) {
   nlohmann::json status = nlohmann::json::parse(*model->Json(swf::view::LiveModel::kStatus));
   nlohmann::json out = {{"messages", bus.Messages()},
                         {"frames", status["frames"]},
                         {"bus", status["bus"]},
-                        {"http", status["http"]}};
+                        {"http", status["http"]},
+                        {"run", run}};
   return out.dump();
 }
 
@@ -45,7 +47,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "swf-view: a live web view of the flight process's LCM outputs (image, trajectory, "
       "landmarks, hazard map, integrity, health)"};
-  app.set_version_flag("--version", std::string("swf-view 1.0"));
+  swf::ground_cli::Adopt(&app, "swf-view");
   app.add_option("--lcm-url", args.lcm_url, "LCM URL to listen on")->capture_default_str();
   app.add_option("--lcm-netns", args.lcm_netns,
                  "listen to LCM inside this network namespace (/run/netns/NAME, "
@@ -65,7 +67,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(16, 4096));
   app.add_option("--timeout", args.timeout_s, "exit after this many seconds (0: run until signal)")
       ->check(CLI::NonNegativeNumber);
-  CLI11_PARSE(app, argc, argv);
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
+  }
 
   swf::view::LiveModel model(args.view);
   swf::view::BusListener bus(&model);
@@ -84,8 +88,11 @@ int main(int argc, char** argv) {
   const std::string url = "http://" + args.host + ":" + std::to_string(server.Port()) + "/";
   std::fprintf(stderr, "swf-view: serving %s (listening on %s, %s*)\n", url.c_str(),
                args.lcm_url.c_str(), args.view.prefix.c_str());
-  if (!args.url_file.empty()) {
-    std::ofstream(args.url_file) << url << "\n";
+  if (!args.url_file.empty() && !swf::cli::WriteFileAtomically(args.url_file, url + "\n", &error)) {
+    std::fprintf(stderr, "swf-view: %s\n", error.c_str());
+    server.Stop();
+    bus.Stop();
+    return swf::cli::kExitFailed;
   }
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
@@ -99,6 +106,8 @@ int main(int argc, char** argv) {
   }
   server.Stop();
   bus.Stop();
-  std::printf("%s\n", SummaryJson(&model, bus).c_str());
+  std::printf(
+      "%s\n",
+      SummaryJson(&model, bus, swf::ground_cli::RunEcho(app, "swf-view", argc, argv)).c_str());
   return 0;
 }
