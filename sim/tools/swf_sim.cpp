@@ -1,7 +1,8 @@
 // swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth.
-//   swf-sim [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks]
-//           [--out DIR] [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4]
-//           [--lcm URL] [--no-png]
+//   swf-sim --out DIR [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks]
+//           [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4] [--lcm URL] [--no-png]
+// --out is required: the whole default descent is ~160 MB of PNGs, not something to start by
+// accident (`swf-sim` alone prints its usage, exit 2).
 // Writes DIR/left_NNNN.png, right_NNNN.png, poses.csv (t_ns, position, quaternion x y z w of
 // world_T_camera), landmarks.csv + observations.csv (measurement-level truth on the same terrain),
 // craters.csv, rocks.csv, terrain_hazard.png (terrain height | hazard truth) and
@@ -9,7 +10,8 @@
 // Progress goes to stderr.
 // --lcm URL also publishes every rendered pair as it is rendered: STEREO (stereo_frame_t), TRUTH
 // (truth_state_t) and TRUTH_LANDMARKS (landmark_map_t), see swf/sim/lcm_publisher.hpp; --no-png
-// skips the per-frame PNG files (streaming only).
+// skips the per-frame PNG files (streaming only). Every file is written under a temporary name
+// and renamed when whole; SIGINT / SIGTERM remove the one being written (docs/cli.md).
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdio>
@@ -19,6 +21,7 @@
 #include <vector>
 
 #include "swf/plot/plot.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/image_io.hpp"
 #include "swf/sim/lcm_publisher.hpp"
@@ -54,12 +57,38 @@ bool DrawTerrainHazard(const swf::sim::Terrain& terrain, const swf::sim::HazardM
   return false;
 }
 
+// sim::WritePng under a temporary name, renamed when whole.
+Status WritePngWhole(const std::string& path, const std::uint8_t* pixels, std::int32_t width,
+                     std::int32_t height, std::int32_t channels, std::int32_t stride) {
+  const std::string temp = path + ".partial";
+  const int slot = swf::cli::RemovePathOnSignal(temp);
+  Status s = swf::sim::WritePng(temp, pixels, width, height, channels, stride);
+  if (s == Status::kOk && std::rename(temp.c_str(), path.c_str()) != 0) s = Status::kIoError;
+  if (s != Status::kOk) std::remove(temp.c_str());
+  swf::cli::ForgetPathOnSignal(slot);
+  return s;
+}
+
+// A CSV file written whole (swf::cli::OutputFile): the header, then `rows` writes the lines.
+template <typename Rows>
+bool WriteCsv(const std::string& path, const char* header, const Rows& rows) {
+  swf::cli::OutputFile out;
+  std::string error;
+  if (out.Open(path, &error)) {
+    std::fputs(header, out.Stream());
+    rows(out.Stream());
+    if (out.Commit(&error)) return true;
+  }
+  std::fprintf(stderr, "swf-sim: %s\n", error.c_str());
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string scenario = "descent";
   std::string terrain_name = "craters";
-  std::string out = "out/sim";
+  std::string out;
   std::string shared = "../shared";
   if (const char* env = std::getenv("SWF_SHARED_DIR")) shared = env;
   int max_frames = -1;
@@ -67,49 +96,37 @@ int main(int argc, char** argv) {
   int spp = 1;
   std::uint64_t seed = 1;
   std::string lcm_url;
-  bool write_png = true;
-  for (int a = 1; a < argc; ++a) {
-    const std::string arg = argv[a];
-    if (arg == "--no-png") {
-      write_png = false;
-      continue;
-    }
-    const char* value = a + 1 < argc ? argv[a + 1] : nullptr;
-    auto take = [&]() {
-      ++a;
-      return std::string(value);
-    };
-    if (value == nullptr && arg != "--help") {
-      std::fprintf(stderr, "swf-sim: %s needs a value\n", arg.c_str());
-      return 2;
-    }
-    if (arg == "--scenario")
-      scenario = take();
-    else if (arg == "--terrain")
-      terrain_name = take();
-    else if (arg == "--out")
-      out = take();
-    else if (arg == "--shared")
-      shared = take();
-    else if (arg == "--frames")
-      max_frames = std::atoi(take().c_str());
-    else if (arg == "--every")
-      every = std::max(1, std::atoi(take().c_str()));
-    else if (arg == "--seed")
-      seed = std::strtoull(take().c_str(), nullptr, 10);
-    else if (arg == "--spp")
-      spp = std::atoi(take().c_str());
-    else if (arg == "--lcm")
-      lcm_url = take();
-    else {
-      std::fprintf(
-          stderr,
-          "usage: swf-sim [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks] "
-          "[--out DIR] [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4] "
-          "[--lcm URL] [--no-png]\n");
-      return arg == "--help" ? 0 : 2;
-    }
+  bool no_png = false;
+  CLI::App app{
+      "swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth "
+      "(sim/README.md)"};
+  swf::ground_cli::Adopt(&app, "swf-sim");
+  app.add_option("--out", out, "output directory (created); the default descent is ~160 MB")
+      ->required();
+  app.add_option("--scenario", scenario)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"descent", "hover", "sideways", "lab"}));
+  app.add_option("--terrain", terrain_name)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"plains", "craters", "rocks"}));
+  app.add_option("--frames", max_frames, "at most N frames (default: the whole scenario)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--every", every, "render every K-th frame")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--seed", seed)->capture_default_str();
+  app.add_option("--shared", shared, "the shared data directory (orbital imagery)")
+      ->capture_default_str();
+  app.add_option("--spp", spp, "samples per pixel")
+      ->capture_default_str()
+      ->check(CLI::IsMember({1, 4}));
+  app.add_option("--lcm", lcm_url, "also publish every pair and its truth on this LCM URL");
+  app.add_flag("--no-png", no_png, "no per-frame PNG files (streaming only)");
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
   }
+  const bool write_png = !no_png;
+  swf::cli::RemovePartialOutputsOnSignal();
   swf::sim::RigOptions rig = swf::sim::EdlRig();
   swf::sim::TrajectoryOptions traj;
   double scale = 1.0;
@@ -133,10 +150,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "swf-sim: unknown terrain '%s'\n", terrain_name.c_str());
     return 2;
   }
-  std::string mkdir = "mkdir -p '" + out + "'";
-  if (std::system(mkdir.c_str()) != 0) {
-    std::fprintf(stderr, "swf-sim: cannot create %s\n", out.c_str());
-    return 1;
+  if (std::string error; !swf::cli::MakeDirectories(out, &error)) {
+    std::fprintf(stderr, "swf-sim: --out: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
   }
 
   std::fprintf(stderr, "swf-sim: terrain '%s' (seed %llu) ...\n", terrain_name.c_str(),
@@ -159,23 +175,23 @@ int main(int argc, char** argv) {
   if (Status s = swf::sim::ComputeHazardTruth(terrain, hazard_options, &hazard); s != Status::kOk) {
     return Fail("hazard truth", s);
   }
-  if (!DrawTerrainHazard(terrain, hazard, terrain_name, out + "/terrain_hazard.png")) return 1;
-  if (std::FILE* f = std::fopen((out + "/rocks.csv").c_str(), "w")) {
-    std::fprintf(f, "x_m,y_m,diameter_m,height_m,base_z_m\n");
-    for (const auto& r : terrain.Rocks()) {
-      std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", r.center_m.x(), r.center_m.y(), r.diameter_m,
-                   r.height_m, r.base_z_m);
-    }
-    std::fclose(f);
-  }
-  if (std::FILE* f = std::fopen((out + "/craters.csv").c_str(), "w")) {
-    std::fprintf(f, "x_m,y_m,diameter_m,depth_m,rim_height_m\n");
-    for (const auto& c : terrain.Craters()) {
-      std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", c.center_m.x(), c.center_m.y(), c.diameter_m,
-                   c.depth_m, c.rim_height_m);
-    }
-    std::fclose(f);
-  }
+  if (!DrawTerrainHazard(terrain, hazard, terrain_name, out + "/terrain_hazard.png")) return swf::cli::kExitFailed;
+  const bool terrain_written =
+      WriteCsv(out + "/rocks.csv", "x_m,y_m,diameter_m,height_m,base_z_m\n",
+               [&](std::FILE* f) {
+                 for (const auto& r : terrain.Rocks()) {
+                   std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", r.center_m.x(), r.center_m.y(),
+                                r.diameter_m, r.height_m, r.base_z_m);
+                 }
+               }) &&
+      WriteCsv(out + "/craters.csv", "x_m,y_m,diameter_m,depth_m,rim_height_m\n",
+               [&](std::FILE* f) {
+                 for (const auto& c : terrain.Craters()) {
+                   std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", c.center_m.x(), c.center_m.y(),
+                                c.diameter_m, c.depth_m, c.rim_height_m);
+                 }
+               });
+  if (!terrain_written) return swf::cli::kExitFailed;
 
   swf::sim::Trajectory trajectory;
   if (Status s = trajectory.Configure(traj); s != Status::kOk) return Fail("trajectory", s);
@@ -186,24 +202,24 @@ int main(int argc, char** argv) {
   mo.seed = seed;
   swf::sim::MeasurementScenario measurements;
   if (Status s = measurements.Configure(mo); s != Status::kOk) return Fail("measurements", s);
-  if (std::FILE* f = std::fopen((out + "/landmarks.csv").c_str(), "w")) {
-    std::fprintf(f, "id,x_m,y_m,z_m\n");
-    for (size_t i = 0; i < measurements.Landmarks().size(); ++i) {
-      const auto& l = measurements.Landmarks()[i];
-      std::fprintf(f, "%zu,%.6f,%.6f,%.6f\n", i, l.x(), l.y(), l.z());
-    }
-    std::fclose(f);
-  }
-  if (std::FILE* f = std::fopen((out + "/observations.csv").c_str(), "w")) {
-    std::fprintf(f, "frame,landmark_id,u_left_px,u_right_px,v_px,is_outlier\n");
-    for (int k = 0; k < measurements.NumFrames(); ++k) {
-      for (const auto& o : measurements.Frame(k).observations) {
-        std::fprintf(f, "%d,%d,%.6f,%.6f,%.6f,%d\n", k, o.landmark_id, o.u_left_px, o.u_right_px,
-                     o.v_px, o.is_outlier ? 1 : 0);
-      }
-    }
-    std::fclose(f);
-  }
+  const bool measurements_written =
+      WriteCsv(out + "/landmarks.csv", "id,x_m,y_m,z_m\n",
+               [&](std::FILE* f) {
+                 for (size_t i = 0; i < measurements.Landmarks().size(); ++i) {
+                   const auto& l = measurements.Landmarks()[i];
+                   std::fprintf(f, "%zu,%.6f,%.6f,%.6f\n", i, l.x(), l.y(), l.z());
+                 }
+               }) &&
+      WriteCsv(out + "/observations.csv",
+               "frame,landmark_id,u_left_px,u_right_px,v_px,is_outlier\n", [&](std::FILE* f) {
+                 for (int k = 0; k < measurements.NumFrames(); ++k) {
+                   for (const auto& o : measurements.Frame(k).observations) {
+                     std::fprintf(f, "%d,%d,%.6f,%.6f,%.6f,%d\n", k, o.landmark_id, o.u_left_px,
+                                  o.u_right_px, o.v_px, o.is_outlier ? 1 : 0);
+                   }
+                 }
+               });
+  if (!measurements_written) return swf::cli::kExitFailed;
 
   swf::sim::SimLcmPublisher publisher;
   if (!lcm_url.empty()) {
@@ -236,8 +252,12 @@ int main(int argc, char** argv) {
   }
   std::vector<swf::plot::ContactFrame> sheet;
 
-  std::FILE* poses = std::fopen((out + "/poses.csv").c_str(), "w");
-  if (poses == nullptr) return Fail("poses.csv", Status::kIoError);
+  swf::cli::OutputFile poses_file;
+  if (std::string error; !poses_file.Open(out + "/poses.csv", &error)) {
+    std::fprintf(stderr, "swf-sim: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
+  }
+  std::FILE* poses = poses_file.Stream();
   std::fprintf(poses, "frame,t_ns,x_m,y_m,z_m,qx,qy,qz,qw\n");
   swf::sim::StereoImages images;
   const swf::core::TimeNs start = swf::core::MonotonicNs();
@@ -252,11 +272,11 @@ int main(int argc, char** argv) {
     if (write_png) {
       char name[64];
       std::snprintf(name, sizeof(name), "/left_%04d.png", k);
-      (void)swf::sim::WritePng(out + name, images.left.data(), images.width, images.height, 1,
-                               images.width);
+      (void)WritePngWhole(out + name, images.left.data(), images.width, images.height, 1,
+                          images.width);
       std::snprintf(name, sizeof(name), "/right_%04d.png", k);
-      (void)swf::sim::WritePng(out + name, images.right.data(), images.width, images.height, 1,
-                               images.width);
+      (void)WritePngWhole(out + name, images.right.data(), images.width, images.height, 1,
+                          images.width);
     }
     if (!lcm_url.empty()) {
       const std::int64_t utime = trajectory.FrameTimeNs(k) / 1000;
@@ -303,13 +323,16 @@ int main(int argc, char** argv) {
                  frames.size(), pose.t.z(), elapsed_s / static_cast<double>(n + 1));
   }
   std::fprintf(stderr, "\n");
-  std::fclose(poses);
+  if (std::string error; !poses_file.Commit(&error)) {
+    std::fprintf(stderr, "swf-sim: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
+  }
   std::string sheet_error;
   if (!swf::plot::DrawContactSheet(
           sheet, "Left camera, scenario '" + scenario + "' over terrain '" + terrain_name + "'",
           out + "/contact_sheet.png", &sheet_error)) {
     std::fprintf(stderr, "swf-sim: cannot draw %s\n", sheet_error.c_str());
-    return 1;
+    return swf::cli::kExitFailed;
   }
   std::fprintf(stderr, "swf-sim: wrote %zu pairs, %d landmarks, %zu rocks, %zu craters to %s\n",
                frames.size(), measurements.Summary().num_landmarks, terrain.Rocks().size(),

@@ -7,8 +7,8 @@
 // "<key>_reason"), OUT/<prefix>.md (text computed from the same numbers), OUT/<prefix>_error.dat
 // and .json (per-frame errors) and the estimated trajectories. Exit status: 0 when every run
 // is scored, 1 for unusable input or unwritable output (with the reason on stderr), 2 for bad
-// arguments (swf-eval's command line), 3 when a run failed (non-finite, diverged, or frames without a tracked landmark;
-// the reason names the frame and the line of the input it came from).
+// arguments (swf-eval's command line), 3 when a run failed (non-finite, diverged, or frames without
+// a tracked landmark; the reason names the frame and the line of the input it came from).
 #pragma once
 
 #include <string>

@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "swf/ground_cli/ground_cli.hpp"
 #include "experiment_file.hpp"
 #include "experiments.hpp"
 #include "kitti_vo.hpp"
@@ -24,6 +23,7 @@
 #include "swf/estimator/stereo_model.hpp"
 #include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/config.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 
 namespace {
 
@@ -117,7 +117,6 @@ Series MonteCarlo(const std::string& name, SceneOptions so, int runs,
   }
   return s;
 }
-
 
 // "consistent" / "overconfident" / "conservative" from the frame-averaged NEES against the
 // 95% band of a single frame's run average.
@@ -452,8 +451,9 @@ int main(int argc, char** argv) {
   double loop_seconds = 0.0;
   CLI::App* euroc = app.add_subcommand("euroc", "a EuRoC ASL sequence through the pipeline");
   add_sequence(euroc);
-  euroc->add_option("--loop-seconds", loop_seconds,
-                    "play the frames forwards and backwards for this long")
+  euroc
+      ->add_option("--loop-seconds", loop_seconds,
+                   "play the frames forwards and backwards for this long")
       ->check(CLI::Range(0.0, 3600.0));
   int max_disparity_px = 128;
   int max_frames = 0;
@@ -462,16 +462,19 @@ int main(int argc, char** argv) {
   kitti->add_option("--max-disparity", max_disparity_px, "the front end's disparity search")
       ->capture_default_str()
       ->check(CLI::Range(16, swf::frontend::kMaxDisparity));
-  kitti->add_option("--frames", max_frames, "only the first N frames")->check(CLI::Range(3, 1000000));
+  kitti->add_option("--frames", max_frames, "only the first N frames")
+      ->check(CLI::Range(3, 1000000));
   std::string out;
   int runs = 5;
   int nees_runs = 50;
   std::string shared = "../shared";
   std::string only_list;
-  CLI::App* paper = app.add_subcommand("paper", "the paper's experiments -> OUT/*.json, results.md");
+  CLI::App* paper =
+      app.add_subcommand("paper", "the paper's experiments -> OUT/*.json, results.md");
   paper->add_option("OUT", out, "output directory (created)")->required();
-  paper->add_option("--runs", runs, "Monte Carlo runs")->capture_default_str()->check(
-      CLI::PositiveNumber);
+  paper->add_option("--runs", runs, "Monte Carlo runs")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   paper->add_option("--nees-runs", nees_runs, "runs of the NEES section")
       ->capture_default_str()
       ->check(CLI::Range(2, 100000));

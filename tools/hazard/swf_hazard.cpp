@@ -23,8 +23,8 @@
 #include <vector>
 
 #include "run_filter.hpp"
-#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/evaluation/statistics.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/plot/plot.hpp"
 #include "swf/scene/runner.hpp"
@@ -724,8 +724,9 @@ int main(int argc, char** argv) {
   int sweep_seeds = 3;
   std::string only_name;
   CLI::App* eval = app.add_subcommand(
-      "eval", "altitude sweep over the three terrain presets, then seeded fused descents with the "
-              "safe-site check -> OUTDIR/hazard_eval.json, *.dat, PNGs");
+      "eval",
+      "altitude sweep over the three terrain presets, then seeded fused descents with the "
+      "safe-site check -> OUTDIR/hazard_eval.json, *.dat, PNGs");
   eval->add_option("OUTDIR", out, "output directory (created)")->required();
   eval->add_option("--descents", descents, "fused descents per preset")
       ->capture_default_str()
