@@ -1,5 +1,6 @@
 #include "swf/drivers/aravis_stereo_source.hpp"
 
+#include <arpa/inet.h>
 #include <arv.h>
 
 #include <chrono>
@@ -10,6 +11,8 @@
 #include <ctime>
 #include <mutex>
 #include <new>
+#include <sstream>
+#include <string>
 #include <thread>
 
 #include "swf/drivers/image_format.hpp"
@@ -160,6 +163,21 @@ AravisStereoSource::AravisStereoSource()
 
 AravisStereoSource::~AravisStereoSource() { Stop(); }
 
+std::string DeviceIdOfSerial(const char* serial) {
+  arv_update_device_list();
+  const unsigned n = arv_get_n_devices();
+  for (unsigned i = 0; i < n; ++i) {
+    const char* s = arv_get_device_serial_nbr(i);
+    if (s != nullptr && std::strcmp(s, serial) == 0) return arv_get_device_id(i);
+  }
+  return "";
+}
+
+bool IsIpv4Address(const char* id) {
+  in_addr address{};
+  return id != nullptr && inet_pton(AF_INET, id, &address) == 1;
+}
+
 core::Status AravisStereoSource::Fail(core::Status status, const char* format, ...) {
   va_list args;
   va_start(args, format);
@@ -188,6 +206,15 @@ core::Status AravisStereoSource::OpenCamera(int side, const char* id) {
   auto cam = std::make_unique<Camera>();
   GError* error = nullptr;
   cam->camera = arv_camera_new(id, &error);
+  if (cam->camera == nullptr) {
+    // Aravis 0.8 opens by device id, physical id or address, not by the serial number a bench
+    // labels its cameras with: that one is looked up among the discovered devices.
+    const std::string device_id = DeviceIdOfSerial(id);
+    if (!device_id.empty()) {
+      g_clear_error(&error);
+      cam->camera = arv_camera_new(device_id.c_str(), &error);
+    }
+  }
   if (cam->camera == nullptr) {
     const core::Status s = Fail(core::Status::kDeviceLost, "aravis %s: cannot open: %s", id,
                                 error != nullptr ? error->message : "not found");
@@ -253,12 +280,18 @@ core::Status AravisStereoSource::OpenCamera(int side, const char* id) {
     }
     if (!core::IsOk(s = check("GevSCPSPacketSize"))) return s;
   }
-  if (options_.features != nullptr && options_.features[0] != '\0') {
-    if (!arv_device_set_features_from_string(arv_camera_get_device(cam->camera), options_.features,
-                                             &error)) {
-      if (!core::IsOk(s = check("features"))) return s;
-      return Fail(core::Status::kUnsupported, "aravis %s: features '%s' refused", id,
-                  options_.features);
+  if (options_.features != nullptr) {
+    // One at a time, so that a refusal names its feature.
+    std::istringstream features(options_.features);
+    std::string feature;
+    while (features >> feature) {
+      if (!arv_device_set_features_from_string(arv_camera_get_device(cam->camera), feature.c_str(),
+                                               &error)) {
+        s = Fail(core::Status::kUnsupported, "aravis %s: GenICam feature %s refused: %s", id,
+                 feature.c_str(), error != nullptr ? error->message : "no such feature or value");
+        g_clear_error(&error);
+        return s;
+      }
     }
   }
 
@@ -393,6 +426,7 @@ core::Status AravisStereoSource::Fill(int side, std::int64_t wait_us) {
   if (status != ARV_BUFFER_STATUS_SUCCESS || data == nullptr || size < RequiredBytes(cam.desc)) {
     if (status == ARV_BUFFER_STATUS_MISSING_PACKETS) {
       ++extra_.missing_packets;
+      ++stats_.missing_packets;
     } else if (status == ARV_BUFFER_STATUS_TIMEOUT) {
       ++extra_.buffer_timeouts;
     } else {

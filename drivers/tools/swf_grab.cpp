@@ -121,8 +121,8 @@ void AddGrabOptions(CLI::App* grab, GrabArgs* a, double* timeout_ms) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   grab->add_flag("--fake-gv", a->fake_gv,
-                 "serve Aravis GigE fake cameras at --left/--right (inside `unshare -n`, "
-                 "drivers/README.md)");
+                 "serve Aravis GigE fake cameras at --left/--right: addresses, or serials served "
+                 "on 127.0.0.1/.2 (inside `unshare -n`, drivers/README.md)");
   grab->add_option("--fake-loss", a->fake_loss, "the right fake camera's packet loss ratio")
       ->check(CLI::Range(0.0, 1.0));
 }
@@ -181,16 +181,22 @@ int Grab(const GrabArgs& a, const nlohmann::json& run) {
   }
   std::vector<ArvGvFakeCamera*> fakes;
   if (a.fake_gv) {
-    for (const std::string& address : {a.left, a.right}) {
-      if (address.empty()) continue;
-      ArvGvFakeCamera* fake = arv_gv_fake_camera_new(address.c_str(), nullptr);
+    // At the address --left / --right name, or, for a serial number, at 127.0.0.1 / 127.0.0.2
+    // with that serial (then found by discovery, as a bench's cameras are).
+    for (const auto& [id, default_address] :
+         {std::pair{a.left, "127.0.0.1"}, std::pair{a.right, "127.0.0.2"}}) {
+      if (id.empty()) continue;
+      const bool by_address = IsIpv4Address(id.c_str());
+      const std::string address = by_address ? id : default_address;
+      ArvGvFakeCamera* fake =
+          arv_gv_fake_camera_new(address.c_str(), by_address ? nullptr : id.c_str());
       if (fake == nullptr || !arv_gv_fake_camera_is_running(fake)) {
         std::fprintf(stderr, "swf-grab: cannot serve a fake camera on %s\n", address.c_str());
         for (ArvGvFakeCamera* f : fakes) g_object_unref(f);
         if (fake != nullptr) g_object_unref(fake);
         return cli::kExitFailed;
       }
-      if (address == a.right && a.fake_loss > 0) {
+      if (id == a.right && a.fake_loss > 0) {
         g_object_set(fake, "gvsp-lost-ratio", a.fake_loss, nullptr);
       }
       fakes.push_back(fake);

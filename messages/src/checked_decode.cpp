@@ -41,8 +41,9 @@ constexpr std::int64_t kHazardTruthSuffixBytes = 1 + 16 + 16;
 // num_features, num_landmarks (2 x 4), frames_valid .. restarts (4 x 8), last_recovery_frames (4),
 // measurements_gated .. gate_suspensions (5 x 8); then num_integrity_flags.
 constexpr std::size_t kHealthPrefixBytes = 64 + 4 + 1 + 8 + 32 + 4 + 40;
-// After the stage times: imu_accepted .. imu_intervals_bridged (7 x 8).
-constexpr std::int64_t kHealthSuffixBytes = 7 * 8;
+// After the stage times: imu_accepted .. imu_intervals_bridged (7 x 8), camera_missing_packets ..
+// camera_timeouts (3 x 8).
+constexpr std::int64_t kHealthSuffixBytes = 7 * 8 + 3 * 8;
 
 // Reads big-endian integers from a byte span; every read is bounds-checked.
 class WireReader {

@@ -328,13 +328,17 @@ bool WriteSummary(const std::string& path, const RunEcho& run, const FswConfig& 
       "  \"overruns\": %lld,\n  \"allocations_after_start\": %lld,\n"
       "  \"outputs_dropped\": %lld,\n  \"frames_dropped\": %lld,\n"
       "  \"frames_rejected\": %lld,\n"
+      "  \"camera\": {\"missing_packets\": %lld, \"pairing_failures\": %lld, \"timeouts\": %lld},\n"
       "  \"stage_errors\": %lld,\n  \"records_lost\": %lld,\n  \"fault_bits\": %d,\n"
       "  \"num_landmarks\": %d,\n"
       "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n",
       static_cast<long long>(counters.overruns),
       static_cast<long long>(health.allocations_after_start),
       static_cast<long long>(health.outputs_dropped), static_cast<long long>(health.frames_dropped),
-      static_cast<long long>(health.frames_rejected), static_cast<long long>(counters.stage_errors),
+      static_cast<long long>(health.frames_rejected),
+      static_cast<long long>(health.camera_missing_packets),
+      static_cast<long long>(health.camera_pairing_failures),
+      static_cast<long long>(health.camera_timeouts), static_cast<long long>(counters.stage_errors),
       static_cast<long long>(output.record_errors + output.encode_errors), health.fault_bits,
       health.num_landmarks, locked ? "true" : "false", fifo ? "true" : "false");
   WriteMemory(f, memory, output_stack);
@@ -428,6 +432,7 @@ struct FlightProcess {
   drivers::AravisStereoSource* aravis_source = nullptr;
   std::string aravis_left_id;  // the source keeps pointers to these
   std::string aravis_right_id;
+  std::string aravis_features;
 #endif
 #if SWF_APP_HAVE_V4L2
   drivers::V4l2StereoSource* v4l2_source = nullptr;
@@ -614,9 +619,15 @@ int OpenAravisSource(FlightProcess* fp) {
   fp->aravis_left_id = config.camera.left.empty() ? "127.0.0.1" : config.camera.left;
   fp->aravis_right_id = config.camera.right.empty() ? "127.0.0.2" : config.camera.right;
   if (config.camera.fake) {
-    // Aravis's GigE Vision fake cameras served by this process (tests, no hardware).
-    for (const std::string& address : {fp->aravis_left_id, fp->aravis_right_id}) {
-      ArvGvFakeCamera* fake = arv_gv_fake_camera_new(address.c_str(), nullptr);
+    // Aravis's GigE Vision fake cameras served by this process (tests, no hardware): at the
+    // address camera.left / camera.right name, or, when they name a serial number, at 127.0.0.1
+    // / 127.0.0.2 with that serial (found by discovery, as a bench's cameras are).
+    for (const auto& [id, default_address] : {std::pair{fp->aravis_left_id, "127.0.0.1"},
+                                              std::pair{fp->aravis_right_id, "127.0.0.2"}}) {
+      const bool by_address = drivers::IsIpv4Address(id.c_str());
+      const std::string address = by_address ? id : default_address;
+      ArvGvFakeCamera* fake =
+          arv_gv_fake_camera_new(address.c_str(), by_address ? nullptr : id.c_str());
       if (fake == nullptr || !arv_gv_fake_camera_is_running(fake)) {
         std::fprintf(stderr, "%s: cannot serve a fake GigE camera on %s\n", fp->tool,
                      address.c_str());
@@ -632,9 +643,23 @@ int OpenAravisSource(FlightProcess* fp) {
   ao.right_id = fp->aravis_right_id.c_str();
   ao.width = fp->po.left_calibration.width;
   ao.height = fp->po.left_calibration.height;
-  ao.trigger =
-      config.camera.fake ? drivers::TriggerMode::kSoftware : drivers::TriggerMode::kFreeRun;
-  ao.frame_rate_hz = config.camera.fake ? 0.0 : config.rate_hz;
+  const CameraConfig& camera = config.camera;
+  ao.x = camera.roi_offset_px[0];
+  ao.y = camera.roi_offset_px[1];
+  ao.exposure_us = camera.exposure_us;
+  ao.gain = camera.gain;
+  ao.packet_size = camera.packet_size;
+  const std::string trigger =
+      camera.trigger.empty() ? (camera.fake ? "software" : "free") : camera.trigger;
+  ao.trigger = trigger == "software"   ? drivers::TriggerMode::kSoftware
+               : trigger == "hardware" ? drivers::TriggerMode::kHardware
+                                       : drivers::TriggerMode::kFreeRun;
+  ao.hardware_trigger_source = camera.trigger_source.c_str();
+  ao.frame_rate_hz = ao.trigger == drivers::TriggerMode::kFreeRun ? config.rate_hz : 0.0;
+  for (const auto& [name, value] : camera.features) {
+    fp->aravis_features += (fp->aravis_features.empty() ? "" : " ") + name + "=" + value;
+  }
+  ao.features = fp->aravis_features.c_str();
   return UseLiveSource(fp, "aravis", ao, std::move(aravis), &fp->aravis_source);
 #else
   std::fprintf(stderr,
@@ -747,6 +772,30 @@ int ConnectImu(FlightProcess* fp) {
   return kContinue;
 }
 
+#if SWF_APP_HAVE_ARAVIS
+// The configuration key behind a setting the Aravis source says a camera refused (its LastError()
+// names the GenICam feature or the setting), "" when none is.
+std::string CameraKeyOfRefusal(const std::string& detail) {
+  const std::string feature = "GenICam feature ";
+  if (const std::size_t at = detail.find(feature); at != std::string::npos) {
+    const std::size_t begin = at + feature.size();
+    return "camera.feature." + detail.substr(begin, detail.find('=', begin) - begin);
+  }
+  static const std::pair<const char*, const char*> kSettings[] = {
+      {": ExposureTime:", "camera.exposure_us"},
+      {": Gain:", "camera.gain"},
+      {": GevSCPSPacketSize:", "camera.packet_size"},
+      {": region of interest:", "camera.roi_offset_px"},
+      {": software trigger:", "camera.trigger"},
+      {": hardware trigger:", "camera.trigger_source"},
+      {": AcquisitionFrameRate:", "rate_hz"}};
+  for (const auto& [setting, key] : kSettings) {
+    if (detail.find(setting) != std::string::npos) return key;
+  }
+  return "";
+}
+#endif
+
 // The rate groups around the pipeline, then the source started.
 int ConfigureLoop(FlightProcess* fp) {
   const FswConfig& config = fp->config;
@@ -780,15 +829,22 @@ int ConfigureLoop(FlightProcess* fp) {
   }
   if (fp->source->Start() == core::Status::kOk) return kContinue;
   const char* detail = "";
+  std::string key;
   if (fp->lcm_source != nullptr) detail = fp->lcm_source->LastError();
 #if SWF_APP_HAVE_ARAVIS
-  if (fp->aravis_source != nullptr) detail = fp->aravis_source->LastError();
+  if (fp->aravis_source != nullptr) {
+    detail = fp->aravis_source->LastError();
+    key = CameraKeyOfRefusal(detail);
+  }
 #endif
 #if SWF_APP_HAVE_V4L2
   if (fp->v4l2_source != nullptr) detail = fp->v4l2_source->LastError();
 #endif
-  std::fprintf(stderr, "%s: the %s source did not start%s%s\n", fp->tool, fp->source->Name(),
-               detail[0] != '\0' ? ": " : "", detail);
+  std::fprintf(
+      stderr, "%s: the %s source did not start%s%s%s%s%s\n", fp->tool, fp->source->Name(),
+      detail[0] != '\0' ? ": " : "", detail, key.empty() ? "" : " (configuration key ",
+      key.empty() ? "" : key.c_str(),
+      key.empty() ? "" : (" at " + ConfigWhere(config, key, config.origins.file) + ")").c_str());
   return kRunError;
 }
 

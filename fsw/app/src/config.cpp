@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -209,6 +210,27 @@ const std::map<std::string, ConfigSetter>& Fields() {
       c->camera.pair_tolerance_ms = d;
       return true;
     };
+    f["camera.exposure_us"] =
+        Number([](FswConfig* c) { return &c->camera.exposure_us; }, 0.0, 1e8, true);
+    f["camera.gain"] = Number([](FswConfig* c) { return &c->camera.gain; }, 0.0, 1e4);
+    f["camera.roi_offset_px"] = [](const std::string& v, FswConfig* c, std::string* why) {
+      std::istringstream in(v);
+      std::int64_t x = -1;
+      std::int64_t y = -1;
+      std::string rest;
+      if (!(in >> x >> y) || (in >> rest) || x < 0 || y < 0 || x > 65535 || y > 65535) {
+        *why = Quoted(v) + ": expected two whole numbers of pixels in [0, 65535]: x y";
+        return false;
+      }
+      c->camera.roi_offset_px[0] = static_cast<std::int32_t>(x);
+      c->camera.roi_offset_px[1] = static_cast<std::int32_t>(y);
+      return true;
+    };
+    f["camera.packet_size"] =
+        Int<std::int32_t>([](FswConfig* c) { return &c->camera.packet_size; }, 0, 65535);
+    f["camera.trigger"] =
+        OneOf([](FswConfig* c) { return &c->camera.trigger; }, {"free", "software", "hardware"});
+    f["camera.trigger_source"] = Text([](FswConfig* c) { return &c->camera.trigger_source; });
     f["mode"] = OneOf([](FswConfig* c) { return &c->mode; }, {"swf", "ekf", "vo", "vsdf"});
     f["window"] = Int<std::int32_t>([](FswConfig* c) { return &c->window; }, 1, kMaxWindow,
                                     " (kMaxWindow, the filter's compiled window capacity)");
@@ -319,7 +341,28 @@ bool SplitLine(const std::string& raw, const std::string& where, std::string* ke
 
 // A key of the program's extension (c->extension) when the flight process has no such key; a
 // simulator key in a program without the simulator says where it belongs.
+// camera.feature.<Name>: any GenICam feature, one key each (a name of letters, digits and '_',
+// as GenICam names are), so that an error names the key.
+constexpr const char* kFeaturePrefix = "camera.feature.";
+
+const ConfigSetter* FeatureField(const std::string& key) {
+  static const ConfigSetter setter = [](const std::string& v, FswConfig* c, std::string* why) {
+    (void)c;
+    (void)v;
+    *why = "";
+    return true;
+  };
+  if (key.rfind(kFeaturePrefix, 0) != 0) return nullptr;
+  const std::string name = key.substr(std::strlen(kFeaturePrefix));
+  if (name.empty() || std::isalpha(static_cast<unsigned char>(name[0])) == 0) return nullptr;
+  for (const char ch : name) {
+    if (std::isalnum(static_cast<unsigned char>(ch)) == 0 && ch != '_') return nullptr;
+  }
+  return &setter;
+}
+
 const ConfigSetter* FindField(const std::string& key, const FswConfig& c) {
+  if (const ConfigSetter* feature = FeatureField(key)) return feature;
   const auto& fields = Fields();
   if (const auto it = fields.find(key); it != fields.end()) return &it->second;
   if (c.extension != nullptr) {
@@ -344,6 +387,15 @@ bool SetField(const std::string& key, const std::string& value, const std::strin
   if (!(*setter)(value, config, &why)) {
     *error = where + ": " + key + ": " + why;
     return false;
+  }
+  if (key.rfind(kFeaturePrefix, 0) == 0) {
+    // A GenICam value is one word (arv_device_set_features_from_string's syntax).
+    if (value.empty() || value.find_first_of(" \t=") != std::string::npos) {
+      *error = where + ": " + key + ": " + Quoted(value) +
+               ": expected one word (the feature's value, e.g. Off, 1000, Mono8)";
+      return false;
+    }
+    config->camera.features[key.substr(std::strlen(kFeaturePrefix))] = value;
   }
   return true;
 }
@@ -566,6 +618,23 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
     if (c.camera.right_calibration.empty()) {
       return fail("camera.right_calibration", "required for a camera source");
     }
+  }
+  if (c.source != SourceKind::kAravis) {
+    for (const char* field : {"camera.packet_size", "camera.trigger", "camera.trigger_source",
+                              "camera.roi_offset_px"}) {
+      if (c.origins.keys.count(field) != 0) return fail(field, "only for source aravis");
+    }
+    if (!c.camera.features.empty()) {
+      return fail(kFeaturePrefix + c.camera.features.begin()->first, "only for source aravis");
+    }
+  }
+  if (c.source != SourceKind::kAravis && c.source != SourceKind::kV4l2) {
+    for (const char* field : {"camera.exposure_us", "camera.gain"}) {
+      if (c.origins.keys.count(field) != 0) return fail(field, "only for a camera source");
+    }
+  }
+  if (c.camera.fake && c.camera.trigger == "hardware") {
+    return fail("camera.trigger", "hardware: the fake cameras have no trigger line");
   }
   if (c.source == SourceKind::kV4l2 && c.camera.fake) {
     return fail("camera.fake", "only for source aravis (v4l2 tests script the kernel)");

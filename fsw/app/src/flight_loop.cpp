@@ -537,9 +537,12 @@ void FlightLoop::PublishHealth() {
   h.utime = last_frame_utime_;
   h.seq = health_seq_++;
   h.frames = counters_.frames;
-  h.frames_dropped =
-      counters_.frames_dropped + static_cast<std::int64_t>(source_->Stats().frames_dropped);
-  h.frames_rejected = static_cast<std::int64_t>(source_->Stats().frames_rejected);
+  const drivers::SourceStats source = source_->Stats();
+  h.frames_dropped = counters_.frames_dropped + static_cast<std::int64_t>(source.frames_dropped);
+  h.frames_rejected = static_cast<std::int64_t>(source.frames_rejected);
+  h.camera_missing_packets = static_cast<std::int64_t>(source.missing_packets);
+  h.camera_pairing_failures = static_cast<std::int64_t>(source.pairing_failures);
+  h.camera_timeouts = static_cast<std::int64_t>(source.timeouts);
   h.overruns = counters_.overruns;
   h.outputs_dropped =
       counters_.outputs_dropped + hazard_outputs_dropped_.load() + counters_.hazard_skipped;

@@ -302,6 +302,9 @@ void FillHealth(const HealthRecord& r, swf_msgs::health_t* m) {
   m->imu_saturated = imu.saturated;
   m->imu_missing = imu.missing_samples + r.imu.overflowed;
   m->imu_intervals_bridged = r.imu.intervals_bridged;
+  m->camera_missing_packets = r.camera_missing_packets;
+  m->camera_pairing_failures = r.camera_pairing_failures;
+  m->camera_timeouts = r.camera_timeouts;
 }
 
 }  // namespace

@@ -21,6 +21,13 @@ drivers::V4l2StereoOptions V4l2OptionsFromConfig(const FswConfig& config, int wi
     side->height = height;
     side->format = FormatOf(config.camera.format);
     side->buffer_count = config.camera.buffers;
+    // V4L2's controls: exposure in units of 100 us, an integer gain.
+    if (config.camera.exposure_us > 0.0) {
+      side->exposure_100us =
+          static_cast<std::int32_t>(std::llround(config.camera.exposure_us / 100.0));
+    }
+    if (config.camera.gain >= 0.0)
+      side->gain = static_cast<std::int32_t>(std::llround(config.camera.gain));
   }
   o.left.device = config.camera.left.c_str();
   o.right.device = config.camera.right.c_str();

@@ -485,6 +485,38 @@ TEST(ConfigTest, CommittedConfigurationsLoadAndFitTheirEnvelope) {
   EXPECT_TRUE(CheckEnvelopeDisparity(c, 300.0, 0.2, 320, &error)) << error;
 }
 
+// The bench's camera settings (bench_gige.cfg): every key parsed, and each refusal names its key.
+TEST(ConfigTest, GigECameraSettingsParseAndBadOnesAreRefusedNamingTheKey) {
+  FswConfig c;
+  std::string error;
+  ASSERT_TRUE(LoadConfig(AppDir() + "/config/bench_gige.cfg", &c, &error)) << error;
+  EXPECT_EQ(c.camera.left, "LEFT01");
+  EXPECT_DOUBLE_EQ(c.camera.exposure_us, 4000.0);
+  EXPECT_DOUBLE_EQ(c.camera.gain, 2.0);
+  EXPECT_EQ(c.camera.packet_size, 1400);
+  EXPECT_EQ(c.camera.trigger, "software");
+  EXPECT_EQ(c.camera.roi_offset_px[0], 0);
+  EXPECT_EQ(c.camera.features,
+            (std::map<std::string, std::string>{{"BinningHorizontal", "1"}, {"GainAuto", "Off"}}));
+  const std::string aravis = "source: aravis\ncamera.fake: true\n";
+  const std::string calibrated =
+      "source: aravis\ncamera.fake: true\ncamera.left_calibration: l.yaml\n"
+      "camera.right_calibration: r.yaml\n";
+  Refused(aravis + "camera.exposure_us: -5\n", "t.cfg:3: camera.exposure_us: -5 is outside");
+  Refused(aravis + "camera.trigger: sometimes\n", "t.cfg:3: camera.trigger: 'sometimes'");
+  Refused(aravis + "camera.roi_offset_px: 3\n", "t.cfg:3: camera.roi_offset_px: '3': expected two");
+  Refused(aravis + "camera.packet_size: 70000\n", "t.cfg:3: camera.packet_size: 70000 is outside");
+  Refused(aravis + "camera.feature.Gain Auto: Off\n", "t.cfg:3: camera.feature.Gain Auto: unknown");
+  Refused(aravis + "camera.feature.GainAuto: Off Now\n",
+          "t.cfg:3: camera.feature.GainAuto: 'Off Now': expected one word");
+  Refused(calibrated + "camera.trigger: hardware\n",
+          "t.cfg:5: camera.trigger: hardware: the fake cameras have no trigger line");
+  Refused("source: log\nlog.path: x.lcmlog\ncamera.feature.GainAuto: Off\n",
+          "t.cfg:3: camera.feature.GainAuto: only for source aravis");
+  Refused("source: log\nlog.path: x.lcmlog\ncamera.packet_size: 1400\n",
+          "t.cfg:3: camera.packet_size: only for source aravis");
+}
+
 // Runs the flight process as `program` with these arguments; returns its exit code.
 int RunProgram(const Program& program, std::vector<std::string> args) {
   args.insert(args.begin(), program.tool);

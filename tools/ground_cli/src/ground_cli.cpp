@@ -22,6 +22,13 @@ bool Knows(const CLI::App& app, const std::string& name) {
   return false;
 }
 
+bool IsSubcommand(const CLI::App& app, const std::string& name) {
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    if (sub->check_name(name)) return true;
+  }
+  return false;
+}
+
 // The first option on the command line that neither the program nor any subcommand declares:
 // named before a missing required option (CLI11 checks requirements first), since it is usually
 // the cause. "" when there is none.
@@ -52,7 +59,15 @@ int Parse(CLI::App* app, int argc, char** argv) {
     return cli::kExitOk;
   } catch (const CLI::ParseError& e) {
     const std::string unknown = UnknownOption(*app, argc, argv);
-    const std::string why = unknown.empty() ? e.what() : "unknown option " + unknown;
+    std::string why = unknown.empty() ? e.what() : "unknown option " + unknown;
+    if (unknown.empty() && app->get_require_subcommand_min() > 0 && argc > 1 && argv[1][0] != '-' &&
+        !IsSubcommand(*app, argv[1])) {
+      why = std::string("unknown command '") + argv[1] + "' (";
+      for (const CLI::App* sub : app->get_subcommands({})) {
+        why += (why.back() == '(' ? "" : ", ") + sub->get_name();
+      }
+      why += ")";
+    }
     std::fprintf(stderr, "%s: %s (usage: %s --help)\n", app->get_name().c_str(), why.c_str(),
                  app->get_name().c_str());
     return cli::kExitUsage;

@@ -20,6 +20,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <string>
 
 #include "swf/drivers/pairing.hpp"
 #include "swf/drivers/stereo_source.hpp"
@@ -38,7 +39,7 @@ enum class TriggerMode : std::uint8_t {
 };
 
 struct AravisStereoOptions {
-  const char* left_id = nullptr;       // Aravis device id, serial number or IP address
+  const char* left_id = nullptr;       // Aravis device id, IP address or serial number (looked up)
   const char* right_id = nullptr;      // ignored when side_by_side
   bool side_by_side = false;           // one stereo head delivering [left | right]
   const char* pixel_format = "Mono8";  // Mono8 (in place), Mono10/Mono12/Mono16 (converted)
@@ -57,7 +58,8 @@ struct AravisStereoOptions {
   // Software trigger: fire again when no pair arrived this long after a trigger.
   core::TimeNs trigger_retry_ns = 100 * core::kNsPerMs;
   // Generic GenICam features for everything else, "Name=Value Name2=Value2", applied last to
-  // both cameras (arv_device_set_features_from_string syntax). nullptr for none.
+  // both cameras one at a time (arv_device_set_features_from_string syntax); a refusal names
+  // its feature in LastError(). nullptr for none.
   const char* features = nullptr;
   std::int32_t buffer_count = 8;                        // per camera
   std::int32_t max_pairs_held = 2;                      // pairs the caller may hold at once
@@ -76,6 +78,12 @@ struct AravisStats {
   std::uint64_t resent_packets = 0;    // GVSP packets the camera resent on request (at Stop)
   std::uint64_t devices_lost = 0;      // kDeviceLost returned by Next() (silence, control lost)
 };
+
+// The Aravis device id of the discovered camera with this serial number, "" when none (Aravis
+// opens by device id, physical id or address only). Discovery allocates: not for the flight loop.
+std::string DeviceIdOfSerial(const char* serial);
+// Whether `id` is a dotted IPv4 address (an id that is none is a serial number or device id).
+bool IsIpv4Address(const char* id);
 
 class AravisStereoSource final : public StereoSource {
  public:

@@ -34,6 +34,7 @@ struct SourceStats {
   std::uint64_t frames_rejected = 0;   // frames received but bad (incomplete, wrong size, ...)
   std::uint64_t pairing_failures = 0;  // frames with no partner within the pairing tolerance
   std::uint64_t timeouts = 0;
+  std::uint64_t missing_packets = 0;  // GigE frames with packets missing (in frames_rejected too)
 };
 
 class StereoSource {

@@ -127,6 +127,18 @@ struct CameraConfig {
   std::string format = "grey";
   std::int32_t buffers = 4;
   double pair_tolerance_ms = 2.0;
+  // aravis (GigE Vision): applied to both cameras when the source starts, in this order; a
+  // setting the camera refuses stops the start with an error naming its key. Negative / 0 keep
+  // the camera's own value. The region of interest's size is the calibrations'; roi_offset_px
+  // places it on the sensor.
+  double exposure_us = -1.0;
+  double gain = -1.0;
+  std::int32_t roi_offset_px[2] = {0, 0};
+  std::int32_t packet_size = 0;  // GigE packet size, bytes (0: the largest the path allows)
+  std::string trigger;           // free | software | hardware ("": software when fake, else free)
+  std::string trigger_source = "Line1";  // the hardware trigger's input line
+  // Any other GenICam feature: `camera.feature.<Name>: <value>` (one key each), applied last.
+  std::map<std::string, std::string> features;
 };
 
 // source: lcm: raw stereo_frame_t pairs published live on an LCM channel (a camera process on

@@ -81,6 +81,10 @@ struct HealthRecord {
   std::int64_t frames = 0;
   std::int64_t frames_dropped = 0;
   std::int64_t frames_rejected = 0;  // received but refused by the source (SourceStats)
+  // The camera's own counters (SourceStats; health_t.camera_*).
+  std::int64_t camera_missing_packets = 0;
+  std::int64_t camera_pairing_failures = 0;
+  std::int64_t camera_timeouts = 0;
   std::int64_t overruns = 0;
   std::int64_t outputs_dropped = 0;
   std::int64_t allocations_after_start = 0;  // -1 when this binary does not count them
