@@ -346,10 +346,10 @@ bool SplitLine(const std::string& raw, const std::string& where, std::string* ke
 constexpr const char* kFeaturePrefix = "camera.feature.";
 
 const ConfigSetter* FeatureField(const std::string& key) {
-  static const ConfigSetter setter = [](const std::string& v, FswConfig* c, std::string* why) {
-    (void)c;
-    (void)v;
-    *why = "";
+  // The value is checked and stored by SetField, which knows the feature's name.
+  static const ConfigSetter kAccept = [](const std::string& /*value*/, FswConfig* /*c*/,
+                                         std::string* why) {
+    why->clear();
     return true;
   };
   if (key.rfind(kFeaturePrefix, 0) != 0) return nullptr;
@@ -358,7 +358,7 @@ const ConfigSetter* FeatureField(const std::string& key) {
   for (const char ch : name) {
     if (std::isalnum(static_cast<unsigned char>(ch)) == 0 && ch != '_') return nullptr;
   }
-  return &setter;
+  return &kAccept;
 }
 
 const ConfigSetter* FindField(const std::string& key, const FswConfig& c) {
