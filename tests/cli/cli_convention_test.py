@@ -51,6 +51,8 @@ def euroc_image(cam, index):
     return os.path.join(EUROC, 'mav0', cam, 'data', names[index])
 
 
+# A private network namespace for the GigE fake cameras (root, or an unprivileged user namespace).
+UNSHARE = ['unshare', '-n'] if os.geteuid() == 0 else ['unshare', '-rn']
 FLIGHT_SETS = ['--set', 'rt.mlockall: false', '--set', 'rt.priority: 0', '--set',
                'lcm.publish: false']
 
@@ -105,7 +107,7 @@ def output_cases(programs, work):
          new('guidance', 'map.txt')),
         ('swf-view', [programs['swf-view'], '--lcm-url', 'memq://', '--port', '0', '--timeout',
                       '0.3', '--url-file', new('view', 'url.txt')], new('view', 'url.txt')),
-        ('swf-grab', ['unshare', '-n', 'sh', '-c',
+        ('swf-grab', UNSHARE + ['sh', '-c',
                       'ip link set lo up && ip addr add 127.0.0.2/8 dev lo && exec "$0" "$@"',
                       programs['swf-grab'], 'grab', '--source', 'aravis', '--fake-gv', '--left',
                       '127.0.0.1', '--right', '127.0.0.2', '--trigger', 'software', '--width',
@@ -140,7 +142,7 @@ def main():
         for name, cmd, output in cases:
             if name not in programs:
                 continue
-            if cmd[0] == 'unshare' and run(['unshare', '-n', 'true']).returncode != 0:
+            if cmd[0] == 'unshare' and run(UNSHARE + ['true']).returncode != 0:
                 check(name, False, 'cannot create a network namespace (run as root)')
                 continue
             r = run(cmd, timeout=120)
