@@ -81,6 +81,8 @@ def output_cases(programs, work):
          new('replay', 'r.lcmlog')),
         ('swf-judge', [programs['swf-judge'], sil_log, '--json', new('judge', 'j.json')],
          new('judge', 'j.json')),
+        ('swf-plot', [programs['swf-plot'], sil_log, '--out', new('plot')],
+         new('plot', 'trajectory.png')),
         ('swf-convert', [programs['swf-convert'], 'euroc', EUROC, '--out', euroc_log,
                          '--calib-out', calib, '--max-frames', '4'], euroc_log),
         ('swf-fsw', [programs['swf-fsw'], '--config', fsw_cfg, '--set',

@@ -121,6 +121,7 @@ std::string StepFailure(int frame, double altitude_m, swf::core::Status s) {
 // (naming the PNG) in `error`.
 bool DrawPublished(const World& world, const EvalOptions& eo, const std::string& title,
                    const std::string& path, std::string* error) {
+  if (!swf::cli::MakeParentDirectories(path, error)) return false;
   return swf::plot::DrawHazardMap(swf::hazard_eval::ViewOf(world.Published()),
                                   eo.footprint_radius_m, title, path, error);
 }

@@ -182,7 +182,10 @@ json Fields(const swf_msgs::health_t& m) {
           {"imu_invalid", V(m.imu_invalid)},
           {"imu_saturated", V(m.imu_saturated)},
           {"imu_missing", V(m.imu_missing)},
-          {"imu_intervals_bridged", V(m.imu_intervals_bridged)}};
+          {"imu_intervals_bridged", V(m.imu_intervals_bridged)},
+          {"camera_missing_packets", V(m.camera_missing_packets)},
+          {"camera_pairing_failures", V(m.camera_pairing_failures)},
+          {"camera_timeouts", V(m.camera_timeouts)}};
 }
 
 json Fields(const swf_msgs::imu_t& m) {

@@ -20,6 +20,7 @@
 
 #include "swf/drivers/log_stereo_source.hpp"
 #include "swf/evaluation/run_judge.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
 #include "swf/messages/checked_decode.hpp"
 #include "swf/plot/plot.hpp"
@@ -90,8 +91,7 @@ int main(int argc, char** argv) {
   // Not ->required(): a required option of the app would be required with `curves` too.
   app.add_option("logs", logs, "LCM logs: the run's outputs and the truth (any order; required)")
       ->check(CLI::ExistingFile);
-  app.add_option("--out", out, "directory the PNGs are written to (required)")
-      ->check(CLI::ExistingDirectory);
+  app.add_option("--out", out, "directory the PNGs are written to (required; created)");
   app.add_option("--footprint-radius", footprint_radius_m,
                  "lander footprint radius drawn around the safe site (m; 0: none)")
       ->capture_default_str()
@@ -103,21 +103,22 @@ int main(int argc, char** argv) {
   curves->add_option("files", dat_files, "the charts' text files (.dat)")
       ->required()
       ->check(CLI::ExistingFile);
-  curves
-      ->add_option("--out", curves_out,
-                   "directory the PNGs are written to (default: beside "
-                   "each file)")
-      ->check(CLI::ExistingDirectory);
-  try {
-    app.parse(argc, argv);
-    if (!curves->parsed() && (logs.empty() || out.empty())) {
-      throw CLI::RequiredError(
-          "give the run's LCM logs and --out DIR (or: swf-plot curves FILE.dat)",
-          static_cast<int>(CLI::ExitCodes::RequiredError));
-    }
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return rc == 0 ? 0 : 2;
+  curves->add_option("--out", curves_out,
+                     "directory the PNGs are written to (default: beside "
+                     "each file; created)");
+  swf::ground_cli::Adopt(&app, "swf-plot");
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue)
+    return code;
+  if (!curves->parsed() && (logs.empty() || out.empty())) {
+    std::fprintf(stderr,
+                 "swf-plot: give the run's LCM logs and --out DIR (or: swf-plot curves FILE.dat) "
+                 "(usage: swf-plot --help)\n");
+    return swf::cli::kExitUsage;
+  }
+  const std::string& out_dir = curves->parsed() ? curves_out : out;
+  if (std::string error; !out_dir.empty() && !swf::cli::MakeDirectories(out_dir, &error)) {
+    std::fprintf(stderr, "swf-plot: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
   }
   if (curves->parsed()) return DrawCurves(dat_files, curves_out);
 
