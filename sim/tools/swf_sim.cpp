@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "swf/plot/plot.hpp"
 #include "swf/ground_cli/ground_cli.hpp"
+#include "swf/plot/plot.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/image_io.hpp"
 #include "swf/sim/lcm_publisher.hpp"
@@ -175,7 +175,8 @@ int main(int argc, char** argv) {
   if (Status s = swf::sim::ComputeHazardTruth(terrain, hazard_options, &hazard); s != Status::kOk) {
     return Fail("hazard truth", s);
   }
-  if (!DrawTerrainHazard(terrain, hazard, terrain_name, out + "/terrain_hazard.png")) return swf::cli::kExitFailed;
+  if (!DrawTerrainHazard(terrain, hazard, terrain_name, out + "/terrain_hazard.png"))
+    return swf::cli::kExitFailed;
   const bool terrain_written =
       WriteCsv(out + "/rocks.csv", "x_m,y_m,diameter_m,height_m,base_z_m\n",
                [&](std::FILE* f) {
