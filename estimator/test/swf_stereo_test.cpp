@@ -316,6 +316,42 @@ TEST(SwfStereo, BadInputIsRefusedAndCounted) {
   EXPECT_EQ(swf->Update(), core::Status::kOk);
 }
 
+// GIVEN a landmark seen from two poses WHEN the newest pose's measurement of it is replaced after
+// the update (the front end's refinement in the loop) THEN the filter's cost (what the next
+// solve minimizes) is evaluated with the new value; a landmark's first sighting, an unknown id, a
+// non-finite value and an empty window are refused, and nothing else changes.
+TEST(SwfStereo, ReplaceNewestObservationFeedsTheCost) {
+  auto swf = std::make_unique<SlidingWindowFilter<StereoModel<double>, 3, 4, 4, 4>>();
+  StereoModel<double> model;
+  model.camera = testing::EdlRig();
+  ASSERT_EQ(swf->Configure(model, ModeOptions(SwfMode::kSlidingWindow)), core::Status::kOk);
+  const Mat3<double> r = Mat3<double>::Identity();
+  EXPECT_EQ(swf->ReplaceNewestObservation(1, Vec3<double>(500, 480, 300)), core::Status::kEmpty);
+  Pose<double> pose;
+  pose.R << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  pose.t = Vec3<double>(0, 0, 50);
+  ASSERT_EQ(swf->AddPose(pose), core::Status::kOk);
+  ASSERT_EQ(swf->AddObservation(1, Vec3<double>(500, 480, 300), r), core::Status::kOk);
+  ASSERT_EQ(swf->AddObservation(2, Vec3<double>(400, 370, 320), r), core::Status::kOk);
+  ASSERT_EQ(swf->Update(), core::Status::kOk);
+  EXPECT_EQ(swf->ReplaceNewestObservation(1, Vec3<double>(501, 481, 300)),
+            core::Status::kInvalidArgument);  // the first sighting placed the landmark
+  ASSERT_EQ(swf->AddPose(pose), core::Status::kOk);
+  ASSERT_EQ(swf->AddObservation(1, Vec3<double>(500, 480, 300), r), core::Status::kOk);
+  ASSERT_EQ(swf->AddObservation(2, Vec3<double>(400, 370, 320), r), core::Status::kOk);
+  ASSERT_EQ(swf->Update(), core::Status::kOk);
+  const double cost = swf->MeasurementCost();
+  EXPECT_EQ(swf->ReplaceNewestObservation(1, Vec3<double>(500, 480, 300)), core::Status::kOk);
+  EXPECT_EQ(swf->MeasurementCost(), cost);  // the same value: the same cost, bit for bit
+  EXPECT_EQ(swf->ReplaceNewestObservation(7, Vec3<double>(500, 480, 300)), core::Status::kEmpty);
+  EXPECT_EQ(swf->ReplaceNewestObservation(1, Vec3<double>(std::nan(""), 480, 300)),
+            core::Status::kInvalidArgument);
+  // Two pixels on u_left and u_right of the newest measurement: whitened residual 2 on each.
+  EXPECT_EQ(swf->ReplaceNewestObservation(1, Vec3<double>(502, 482, 300)), core::Status::kOk);
+  EXPECT_GT(swf->MeasurementCost(), cost + 1.0);
+  EXPECT_EQ(swf->NumLandmarks(), 2);
+}
+
 // Paper Fig. 14 load on a long sideways pass: ~20 measurements per frame, tracks ~10 frames.
 SceneOptions LongPass(int frames) {
   SceneOptions so;

@@ -327,6 +327,13 @@ class SlidingWindowFilter {
   core::Status AddObservation(std::int64_t landmark_id, const Vec3<S>& z,
                               const Mat3<S>& sqrt_information);
 
+  // Replaces the value of the newest pose's measurement of a landmark (same information), e.g.
+  // by the front end's re-refinement after Update() (paper 4.1.2); the next Update() solves
+  // with it. kEmpty when the newest pose holds no measurement of it (unknown id, or taken out
+  // by a gate); kInvalidArgument for a non-finite z or the landmark's first sighting (its
+  // measurement placed the landmark: a re-measurement would need a new initialization). O(M).
+  core::Status ReplaceNewestObservation(std::int64_t landmark_id, const Vec3<S>& z);
+
   // Marginalizes (per mode) and runs robust Gauss-Newton over the window.
   core::Status Update();
 

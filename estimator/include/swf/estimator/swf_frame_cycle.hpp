@@ -114,6 +114,22 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::AddObservation(
 }
 
 template <typename Model, int K, int N, int M, int P>
+core::Status SlidingWindowFilter<Model, K, N, M, P>::ReplaceNewestObservation(
+    std::int64_t landmark_id, const Vec3<S>& z) {
+  if (num_poses_ == 0) return core::Status::kEmpty;
+  if (!z.allFinite()) return core::Status::kInvalidArgument;
+  const int slot = ids_.Find(landmark_id);
+  if (slot < 0) return core::Status::kEmpty;
+  if (landmarks_[slot].total_obs <= 1) return core::Status::kInvalidArgument;
+  for (Observation& o : Newest().obs) {
+    if (o.landmark != slot) continue;
+    o.z = z;
+    return core::Status::kOk;
+  }
+  return core::Status::kEmpty;
+}
+
+template <typename Model, int K, int N, int M, int P>
 core::Status SlidingWindowFilter<Model, K, N, M, P>::Update() {
   if (!configured_) return core::Status::kNotConfigured;
   summary_ = SwfSummary{};
