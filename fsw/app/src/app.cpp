@@ -100,6 +100,8 @@ frontend::FrontendOptions FrontendFor(const FswConfig& c, int width, int height)
   o.harris.bucket_rows = std::max(1, std::min(64, height / 40));
   o.max_tracks = static_cast<std::size_t>(c.max_tracks);
   o.stereo.max_disparity = std::min(c.max_disparity_px, width / 2);
+  o.reference_from_estimate = c.frontend_reference_from_estimate;
+  o.recover_lost_tracks = c.frontend_recover_lost_tracks;
   return o;
 }
 
@@ -1142,6 +1144,7 @@ void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int
   po->swf = SwfFor(config, nav_mode);
   po->measurement_sigma_px = config.measurement_sigma_px;
   po->min_quality = static_cast<float>(config.min_quality);
+  po->refine_in_loop = config.frontend_refine_in_loop;
   po->process_sigma_m = config.process_sigma_m;
   po->process_sigma_rad = config.process_sigma_rad;
   po->calibration_baseline_sigma_m = config.calibration_baseline_sigma_m;

@@ -248,6 +248,11 @@ const std::map<std::string, ConfigSetter>& Fields() {
                                         " (frontend::kMaxTracks, the compiled track capacity)");
     f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
                                               frontend::kMaxDisparity);
+    f["frontend.refine_in_loop"] = Bool([](FswConfig* c) { return &c->frontend_refine_in_loop; });
+    f["frontend.reference_from_estimate"] =
+        Bool([](FswConfig* c) { return &c->frontend_reference_from_estimate; });
+    f["frontend.recover_lost_tracks"] =
+        Bool([](FswConfig* c) { return &c->frontend_recover_lost_tracks; });
     f["rate_hz"] = Double(&FswConfig::rate_hz, 0.1, 1000.0);
     f["pacing"] = OneOf<Pacing>([](FswConfig* c) { return &c->pacing; },
                                 {{"realtime", Pacing::kRealtime}, {"lockstep", Pacing::kLockstep}});

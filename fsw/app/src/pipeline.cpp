@@ -88,6 +88,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
   has_previous_pose_ = false;
   has_before_previous_ = false;
   frames_estimated_ = 0;
+  frontend_counters_ = FrontendCounters{};
   integrity_ = IntegrityCounters{};
   report_ = estimator::IntegrityReport{};
   trusted_pose_ = options_.initial_world_T_camera;
@@ -150,20 +151,67 @@ Status Pipeline::Track() {
       prediction.world_T_camera = inertial_model_.CameraPose(
           inertial_model_.Propagate(inertial_->NewestPose(), imu_.SinceEstimate()));
     }
-    std::size_t n = 0;
-    Visit([&](const auto& filter) {
-      filter.ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int /*obs*/) {
-        if (n < static_cast<std::size_t>(kMaxLandmarks)) {
-          estimates_[n].id = static_cast<std::uint32_t>(id);
-          estimates_[n].p_world = p;
-          ++n;
-        }
-      });
-    });
     prediction.landmarks = estimates_.get();
-    prediction.num_landmarks = n;
+    prediction.num_landmarks = GatherLandmarkEstimates();
   }
-  return frontend_->ProcessFrame(current_, prediction, output_.get());
+  const Status s = frontend_->ProcessFrame(current_, prediction, output_.get());
+  const frontend::FrameStats& f = output_->stats;
+  FrontendCounters& c = frontend_counters_;
+  c.measurements += static_cast<std::int64_t>(output_->measurements.size());
+  c.warped += static_cast<std::int64_t>(f.warped);
+  c.lost_tracking += static_cast<std::int64_t>(f.lost_tracking);
+  c.searched += static_cast<std::int64_t>(f.searched);
+  c.recovered += static_cast<std::int64_t>(f.recovered);
+  c.recovered_inconsistent += static_cast<std::int64_t>(f.recovered_inconsistent);
+  c.rejected_consistency += static_cast<std::int64_t>(f.rejected_consistency);
+  return s;
+}
+
+std::size_t Pipeline::GatherLandmarkEstimates() {
+  std::size_t n = 0;
+  Visit([&](const auto& filter) {
+    filter.ForEachLandmark([&](std::int64_t id, const Vec3<double>& p, int /*obs*/) {
+      if (n < static_cast<std::size_t>(kMaxLandmarks)) {
+        estimates_[n].id = static_cast<std::uint32_t>(id);
+        estimates_[n].p_world = p;
+        ++n;
+      }
+    });
+  });
+  return n;
+}
+
+// Paper 4.1.2. The templates this frame started take its estimated pose as their reference;
+// then every measurement of the frame is re-aligned at the updated pose and landmarks and the
+// refined value replaces the one the filter holds (measurements a gate took out stay out; the
+// feature marks show the refined pixel).
+void Pipeline::RefineAfterUpdate() {
+  const Pose<double> pose = NewestCameraPose();
+  frontend_->SetReferencePose(pose);
+  if (!options_.refine_in_loop) return;
+  frontend::FramePrediction updated;
+  updated.has_pose = true;
+  updated.world_T_camera = pose;
+  updated.landmarks = estimates_.get();
+  updated.num_landmarks = GatherLandmarkEstimates();
+  std::size_t refined = 0;
+  if (frontend_->Refine(updated, output_.get(), &refined) != Status::kOk || refined == 0) return;
+  // AddMeasurements marked the measurements first, in their order.
+  const std::size_t marks =
+      std::min(output_->measurements.size(), static_cast<std::size_t>(num_feature_marks_));
+  for (std::size_t i = 0; i < output_->measurements.size(); ++i) {
+    const frontend::StereoMeasurement& m = output_->measurements[i];
+    if (m.quality < options_.min_quality) continue;
+    const Status s = Visit([&](auto& filter) {
+      return filter.ReplaceNewestObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v));
+    });
+    if (s != Status::kOk) continue;
+    ++frontend_counters_.refined;
+    if (i < marks && feature_marks_[i].id == m.landmark_id) {
+      feature_marks_[i].u_px = static_cast<float>(m.u_left);
+      feature_marks_[i].v_px = static_cast<float>(m.v);
+    }
+  }
 }
 
 Status Pipeline::Estimate(const Pose<double>* motion_input) {
@@ -236,6 +284,7 @@ Status Pipeline::Estimate(const Pose<double>* motion_input) {
     }
     // The next interval is integrated at the biases just estimated.
     if (inertial_) (void)imu_.RestartSinceEstimate(inertial_->NewestPose().biases);
+    if (s == Status::kOk || s == Status::kNotConverged) RefineAfterUpdate();
   }
   last_estimate_utime_ = utime_;
   AssessIntegrity(filter_reset, motion != nullptr);

@@ -122,7 +122,8 @@ TEST(FlightLoopTest, HazardClassesMapToTheSchema) {
 }
 
 // GIVEN the whole simulated descent (100 m -> 10 m, 91 frames) WHEN every frame-group cycle runs
-// inside an allocation-counting scope, hazard mapping every 5th frame included, THEN not one
+// inside an allocation-counting scope, hazard mapping every 5th frame and the front end's
+// refinement in the loop and lost-track search included, THEN not one
 // allocation happens, every snapshot frame gives a hazard map, and the estimate stays within a
 // metre of the truth. Stereo-only with the motion input, and stereo-inertial with the simulated
 // MEMS IMU (its samples handed over and queued for recording every cycle).
@@ -149,6 +150,9 @@ TEST_P(FlightLoopAllocations, NoAllocationOnTheRealTimePathOverAWholeDescent) {
   ASSERT_EQ(run.unexpected, core::Status::kOk) << core::ToString(run.unexpected);
   EXPECT_EQ(run.frames, 91);
   EXPECT_EQ(run.allocations, 0u);
+  // The counted path includes refinement in the loop and the search for lost tracks.
+  EXPECT_GT(rig.pipeline->Frontend().refined, 1000);
+  EXPECT_GT(rig.pipeline->Frontend().searched, 0);
   EXPECT_EQ(loop.Counters().stage_errors, 0);
   EXPECT_EQ(loop.Counters().outputs_dropped, 0);
   EXPECT_EQ(loop.Counters().hazard_skipped, 0);

@@ -29,6 +29,7 @@ Status Frontend::Configure(const FrontendOptions& options) {
   }
   next_id_ = 1;
   has_previous_ = false;
+  frame_count_ = 0;
   current_ = 0;
   width_ = 0;
   height_ = 0;
@@ -79,10 +80,18 @@ Eigen::Vector3d Frontend::Triangulate(float x, float y, float disparity) const {
   return p;
 }
 
-bool Frontend::TrackOne(const Track& track, const FramePrediction& prediction, float* x, float* y,
-                        float* disparity_guess, float* quality, bool* warped) const {
+bool Frontend::TrackOne(const Track& track, const FramePrediction& prediction, bool may_search,
+                        float* x, float* y, float* disparity_guess, float* quality, bool* warped,
+                        bool* searched, bool* recovered) const {
   *warped = false;
+  *searched = false;
+  *recovered = false;
   const GrayView left = pyramids_[current_].Level(0);
+  bool has_warp = false;
+  Eigen::Matrix3d h;
+  float predicted_x = 0.0f;
+  float predicted_y = 0.0f;
+  float predicted_d = 0.0f;
   if (prediction.has_pose && track.has_estimate && track.has_ref_pose) {
     const Eigen::Vector3d p_cam = prediction.world_T_camera.ApplyInverse(track.p_world);
     const Eigen::Vector3d p_ref = track.world_T_ref.ApplyInverse(track.p_world);
@@ -90,18 +99,37 @@ bool Frontend::TrackOne(const Track& track, const FramePrediction& prediction, f
       const Eigen::Vector3d z = options_.camera.Project(p_cam);
       const estimator::Pose<double> cur_T_ref =
           prediction.world_T_camera.Inverse() * track.world_T_ref;
-      const Eigen::Matrix3d h = PlaneHomography(options_.camera, cur_T_ref, p_ref.z());
-      float px = static_cast<float>(z.x());
-      float py = static_cast<float>(z.z());
+      h = PlaneHomography(options_.camera, cur_T_ref, p_ref.z());
+      has_warp = true;
+      predicted_x = static_cast<float>(z.x());
+      predicted_y = static_cast<float>(z.z());
+      predicted_d = static_cast<float>(z.x() - z.y());
+      float px = predicted_x;
+      float py = predicted_y;
       float q = 0.0f;
       if (tracker_.TrackWarped(left, templates_[track.template_slot], h, &px, &py, &q)) {
         *x = px;
         *y = py;
-        *disparity_guess = static_cast<float>(z.x() - z.y());
+        *disparity_guess = predicted_d;
         *quality = q;
         *warped = true;
         return true;
       }
+    }
+  }
+  if (has_warp && may_search) {
+    // Warped LK lost it: look for the same template around the prediction before falling back
+    // to frame-to-frame LK, which re-anchors the track on the previous frame (and drifts).
+    *searched = true;
+    float px = predicted_x;
+    float py = predicted_y;
+    if (tracker_.SearchWarped(left, templates_[track.template_slot], h, &px, &py, quality)) {
+      *x = px;
+      *y = py;
+      *disparity_guess = predicted_d;
+      *warped = true;
+      *recovered = true;
+      return true;
     }
   }
   if (!has_previous_) return false;
@@ -172,6 +200,7 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
 
   // 1. Temporal tracking and stereo of every known landmark.
   std::size_t n = 0;
+  std::size_t searches = 0;
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
     Track& t = tracks_[i];
     keep_[i] = false;
@@ -180,7 +209,14 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
     float d = t.disparity;
     float q_track = 0.0f;
     bool warped = false;
-    if (!TrackOne(t, prediction, &x, &y, &d, &q_track, &warped)) {
+    bool searched = false;
+    bool recovered = false;
+    const bool may_search = options_.recover_lost_tracks && searches < options_.max_recoveries;
+    const bool tracked =
+        TrackOne(t, prediction, may_search, &x, &y, &d, &q_track, &warped, &searched, &recovered);
+    if (searched) ++searches;
+    if (searched) ++stats.searched;
+    if (!tracked) {
       ++stats.lost_tracking;
       continue;
     }
@@ -190,6 +226,8 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
       continue;
     }
     if (warped) ++stats.warped;
+    if (recovered) ++stats.recovered;
+    recovered_[n] = recovered;
     keep_[i] = true;
     p0_[n] = t.p_camera;
     p1_[n] = Triangulate(x, y, d);
@@ -221,6 +259,7 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
       ++k;
       if (!consistent) {
         ++stats.rejected_consistency;
+        if (recovered_[k - 1]) ++stats.recovered_inconsistent;
         keep = false;
       }
     }
@@ -273,6 +312,7 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
       t.template_slot = slot;
       t.has_ref_pose = prediction.has_pose;
       t.world_T_ref = prediction.world_T_camera;
+      t.ref_frame = frame_count_;
       t.p_camera = Triangulate(m.x, m.y, m.disparity);
       (void)tracks_.push_back(t);
       (void)output->new_landmarks.push_back(NewLandmark{
@@ -281,7 +321,19 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
     }
   }
   has_previous_ = true;
+  ++frame_count_;
   return Status::kOk;
+}
+
+void Frontend::SetReferencePose(const estimator::Pose<double>& world_T_camera) {
+  if (!configured_ || !options_.reference_from_estimate || !has_previous_) return;
+  // New tracks are appended: those of the frame just processed are the tail.
+  for (std::size_t i = tracks_.size(); i-- > 0;) {
+    Track& t = tracks_[i];
+    if (t.ref_frame != frame_count_ - 1) break;
+    t.has_ref_pose = true;
+    t.world_T_ref = world_T_camera;
+  }
 }
 
 Status Frontend::Refine(const FramePrediction& updated, FrameOutput* output,

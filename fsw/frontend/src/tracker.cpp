@@ -1,5 +1,6 @@
 #include "swf/frontend/tracker.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace swf::frontend {
@@ -81,7 +82,8 @@ Status PatchTracker::Configure(const TrackerOptions& options) {
   if (options.patch_radius < 1 || options.patch_radius > kMaxPatchRadius ||
       options.pyramid_levels < 1 || options.pyramid_levels > kMaxPyramidLevels ||
       options.max_iterations < 1 || !(options.epsilon_px > 0.0f) ||
-      !(options.coarse_epsilon_px > 0.0f) || !(options.max_prediction_error_px > 0.0f)) {
+      !(options.coarse_epsilon_px > 0.0f) || !(options.max_prediction_error_px > 0.0f) ||
+      options.search_radius_px < 1 || options.search_radius_px > kMaxSearchRadius) {
     return Status::kInvalidArgument;
   }
   options_ = options;
@@ -262,12 +264,10 @@ bool PatchTracker::TrackFlow(const Pyramid& prev, const Pyramid& cur, float prev
   return q >= options_.min_zncc;
 }
 
-bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
-                               const Eigen::Matrix3d& homography, float* cur_x, float* cur_y,
-                               float* quality) const {
+bool PatchTracker::WarpTemplate(const PatchTemplate& tmpl, const Eigen::Matrix3d& homography,
+                                float* offsets, float* gx, float* gy) const {
   if (!configured_ || tmpl.radius < 1 || tmpl.radius > kMaxPatchRadius) return false;
   const int r = tmpl.radius;
-  const int count = (2 * r + 1) * (2 * r + 1);
   const Eigen::Vector3d c = homography * Eigen::Vector3d(tmpl.ref_x, tmpl.ref_y, 1.0);
   if (!(c.z() > 1e-9)) return false;
   const double ux = c.x() / c.z();
@@ -281,9 +281,6 @@ bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
   const double det = a.determinant();
   if (!(std::fabs(det) > 1e-6)) return false;
   const Eigen::Matrix2d a_inv_t = a.inverse().transpose();
-  float offsets[2 * kMaxPatchPixels];
-  float gx[kMaxPatchPixels];
-  float gy[kMaxPatchPixels];
   for (int j = -r, k = 0; j <= r; ++j) {
     for (int i = -r; i <= r; ++i, ++k) {
       const Eigen::Vector3d p = homography * Eigen::Vector3d(tmpl.ref_x + i, tmpl.ref_y + j, 1.0);
@@ -294,6 +291,17 @@ bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
       gy[k] = static_cast<float>(g.y());
     }
   }
+  return true;
+}
+
+bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
+                               const Eigen::Matrix3d& homography, float* cur_x, float* cur_y,
+                               float* quality) const {
+  float offsets[2 * kMaxPatchPixels];
+  float gx[kMaxPatchPixels];
+  float gy[kMaxPatchPixels];
+  if (!WarpTemplate(tmpl, homography, offsets, gx, gy)) return false;
+  const int count = (2 * tmpl.radius + 1) * (2 * tmpl.radius + 1);
   const float x0 = *cur_x;
   const float y0 = *cur_y;
   float x = x0;
@@ -312,6 +320,99 @@ bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
   *cur_y = y;
   *quality = q;
   return q >= options_.min_zncc;
+}
+
+bool PatchTracker::SearchWarped(const GrayView& image, const PatchTemplate& tmpl,
+                                const Eigen::Matrix3d& homography, float* cur_x, float* cur_y,
+                                float* quality) const {
+  const int radius = options_.search_radius_px;
+  float offsets[2 * kMaxPatchPixels];
+  float gx[kMaxPatchPixels];
+  float gy[kMaxPatchPixels];
+  if (radius < 1 || !WarpTemplate(tmpl, homography, offsets, gx, gy)) return false;
+  const int count = (2 * tmpl.radius + 1) * (2 * tmpl.radius + 1);
+  // Every candidate is the prediction moved by whole pixels, so each sample keeps its bilinear
+  // weights over the whole search: its cell and weights are computed once.
+  int cell_x[kMaxPatchPixels];
+  int cell_y[kMaxPatchPixels];
+  float ax[kMaxPatchPixels];
+  float ay[kMaxPatchPixels];
+  float centred[kMaxPatchPixels];  // the template minus its mean
+  int min_x = 1 << 30;
+  int min_y = 1 << 30;
+  int max_x = -(1 << 30);
+  int max_y = -(1 << 30);
+  float mean_t = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    const float sx = *cur_x + offsets[2 * k];
+    const float sy = *cur_y + offsets[2 * k + 1];
+    if (!(std::isfinite(sx) && std::isfinite(sy)) || std::fabs(sx) > 1e6f || std::fabs(sy) > 1e6f) {
+      return false;
+    }
+    cell_x[k] = static_cast<int>(std::floor(sx));
+    cell_y[k] = static_cast<int>(std::floor(sy));
+    ax[k] = sx - static_cast<float>(cell_x[k]);
+    ay[k] = sy - static_cast<float>(cell_y[k]);
+    min_x = std::min(min_x, cell_x[k]);
+    min_y = std::min(min_y, cell_y[k]);
+    max_x = std::max(max_x, cell_x[k]);
+    max_y = std::max(max_y, cell_y[k]);
+    mean_t += tmpl.value[k];
+  }
+  mean_t /= static_cast<float>(count);
+  float norm_t = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    centred[k] = tmpl.value[k] - mean_t;
+    norm_t += centred[k] * centred[k];
+  }
+  if (!(norm_t > 0.0f)) return false;
+  float best = -2.0f;
+  int best_i = 0;
+  int best_j = 0;
+  for (int j = -radius; j <= radius; ++j) {
+    if (min_y + j < 0 || max_y + j + 1 >= image.height) continue;
+    for (int i = -radius; i <= radius; ++i) {
+      if (min_x + i < 0 || max_x + i + 1 >= image.width) continue;
+      float sum = 0.0f;
+      float sum2 = 0.0f;
+      float cross = 0.0f;
+      for (int k = 0; k < count; ++k) {
+        const std::uint8_t* r0 = image.Row(cell_y[k] + j) + cell_x[k] + i;
+        const std::uint8_t* r1 = r0 + image.stride;
+        const float top = static_cast<float>(r0[0]) + ax[k] * static_cast<float>(r0[1] - r0[0]);
+        const float bottom = static_cast<float>(r1[0]) + ax[k] * static_cast<float>(r1[1] - r1[0]);
+        const float s = top + ay[k] * (bottom - top);
+        sum += s;
+        sum2 += s * s;
+        cross += s * centred[k];
+      }
+      const float var = sum2 - sum * sum / static_cast<float>(count);
+      if (!(var > 0.0f)) continue;
+      const float zncc = cross / std::sqrt(var * norm_t);
+      if (zncc > best) {  // ties: the first in raster order
+        best = zncc;
+        best_i = i;
+        best_j = j;
+      }
+    }
+  }
+  if (best < options_.min_zncc) return false;
+  const float px = *cur_x;
+  const float py = *cur_y;
+  float x = px + static_cast<float>(best_i);
+  float y = py + static_cast<float>(best_j);
+  float q = 0.0f;
+  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, options_.epsilon_px, &x, &y,
+             &q) ||
+      q < options_.min_zncc) {
+    return false;
+  }
+  const float limit = static_cast<float>(radius) + 1.0f;
+  if (std::fabs(x - px) > limit || std::fabs(y - py) > limit) return false;
+  *cur_x = x;
+  *cur_y = y;
+  *quality = q;
+  return true;
 }
 
 }  // namespace swf::frontend

@@ -76,6 +76,27 @@ void Evaluation::OnNav(const app::NavRecord& r) {
   truth_.orientation_world_q[3] = q.z();
   truth_.altitude_m = pose.t.z() - terrain_->HeightAt(pose.t.x(), pose.t.y());
   Send(channels_.truth, truth_);
+  if (first_frame_ < 0) first_frame_ = frame;
+  ScoreTracking(r, pose);
+}
+
+void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<double>& pose) {
+  for (std::int32_t k = 0; k < r.num_features; ++k) {
+    const app::FeatureMark& m = r.features[k];
+    if (m.fate != app::FeatureFate::kTracked) continue;
+    Eigen::Vector3d p;
+    if (!TrueLandmark(m.id, &p)) continue;
+    const Eigen::Vector3d c = pose.ApplyInverse(p);
+    if (!(c.z() > 0.0)) continue;
+    const Eigen::Vector3d z = camera_.Project(c);
+    const double e = std::hypot(m.u_px - z.x(), m.v_px - z.z());
+    tracking_.all_px.push_back(e);
+    app::NewSighting s;
+    if (FirstSeen(m.id, &s) && s.frame_seq == first_frame_) {
+      tracking_.first_frame_px.push_back(e);
+      tracking_.first_frame_age.push_back(static_cast<int>(r.nav.frame_seq - s.frame_seq));
+    }
+  }
 }
 
 bool Evaluation::FirstSeen(std::int64_t id, app::NewSighting* sighting) const {

@@ -7,6 +7,7 @@
 
 #include "swf/app/config.hpp"
 #include "swf/app/config_fields.hpp"
+#include "swf/evaluation/statistics.hpp"
 #include "swf/hazard_eval/hazard_eval.hpp"
 #include "swf/sim/rig.hpp"
 
@@ -45,6 +46,27 @@ void WriteOutputs(std::FILE* f, const evaluation::RunScore& score) {
 }
 
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
+// The front end's measurements against the renderer's truth (Evaluation::Tracking): every fused
+// measurement of a known landmark, and the landmarks of the first frame, overall and once they
+// are 10 frames old (their drift).
+void WriteTrackingErrors(std::FILE* f, const Evaluation::TrackingErrors& t) {
+  std::vector<double> old_px;
+  for (std::size_t i = 0; i < t.first_frame_px.size(); ++i) {
+    if (t.first_frame_age[i] >= 10) old_px.push_back(t.first_frame_px[i]);
+  }
+  std::fprintf(
+      f,
+      "  \"tracking_error_px\": {\"measurements\": %zu, \"median\": %s, \"p90\": %s, "
+      "\"rms\": %s,\n    \"first_frame\": {\"measurements\": %zu, \"median\": %s, "
+      "\"p90\": %s, \"measurements_10_frames_old\": %zu, \"median_10_frames_old\": %s}},\n",
+      t.all_px.size(), app::JsonNumber(evaluation::Median(t.all_px)).c_str(),
+      app::JsonNumber(evaluation::Quantile(t.all_px, 0.9)).c_str(),
+      app::JsonNumber(evaluation::Rms(t.all_px)).c_str(), t.first_frame_px.size(),
+      app::JsonNumber(evaluation::Median(t.first_frame_px)).c_str(),
+      app::JsonNumber(evaluation::Quantile(t.first_frame_px, 0.9)).c_str(), old_px.size(),
+      app::JsonNumber(evaluation::Median(old_px)).c_str());
+}
+
 void WriteHazardEvaluation(std::FILE* f, const evaluation::HazardScore& e) {
   const evaluation::HazardMapMetrics& h = e.map;
   std::fprintf(
@@ -187,6 +209,7 @@ void SimulatedDescent::Evaluate(const app::FswConfig& config, const app::FlightP
                                 app::Verdict* verdict, app::ImuReport* imu) {
   const SimWorld& world = *world_;
   score_ = evaluation_.Score();
+  if (parts.pipeline) frontend_ = parts.pipeline->Frontend();
   if (!config.plot_dir.empty()) DrawPlots(config.plot_dir, *parts.hazard, verdict);
   if (score_.protection_violations > 0) {
     app::Fail(verdict, std::to_string(score_.protection_violations) +
@@ -260,6 +283,22 @@ void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
           .c_str(),
       score.final_pose_error_m, static_cast<long long>(score.outputs.size()),
       static_cast<long long>(score.maps.size()));
+  WriteTrackingErrors(f, evaluation_.Tracking());
+  const app::FrontendCounters& fc = frontend_;
+  std::fprintf(f,
+               "  \"frontend\": {\"refine_in_loop\": %s, \"reference_from_estimate\": %s, "
+               "\"recover_lost_tracks\": %s, \"measurements\": %lld, \"warped\": %lld, "
+               "\"lost_tracking\": %lld, \"searched\": %lld, \"recovered\": %lld, "
+               "\"recovered_inconsistent\": %lld, "
+               "\"rejected_consistency\": %lld, \"refined\": %lld},\n",
+               c.frontend_refine_in_loop ? "true" : "false",
+               c.frontend_reference_from_estimate ? "true" : "false",
+               c.frontend_recover_lost_tracks ? "true" : "false",
+               static_cast<long long>(fc.measurements), static_cast<long long>(fc.warped),
+               static_cast<long long>(fc.lost_tracking), static_cast<long long>(fc.searched),
+               static_cast<long long>(fc.recovered),
+               static_cast<long long>(fc.recovered_inconsistent),
+               static_cast<long long>(fc.rejected_consistency), static_cast<long long>(fc.refined));
   std::fprintf(f, "  \"mean_position_nees\": %s,\n  \"position_nees\": [",
                app::JsonNumber(score.mean_position_nees).c_str());
   for (std::size_t k = 0; k < score.outputs.size(); ++k) {

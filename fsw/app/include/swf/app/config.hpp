@@ -197,6 +197,13 @@ struct FswConfig {
   double calibration_disparity_sigma_px = 0.0;
   std::int32_t max_tracks = 150;
   std::int32_t max_disparity_px = 128;
+  // The front end's paper 4.1 steps, each switchable to measure its effect (docs/frontend.md):
+  // refinement in the loop (PipelineOptions::refine_in_loop), templates referenced to the
+  // estimated pose so every track is warped, and the search that recovers lost tracks
+  // (FrontendOptions::reference_from_estimate, recover_lost_tracks).
+  bool frontend_refine_in_loop = true;
+  bool frontend_reference_from_estimate = true;
+  bool frontend_recover_lost_tracks = true;
 
   // Rate groups.
   double rate_hz = 10.0;

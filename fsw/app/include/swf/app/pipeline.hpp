@@ -76,6 +76,11 @@ struct PipelineOptions {
   int height_px = 0;
 
   frontend::FrontendOptions frontend;  // camera is filled in by Configure
+  // Paper 4.1.2, refinement in the loop: after the filter's update the frame's measurements are
+  // re-aligned at the updated pose and landmarks (Frontend::Refine) and the refined values
+  // replace the ones the filter holds, so the next frame's solve (every solve of the window that
+  // still holds this pose) uses them. One warped LK and one stereo LK per measurement.
+  bool refine_in_loop = true;
   estimator::SwfOptions swf;
   double measurement_sigma_px = 0.5;  // per stereo coordinate (uL, uR, v)
   float min_quality = 0.7f;           // measurements below this ZNCC are not used
@@ -126,6 +131,19 @@ struct IntegrityCounters {
   std::int64_t frames_blind = 0;      // ... or, stereo-inertial, with images too poor to measure
   std::int32_t longest_outage_frames = 0;
   std::int64_t flag_counts[estimator::kNumIntegrityFlags] = {};
+};
+
+// The front end since Configure: its per-frame statistics summed, and the measurements
+// refinement in the loop replaced in the filter.
+struct FrontendCounters {
+  std::int64_t measurements = 0;  // of tracked landmarks (before the filter's gates)
+  std::int64_t warped = 0;
+  std::int64_t lost_tracking = 0;
+  std::int64_t searched = 0;  // lost tracks searched for around their prediction
+  std::int64_t recovered = 0;
+  std::int64_t recovered_inconsistent = 0;
+  std::int64_t rejected_consistency = 0;
+  std::int64_t refined = 0;  // replaced in the filter by refinement in the loop
 };
 
 // The navigation output of one frame (nav_state_t without the transport fields).
@@ -257,6 +275,7 @@ class Pipeline {
   const FeatureMark* FeatureMarks() const { return feature_marks_.get(); }
   const estimator::StereoCamera<double>& Camera() const { return options_.camera; }
   std::int64_t FramesEstimated() const { return frames_estimated_; }
+  const FrontendCounters& Frontend() const { return frontend_counters_; }
   bool Rectifies() const { return options_.rectify; }
 
  private:
@@ -346,6 +365,11 @@ class Pipeline {
   core::Status RestartFromTrusted();
   estimator::Pose<double> BoundedConstantVelocity() const;
   void AddMeasurements();
+  // After a solve: templates' reference pose and refinement in the loop (refine_in_loop).
+  void RefineAfterUpdate();
+  // The filter's landmarks into estimates_ (the front end's view of the map); their count.
+  std::size_t GatherLandmarkEstimates();
+  FrontendCounters frontend_counters_{};
   void AssessIntegrity(bool filter_reset, bool has_motion);
   estimator::IntegrityMonitor monitor_;
   estimator::IntegrityReport report_{};

@@ -27,6 +27,8 @@ inline constexpr int kMaxCandidatesPerBucket = 8;
 // LK patches: radius up to 7 (15 x 15 pixels).
 inline constexpr int kMaxPatchRadius = 7;
 inline constexpr int kMaxPatchPixels = (2 * kMaxPatchRadius + 1) * (2 * kMaxPatchRadius + 1);
+// Recovery search of a lost track: radius of the whole-pixel window around the prediction.
+inline constexpr int kMaxSearchRadius = 16;
 // Image pyramid levels for translation-only LK without a geometric prediction.
 inline constexpr int kMaxPyramidLevels = 4;
 // Disparity search range limit of the SAD matcher.

@@ -9,7 +9,9 @@
 // Usage by the estimator, once per frame:
 //   frontend.ProcessFrame(frame, prediction, &output);   // measurements for the SWF
 //   ... SWF Gauss-Newton update ...
-//   frontend.Refine(updated_prediction, &output);        // optional re-refinement (paper 4.1.2)
+//   frontend.SetReferencePose(updated_pose);             // templates of this frame: estimated pose
+//   frontend.Refine(updated_prediction, &output, &n);     // re-refinement (paper 4.1.2); the
+//                                                        // caller replaces what the SWF holds
 // Capacities: config.hpp. The object is large (images, remap-free); create it once at start.
 #pragma once
 
@@ -76,6 +78,11 @@ struct FrameStats {
   std::size_t corners = 0;               // Harris corners offered for new landmarks
   std::size_t new_landmarks = 0;
   std::size_t warped = 0;  // tracks aligned with the plane homography
+  // Tracks LK lost that the search around the prediction found again (and stereo kept), and
+  // how many of those Moravec's check then rejected.
+  std::size_t searched = 0;
+  std::size_t recovered = 0;
+  std::size_t recovered_inconsistent = 0;
 };
 
 struct FrameOutput {
@@ -104,6 +111,18 @@ struct FrontendOptions {
   // seed landmarks; stereo and LK refine them at full resolution) but finds fewer corners in weak
   // texture: on EuRoC 213 instead of 297 tracks per frame (docs/benchmarks.md).
   int detection_level = 0;
+  // Paper 4.1.2 warps every feature patch from the frame it was first tracked in. The reference
+  // pose of a template is the estimator's updated pose of that frame (SetReferencePose), so
+  // tracks started without a prediction (the first frame, a restart) are warped too once the
+  // estimator has their landmark. Off: the pose predicted at first sighting, and tracks started
+  // without one follow frame-to-frame LK for life.
+  bool reference_from_estimate = true;
+  // A track whose warped LK fails is searched for around its predicted projection
+  // (PatchTracker::SearchWarped, tracker.search_radius_px) before it is given up; what the
+  // search finds passes stereo and Moravec's check like any track. At most max_recoveries
+  // searches per frame bound the cost.
+  bool recover_lost_tracks = true;
+  std::size_t max_recoveries = 64;
 };
 
 // A tracked landmark as seen by tools and tests.
@@ -124,9 +143,14 @@ class Frontend {
   core::Status ProcessFrame(const StereoFrame& frame, const FramePrediction& prediction,
                             FrameOutput* output);
 
+  // The estimator's updated pose of the frame just processed: the reference pose of the templates
+  // this frame started (FrontendOptions::reference_from_estimate; a no-op when off).
+  void SetReferencePose(const estimator::Pose<double>& world_T_camera);
+
   // Re-aligns this frame's measurements with an updated pose and landmark estimates (paper
-  // 4.1.2: refine after each Gauss-Newton step). Measurements whose refinement fails keep their
-  // previous value. *num_refined: how many were updated.
+  // 4.1.2: refine after each Gauss-Newton step): each track's template warped at the updated
+  // pose and landmark, LK from its measurement, then stereo LK. Measurements whose refinement
+  // fails keep their previous value. *num_refined: how many were updated.
   core::Status Refine(const FramePrediction& updated, FrameOutput* output,
                       std::size_t* num_refined);
 
@@ -145,6 +169,7 @@ class Frontend {
     int template_slot = -1;
     bool has_ref_pose = false;
     estimator::Pose<double> world_T_ref;
+    std::int64_t ref_frame = 0;  // the frame the template was taken in (frame_count_)
     Eigen::Vector3d p_camera = Eigen::Vector3d::Zero();  // last stereo triangulation
     // Per-frame scratch.
     bool has_estimate = false;
@@ -153,8 +178,11 @@ class Frontend {
 
   void AttachEstimates(const FramePrediction& prediction);
   // Warped tracking of one track under `prediction`; (x, y, d) in: fallback start, out: result.
-  bool TrackOne(const Track& track, const FramePrediction& prediction, float* x, float* y,
-                float* disparity_guess, float* quality, bool* warped) const;
+  // When warped LK fails and `may_search`, the search around the prediction comes before
+  // frame-to-frame LK (*searched: it ran; *recovered: it found the track).
+  bool TrackOne(const Track& track, const FramePrediction& prediction, bool may_search, float* x,
+                float* y, float* disparity_guess, float* quality, bool* warped, bool* searched,
+                bool* recovered) const;
   bool StereoOne(const GrayView& left, const GrayView& right, float x, float y, float* disparity,
                  float* quality) const;
   Eigen::Vector3d Triangulate(float x, float y, float disparity) const;
@@ -172,6 +200,7 @@ class Frontend {
   Image<std::uint8_t> right_;
   int current_ = 0;
   bool has_previous_ = false;
+  std::int64_t frame_count_ = 0;  // frames processed
   int width_ = 0;
   int height_ = 0;
 
@@ -188,6 +217,7 @@ class Frontend {
   Eigen::Vector3d p1_[kMaxTracks];
   bool inlier_[kMaxTracks] = {};
   bool keep_[kMaxTracks] = {};
+  bool recovered_[kMaxTracks] = {};
 };
 
 }  // namespace swf::frontend

@@ -39,6 +39,9 @@ struct TrackerOptions {
   // intensity ramp across the patch moved by a translation is indistinguishable from an offset,
   // so with the offset the patch's strongest (low-frequency) content carries no information.
   bool brightness_offset = true;
+  // SearchWarped: the integer offsets within this radius of the prediction are compared
+  // (search_radius_px^2 * 4 ZNCCs of the patch; <= kMaxSearchRadius).
+  int search_radius_px = 5;
 };
 
 // A reference patch with its (Scharr) gradients, taken where a landmark was first
@@ -91,6 +94,16 @@ class PatchTracker {
                    const Eigen::Matrix3d& homography, float* cur_x, float* cur_y,
                    float* quality) const;
 
+  // Recovery when TrackWarped lost the track (paper 4.1.1: patch matching before LK): the warped
+  // template's ZNCC at every whole-pixel offset within search_radius_px of the prediction
+  // (*cur_x, *cur_y), the best one, if its ZNCC reaches min_zncc, refined by the same warped LK.
+  // False when nothing in the window matches, LK fails from there or ends more than
+  // search_radius_px + 1 from the prediction. The window's samples share their bilinear weights,
+  // so the cost is (2 search_radius_px + 1)^2 patch correlations of 4 loads per pixel.
+  bool SearchWarped(const GrayView& image, const PatchTemplate& tmpl,
+                    const Eigen::Matrix3d& homography, float* cur_x, float* cur_y,
+                    float* quality) const;
+
  private:
   // Core Gauss-Newton alignment (file comment). offsets: 2 * count floats.
   // grid_radius >= 0: offsets are the unwarped integer grid (fast sampling); clamped: replicate
@@ -98,6 +111,10 @@ class PatchTracker {
   bool Align(const GrayView& image, const float* value, const float* gx, const float* gy,
              const float* offsets, int count, int grid_radius, bool clamped, float epsilon,
              float* cx, float* cy, float* quality) const;
+  // The template under homography: offsets (2 per pixel) of its pixels around the centre's image
+  // and its gradients mapped by A^-T (file comment). False for a degenerate warp.
+  bool WarpTemplate(const PatchTemplate& tmpl, const Eigen::Matrix3d& homography, float* offsets,
+                    float* gx, float* gy) const;
 
   TrackerOptions options_{};
   bool configured_ = false;

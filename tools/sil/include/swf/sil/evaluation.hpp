@@ -6,7 +6,9 @@
 // to evaluation::RunJudge, the same judge swf-judge runs on logs. A landmark's true position is
 // where the ray through the pixel it was first seen at (the frame group's NewSighting), from the
 // true camera pose of that frame, meets the terrain. A hazard map's truth is drawn from the
-// terrain at the mapper's thresholds (hazard_eval::HazardTruthOf).
+// terrain at the mapper's thresholds (hazard_eval::HazardTruthOf). The tracking error of every
+// fused measurement of a known landmark (the feature marks, after refinement in the loop) is the
+// pixel distance to that true point projected from the frame's true pose.
 #pragma once
 
 #include <Eigen/Core>
@@ -47,8 +49,8 @@ class Evaluation : public app::OutputObserver {
               const estimator::StereoCamera<double>& camera,
               const hazard::HazardMapperOptions& mapper, app::OutputThread* output);
 
-  void OnNav(const app::NavRecord& r) override;        // first sightings; the frame's truth state
-  void OnMap(const app::MapRecord& r) override;        // the true positions of the map's landmarks
+  void OnNav(const app::NavRecord& r) override;  // first sightings, truth state, tracking error
+  void OnMap(const app::MapRecord& r) override;  // the true positions of the map's landmarks
   void OnHazard(const app::HazardRecord& r) override;  // the map's truth; keeps the last map
   void OnMessage(const std::string& channel, const std::uint8_t* data, int size) override;
 
@@ -58,6 +60,14 @@ class Evaluation : public app::OutputObserver {
   // (false: never seen, or the ray misses the terrain).
   bool FirstSeen(std::int64_t id, app::NewSighting* sighting) const;
   bool TrueLandmark(std::int64_t id, Eigen::Vector3d* position);
+  // |(u, v) - true projection| of every fused measurement of a known landmark (pixels), and of
+  // those whose landmark was first seen in the first frame, with the frames since.
+  struct TrackingErrors {
+    std::vector<double> all_px;
+    std::vector<double> first_frame_px;
+    std::vector<int> first_frame_age;
+  };
+  const TrackingErrors& Tracking() const { return tracking_; }
   // The terrain with the hazard truth maps are judged against (the mapper's thresholds), for
   // plot::DrawTerrainHazard; empty when the truth could not be drawn.
   plot::HeightGrid TerrainTruth() const;
@@ -78,6 +88,9 @@ class Evaluation : public app::OutputObserver {
   evaluation::RunJudge judge_;
   std::unordered_map<std::int64_t, app::NewSighting> first_seen_;
   std::unordered_map<std::int64_t, Eigen::Vector3d> true_landmarks_;  // NaN: the ray missed
+  TrackingErrors tracking_;
+  std::int64_t first_frame_ = -1;  // frame_seq of the first navigation output
+  void ScoreTracking(const app::NavRecord& r, const estimator::Pose<double>& pose);
   swf_msgs::truth_state_t truth_;
   swf_msgs::landmark_map_t truth_map_;
   std::vector<std::uint8_t> buffer_;

@@ -56,6 +56,7 @@ class SimulatedDescent final : public app::ProcessExtension {
   std::unique_ptr<SimWorld> world_;
   Evaluation evaluation_;
   evaluation::RunScore score_;
+  app::FrontendCounters frontend_{};  // the pipeline's, after the run
 };
 
 }  // namespace swf::sil
