@@ -174,6 +174,27 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
                               FrameOutput* output) {
   output->Clear();
   if (!configured_) return Status::kNotConfigured;
+  if (Status s = LoadImages(frame); s != Status::kOk) return s;
+  const GrayView left = pyramids_[current_].Level(0);
+  const GrayView right = right_.View();
+
+  FrameStats& stats = output->stats;
+  stats.tracks_in = tracks_.size();
+  AttachEstimates(prediction);
+  // 1. Temporal tracking and stereo of every known landmark.
+  const std::size_t n = TrackAndTriangulate(left, right, prediction, &stats);
+  // 2. Moravec's rigid-consistency check on the previous and current stereo points.
+  if (Status s = MarkConsistent(n); s != Status::kOk) return s;
+  // 3. Emit measurements, drop the lost and the inconsistent.
+  EmitMeasurements(output);
+  // 4. New landmarks where the image is not covered.
+  if (Status s = AddNewLandmarks(left, right, prediction, output); s != Status::kOk) return s;
+  has_previous_ = true;
+  ++frame_count_;
+  return Status::kOk;
+}
+
+Status Frontend::LoadImages(const StereoFrame& frame) {
   if (!frame.left.Valid() || !frame.right.Valid() || frame.left.width != frame.right.width ||
       frame.left.height != frame.right.height || frame.left.width > kMaxImageWidth ||
       frame.left.height > kMaxImageHeight) {
@@ -191,14 +212,11 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
   }
   if (Status s = right_.Resize(width_, height_); s != Status::kOk) return s;
   right_.CopyFrom(frame.right);
-  const GrayView left = pyramids_[current_].Level(0);
-  const GrayView right = right_.View();
+  return Status::kOk;
+}
 
-  FrameStats& stats = output->stats;
-  stats.tracks_in = tracks_.size();
-  AttachEstimates(prediction);
-
-  // 1. Temporal tracking and stereo of every known landmark.
+std::size_t Frontend::TrackAndTriangulate(const GrayView& left, const GrayView& right,
+                                          const FramePrediction& prediction, FrameStats* stats) {
   std::size_t n = 0;
   std::size_t searches = 0;
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
@@ -215,18 +233,18 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
     const bool tracked =
         TrackOne(t, prediction, may_search, &x, &y, &d, &q_track, &warped, &searched, &recovered);
     if (searched) ++searches;
-    if (searched) ++stats.searched;
+    if (searched) ++stats->searched;
     if (!tracked) {
-      ++stats.lost_tracking;
+      ++stats->lost_tracking;
       continue;
     }
     float q_stereo = 0.0f;
     if (!StereoOne(left, right, x, y, &d, &q_stereo)) {
-      ++stats.lost_stereo;
+      ++stats->lost_stereo;
       continue;
     }
-    if (warped) ++stats.warped;
-    if (recovered) ++stats.recovered;
+    if (warped) ++stats->warped;
+    if (recovered) ++stats->recovered;
     recovered_[n] = recovered;
     keep_[i] = true;
     p0_[n] = t.p_camera;
@@ -237,18 +255,21 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
     t.quality = std::fmin(q_track, q_stereo);
     ++n;
   }
+  return n;
+}
 
-  // 2. Moravec's rigid-consistency check on the previous and current stereo points.
+Status Frontend::MarkConsistent(std::size_t n) {
   if (options_.consistency_check && n >= options_.min_consistency_points) {
     std::size_t num_inliers = 0;
-    if (Status s = consistency_.Run(p0_, p1_, n, inlier_, &num_inliers); s != Status::kOk) {
-      return s;
-    }
-  } else {
-    for (std::size_t k = 0; k < n; ++k) inlier_[k] = true;
+    return consistency_.Run(p0_, p1_, n, inlier_, &num_inliers);
   }
+  for (std::size_t k = 0; k < n; ++k) inlier_[k] = true;
+  return Status::kOk;
+}
 
-  // 3. Emit measurements, drop the lost and the inconsistent (order kept: tracks stay sorted).
+void Frontend::EmitMeasurements(FrameOutput* output) {
+  FrameStats& stats = output->stats;
+  // Order kept: tracks stay sorted.
   std::size_t write = 0;
   for (std::size_t i = 0, k = 0; i < tracks_.size(); ++i) {
     Track& t = tracks_[i];
@@ -275,53 +296,52 @@ Status Frontend::ProcessFrame(const StereoFrame& frame, const FramePrediction& p
     ++write;
   }
   while (tracks_.size() > write) tracks_.pop_back();
+}
 
-  // 4. New landmarks where the image is not covered.
+Status Frontend::AddNewLandmarks(const GrayView& left, const GrayView& right,
+                                 const FramePrediction& prediction, FrameOutput* output) {
   const int level = std::min(options_.detection_level, pyramids_[current_].NumLevels() - 1);
   const float to_level = 1.0f / static_cast<float>(1 << level);
   for (std::size_t i = 0; i < tracks_.size(); ++i) {
     occupied_[i] = Point2f{tracks_[i].x * to_level, tracks_[i].y * to_level};
   }
-  if (tracks_.size() < options_.max_tracks) {
-    if (Status s =
-            harris_.Detect(pyramids_[current_].Level(level), occupied_, tracks_.size(), &corners_);
-        s != Status::kOk && s != Status::kFull) {
-      return s;
-    }
-    stats.corners = corners_.size();
-    for (const Corner& c : corners_) {
-      if (tracks_.size() >= options_.max_tracks || num_free_ == 0 || output->new_landmarks.full()) {
-        break;
-      }
-      // Level-l pixel x samples full-resolution pixel (x << l) (Downsample2x is centred there).
-      const int x0 = static_cast<int>(c.x) << level;
-      const int y0 = static_cast<int>(c.y) << level;
-      StereoMatch m;
-      if (!stereo_.Match(left, right, x0, y0, &m)) continue;
-      if (!(m.disparity > 0.0f)) continue;
-      const int slot = free_slots_[num_free_ - 1];
-      if (!tracker_.ExtractTemplate(left, m.x, m.y, &templates_[slot])) continue;
-      --num_free_;
-      Track t;
-      t.id = next_id_++;
-      t.x = m.x;
-      t.y = m.y;
-      t.disparity = m.disparity;
-      t.quality = m.quality;
-      t.length = 1;
-      t.template_slot = slot;
-      t.has_ref_pose = prediction.has_pose;
-      t.world_T_ref = prediction.world_T_camera;
-      t.ref_frame = frame_count_;
-      t.p_camera = Triangulate(m.x, m.y, m.disparity);
-      (void)tracks_.push_back(t);
-      (void)output->new_landmarks.push_back(NewLandmark{
-          t.id, m.x, static_cast<double>(m.x) - m.disparity, m.y, t.p_camera, m.quality});
-      ++stats.new_landmarks;
-    }
+  if (tracks_.size() >= options_.max_tracks) return Status::kOk;
+  if (Status s =
+          harris_.Detect(pyramids_[current_].Level(level), occupied_, tracks_.size(), &corners_);
+      s != Status::kOk && s != Status::kFull) {
+    return s;
   }
-  has_previous_ = true;
-  ++frame_count_;
+  output->stats.corners = corners_.size();
+  for (const Corner& c : corners_) {
+    if (tracks_.size() >= options_.max_tracks || num_free_ == 0 || output->new_landmarks.full()) {
+      break;
+    }
+    // Level-l pixel x samples full-resolution pixel (x << l) (Downsample2x is centred there).
+    const int x0 = static_cast<int>(c.x) << level;
+    const int y0 = static_cast<int>(c.y) << level;
+    StereoMatch m;
+    if (!stereo_.Match(left, right, x0, y0, &m)) continue;
+    if (!(m.disparity > 0.0f)) continue;
+    const int slot = free_slots_[num_free_ - 1];
+    if (!tracker_.ExtractTemplate(left, m.x, m.y, &templates_[slot])) continue;
+    --num_free_;
+    Track t;
+    t.id = next_id_++;
+    t.x = m.x;
+    t.y = m.y;
+    t.disparity = m.disparity;
+    t.quality = m.quality;
+    t.length = 1;
+    t.template_slot = slot;
+    t.has_ref_pose = prediction.has_pose;
+    t.world_T_ref = prediction.world_T_camera;
+    t.ref_frame = frame_count_;
+    t.p_camera = Triangulate(m.x, m.y, m.disparity);
+    (void)tracks_.push_back(t);
+    (void)output->new_landmarks.push_back(
+        NewLandmark{t.id, m.x, static_cast<double>(m.x) - m.disparity, m.y, t.p_camera, m.quality});
+    ++output->stats.new_landmarks;
+  }
   return Status::kOk;
 }
 

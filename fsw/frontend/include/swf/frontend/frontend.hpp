@@ -176,6 +176,15 @@ class Frontend {
     Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
   };
 
+  // ProcessFrame's steps, in order.
+  core::Status LoadImages(const StereoFrame& frame);  // checks the pair, builds the left pyramid
+  // Tracks and re-triangulates every known landmark; returns how many survived (keep_, p0_, p1_).
+  std::size_t TrackAndTriangulate(const GrayView& left, const GrayView& right,
+                                  const FramePrediction& prediction, FrameStats* stats);
+  core::Status MarkConsistent(std::size_t n);  // inlier_ of the n survivors
+  void EmitMeasurements(FrameOutput* output);
+  core::Status AddNewLandmarks(const GrayView& left, const GrayView& right,
+                               const FramePrediction& prediction, FrameOutput* output);
   void AttachEstimates(const FramePrediction& prediction);
   // Warped tracking of one track under `prediction`; (x, y, d) in: fallback start, out: result.
   // When warped LK fails and `may_search`, the search around the prediction comes before
