@@ -26,6 +26,14 @@ std::int32_t AcquireOutput(Pool* pool, bool lockstep) {
   return slot;
 }
 
+// AcquireOutput for an output that is dropped whole when no slot is free: -1 is counted.
+template <typename Pool>
+std::int32_t AcquireOutputOrCountDrop(Pool* pool, bool lockstep, std::int64_t* outputs_dropped) {
+  const std::int32_t slot = AcquireOutput(pool, lockstep);
+  if (slot < 0) ++*outputs_dropped;
+  return slot;
+}
+
 }  // namespace
 
 using core::Status;
@@ -123,11 +131,8 @@ void FlightLoop::FeedImu(std::int64_t until_utime) {
     ++counters_.imu_samples;
     if (!options_.record_frames) continue;
     if (slot < 0) {
-      slot = AcquireOutput(&out_->imus, lockstep);
-      if (slot < 0) {
-        ++counters_.outputs_dropped;
-        continue;
-      }
+      slot = AcquireOutputOrCountDrop(&out_->imus, lockstep, &counters_.outputs_dropped);
+      if (slot < 0) continue;
       out_->imus[slot].count = 0;
     }
     ImuRecord& r = out_->imus[slot];
@@ -268,11 +273,9 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
 }
 
 void FlightLoop::PublishNav() {
-  const std::int32_t slot = AcquireOutput(&out_->navs, options_.pacing == Pacing::kLockstep);
-  if (slot < 0) {
-    ++counters_.outputs_dropped;
-    return;
-  }
+  const std::int32_t slot = AcquireOutputOrCountDrop(
+      &out_->navs, options_.pacing == Pacing::kLockstep, &counters_.outputs_dropped);
+  if (slot < 0) return;
   NavRecord& r = out_->navs[slot];
   r.seq = nav_seq_++;
   r.mode = options_.nav_mode;
@@ -433,9 +436,9 @@ void FlightLoop::CopyRectified(HazardInput* h) {
 }
 
 void FlightLoop::TakeSnapshot(bool synchronous, std::int32_t hazard_slot) {
-  const std::int32_t slot = AcquireOutput(&out_->maps, options_.pacing == Pacing::kLockstep);
+  const std::int32_t slot = AcquireOutputOrCountDrop(
+      &out_->maps, options_.pacing == Pacing::kLockstep, &counters_.outputs_dropped);
   if (slot < 0) {
-    ++counters_.outputs_dropped;
     if (hazard_slot >= 0) out_->hazard_inputs.Release(hazard_slot);
     return;
   }
@@ -528,11 +531,9 @@ void FlightLoop::HazardMain() {
 }
 
 void FlightLoop::PublishHealth() {
-  const std::int32_t slot = AcquireOutput(&out_->healths, options_.pacing == Pacing::kLockstep);
-  if (slot < 0) {
-    ++counters_.outputs_dropped;
-    return;
-  }
+  const std::int32_t slot = AcquireOutputOrCountDrop(
+      &out_->healths, options_.pacing == Pacing::kLockstep, &counters_.outputs_dropped);
+  if (slot < 0) return;
   HealthRecord& h = out_->healths[slot];
   h.utime = last_frame_utime_;
   h.seq = health_seq_++;
