@@ -104,22 +104,34 @@ TEST(PlaneHomographyTest, MapsPlanePointsLikeTheCameras) {
   }
 }
 
+// Reference -> current view: rotation by 15 deg and scale 1.2 about (200, 150), a slight
+// shift and perspective (paper 4.1.2: descent imagery).
+Eigen::Matrix3d RotatedAndScaled() {
+  Eigen::Matrix3d h;
+  const double c = 1.2 * std::cos(0.26);
+  const double s = 1.2 * std::sin(0.26);
+  h << c, -s, 200.0 - c * 200.0 + s * 150.0 + 3.3, s, c, 150.0 - s * 200.0 - c * 150.0 - 2.1, 1e-5,
+      -2e-5, 1.0;
+  return h;
+}
+
+// The 400 x 300 view of `texture` that the reference -> current homography `h` makes.
+TestImage RenderWarped(const testing::Texture& texture, const Eigen::Matrix3d& h) {
+  const Eigen::Matrix3d h_inv = h.inverse();
+  return Render(400, 300, [&](double x, double y) {
+    const Eigen::Vector3d p = h_inv * Eigen::Vector3d(x, y, 1.0);
+    return texture(p.x() / p.z(), p.y() / p.z());
+  });
+}
+
 // GIVEN a view rotated by 15 deg and scaled by 1.2 (paper 4.1.2: descent imagery) WHEN tracking
 // the reference patches warped by the true homography THEN the error is subpixel-accurate, and
 // better than square-patch tracking of the same features.
 TEST(PatchTrackerTest, WarpedTrackingBeatsSquarePatches) {
   const testing::Texture texture(33);
   const TestImage a = texture.RenderShifted<TestImage>(400, 300, 0.0, 0.0);
-  Eigen::Matrix3d h;  // ref -> cur: rotation + scale about (200, 150), slight perspective
-  const double c = 1.2 * std::cos(0.26);
-  const double s = 1.2 * std::sin(0.26);
-  h << c, -s, 200.0 - c * 200.0 + s * 150.0 + 3.3, s, c, 150.0 - s * 200.0 - c * 150.0 - 2.1, 1e-5,
-      -2e-5, 1.0;
-  const Eigen::Matrix3d h_inv = h.inverse();
-  const TestImage b = Render(400, 300, [&](double x, double y) {
-    const Eigen::Vector3d p = h_inv * Eigen::Vector3d(x, y, 1.0);
-    return texture(p.x() / p.z(), p.y() / p.z());
-  });
+  const Eigen::Matrix3d h = RotatedAndScaled();
+  const TestImage b = RenderWarped(texture, h);
   PatchTracker tracker;
   ASSERT_EQ(tracker.Configure(TrackerOptions{}), core::Status::kOk);
   const CornerList corners = testing::DetectCorners(a);
@@ -166,16 +178,8 @@ TEST(PatchTrackerTest, WarpedTrackingBeatsSquarePatches) {
 TEST(PatchTrackerTest, SearchRecoversWhatWarpedLkLoses) {
   const testing::Texture texture(33);
   const TestImage a = texture.RenderShifted<TestImage>(400, 300, 0.0, 0.0);
-  Eigen::Matrix3d h;
-  const double c = 1.2 * std::cos(0.26);
-  const double s = 1.2 * std::sin(0.26);
-  h << c, -s, 200.0 - c * 200.0 + s * 150.0 + 3.3, s, c, 150.0 - s * 200.0 - c * 150.0 - 2.1, 1e-5,
-      -2e-5, 1.0;
-  const Eigen::Matrix3d h_inv = h.inverse();
-  const TestImage b = Render(400, 300, [&](double x, double y) {
-    const Eigen::Vector3d p = h_inv * Eigen::Vector3d(x, y, 1.0);
-    return texture(p.x() / p.z(), p.y() / p.z());
-  });
+  const Eigen::Matrix3d h = RotatedAndScaled();
+  const TestImage b = RenderWarped(texture, h);
   PatchTracker tracker;
   TrackerOptions options;
   options.search_radius_px = 10;
