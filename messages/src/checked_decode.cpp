@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <vector>
 
 namespace swf::messages {
 namespace {
@@ -216,6 +217,15 @@ DecodeError CheckHealthShape(WireReader* r) {
                          3 * 4 * std::int64_t{stages} + kHealthSuffixBytes);
 }
 
+// Every value of an enumerated int8 field within [first, last]; the first that is not, named.
+DecodeError CheckEnum(const std::vector<std::int8_t>& values, std::int8_t first, std::int8_t last,
+                      const char* field) {
+  for (const std::int8_t v : values) {
+    if (v < first || v > last) return Error(DecodeResult::kBadValue, field, v);
+  }
+  return DecodeError{};
+}
+
 template <typename Msg, typename Shape>
 DecodeError Decode(const void* data, std::size_t size, Msg* msg, Shape check_shape) {
   WireReader r(data, size);
@@ -273,34 +283,23 @@ DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::landmark
 }
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::feature_set_t* msg) {
-  DecodeError e = Decode(data, size, msg, CheckFeatureShape);
+  const DecodeError e = Decode(data, size, msg, CheckFeatureShape);
   if (!e.Ok()) return e;
-  for (const std::int8_t s : msg->status) {
-    if (s < swf_msgs::feature_set_t::STATUS_TRACKED || s > swf_msgs::feature_set_t::STATUS_GATED) {
-      return Error(DecodeResult::kBadValue, "status", s);
-    }
-  }
-  return e;
+  return CheckEnum(msg->status, swf_msgs::feature_set_t::STATUS_TRACKED,
+                   swf_msgs::feature_set_t::STATUS_GATED, "status");
 }
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_map_t* msg) {
-  DecodeError e = Decode(data, size, msg, CheckHazardShape);
+  const DecodeError e = Decode(data, size, msg, CheckHazardShape);
   if (!e.Ok()) return e;
-  for (const std::int8_t c : msg->hazard_class) {
-    if (c < swf_msgs::hazard_map_t::CLASS_UNKNOWN || c > swf_msgs::hazard_map_t::CLASS_UNCERTAIN) {
-      return Error(DecodeResult::kBadValue, "hazard_class", c);
-    }
-  }
-  return e;
+  return CheckEnum(msg->hazard_class, swf_msgs::hazard_map_t::CLASS_UNKNOWN,
+                   swf_msgs::hazard_map_t::CLASS_UNCERTAIN, "hazard_class");
 }
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::hazard_truth_t* msg) {
-  DecodeError e = Decode(data, size, msg, CheckHazardTruthShape);
+  const DecodeError e = Decode(data, size, msg, CheckHazardTruthShape);
   if (!e.Ok()) return e;
-  for (const std::int8_t f : msg->rock_free) {
-    if (f != 0 && f != 1) return Error(DecodeResult::kBadValue, "rock_free", f);
-  }
-  return e;
+  return CheckEnum(msg->rock_free, 0, 1, "rock_free");
 }
 
 DecodeError CheckedDecode(const void* data, std::size_t size, swf_msgs::health_t* msg) {
