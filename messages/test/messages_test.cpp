@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "swf/messages/checked_decode.hpp"
+#include "swf/testing/encode.hpp"
 #include "swf_msgs/feature_set_t.hpp"
 #include "swf_msgs/hazard_map_t.hpp"
 #include "swf_msgs/hazard_truth_t.hpp"
@@ -28,6 +29,31 @@ Msg RoundTrip(const Msg& in, std::vector<std::uint8_t>* buffer) {
   EXPECT_EQ(out.decode(buffer->data(), 0, static_cast<int>(buffer->size())),
             static_cast<int>(buffer->size()));
   return out;
+}
+
+// Two landmarks, the second at (4, 5, 6).
+swf_msgs::landmark_map_t TwoLandmarks() {
+  swf_msgs::landmark_map_t map{};
+  map.num_landmarks = 2;
+  map.id = {5, 6};
+  map.position_world_m = {{1, 2, 3}, {4, 5, 6}};
+  map.covariance_m2 = {{1, 0, 0, 1, 0, 1}, {2, 0, 0, 2, 0, 2}};
+  map.num_observations = {3, 4};
+  return map;
+}
+
+// A 1 x 2 hazard map: a safe cell and a rock.
+swf_msgs::hazard_map_t SafeAndRockCells() {
+  swf_msgs::hazard_map_t hazard{};
+  hazard.rows = 1;
+  hazard.cols = 2;
+  hazard.num_cells = 2;
+  hazard.elevation_m = {0.5f, 0.25f};
+  hazard.sigma_m = {0.1f, 0.1f};
+  hazard.slope_deg = {1.0f, 2.0f};
+  hazard.roughness_m = {0.0f, 0.3f};
+  hazard.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_ROCK};
+  return hazard;
 }
 
 TEST(Messages, StereoFrameRoundTripsAndRejectsTruncation) {
@@ -65,25 +91,12 @@ TEST(Messages, NavStateLandmarksHazardHealthRoundTrip) {
   nav.mode = swf_msgs::nav_state_t::MODE_SWF;
   EXPECT_EQ(RoundTrip(nav, &buffer).covariance[35], 1e-4);
 
-  swf_msgs::landmark_map_t map{};
-  map.num_landmarks = 2;
-  map.id = {5, 6};
-  map.position_world_m = {{1, 2, 3}, {4, 5, 6}};
-  map.covariance_m2 = {{1, 0, 0, 1, 0, 1}, {2, 0, 0, 2, 0, 2}};
-  map.num_observations = {3, 4};
+  swf_msgs::landmark_map_t map = TwoLandmarks();
   map.frame_seq = 17;
   EXPECT_EQ(RoundTrip(map, &buffer).position_world_m[1][2], 6.0);
   EXPECT_EQ(RoundTrip(map, &buffer).frame_seq, 17);
 
-  swf_msgs::hazard_map_t hazard{};
-  hazard.rows = 1;
-  hazard.cols = 2;
-  hazard.num_cells = 2;
-  hazard.elevation_m = {0.5f, 0.25f};
-  hazard.sigma_m = {0.1f, 0.1f};
-  hazard.slope_deg = {1.0f, 2.0f};
-  hazard.roughness_m = {0.0f, 0.3f};
-  hazard.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_ROCK};
+  swf_msgs::hazard_map_t hazard = SafeAndRockCells();
   EXPECT_EQ(RoundTrip(hazard, &buffer).hazard_class[1], swf_msgs::hazard_map_t::CLASS_ROCK);
   hazard.hazard_class[1] = swf_msgs::hazard_map_t::CLASS_UNCERTAIN;  // its own class, not safe
   EXPECT_EQ(RoundTrip(hazard, &buffer).hazard_class[1], swf_msgs::hazard_map_t::CLASS_UNCERTAIN);
@@ -102,14 +115,7 @@ TEST(Messages, NavStateLandmarksHazardHealthRoundTrip) {
 using swf::messages::CheckedDecode;
 using swf::messages::DecodeError;
 using swf::messages::DecodeResult;
-
-template <typename Msg>
-std::vector<std::uint8_t> Encode(const Msg& msg) {
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
-  EXPECT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
-            static_cast<int>(bytes.size()));
-  return bytes;
-}
+using swf::testing::Encode;
 
 // Overwrites the big-endian int32 at `offset` (counted from the start, fingerprint included).
 std::vector<std::uint8_t> WithInt32(std::vector<std::uint8_t> bytes, std::size_t offset,
@@ -216,12 +222,7 @@ TEST(CheckedDecode, StereoFrameWithinTheReceiversLimitsFitsItsReservedBuffers) {
 }
 
 TEST(CheckedDecode, LandmarkMapCountIsCheckedAgainstTheBytesAndTheLimit) {
-  swf_msgs::landmark_map_t map{};
-  map.num_landmarks = 2;
-  map.id = {5, 6};
-  map.position_world_m = {{1, 2, 3}, {4, 5, 6}};
-  map.covariance_m2 = {{1, 0, 0, 1, 0, 1}, {2, 0, 0, 2, 0, 2}};
-  map.num_observations = {3, 4};
+  swf_msgs::landmark_map_t map = TwoLandmarks();
   const std::vector<std::uint8_t> bytes = Encode(map);
   swf_msgs::landmark_map_t out;
   ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
@@ -264,15 +265,7 @@ TEST(CheckedDecode, FeatureSetCountAndStatusesAreChecked) {
 }
 
 TEST(CheckedDecode, HazardMapCellsAndClassesAreChecked) {
-  swf_msgs::hazard_map_t hazard{};
-  hazard.rows = 1;
-  hazard.cols = 2;
-  hazard.num_cells = 2;
-  hazard.elevation_m = {0.5f, 0.25f};
-  hazard.sigma_m = {0.1f, 0.1f};
-  hazard.slope_deg = {1.0f, 2.0f};
-  hazard.roughness_m = {0.0f, 0.3f};
-  hazard.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_ROCK};
+  swf_msgs::hazard_map_t hazard = SafeAndRockCells();
   hazard.safe_site_score = 0.5;
   const std::vector<std::uint8_t> bytes = Encode(hazard);
   swf_msgs::hazard_map_t out;
