@@ -69,6 +69,19 @@ Json IntegrityFlagNames(std::int32_t flags) {
   return names;
 }
 
+// An enumerated field's values (0 .. N-1, as the decoder checked) as one digit each, for the
+// page; counts[k] gets how many are k.
+template <std::size_t N>
+std::string DigitsAndCounts(const std::vector<std::int8_t>& values, std::int64_t (&counts)[N]) {
+  std::string digits(values.size(), '0');
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const int k = std::clamp<int>(values[i], 0, static_cast<int>(N) - 1);
+    digits[i] = static_cast<char>('0' + k);
+    ++counts[k];
+  }
+  return digits;
+}
+
 std::string Base64(const std::vector<std::uint8_t>& bytes) {
   static const char kAlphabet[] =
       "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -622,13 +635,8 @@ std::shared_ptr<const std::string> LiveModel::Json(Part part) {
           break;
         }
         const swf_msgs::hazard_map_t& h = s.hazard;
-        std::string classes(h.hazard_class.size(), '0');
         std::int64_t counts[6] = {};
-        for (std::size_t i = 0; i < h.hazard_class.size(); ++i) {
-          const int k = std::clamp<int>(h.hazard_class[i], 0, 5);  // the decoder checked 0..5
-          classes[i] = static_cast<char>('0' + k);
-          ++counts[k];
-        }
+        const std::string classes = DigitsAndCounts(h.hazard_class, counts);
         j = {{"frame_seq", h.frame_seq},
              {"rows", h.rows},
              {"cols", h.cols},
@@ -669,13 +677,8 @@ std::shared_ptr<const std::string> LiveModel::Json(Part part) {
           break;
         }
         const swf_msgs::feature_set_t& f = s.features;
-        std::string status(f.status.size(), '0');
         std::int64_t counts[4] = {};
-        for (std::size_t i = 0; i < f.status.size(); ++i) {
-          const int k = std::clamp<int>(f.status[i], 0, 3);  // the decoder checked 0..3
-          status[i] = static_cast<char>('0' + k);
-          ++counts[k];
-        }
+        const std::string status = DigitsAndCounts(f.status, counts);
         j = {{"frame_seq", f.frame_seq},
              {"u_px", f.u_px},
              {"v_px", f.v_px},
