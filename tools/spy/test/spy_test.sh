@@ -10,9 +10,9 @@
 # usage: spy_test.sh SWF-SIL CONFIG SWF-LCMLOG "SPYCHECK-COMMAND" SCREENSHOT_OUT
 set -eu
 sil=$1 cfg=$2 lcmlog=$3 check=$4 shot=$5
-fail() { echo "FAIL: $*" >&2; exit 1; }
-if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
-if ! $ns true 2>/dev/null; then
+export private_network_sh="$(cd "$(dirname "$0")/../../../tests/support/sh" && pwd)/private_network.sh"
+. "$private_network_sh"
+if ! choose_private_network; then
   echo "SKIP: cannot create a network namespace (needs root or unprivileged user namespaces)"
   exit 77
 fi
@@ -22,8 +22,8 @@ trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
 frames=10
 $ns sh -c '
   set -e
-  ip link set lo up
-  ip route add 239.0.0.0/8 dev lo
+  . "$private_network_sh"
+  multicast_on_loopback
   xvfb-run -a -s "-screen 0 1280x800x24" $4 "$5/ready" "$5/expected" "$6" 90 \
     > "$5/spy.out" 2> "$5/spy.err" &
   c=$!

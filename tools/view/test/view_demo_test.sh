@@ -11,21 +11,18 @@
 # usage: view_demo_test.sh SWF-SIL SWF-VIEW CONFIG PAGE_CHECK SCREENSHOT_OUT
 set -eu
 sil=$1 view=$2 cfg=$3 check=$4 shot=$5
-fail() { echo "FAIL: $*" >&2; exit 1; }
-if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
-$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged user namespaces)"
+export private_network_sh="$(cd "$(dirname "$0")/../../../tests/support/sh" && pwd)/private_network.sh"
+. "$private_network_sh"
+choose_private_network || fail "cannot create a network namespace (root or unprivileged user namespaces)"
 command -v chromium >/dev/null || fail "chromium is not installed (tools/run installs it)"
 dir=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
 frames=20
 $ns sh -c '
   set -e
-  ip link set lo up
-  ip route add 239.0.0.0/8 dev lo
-  "$2" --port 0 --url-file "$5/url" > "$5/view.json" 2> "$5/view.err" &
-  v=$!
-  for i in $(seq 50); do [ -s "$5/url" ] && break; sleep 0.1; done
-  url=$(cat "$5/url")
+  . "$private_network_sh"
+  multicast_on_loopback
+  start_view "$2" "$5"
   /usr/bin/python3 "$4" "$url" --frames "$7" --image --features --screenshot "$6" --timeout 150 \
     > "$5/page.json" 2> "$5/page.err" &
   c=$!
@@ -39,7 +36,6 @@ $ns sh -c '
   cat "$dir/page.err" "$dir/view.err" "$dir/sil.err" >&2; fail "the page did not show the descent"; }
 echo "page: $(cat "$dir/page.json")"
 echo "swf-view: $(cat "$dir/view.json")"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 [ "$(json "$dir/view.json" "d['frames']")" -eq $frames ] || fail "swf-view did not receive every nav_state_t"
 [ "$(json "$dir/view.json" "d['bus']['malformed_total'] + d['bus']['lost_total']")" -eq 0 ] || fail "messages malformed or lost"
 [ "$(json "$dir/view.json" "d['bus']['channels']['SWF_HAZARD']['received']")" -ge 1 ] || fail "no hazard map"

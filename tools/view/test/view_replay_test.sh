@@ -8,9 +8,9 @@
 # usage: view_replay_test.sh SWF-SIL SWF-REPLAY SWF-VIEW CONFIG PAGE_CHECK
 set -eu
 sil=$1 replay=$2 view=$3 cfg=$4 check=$5
-fail() { echo "FAIL: $*" >&2; exit 1; }
-if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
-$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged user namespaces)"
+export private_network_sh="$(cd "$(dirname "$0")/../../../tests/support/sh" && pwd)/private_network.sh"
+. "$private_network_sh"
+choose_private_network || fail "cannot create a network namespace (root or unprivileged user namespaces)"
 dir=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
 frames=10
@@ -19,12 +19,10 @@ frames=10
   --set "summary.path: $dir/flown.json" 2> "$dir/sil.err" || { cat "$dir/sil.err" >&2; fail "swf-sil"; }
 $ns sh -c '
   set -e
-  ip link set lo up
-  ip route add 239.0.0.0/8 dev lo
-  "$2" --port 0 --url-file "$5/url" > "$5/view.json" 2> "$5/view.err" &
-  v=$!
-  for i in $(seq 50); do [ -s "$5/url" ] && break; sleep 0.1; done
-  /usr/bin/python3 "$4" "$(cat "$5/url")" --frames "$6" --features --screenshot "$5/replay.png" \
+  . "$private_network_sh"
+  multicast_on_loopback
+  start_view "$2" "$5"
+  /usr/bin/python3 "$4" "$url" --frames "$6" --features --screenshot "$5/replay.png" \
     --timeout 150 > "$5/page.json" 2> "$5/page.err" &
   c=$!
   "$1" --config "$3" --log "$5/flown.lcmlog" \
@@ -38,7 +36,6 @@ $ns sh -c '
   cat "$dir/page.err" "$dir/view.err" "$dir/replay.err" >&2; fail "the page did not show the replay"; }
 echo "page: $(cat "$dir/page.json")"
 echo "swf-view: $(cat "$dir/view.json")"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 [ "$(json "$dir/view.json" "d['frames']")" -eq $frames ] || fail "swf-view did not receive every nav_state_t"
 [ "$(json "$dir/view.json" "d['bus']['malformed_total'] + d['bus']['lost_total']")" -eq 0 ] || fail "messages malformed or lost"
 [ "$(json "$dir/page.json" "d['hazard_known_pixels']")" -gt 1000 ] || fail "hazard map (nearly) empty on the page"

@@ -9,19 +9,16 @@
 # usage: view_robustness_test.sh SWF-VIEW STRESS-PUBLISHER SLOW_CLIENTS
 set -eu
 view=$1 publisher=$2 clients=$3
-fail() { echo "FAIL: $*" >&2; exit 1; }
-if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
-$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged user namespaces)"
+export private_network_sh="$(cd "$(dirname "$0")/../../../tests/support/sh" && pwd)/private_network.sh"
+. "$private_network_sh"
+choose_private_network || fail "cannot create a network namespace (root or unprivileged user namespaces)"
 dir=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
 $ns sh -c '
   set -e
-  ip link set lo up
-  ip route add 239.0.0.0/8 dev lo
-  "$1" --port 0 --url-file "$4/url" > "$4/view.json" 2> "$4/view.err" &
-  v=$!
-  for i in $(seq 50); do [ -s "$4/url" ] && break; sleep 0.1; done
-  url=$(cat "$4/url")
+  . "$private_network_sh"
+  multicast_on_loopback
+  start_view "$1" "$4"
   /usr/bin/python3 "$3" "$url" "$4/stop" > "$4/clients.json" &
   c=$!
   "$2" --frames 40 --rate 20 --pause 2.5 --width 1024 --height 768 > "$4/publisher.json"
@@ -35,7 +32,6 @@ $ns sh -c '
 echo "publisher: $(cat "$dir/publisher.json")"
 echo "clients: $(cat "$dir/clients.json")"
 echo "swf-view: $(cat "$dir/view.json")"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 [ "$(cat "$dir/healthz")" = ok ] || fail "swf-view did not answer at the end"
 sent_bad=$(json "$dir/publisher.json" "d['malformed']")
 [ "$(json "$dir/view.json" "d['bus']['malformed_total']")" -eq "$sent_bad" ] || fail "malformed messages not all counted ($sent_bad sent)"
