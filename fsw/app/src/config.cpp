@@ -157,148 +157,177 @@ ConfigSetter ImuNumber(double ImuConfig::*field, double hi) {
   };
 }
 
+// Where the stereo pairs come from: the source and its log or LCM input.
+void AddSourceFields(std::map<std::string, ConfigSetter>* fields) {
+  std::map<std::string, ConfigSetter>& f = *fields;
+  f["source"] =
+      OneOf<SourceKind>([](FswConfig* c) { return &c->source; }, {{"sim", SourceKind::kSim},
+                                                                  {"v4l2", SourceKind::kV4l2},
+                                                                  {"aravis", SourceKind::kAravis},
+                                                                  {"log", SourceKind::kLog},
+                                                                  {"lcm", SourceKind::kLcm}});
+  f["log.path"] = Text([](FswConfig* c) { return &c->log_path; });
+  f["lcm_source.url"] = Text([](FswConfig* c) { return &c->lcm_source.url; });
+  f["lcm_source.channel"] = Text([](FswConfig* c) { return &c->lcm_source.channel; });
+  // The frame group holds one pair; the receiver needs a free buffer to keep receiving.
+  f["lcm_source.buffers"] =
+      Int<std::int32_t>([](FswConfig* c) { return &c->lcm_source.buffers; }, 2,
+                        drivers::kMaxLcmBuffers, " (drivers::kMaxLcmBuffers)");
+}
+
+// The IMU input and its model.
+void AddImuFields(std::map<std::string, ConfigSetter>* fields) {
+  std::map<std::string, ConfigSetter>& f = *fields;
+  f["imu.enabled"] = Bool([](FswConfig* c) { return &c->imu.enabled; });
+  f["imu.static_start"] = Bool([](FswConfig* c) { return &c->imu.static_start; });
+  f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
+  f["imu.rate_hz"] = ImuNumber(&ImuConfig::rate_hz, 10000.0);
+  f["imu.max_latency_ms"] = ImuNumber(&ImuConfig::max_latency_ms, 1000.0);
+  f["imu.gyro_noise_density"] = ImuNumber(&ImuConfig::gyro_noise_density, 1.0);
+  f["imu.gyro_random_walk"] = ImuNumber(&ImuConfig::gyro_random_walk, 1.0);
+  f["imu.accel_noise_density"] = ImuNumber(&ImuConfig::accel_noise_density, 10.0);
+  f["imu.accel_random_walk"] = ImuNumber(&ImuConfig::accel_random_walk, 10.0);
+  f["imu.gyro_range_radps"] = ImuNumber(&ImuConfig::gyro_range_radps, 1000.0);
+  f["imu.accel_range_mps2"] = ImuNumber(&ImuConfig::accel_range_mps2, 10000.0);
+  f["imu.gravity_mps2"] = ImuNumber(&ImuConfig::gravity_mps2, 100.0);
+  f["imu.gyro_bias_sigma_radps"] = ImuNumber(&ImuConfig::gyro_bias_sigma_radps, 10.0);
+  f["imu.accel_bias_sigma_mps2"] = ImuNumber(&ImuConfig::accel_bias_sigma_mps2, 100.0);
+  f["imu.camera_t_imu_m"] = Vector3([](FswConfig* c) { return c->imu.camera_t_imu_m; });
+  f["imu.camera_r_imu_rad"] = Vector3([](FswConfig* c) { return c->imu.camera_r_imu_rad; });
+  f["imu.initial_velocity_mps"] = Vector3([](FswConfig* c) { return c->imu.initial_velocity_mps; });
+}
+
+// The cameras (V4L2, Aravis) and their calibrations.
+void AddCameraFields(std::map<std::string, ConfigSetter>* fields) {
+  std::map<std::string, ConfigSetter>& f = *fields;
+  f["camera.left"] = Text([](FswConfig* c) { return &c->camera.left; });
+  f["camera.right"] = Text([](FswConfig* c) { return &c->camera.right; });
+  f["camera.left_calibration"] = Text([](FswConfig* c) { return &c->camera.left_calibration; });
+  f["camera.right_calibration"] = Text([](FswConfig* c) { return &c->camera.right_calibration; });
+  f["camera.fake"] = Bool([](FswConfig* c) { return &c->camera.fake; });
+  f["camera.format"] =
+      OneOf([](FswConfig* c) { return &c->camera.format; }, {"grey", "y16", "yuyv"});
+  // The V4L2 source holds up to 2 pairs and the kernel needs 2 more buffers to keep streaming.
+  f["camera.buffers"] = Int<std::int32_t>([](FswConfig* c) { return &c->camera.buffers; }, 4, 16);
+  f["camera.pair_tolerance_ms"] = [](const std::string& v, FswConfig* c, std::string* why) {
+    double d = 0;
+    if (!ParseDouble(v, &d, why)) return false;
+    if (!(d >= 0.0 && d <= 1000.0)) {
+      *why = Excerpt(v) + " is outside [0, 1000]";
+      return false;
+    }
+    c->camera.pair_tolerance_ms = d;
+    return true;
+  };
+  f["camera.exposure_us"] =
+      Number([](FswConfig* c) { return &c->camera.exposure_us; }, 0.0, 1e8, true);
+  f["camera.gain"] = Number([](FswConfig* c) { return &c->camera.gain; }, 0.0, 1e4);
+  f["camera.roi_offset_px"] = [](const std::string& v, FswConfig* c, std::string* why) {
+    std::istringstream in(v);
+    std::int64_t x = -1;
+    std::int64_t y = -1;
+    std::string rest;
+    if (!(in >> x >> y) || (in >> rest) || x < 0 || y < 0 || x > 65535 || y > 65535) {
+      *why = Quoted(v) + ": expected two whole numbers of pixels in [0, 65535]: x y";
+      return false;
+    }
+    c->camera.roi_offset_px[0] = static_cast<std::int32_t>(x);
+    c->camera.roi_offset_px[1] = static_cast<std::int32_t>(y);
+    return true;
+  };
+  f["camera.packet_size"] =
+      Int<std::int32_t>([](FswConfig* c) { return &c->camera.packet_size; }, 0, 65535);
+  f["camera.trigger"] =
+      OneOf([](FswConfig* c) { return &c->camera.trigger; }, {"free", "software", "hardware"});
+  f["camera.trigger_source"] = Text([](FswConfig* c) { return &c->camera.trigger_source; });
+}
+
+// The estimator and the front end.
+void AddEstimatorFields(std::map<std::string, ConfigSetter>* fields) {
+  std::map<std::string, ConfigSetter>& f = *fields;
+  f["mode"] = OneOf([](FswConfig* c) { return &c->mode; }, {"swf", "ekf", "vo", "vsdf"});
+  f["window"] = Int<std::int32_t>([](FswConfig* c) { return &c->window; }, 1, kMaxWindow,
+                                  " (kMaxWindow, the filter's compiled window capacity)");
+  f["max_iterations"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_iterations; }, 1, 100);
+  f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
+  f["min_quality"] = Double(&FswConfig::min_quality, -1.0, 1.0);
+  f["process_sigma_m"] = Double(&FswConfig::process_sigma_m, 1e-6, 1e3);
+  f["process_sigma_rad"] = Double(&FswConfig::process_sigma_rad, 1e-8, 3.0);
+  f["calibration.baseline_sigma_m"] = Double(&FswConfig::calibration_baseline_sigma_m, 0.0, 1.0);
+  f["calibration.disparity_sigma_px"] =
+      Double(&FswConfig::calibration_disparity_sigma_px, 0.0, 10.0);
+  f["max_tracks"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_tracks; }, 8,
+                                      static_cast<std::int64_t>(frontend::kMaxTracks),
+                                      " (frontend::kMaxTracks, the compiled track capacity)");
+  f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
+                                            frontend::kMaxDisparity);
+  f["frontend.refine_in_loop"] = Bool([](FswConfig* c) { return &c->frontend_refine_in_loop; });
+  f["frontend.reference_from_estimate"] =
+      Bool([](FswConfig* c) { return &c->frontend_reference_from_estimate; });
+  f["frontend.recover_lost_tracks"] =
+      Bool([](FswConfig* c) { return &c->frontend_recover_lost_tracks; });
+}
+
+// Pacing, the hazard and health cadences, real-time settings, outputs, fault injection and the
+// integrity envelope.
+void AddRunFields(std::map<std::string, ConfigSetter>* fields) {
+  std::map<std::string, ConfigSetter>& f = *fields;
+  f["rate_hz"] = Double(&FswConfig::rate_hz, 0.1, 1000.0);
+  f["pacing"] = OneOf<Pacing>([](FswConfig* c) { return &c->pacing; },
+                              {{"realtime", Pacing::kRealtime}, {"lockstep", Pacing::kLockstep}});
+  f["hazard_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->hazard_every; }, 1, 100000);
+  f["hazard.max_disparities"] =
+      Int<std::int32_t>([](FswConfig* c) { return &c->hazard_max_disparities; }, 16, 256);
+  f["hazard.downsample"] = OneOf<std::int32_t>([](FswConfig* c) { return &c->hazard_downsample; },
+                                               {{"1", 1}, {"2", 2}, {"4", 4}});
+  f["health_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->health_every; }, 1, 100000);
+  f["max_frames"] =
+      Int<std::int64_t>([](FswConfig* c) { return &c->max_frames; }, 0, std::int64_t{1} << 40);
+  f["rt.mlockall"] = Bool([](FswConfig* c) { return &c->mlockall; });
+  f["rt.priority"] = Int<std::int32_t>([](FswConfig* c) { return &c->priority; }, 0, 98);
+  f["rt.cpu"] = Int<std::int32_t>([](FswConfig* c) { return &c->cpu; }, -1, 1023);
+  f["lcm.url"] = Text([](FswConfig* c) { return &c->lcm_url; });
+  f["lcm.publish"] = Bool([](FswConfig* c) { return &c->publish; });
+  f["lcm.channel_prefix"] = Text([](FswConfig* c) { return &c->channel_prefix; });
+  f["record.path"] = Text([](FswConfig* c) { return &c->record_path; });
+  f["record.frames"] = Bool([](FswConfig* c) { return &c->record_frames; });
+  f["summary.path"] = Text([](FswConfig* c) { return &c->summary_path; });
+  f["summary.plot_dir"] = Text([](FswConfig* c) { return &c->plot_dir; });
+  f["initial"] = OneOf([](FswConfig* c) { return &c->initial; }, {"truth", "position"});
+  f["initial.position_m"] = Vector3([](FswConfig* c) { return c->initial_position_m; });
+  f["inject.stage"] = [](const std::string& v, FswConfig* c, std::string* why) {
+    if (StageIndex(v) < 0 || StageIndex(v) >= kStageCycle) {
+      *why = Quoted(v) + " is not a stage (acquire rectify track estimate output map)";
+      return false;
+    }
+    c->inject_stage = v;
+    return true;
+  };
+  f["inject.frame"] =
+      Int<std::int64_t>([](FswConfig* c) { return &c->inject_frame; }, -1, std::int64_t{1} << 40);
+  f["inject.frames"] =
+      Int<std::int64_t>([](FswConfig* c) { return &c->inject_frames; }, 1, std::int64_t{1} << 40);
+  f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
+  f["envelope.min_range_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
+    double d = 0.0;
+    if (!ParseDouble(v, &d, why)) return false;
+    if (!(d > 0.0 && d <= 1e6)) {
+      *why = Excerpt(v) + " is outside (0, 1e6]";
+      return false;
+    }
+    c->envelope_min_range_m = d;
+    return true;
+  };
+}
+
 const std::map<std::string, ConfigSetter>& Fields() {
   static const std::map<std::string, ConfigSetter> kFields = [] {
     std::map<std::string, ConfigSetter> f;
-    f["source"] =
-        OneOf<SourceKind>([](FswConfig* c) { return &c->source; }, {{"sim", SourceKind::kSim},
-                                                                    {"v4l2", SourceKind::kV4l2},
-                                                                    {"aravis", SourceKind::kAravis},
-                                                                    {"log", SourceKind::kLog},
-                                                                    {"lcm", SourceKind::kLcm}});
-    f["log.path"] = Text([](FswConfig* c) { return &c->log_path; });
-    f["lcm_source.url"] = Text([](FswConfig* c) { return &c->lcm_source.url; });
-    f["lcm_source.channel"] = Text([](FswConfig* c) { return &c->lcm_source.channel; });
-    // The frame group holds one pair; the receiver needs a free buffer to keep receiving.
-    f["lcm_source.buffers"] =
-        Int<std::int32_t>([](FswConfig* c) { return &c->lcm_source.buffers; }, 2,
-                          drivers::kMaxLcmBuffers, " (drivers::kMaxLcmBuffers)");
-    f["imu.enabled"] = Bool([](FswConfig* c) { return &c->imu.enabled; });
-    f["imu.static_start"] = Bool([](FswConfig* c) { return &c->imu.static_start; });
-    f["imu.channel"] = Text([](FswConfig* c) { return &c->imu.channel; });
-    f["imu.rate_hz"] = ImuNumber(&ImuConfig::rate_hz, 10000.0);
-    f["imu.max_latency_ms"] = ImuNumber(&ImuConfig::max_latency_ms, 1000.0);
-    f["imu.gyro_noise_density"] = ImuNumber(&ImuConfig::gyro_noise_density, 1.0);
-    f["imu.gyro_random_walk"] = ImuNumber(&ImuConfig::gyro_random_walk, 1.0);
-    f["imu.accel_noise_density"] = ImuNumber(&ImuConfig::accel_noise_density, 10.0);
-    f["imu.accel_random_walk"] = ImuNumber(&ImuConfig::accel_random_walk, 10.0);
-    f["imu.gyro_range_radps"] = ImuNumber(&ImuConfig::gyro_range_radps, 1000.0);
-    f["imu.accel_range_mps2"] = ImuNumber(&ImuConfig::accel_range_mps2, 10000.0);
-    f["imu.gravity_mps2"] = ImuNumber(&ImuConfig::gravity_mps2, 100.0);
-    f["imu.gyro_bias_sigma_radps"] = ImuNumber(&ImuConfig::gyro_bias_sigma_radps, 10.0);
-    f["imu.accel_bias_sigma_mps2"] = ImuNumber(&ImuConfig::accel_bias_sigma_mps2, 100.0);
-    f["imu.camera_t_imu_m"] = Vector3([](FswConfig* c) { return c->imu.camera_t_imu_m; });
-    f["imu.camera_r_imu_rad"] = Vector3([](FswConfig* c) { return c->imu.camera_r_imu_rad; });
-    f["imu.initial_velocity_mps"] =
-        Vector3([](FswConfig* c) { return c->imu.initial_velocity_mps; });
-    f["camera.left"] = Text([](FswConfig* c) { return &c->camera.left; });
-    f["camera.right"] = Text([](FswConfig* c) { return &c->camera.right; });
-    f["camera.left_calibration"] = Text([](FswConfig* c) { return &c->camera.left_calibration; });
-    f["camera.right_calibration"] = Text([](FswConfig* c) { return &c->camera.right_calibration; });
-    f["camera.fake"] = Bool([](FswConfig* c) { return &c->camera.fake; });
-    f["camera.format"] =
-        OneOf([](FswConfig* c) { return &c->camera.format; }, {"grey", "y16", "yuyv"});
-    // The V4L2 source holds up to 2 pairs and the kernel needs 2 more buffers to keep streaming.
-    f["camera.buffers"] = Int<std::int32_t>([](FswConfig* c) { return &c->camera.buffers; }, 4, 16);
-    f["camera.pair_tolerance_ms"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      double d = 0;
-      if (!ParseDouble(v, &d, why)) return false;
-      if (!(d >= 0.0 && d <= 1000.0)) {
-        *why = Excerpt(v) + " is outside [0, 1000]";
-        return false;
-      }
-      c->camera.pair_tolerance_ms = d;
-      return true;
-    };
-    f["camera.exposure_us"] =
-        Number([](FswConfig* c) { return &c->camera.exposure_us; }, 0.0, 1e8, true);
-    f["camera.gain"] = Number([](FswConfig* c) { return &c->camera.gain; }, 0.0, 1e4);
-    f["camera.roi_offset_px"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      std::istringstream in(v);
-      std::int64_t x = -1;
-      std::int64_t y = -1;
-      std::string rest;
-      if (!(in >> x >> y) || (in >> rest) || x < 0 || y < 0 || x > 65535 || y > 65535) {
-        *why = Quoted(v) + ": expected two whole numbers of pixels in [0, 65535]: x y";
-        return false;
-      }
-      c->camera.roi_offset_px[0] = static_cast<std::int32_t>(x);
-      c->camera.roi_offset_px[1] = static_cast<std::int32_t>(y);
-      return true;
-    };
-    f["camera.packet_size"] =
-        Int<std::int32_t>([](FswConfig* c) { return &c->camera.packet_size; }, 0, 65535);
-    f["camera.trigger"] =
-        OneOf([](FswConfig* c) { return &c->camera.trigger; }, {"free", "software", "hardware"});
-    f["camera.trigger_source"] = Text([](FswConfig* c) { return &c->camera.trigger_source; });
-    f["mode"] = OneOf([](FswConfig* c) { return &c->mode; }, {"swf", "ekf", "vo", "vsdf"});
-    f["window"] = Int<std::int32_t>([](FswConfig* c) { return &c->window; }, 1, kMaxWindow,
-                                    " (kMaxWindow, the filter's compiled window capacity)");
-    f["max_iterations"] =
-        Int<std::int32_t>([](FswConfig* c) { return &c->max_iterations; }, 1, 100);
-    f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
-    f["min_quality"] = Double(&FswConfig::min_quality, -1.0, 1.0);
-    f["process_sigma_m"] = Double(&FswConfig::process_sigma_m, 1e-6, 1e3);
-    f["process_sigma_rad"] = Double(&FswConfig::process_sigma_rad, 1e-8, 3.0);
-    f["calibration.baseline_sigma_m"] = Double(&FswConfig::calibration_baseline_sigma_m, 0.0, 1.0);
-    f["calibration.disparity_sigma_px"] =
-        Double(&FswConfig::calibration_disparity_sigma_px, 0.0, 10.0);
-    f["max_tracks"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_tracks; }, 8,
-                                        static_cast<std::int64_t>(frontend::kMaxTracks),
-                                        " (frontend::kMaxTracks, the compiled track capacity)");
-    f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
-                                              frontend::kMaxDisparity);
-    f["frontend.refine_in_loop"] = Bool([](FswConfig* c) { return &c->frontend_refine_in_loop; });
-    f["frontend.reference_from_estimate"] =
-        Bool([](FswConfig* c) { return &c->frontend_reference_from_estimate; });
-    f["frontend.recover_lost_tracks"] =
-        Bool([](FswConfig* c) { return &c->frontend_recover_lost_tracks; });
-    f["rate_hz"] = Double(&FswConfig::rate_hz, 0.1, 1000.0);
-    f["pacing"] = OneOf<Pacing>([](FswConfig* c) { return &c->pacing; },
-                                {{"realtime", Pacing::kRealtime}, {"lockstep", Pacing::kLockstep}});
-    f["hazard_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->hazard_every; }, 1, 100000);
-    f["hazard.max_disparities"] =
-        Int<std::int32_t>([](FswConfig* c) { return &c->hazard_max_disparities; }, 16, 256);
-    f["hazard.downsample"] = OneOf<std::int32_t>([](FswConfig* c) { return &c->hazard_downsample; },
-                                                 {{"1", 1}, {"2", 2}, {"4", 4}});
-    f["health_every"] = Int<std::int32_t>([](FswConfig* c) { return &c->health_every; }, 1, 100000);
-    f["max_frames"] =
-        Int<std::int64_t>([](FswConfig* c) { return &c->max_frames; }, 0, std::int64_t{1} << 40);
-    f["rt.mlockall"] = Bool([](FswConfig* c) { return &c->mlockall; });
-    f["rt.priority"] = Int<std::int32_t>([](FswConfig* c) { return &c->priority; }, 0, 98);
-    f["rt.cpu"] = Int<std::int32_t>([](FswConfig* c) { return &c->cpu; }, -1, 1023);
-    f["lcm.url"] = Text([](FswConfig* c) { return &c->lcm_url; });
-    f["lcm.publish"] = Bool([](FswConfig* c) { return &c->publish; });
-    f["lcm.channel_prefix"] = Text([](FswConfig* c) { return &c->channel_prefix; });
-    f["record.path"] = Text([](FswConfig* c) { return &c->record_path; });
-    f["record.frames"] = Bool([](FswConfig* c) { return &c->record_frames; });
-    f["summary.path"] = Text([](FswConfig* c) { return &c->summary_path; });
-    f["summary.plot_dir"] = Text([](FswConfig* c) { return &c->plot_dir; });
-    f["initial"] = OneOf([](FswConfig* c) { return &c->initial; }, {"truth", "position"});
-    f["initial.position_m"] = Vector3([](FswConfig* c) { return c->initial_position_m; });
-    f["inject.stage"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      if (StageIndex(v) < 0 || StageIndex(v) >= kStageCycle) {
-        *why = Quoted(v) + " is not a stage (acquire rectify track estimate output map)";
-        return false;
-      }
-      c->inject_stage = v;
-      return true;
-    };
-    f["inject.frame"] =
-        Int<std::int64_t>([](FswConfig* c) { return &c->inject_frame; }, -1, std::int64_t{1} << 40);
-    f["inject.frames"] =
-        Int<std::int64_t>([](FswConfig* c) { return &c->inject_frames; }, 1, std::int64_t{1} << 40);
-    f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
-    f["envelope.min_range_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-      double d = 0.0;
-      if (!ParseDouble(v, &d, why)) return false;
-      if (!(d > 0.0 && d <= 1e6)) {
-        *why = Excerpt(v) + " is outside (0, 1e6]";
-        return false;
-      }
-      c->envelope_min_range_m = d;
-      return true;
-    };
+    AddSourceFields(&f);
+    AddImuFields(&f);
+    AddCameraFields(&f);
+    AddEstimatorFields(&f);
+    AddRunFields(&f);
     return f;
   }();
   return kFields;
