@@ -14,9 +14,9 @@
 set -eu
 fsw=$1 pub=$2
 here=$(dirname "$0")
-fail() { echo "FAIL: $*" >&2; exit 1; }
-if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
-$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged userns)"
+export private_network_sh="$(cd "$here/../../../tests/support/sh" && pwd)/private_network.sh"
+. "$private_network_sh"
+choose_private_network || fail "cannot create a network namespace (root or unprivileged userns)"
 dir=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
 cat > "$dir/lcm.cfg" <<CFG
@@ -50,7 +50,7 @@ url="udpm://239.255.76.67:7667?ttl=0"
 fly() {
   tag=$1 cfg=$2
   shift 2
-  $ns sh -c 'ip link set lo up && ip route add 239.0.0.0/8 dev lo || exit 9
+  $ns sh -c '. "$private_network_sh"; multicast_on_loopback || exit 9
     fsw=$1 pub=$2 cfg=$3 url=$4 out=$5
     shift 5
     "$pub" "$url" "$@" 2> "$out.pub.err" & p=$!
@@ -62,7 +62,6 @@ fly() {
 }
 fly stereo "$dir/lcm.cfg" CAM_STEREO SWF_NAV 320 240 20 --junk
 [ "$prc" -eq 0 ] || fail "the publisher did not see 20 nav_state_t (exit $prc)"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 result=$(json "$dir/summary.json" "d['result']")
 case "$result:$rc" in ok:0|degraded:3|failed:1) ;; *) fail "result $result with exit $rc" ;; esac
 [ "$result" != ok ] || fail "a rejected message on the channel went unreported (result ok)"

@@ -14,8 +14,7 @@ choose_private_network() {
 
 # Inside the namespace: loopback up, with LCM's multicast group routed over it.
 multicast_on_loopback() {
-  ip link set lo up
-  ip route add 239.0.0.0/8 dev lo
+  ip link set lo up && ip route add 239.0.0.0/8 dev lo
 }
 
 # Inside the namespace: starts swf-view ($1) on a free port with its summary in $2/view.json and
