@@ -2,7 +2,7 @@
 # swf-eval's figures as `tools/run eval` draws them: Fig. 12 from a one-run `swf-eval paper`, its
 # .dat carrying the figure's title, axis labels and scale, drawn by `swf-plot curves` and checked
 # as an image (png_check). Then malformed .dat files: each refused with its file and line named,
-# exit 2, and no PNG; a good file beside them is still drawn.
+# exit 1, and no PNG; a good file beside them is still drawn.
 # usage: eval_plot_test.sh SWF_EVAL SWF_PLOT PNG_CHECK
 set -eu
 eval_tool=$1
@@ -35,7 +35,7 @@ rc=0
 "$plot" curves "$dir/bad/old.dat" "$dir/bad/short.dat" "$dir/bad/good.dat" "$dir/bad/word.dat" \
   --out "$dir/png" > "$dir/bad.txt" 2> "$dir/bad_err.txt" || rc=$?
 cat "$dir/bad_err.txt"
-[ "$rc" -eq 2 ] || fail "swf-plot curves exited $rc on malformed files"
+[ "$rc" -eq 1 ] || fail "swf-plot curves exited $rc on malformed files"
 grep -qF "swf-plot curves: $dir/bad/old.dat:1: expected a header line '# KEY: VALUE'" \
   "$dir/bad_err.txt" || fail "the old header is not named"
 grep -qF "swf-plot curves: $dir/bad/short.dat:7: expected 3 numbers (x and 2 series), found 2" \

@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "swf/drivers/log_stereo_source.hpp"
 #include "swf/evaluation/run_judge.hpp"
 #include "swf/ground_cli/ground_cli.hpp"
 
@@ -20,21 +19,6 @@ namespace {
 
 using nlohmann::json;
 using swf::evaluation::RunScore;
-
-// Feeds every event of one log; false with the error naming the file and record.
-bool Feed(const std::string& path, swf::evaluation::RunJudge* judge, std::int64_t* events,
-          std::string* error) {
-  swf::drivers::LogReader reader;
-  if (!reader.Open(path, error)) return false;
-  swf::drivers::LogEvent event;
-  for (;;) {
-    const int r = reader.Next(&event, error);
-    if (r == 0) return true;
-    if (r < 0) return false;
-    ++*events;
-    judge->Add(event.channel, event.data.data(), event.data.size());
-  }
-}
 
 // A judged hazard map as the summary of swf-sil gives it.
 json HazardReport(const swf::evaluation::HazardScore& h) {
@@ -145,10 +129,10 @@ int main(int argc, char** argv) {
   }
 
   swf::evaluation::RunJudge judge(channels);
-  std::int64_t events = 0;
+  swf::evaluation::LogTally tally;
   for (const std::string& path : logs) {
     std::string error;
-    if (!Feed(path, &judge, &events, &error)) {
+    if (!swf::evaluation::JudgeLog(path, &judge, &tally, &error)) {
       std::fprintf(stderr, "swf-judge: %s\n", error.c_str());
       return swf::cli::kExitFailed;
     }
@@ -156,7 +140,7 @@ int main(int argc, char** argv) {
   const RunScore score = judge.Score();
   json report = Report(score, with_outputs);
   report["logs"] = logs;
-  report["events_read"] = events;
+  report["events_read"] = tally.events;
   const bool judged = !score.outputs.empty();
   const bool failed = score.protection_violations > 0;
   report["result"] = !judged ? "not judged" : (failed ? "failed" : "ok");

@@ -1,8 +1,8 @@
 #!/bin/sh
 # The plots of a short simulated descent, as each tool draws them: swf-sil into summary.plot_dir,
 # swf-plot from the recorded log (what a replay or a campaign run gets), swf-sim's terrain and
-# contact sheet; each PNG checked as an image (png_check). Then a failing plotter: each tool says
-# which plot failed and why, and exits non-zero.
+# contact sheet; each PNG checked as an image (png_check). Then a cut log (refused, exit 1) and a
+# failing plotter: each tool says which plot failed and why, and exits non-zero.
 # usage: plot_run_test.sh SWF_SIL SWF_PLOT SWF_SIM PNG_CHECK CONFIG
 set -eu
 sil=$1
@@ -32,6 +32,14 @@ cmp "$dir/sil/hazard.png" "$dir/log/hazard.png"
 
 "$sim" --scenario descent --terrain rocks --frames 4 --every 20 --out "$dir/sim" --no-png 2> "$dir/sim.txt"
 "$check" 800 300 "$dir/sim/terrain_hazard.png" "$dir/sim/contact_sheet.png"
+
+# A log cut mid-record: refused with the file named, exit 1 (failed), and no plot drawn.
+head -c 5000 "$dir/run.lcmlog" > "$dir/cut.lcmlog"
+rc=0
+"$plot" "$dir/cut.lcmlog" --out "$dir/cut" 2> "$dir/cut.txt" > /dev/null || rc=$?
+[ "$rc" -eq 1 ] || { echo "swf-plot exited $rc on a cut log"; exit 1; }
+grep -qF "swf-plot: $dir/cut.lcmlog" "$dir/cut.txt" || { cat "$dir/cut.txt"; exit 1; }
+[ -z "$(ls "$dir/cut")" ] || { echo "a refused log left plots:"; ls "$dir/cut"; exit 1; }
 
 # A plotter that fails: named by every tool, with a non-zero exit.
 rc=0

@@ -3,55 +3,26 @@
 // evaluation::RunJudge, the judge swf-sil runs live, and the pictures are swf::plot's, the same
 // swf-sil draws into summary.plot_dir.
 //   swf-plot RUN.lcmlog [MORE.lcmlog ...] --out DIR [--footprint-radius M]
-// Exit: 0 every plot the logs allow was drawn; 1 a plot failed (each failure named on stderr);
-// 2 nothing to draw (usage, an unreadable log, no navigation output with its truth).
+// Exit (docs/cli.md): 0 every plot the logs allow was drawn; 1 a log is unreadable, no navigation
+// output has its truth, or a plot failed (each failure named on stderr); 2 usage.
 //
 // `swf-plot curves` draws line charts stored as text (swf::plot::ReadLineChart: swf-eval's
 // OUT/NAME.dat, which carry their title, axis labels and scale), each as NAME.png:
 //   swf-plot curves FILE.dat [MORE.dat ...] [--out DIR]     (default: beside each file)
-// Exit: 0 every chart drawn; 1 a chart failed to draw; 2 a file is unreadable or malformed (named
-// with its line). Every file is tried either way.
+// Exit: 0 every chart drawn; 1 a file is unreadable or malformed (named with its line) or a chart
+// failed to draw. Every file is tried either way.
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
 #include <vector>
 
-#include "swf/drivers/log_stereo_source.hpp"
 #include "swf/evaluation/run_judge.hpp"
 #include "swf/ground_cli/ground_cli.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
-#include "swf/messages/checked_decode.hpp"
 #include "swf/plot/plot.hpp"
 
 namespace {
-
-struct Run {
-  swf::evaluation::RunJudge judge;
-  swf_msgs::hazard_map_t last_hazard_map;
-  bool has_hazard_map = false;
-};
-
-// Every event of one log to the judge, keeping the last hazard map that decodes; false with the
-// error naming the file and record.
-bool Feed(const std::string& path, const std::string& hazard_channel, Run* run,
-          std::string* error) {
-  swf::drivers::LogReader reader;
-  if (!reader.Open(path, error)) return false;
-  swf::drivers::LogEvent event;
-  for (;;) {
-    const int r = reader.Next(&event, error);
-    if (r == 0) return true;
-    if (r < 0) return false;
-    run->judge.Add(event.channel, event.data.data(), event.data.size());
-    if (event.channel == hazard_channel &&
-        swf::messages::CheckedDecode(event.data.data(), event.data.size(), &run->last_hazard_map)
-            .Ok()) {
-      run->has_hazard_map = true;
-    }
-  }
-}
 
 // `swf-plot curves`: each file's chart into DIR/NAME.png (beside the file when DIR is empty).
 int DrawCurves(const std::vector<std::string>& files, const std::string& out_dir) {
@@ -61,7 +32,7 @@ int DrawCurves(const std::vector<std::string>& files, const std::string& out_dir
     swf::plot::LineChart chart;
     if (!swf::plot::ReadLineChart(file, &chart, &error)) {
       std::fprintf(stderr, "swf-plot curves: %s\n", error.c_str());
-      rc = 2;
+      rc = swf::cli::kExitFailed;
       continue;
     }
     const std::filesystem::path path(file);
@@ -70,7 +41,7 @@ int DrawCurves(const std::vector<std::string>& files, const std::string& out_dir
     const std::string png = (dir / path.stem()).string() + ".png";
     if (!swf::plot::DrawLineChart(chart, png, &error)) {
       std::fprintf(stderr, "swf-plot curves: cannot draw %s\n", error.c_str());
-      rc = std::max(rc, 1);
+      rc = swf::cli::kExitFailed;
       continue;
     }
     std::printf("%s\n", png.c_str());
@@ -87,7 +58,6 @@ int main(int argc, char** argv) {
   std::vector<std::string> logs;
   std::string out;
   double footprint_radius_m = swf::hazard::HazardMapperOptions{}.footprint_radius_m;
-  swf::evaluation::JudgeChannels channels;
   // Not ->required(): a required option of the app would be required with `curves` too.
   app.add_option("logs", logs, "LCM logs: the run's outputs and the truth (any order; required)")
       ->check(CLI::ExistingFile);
@@ -122,26 +92,27 @@ int main(int argc, char** argv) {
   }
   if (curves->parsed()) return DrawCurves(dat_files, curves_out);
 
-  Run run{swf::evaluation::RunJudge(channels), {}, false};
+  swf::evaluation::RunJudge judge;
+  swf::evaluation::LogTally tally;
   for (const std::string& path : logs) {
     std::string error;
-    if (!Feed(path, channels.hazard, &run, &error)) {
+    if (!swf::evaluation::JudgeLog(path, &judge, &tally, &error)) {
       std::fprintf(stderr, "swf-plot: %s\n", error.c_str());
-      return 2;
+      return swf::cli::kExitFailed;
     }
   }
-  const swf::evaluation::RunScore score = run.judge.Score();
+  const swf::evaluation::RunScore score = judge.Score();
   if (score.outputs.empty()) {
     std::fprintf(stderr, "swf-plot: %s\n",
                  score.navs_without_truth > 0
                      ? "no navigation output has the truth of its frame: give the log with the "
                        "truth (SIM_TRUTH) too"
                      : "no navigation output in the logs");
-    return 2;
+    return swf::cli::kExitFailed;
   }
-  const swf::evaluation::HazardMapView hazard = swf::evaluation::ViewOf(run.last_hazard_map);
+  const swf::evaluation::HazardMapView hazard = swf::evaluation::ViewOf(tally.last_hazard_map);
   swf::plot::RunPictures pictures;
-  pictures.last_hazard_map = run.has_hazard_map ? &hazard : nullptr;
+  pictures.last_hazard_map = tally.has_hazard_map ? &hazard : nullptr;
   pictures.footprint_radius_m = footprint_radius_m;
   std::vector<std::string> errors;
   const std::vector<std::string> written = swf::plot::DrawRun(score, pictures, out, &errors);

@@ -126,6 +126,8 @@ class RunJudge {
 
   RunScore Score() const;
 
+  const JudgeChannels& channels() const { return channels_; }
+
  private:
   struct Nav {
     std::int64_t frame_seq;
@@ -171,5 +173,17 @@ class RunJudge {
   std::int64_t undecodable_ = 0;
   std::string first_decode_error_;
 };
+
+// What JudgeLog read besides what it gave the judge.
+struct LogTally {
+  std::int64_t events = 0;
+  swf_msgs::hazard_map_t
+      last_hazard_map;  // the last map on the judge's hazard channel that decoded
+  bool has_hazard_map = false;
+};
+
+// Every event of one LCM log to the judge (a recorded run judged like a live one); false with the
+// error naming the file and record.
+bool JudgeLog(const std::string& path, RunJudge* judge, LogTally* tally, std::string* error);
 
 }  // namespace swf::evaluation
