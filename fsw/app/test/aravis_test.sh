@@ -12,20 +12,13 @@
 set -eu
 fsw=$1 replay=$2
 here=$(dirname "$0")
+. "$here/fake_gige_env.sh"
 cfg="$here/../config/fake_gv.cfg"
-cmp="/usr/bin/python3 $here/log_compare.py"
-fail() { echo "FAIL: $*" >&2; exit 1; }
-if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
-$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged userns)"
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
 rc=0
-$ns sh -c 'ip link set lo up && ip addr add 127.0.0.2/8 dev lo && exec "$0" "$@"' \
-  "$fsw" --config "$cfg" --set "record.path: $dir/live.lcmlog" \
+in_gige_namespace "$fsw" --config "$cfg" --set "record.path: $dir/live.lcmlog" \
   --set "summary.path: $dir/summary.json" 2> "$dir/err" || rc=$?
 cat "$dir/err"
 [ "$rc" -eq 1 ] || fail "swf-fsw exit $rc: expected 1 (no stereo in the fake cameras' pattern)"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 [ "$(json "$dir/summary.json" "d['result']")" = failed ] || fail "the result does not say failed"
 [ "$(json "$dir/summary.json" "d['integrity']['frames_invalid']")" -eq 20 ] ||
   fail "frames of the flat test pattern were not all INVALID"

@@ -11,16 +11,10 @@
 set -eu
 fsw=$1
 here=$(dirname "$0")
+. "$here/fake_gige_env.sh"
 cfg="$here/../config/bench_gige.cfg"
-cmp="/usr/bin/python3 $here/log_compare.py"
-fail() { echo "FAIL: $*" >&2; exit 1; }
-if [ "$(id -u)" -eq 0 ]; then ns="unshare -n"; else ns="unshare -rn"; fi
-$ns true 2>/dev/null || fail "cannot create a network namespace (root or unprivileged userns)"
-dir=$(mktemp -d)
-trap 'rm -rf "$dir"' EXIT
 bench() {
-  $ns sh -c 'ip link set lo up && ip addr add 127.0.0.2/8 dev lo && exec "$0" "$@"' \
-    "$fsw" --config "$cfg" --set "camera.fake: true" \
+  in_gige_namespace "$fsw" --config "$cfg" --set "camera.fake: true" \
     --set "camera.left_calibration: $here/../config/fake_gv_left.yaml" \
     --set "camera.right_calibration: $here/../config/fake_gv_right.yaml" \
     --set "max_frames: 10" --set "pacing: lockstep" "$@"
@@ -32,7 +26,6 @@ cat "$dir/err"
 # The fake cameras show both eyes the same pattern: no stereo, every frame INVALID, exit 1 (the
 # plumbing is what is tested here, as in aravis_test.sh).
 [ "$rc" -eq 1 ] || fail "swf-fsw exit $rc: expected 1 (no stereo in the fake cameras' pattern)"
-json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 s="$dir/new/summary.json"
 [ "$(json "$s" "d['source']")" = aravis ] || fail "not the aravis source"
 [ "$(json "$s" "d['frames']")" -eq 10 ] || fail "not 10 frames"
