@@ -213,36 +213,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   if (stage != Status::kOk) ++counters_.stage_errors;
 
   Inject(kStageOutput);
-  if (options_.record_frames) {
-    const std::int32_t slot = AcquireOutput(&out_->frames, options_.pacing == Pacing::kLockstep);
-    const std::int32_t w = pair.left.width;
-    const std::int32_t h = pair.left.height;
-    if (slot < 0 || w * h > out_->frames[slot < 0 ? 0 : slot].capacity_bytes ||
-        pair.right.width != w || pair.right.height != h) {
-      ++counters_.outputs_dropped;
-    } else {
-      FrameRecord& r = out_->frames[slot];
-      r.utime = frame.utime;
-      r.seq = frame.seq;
-      r.left_exposure_utime = pair.left_exposure_ns / core::kNsPerUs;
-      r.right_exposure_utime = pair.right_exposure_ns / core::kNsPerUs;
-      r.dropped_before = static_cast<std::int32_t>(pair.dropped_before);
-      r.rectified = !pipeline_->Rectifies();
-      r.has_motion = frame.has_motion;
-      r.motion = motion;
-      r.width = w;
-      r.height = h;
-      for (std::int32_t y = 0; y < h; ++y) {
-        std::memcpy(r.left.get() + static_cast<std::size_t>(y) * w,
-                    pair.left.data + static_cast<std::size_t>(y) * pair.left.stride,
-                    static_cast<std::size_t>(w));
-        std::memcpy(r.right.get() + static_cast<std::size_t>(y) * w,
-                    pair.right.data + static_cast<std::size_t>(y) * pair.right.stride,
-                    static_cast<std::size_t>(w));
-      }
-      Push(&out_->frame_group, RecordRef{RecordKind::kFrame, slot});
-    }
-  }
+  if (options_.record_frames) RecordFrame(frame, pair, motion);
   // The hazard snapshot's images are copied before the source gets its buffer back.
   const bool snapshot_frame = (counters_.frames + 1) % options_.hazard_every == 0;
   std::int32_t hazard_slot = -1;
@@ -270,6 +241,46 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   *processing_ns = t6 - t1;
   if (++cycles_ % options_.health_every == 0) PublishHealth();
   return Status::kOk;
+}
+
+// Copies the pair into a frame record for the output thread. A pair the record cannot hold (larger
+// than the pool was sized for, or left and right of different sizes) is a counted drop, and its
+// slot goes back to the pool at once (kept, every such pair would shrink the pool for good).
+void FlightLoop::RecordFrame(const PipelineFrame& frame, const drivers::StereoPair& pair,
+                             const drivers::MotionInput& motion) {
+  const std::int32_t slot = AcquireOutput(&out_->frames, options_.pacing == Pacing::kLockstep);
+  if (slot < 0) {
+    ++counters_.outputs_dropped;
+    return;
+  }
+  const std::int32_t w = pair.left.width;
+  const std::int32_t h = pair.left.height;
+  if (w * h > out_->frames[slot].capacity_bytes || pair.right.width != w ||
+      pair.right.height != h) {
+    out_->frames.Release(slot);
+    ++counters_.outputs_dropped;
+    return;
+  }
+  FrameRecord& r = out_->frames[slot];
+  r.utime = frame.utime;
+  r.seq = frame.seq;
+  r.left_exposure_utime = pair.left_exposure_ns / core::kNsPerUs;
+  r.right_exposure_utime = pair.right_exposure_ns / core::kNsPerUs;
+  r.dropped_before = static_cast<std::int32_t>(pair.dropped_before);
+  r.rectified = !pipeline_->Rectifies();
+  r.has_motion = frame.has_motion;
+  r.motion = motion;
+  r.width = w;
+  r.height = h;
+  for (std::int32_t y = 0; y < h; ++y) {
+    std::memcpy(r.left.get() + static_cast<std::size_t>(y) * w,
+                pair.left.data + static_cast<std::size_t>(y) * pair.left.stride,
+                static_cast<std::size_t>(w));
+    std::memcpy(r.right.get() + static_cast<std::size_t>(y) * w,
+                pair.right.data + static_cast<std::size_t>(y) * pair.right.stride,
+                static_cast<std::size_t>(w));
+  }
+  Push(&out_->frame_group, RecordRef{RecordKind::kFrame, slot});
 }
 
 void FlightLoop::PublishNav() {

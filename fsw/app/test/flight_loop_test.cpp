@@ -388,6 +388,63 @@ TEST(FlightLoopTest, LostCameraIsRestartedOffTheRealTimeThread) {
   EXPECT_EQ(c.source_errors, 1);  // the one kDeviceLost
 }
 
+// A source whose right image is two columns narrower than the left for frames [first,
+// first + count): a camera delivering a pair the flight process cannot use.
+class MismatchedPairSource final : public drivers::StereoSource {
+ public:
+  MismatchedPairSource(drivers::StereoSource* inner, std::uint64_t first, std::uint64_t count)
+      : inner_(inner), first_(first), count_(count) {}
+  core::Status Start() override { return core::Status::kOk; }
+  core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override {
+    const core::Status s = inner_->Next(timeout_ns, pair);
+    if (s == core::Status::kOk && pair->seq >= first_ && pair->seq < first_ + count_) {
+      pair->right.width -= 2;
+    }
+    return s;
+  }
+  void Release(const drivers::StereoPair& pair) override { inner_->Release(pair); }
+  void Stop() override {}
+  drivers::SourceStats Stats() const override { return inner_->Stats(); }
+  const char* Name() const override { return "mismatched"; }
+  const char* LastError() const override { return ""; }
+
+ private:
+  drivers::StereoSource* inner_;
+  std::uint64_t first_;
+  std::uint64_t count_;
+};
+
+class StereoFrameCounter : public OutputObserver {
+ public:
+  void OnMessage(const std::string& channel, const std::uint8_t* /*data*/, int /*size*/) override {
+    frames += channel == "SWF_STEREO" ? 1 : 0;
+  }
+  int frames = 0;
+};
+
+// GIVEN a camera whose pairs 5-24 come with left and right of different sizes (more pairs than
+// the frame record pool has slots) WHEN the frame group records every pair THEN each of the 20 is
+// a counted drop, and every pair after them is recorded again: a refused pair gives its record
+// slot back instead of shrinking the pool for good.
+TEST(FlightLoopTest, PairsOfMismatchedSizesAreCountedDropsThatKeepTheirRecordSlots) {
+  Rig rig(
+      "source: sim\nsim.frames: 40\nsim.width_px: 128\nsim.height_px: 96\n"
+      "sim.terrain_size: 512\nmax_disparity_px: 40\nrate_hz: 20\n");
+  static_assert(kFramePoolSize < 20, "more bad pairs than record slots");
+  MismatchedPairSource source(rig.source.get(), 5, 20);
+  StereoFrameCounter recorded;
+  rig.output.AddObserver(&recorded);
+  FlightLoop loop;
+  rig.loop_options.record_frames = true;
+  ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), &source, rig.channels.get(),
+                           rig.world.get()),
+            core::Status::kOk);
+  const SteppedRun run = StepUntilEmpty(&loop, &rig, false, 100);
+  EXPECT_EQ(run.allocations, 0u);
+  EXPECT_EQ(loop.Counters().outputs_dropped, 20);
+  EXPECT_EQ(recorded.frames, 20);  // frames 0-4 and 25-39
+}
+
 // ---- the simulated flight's dispersions (sim.* keys of a Monte Carlo campaign) ------------------
 
 class HealthCollector : public OutputObserver {

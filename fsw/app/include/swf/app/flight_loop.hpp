@@ -164,6 +164,8 @@ class FlightLoop {
   void CopyRectified(HazardInput* h);
   void RunHazard(std::int32_t input_slot, core::SpscQueue<RecordRef, kOrderQueueSize>* q,
                  bool wait);
+  void RecordFrame(const PipelineFrame& frame, const drivers::StereoPair& pair,
+                   const drivers::MotionInput& motion);
   void PublishNav();
   // Hands the IMU samples due by until_utime to the pipeline and queues them for recording.
   void FeedImu(std::int64_t until_utime);
