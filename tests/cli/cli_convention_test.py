@@ -171,6 +171,10 @@ def main():
     r = run([tools_run, '--no-such-option-xyz'])
     check('tools/run', r.returncode == 2 and '--no-such-option-xyz' in r.stderr,
           'unknown verb: exit %d' % r.returncode)
+    for verb, value in (('fuzz', 'abc'), ('fuzz', '0'), ('soak', '-3'), ('soak', '2x')):
+        r = run([tools_run, verb, value])
+        check('tools/run', r.returncode == 2 and repr(value) in r.stderr.replace('"', "'"),
+              '%s %s: exit %d, %r' % (verb, value, r.returncode, r.stderr.strip()))
     if failures:
         print('\n%d failures:\n  %s' % (len(failures), '\n  '.join(failures)))
         return 1
