@@ -35,6 +35,8 @@ SUMMARY_TOLERANCE = 0.02
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 DEFAULT_REFERENCE = os.path.join(HERE, 'demo_reference.txt')
+sys.path.insert(0, os.path.join(ROOT, 'tools', 'lcmlog'))
+import swf_lcmlog  # noqa: E402  (the project's LCM log reader, from the source tree)
 
 
 def libm_fingerprint():
@@ -51,19 +53,12 @@ def libm_fingerprint():
 
 
 def read_log(path):
-    """(channel, payload) of every record of an LCM log, in order."""
-    with open(path, 'rb') as f:
-        data = f.read()
-    pos = 0
-    while pos < len(data):
-        if len(data) - pos < 28:
-            raise SystemExit('%s: truncated record header at byte %d' % (path, pos))
-        magic, _, _, clen, dlen = struct.unpack('>IqqII', data[pos:pos + 28])
-        if magic != 0xEDA1DA01 or pos + 28 + clen + dlen > len(data):
-            raise SystemExit('%s: damaged record at byte %d' % (path, pos))
-        channel = data[pos + 28:pos + 28 + clen].decode()
-        yield channel, data[pos + 28 + clen:pos + 28 + clen + dlen]
-        pos += 28 + clen + dlen
+    """(channel, payload) of every record of an LCM log, in order; exits naming a damaged record."""
+    try:
+        for record in swf_lcmlog.records(path):
+            yield record.channel, record.data
+    except swf_lcmlog.LogError as e:
+        raise SystemExit(str(e)) from None
 
 
 def fly_demo(fsw, workdir):

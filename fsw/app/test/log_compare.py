@@ -3,22 +3,21 @@
 usage: log_compare.py CHANNELS A.lcmlog B.lcmlog [...]   (CHANNELS comma-separated)
        log_compare.py --count CHANNEL LOG                  (prints the number of messages)
 Exit 0 when every log holds the same messages on every channel (and at least one)."""
-import struct
+import os
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', '..',
+                                'tools', 'lcmlog'))
+import swf_lcmlog  # noqa: E402  (the project's LCM log reader, from the source tree)
 
 
 def read(path):
     out = {}
-    with open(path, 'rb') as f:
-        data = f.read()
-    pos = 0
-    while pos < len(data):
-        magic, _, _, clen, dlen = struct.unpack('>IqqII', data[pos:pos + 28])
-        if magic != 0xEDA1DA01:
-            raise SystemExit('%s: bad record at byte %d' % (path, pos))
-        channel = data[pos + 28:pos + 28 + clen].decode()
-        out.setdefault(channel, []).append(data[pos + 28 + clen:pos + 28 + clen + dlen])
-        pos += 28 + clen + dlen
+    try:
+        for record in swf_lcmlog.records(path):
+            out.setdefault(record.channel, []).append(record.data)
+    except swf_lcmlog.LogError as e:
+        raise SystemExit(str(e)) from None
     return out
 
 

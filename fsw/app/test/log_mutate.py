@@ -8,28 +8,27 @@ usage: log_mutate.py IN OUT CHANNEL OP K
   neglen K     set the K-th record's stereo_frame_t.num_bytes to -1
   unrectify K  mark every record on CHANNEL from the K-th on as not rectified (raw camera frames)
 """
+import os
 import struct
 import sys
 
-HEADER = struct.Struct(">IqqII")  # sync word, event number, timestamp, channel and data length
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..",
+                                "tools", "lcmlog"))
+import swf_lcmlog  # noqa: E402  (the project's LCM log reader, from the source tree)
+
 NUM_BYTES = 8 + 86 + 8  # stereo_frame_t.num_bytes: fingerprint, fixed fields, width, height
 RECTIFIED = 8 + 4 * 8 + 4  # stereo_frame_t.rectified: fingerprint, four int64, dropped_before
 
 
-def records(data):
-    pos = 0
-    while pos < len(data):
-        _, eventnum, utime, clen, dlen = HEADER.unpack_from(data, pos)
-        start = pos + HEADER.size
-        channel = data[start:start + clen].decode()
-        yield eventnum, utime, channel, bytearray(data[start + clen:start + clen + dlen])
-        pos = start + clen + dlen
+def records(path):
+    """(event number, utime, channel, payload as a bytearray) of every record, in order."""
+    return [(r.eventnum, r.utime, r.channel, bytearray(r.data)) for r in swf_lcmlog.records(path)]
 
 
 def main():
     src, dst, channel, op, k = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], int(sys.argv[5])
     out = []
-    recs = list(records(open(src, "rb").read()))
+    recs = records(src)
     stereo = [i for i, r in enumerate(recs) if r[2] == channel]
     target = stereo[k]
     for i, rec in enumerate(recs):
@@ -50,7 +49,7 @@ def main():
             out.append(rec)
     with open(dst, "wb") as f:
         for n, (_, utime, ch, payload) in enumerate(out):
-            f.write(HEADER.pack(0xEDA1DA01, n, utime, len(ch), len(payload)))
+            f.write(swf_lcmlog.HEADER.pack(swf_lcmlog.SYNC_WORD, n, utime, len(ch), len(payload)))
             f.write(ch.encode())
             f.write(payload)
 
