@@ -105,6 +105,24 @@ struct Neon {
 };
 #endif
 
+// Lanes shifted by one across two adjacent chunks: [lo's last lane, hi's lanes but the last], and
+// [lo's lanes but the first, hi's first lane]. For a vector whose chunks were just stored, the
+// neighbours L(d - 1) and L(d + 1) come from aligned reloads of whole stored chunks (forwarded from
+// the store buffer) instead of loads that straddle two stores, which stall until both retire.
+[[gnu::always_inline]] inline V8s UpOne(V8s lo, V8s hi) {
+  return __builtin_shufflevector(lo, hi, 7, 8, 9, 10, 11, 12, 13, 14);
+}
+[[gnu::always_inline]] inline V8s DownOne(V8s lo, V8s hi) {
+  return __builtin_shufflevector(lo, hi, 1, 2, 3, 4, 5, 6, 7, 8);
+}
+[[gnu::always_inline]] inline V16s UpOne(V16s lo, V16s hi) {
+  return __builtin_shufflevector(lo, hi, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29,
+                                 30);
+}
+[[gnu::always_inline]] inline V16s DownOne(V16s lo, V16s hi) {
+  return __builtin_shufflevector(lo, hi, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16);
+}
+
 template <class V>
 [[gnu::always_inline]] inline V Iota() {
   V v{};
@@ -200,14 +218,28 @@ template <class K, int kPaths, bool kAddSum>
     for (int k = 0; k < kPaths; ++k) path_min[k] = highest;
     const std::uint8_t* cost = j.cost + static_cast<std::ptrdiff_t>(x) * j.cost_stride;
     const std::ptrdiff_t sum_at = static_cast<std::ptrdiff_t>(x) * dp;
+    // The horizontal predecessor was stored by the previous pixel: its chunks below, at and above
+    // d0 roll through registers.
+    const std::int16_t* h = pred[kNumVertical].l;
+    S h_below = Load<S>(h - kN);
+    S h_at = Load<S>(h);
     for (int d0 = 0; d0 < dp; d0 += kN) {
       const S c = K::LoadCost(cost + d0);
       S sum = kAddSum ? Load<S>(j.sum_in + sum_at + d0) : S{};
+      const S h_above = Load<S>(h + d0 + kN);
       for (int k = 0; k < kPaths; ++k) {
         // L = C + min(L(d), min(L(d - 1), L(d + 1)) + P1, min + P2) - min.
-        const std::int16_t* p = pred[k].l + d0;
-        S t = Min(Load<S>(p - 1), Load<S>(p + 1)) + p1;
-        t = Min(Min(t, Load<S>(p)), pred[k].big);
+        S at;
+        S t;
+        if (k == kNumVertical) {
+          at = h_at;
+          t = Min(UpOne(h_below, h_at), DownOne(h_at, h_above));
+        } else {
+          const std::int16_t* p = pred[k].l + d0;
+          at = Load<S>(p);
+          t = Min(Load<S>(p - 1), Load<S>(p + 1));
+        }
+        t = Min(Min(t + p1, at), pred[k].big);
         S l = c + (t - pred[k].min);
         if (d0 >= padded_from) l = Max(l, Load<S>(j.pad_floor + d0));
         Store(dst[k] + d0, l);
@@ -215,6 +247,8 @@ template <class K, int kPaths, bool kAddSum>
         path_min[k] = Min(path_min[k], l);
       }
       Store(j.sum_out + sum_at + d0, sum);
+      h_below = h_at;
+      h_at = h_above;
     }
     for (int k = 0; k < kNumVertical; ++k) {
       j.cur_mins[static_cast<std::ptrdiff_t>(k) * w + x] = K::MinAll(path_min[k])[0];
@@ -258,14 +292,21 @@ template <class K>
   const S lane = Iota<S>();
   for (int x = 0; x < w; ++x) {
     const std::int16_t* s = j.sum + static_cast<std::ptrdiff_t>(x) * dp;
-    // From the top chunk down: chunk d0 reads [d0 - 1, d0 + kN - 1) before chunk d0 - kN writes.
+    // From the top chunk down: chunk d0 reads [d0 - 1, d0 + kN - 1) before chunk d0 - kN writes
+    // (whole chunks, see UpOne).
+    S cost_at = Load<S>(cost + dp - kN);
+    S index_at = Load<S>(index + dp - kN);
     for (int d0 = dp - kN; d0 >= 0; d0 -= kN) {
-      const S old_cost = Load<S>(cost + d0 - 1);
-      const S old_index = Load<S>(index + d0 - 1);
+      const S cost_below = Load<S>(cost + d0 - kN);
+      const S index_below = Load<S>(index + d0 - kN);
+      const S old_cost = UpOne(cost_below, cost_at);
+      const S old_index = UpOne(index_below, index_at);
       const S v = Load<S>(s + d0);
       const auto take = v < old_cost;
       Store(cost + d0, take ? v : old_cost);
       Store(index + d0, take ? lane + static_cast<std::int16_t>(d0) : old_index);
+      cost_at = cost_below;
+      index_at = index_below;
     }
     const int xr = x - j.min_disparity - (n - 1);
     if (xr >= 0) j.right[xr] = static_cast<float>(index[n - 1] + j.min_disparity);
