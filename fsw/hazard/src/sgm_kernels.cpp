@@ -290,7 +290,25 @@ template <class K>
   std::fill(index - 1, index + dp, static_cast<std::int16_t>(0));
   std::fill(j.right, j.right + w, SgmMatcher::kInvalid);
   const S lane = Iota<S>();
-  for (int x = 0; x < w; ++x) {
+  if (dp == kN) {
+    // One chunk: the window stays in registers (the pass over a row is then one dependency chain
+    // of a shuffle, a compare and a blend per pixel, no memory round trip).
+    const S highest = S{} + static_cast<std::int16_t>(0x7FFF);
+    S window_cost = highest;
+    S window_index{};
+    for (int x = 0; x < w; ++x) {
+      const S old_cost = UpOne(highest, window_cost);
+      const S old_index = UpOne(S{}, window_index);
+      const S v = Load<S>(j.sum + static_cast<std::ptrdiff_t>(x) * dp);
+      const auto take = v < old_cost;
+      window_cost = take ? v : old_cost;
+      window_index = take ? lane : old_index;
+      const int xr = x - j.min_disparity - (n - 1);
+      if (xr >= 0) j.right[xr] = static_cast<float>(window_index[n - 1] + j.min_disparity);
+    }
+    Store(index, window_index);
+  }
+  for (int x = 0; x < w && dp > kN; ++x) {
     const std::int16_t* s = j.sum + static_cast<std::ptrdiff_t>(x) * dp;
     // From the top chunk down: chunk d0 reads [d0 - 1, d0 + kN - 1) before chunk d0 - kN writes
     // (whole chunks, see UpOne).
@@ -315,6 +333,14 @@ template <class K>
     const int xr = w - 1 - j.min_disparity - d;
     if (xr >= 0) j.right[xr] = static_cast<float>(index[d] + j.min_disparity);
   }
+}
+
+// std::lround of a float in int range, inline (the library call costs more than the select).
+// v - trunc(v) is exact in float, so the comparisons with 0.5 decide as lround does.
+[[gnu::always_inline]] inline int RoundHalfAway(float v) {
+  const int t = static_cast<int>(v);
+  const float fraction = v - static_cast<float>(t);
+  return t + (fraction >= 0.5f ? 1 : 0) - (fraction <= -0.5f ? 1 : 0);
 }
 
 template <class K>
@@ -366,7 +392,7 @@ template <class K>
     const float denom = sm - 2.0f * s0 + sp;
     const float offset = denom > 0.0f ? 0.5f * (sm - sp) / denom : 0.0f;
     const float disparity = static_cast<float>(best_d + j.min_disparity) + offset;
-    const int xr = static_cast<int>(std::lround(static_cast<float>(x) - disparity));
+    const int xr = RoundHalfAway(static_cast<float>(x) - disparity);
     if (xr < 0 || xr >= w) continue;
     const float dr = j.right[xr];
     if (dr == SgmMatcher::kInvalid) continue;
@@ -386,7 +412,14 @@ void PassRowPortable(const PassRowJob& j) { PassRowDispatch<Portable>(j); }
 void SelectRowPortable(SelectRowJob* j) { SelectRowT<Portable>(j); }
 
 #if defined(__x86_64__)
-[[gnu::target("avx2")]] void CostRowAvx2(const CostRowJob& j) { CostRowT<Wide>(j); }
+[[gnu::target("avx2")]] void CostRowAvx2(const CostRowJob& j) {
+  // 16 disparities fill half a 256-bit byte vector: 128-bit steps do half the work.
+  if (j.padded_d < static_cast<int>(sizeof(Wide::B))) {
+    CostRowT<Portable>(j);
+  } else {
+    CostRowT<Wide>(j);
+  }
+}
 [[gnu::target("avx2")]] void PassRowAvx2(const PassRowJob& j) { PassRowDispatch<Wide>(j); }
 [[gnu::target("avx2")]] void SelectRowAvx2(SelectRowJob* j) { SelectRowT<Wide>(j); }
 #endif
@@ -430,7 +463,11 @@ void CensusRow(const frontend::GrayView& image, int y, bool reversed, std::uint8
       CensusClamped(image, x, y, bits);
       put(x, bits);
     }
-    for (; x + 16 <= w - 2; x += 16) {
+    // The last block overlaps the one before it (the same bits again) rather than leaving up to
+    // 15 pixels to the clamped scalar census.
+    const int last_block = w - 2 - 16;
+    for (; x <= last_block + 15 && last_block >= 2; x += 16) {
+      x = std::min(x, last_block);
       const V16b c = Load<V16b>(image.Row(y) + x);
       V16b bits[kCensusPlanes] = {};
       int k = 0;

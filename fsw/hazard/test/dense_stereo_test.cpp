@@ -182,11 +182,9 @@ TEST(SgmMatcherTest, EveryKernelMatchesTheScalarReferenceBitForBit) {
   struct Case {
     int w, h, min_d, num_d, paths, p1, p2;
   };
-  const Case cases[] = {{97, 41, 0, 32, 8, 8, 96},
-                        {64, 37, 3, 21, 8, 8, 96},
-                        {53, 30, 0, 4, 4, 8, 96},
-                        {120, 33, 5, 48, 4, 12, 300},
-                        {70, 29, 1, 37, 8, 30, 1000}};
+  const Case cases[] = {{97, 41, 0, 32, 8, 8, 96},    {64, 37, 3, 21, 8, 8, 96},
+                        {53, 30, 0, 4, 4, 8, 96},     {120, 33, 5, 48, 4, 12, 300},
+                        {70, 29, 1, 37, 8, 30, 1000}, {83, 26, 2, 16, 8, 8, 96}};
   const std::vector<SgmKernel> kernels = Kernels();
   ASSERT_GE(kernels.size(), 2u);  // the portable kernel and the ISA's own
   std::uint32_t seed = 1;
