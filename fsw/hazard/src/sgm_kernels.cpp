@@ -9,6 +9,8 @@
 
 #if defined(__aarch64__)
 #include <arm_neon.h>
+#elif defined(__x86_64__)
+#include <immintrin.h>  // declares the SSSE3 / AVX2 builtins used inside target("avx2") kernels
 #endif
 
 // The 256-bit helpers below are always inlined into target("avx2") functions; no 32-byte vector
@@ -77,6 +79,31 @@ struct Portable {
   [[gnu::always_inline]] static B Popcount(B v) { return PopcountBytes(v); }
 };
 
+#if defined(__x86_64__)
+// Bits set per byte by a table of the 16 nibbles (pshufb). The SSSE3 / AVX2 builtins (declared by
+// <immintrin.h>) are expanded in the target("avx2") functions these helpers are inlined into.
+using C16 [[gnu::vector_size(16)]] = char;
+using C32 [[gnu::vector_size(32)]] = char;
+constexpr V32b kNibbleBits = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,
+                              0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+[[gnu::always_inline]] inline V32b PopcountNibbles(V32b v) {
+  const C32 table = reinterpret_cast<C32>(kNibbleBits);
+  const V32b low = reinterpret_cast<V32b>(
+      __builtin_ia32_pshufb256(table, reinterpret_cast<C32>(v & static_cast<std::uint8_t>(0x0F))));
+  const V32b high = reinterpret_cast<V32b>(__builtin_ia32_pshufb256(
+      table, reinterpret_cast<C32>((v >> 4) & static_cast<std::uint8_t>(0x0F))));
+  return low + high;
+}
+[[gnu::always_inline]] inline V16b PopcountNibbles(V16b v) {
+  const C16 table = reinterpret_cast<C16>(__builtin_shufflevector(
+      kNibbleBits, kNibbleBits, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
+  const V16b low = reinterpret_cast<V16b>(
+      __builtin_ia32_pshufb128(table, reinterpret_cast<C16>(v & static_cast<std::uint8_t>(0x0F))));
+  const V16b high = reinterpret_cast<V16b>(__builtin_ia32_pshufb128(
+      table, reinterpret_cast<C16>((v >> 4) & static_cast<std::uint8_t>(0x0F))));
+  return low + high;
+}
+
 struct Wide {  // 256-bit: instantiated only inside target("avx2") functions
   using S = V16s;
   using B = V32b;
@@ -85,8 +112,14 @@ struct Wide {  // 256-bit: instantiated only inside target("avx2") functions
     return __builtin_convertvector(Load<V16b>(p), S);
   }
   [[gnu::always_inline]] static S MinAll(S v) { return sgm_detail::MinAll(v); }
-  [[gnu::always_inline]] static B Popcount(B v) { return PopcountBytes(v); }
+  [[gnu::always_inline]] static B Popcount(B v) { return PopcountNibbles(v); }
 };
+
+// 128-bit costs inside the AVX2 kernel (16 disparities: half a 256-bit vector of bytes).
+struct WideHalf : Portable {
+  [[gnu::always_inline]] static B Popcount(B v) { return PopcountNibbles(v); }
+};
+#endif
 
 #if defined(__aarch64__)
 struct Neon {
@@ -415,7 +448,7 @@ void SelectRowPortable(SelectRowJob* j) { SelectRowT<Portable>(j); }
 [[gnu::target("avx2")]] void CostRowAvx2(const CostRowJob& j) {
   // 16 disparities fill half a 256-bit byte vector: 128-bit steps do half the work.
   if (j.padded_d < static_cast<int>(sizeof(Wide::B))) {
-    CostRowT<Portable>(j);
+    CostRowT<WideHalf>(j);
   } else {
     CostRowT<Wide>(j);
   }
