@@ -104,6 +104,15 @@ constexpr V32b kNibbleBits = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,
   return low + high;
 }
 
+// The minimum of 16 lanes by SSE4.1's phminposuw (unsigned: every vector the kernels reduce is
+// non-negative: path costs, sums, indices, the 0x7FFF filler), in every lane: 4 operations instead
+// of 4 shuffles and 4 minimums.
+[[gnu::always_inline]] inline V16s MinAllUnsigned(V16s v) {
+  const V8s half = Min(__builtin_shufflevector(v, v, 0, 1, 2, 3, 4, 5, 6, 7),
+                       __builtin_shufflevector(v, v, 8, 9, 10, 11, 12, 13, 14, 15));
+  return V16s{} + __builtin_ia32_phminposuw128(half)[0];
+}
+
 struct Wide {  // 256-bit: instantiated only inside target("avx2") functions
   using S = V16s;
   using B = V32b;
@@ -111,7 +120,7 @@ struct Wide {  // 256-bit: instantiated only inside target("avx2") functions
   [[gnu::always_inline]] static S LoadCost(const std::uint8_t* p) {
     return __builtin_convertvector(Load<V16b>(p), S);
   }
-  [[gnu::always_inline]] static S MinAll(S v) { return sgm_detail::MinAll(v); }
+  [[gnu::always_inline]] static S MinAll(S v) { return MinAllUnsigned(v); }
   [[gnu::always_inline]] static B Popcount(B v) { return PopcountNibbles(v); }
 };
 
