@@ -62,7 +62,8 @@ core::Status SgmMatcher::Configure(const SgmOptions& options) {
   const std::size_t census = kCensusPlanes * h * static_cast<std::size_t>(census_stride_);
   census_left_.assign(census, 0);
   census_right_.assign(census, 0);
-  cost_row_.assign(w * static_cast<std::size_t>(RoundUp(max_padded, sgm_detail::kCostUnit)), 0);
+  cost_volume_.assign(h * w * static_cast<std::size_t>(RoundUp(max_padded, sgm_detail::kCostUnit)),
+                      0);
   forward_sum_.assign(h * w * dp, 0);
   row_sum_.assign(w * dp, 0);
   path_rows_.assign(2 * 3 * w * max_path_stride, kBorder);
@@ -113,8 +114,14 @@ void SgmMatcher::CostRow(int y, int min_disparity) {
   job.min_disparity = min_disparity;
   job.padded_d = padded_d_;
   job.cost_stride = RoundUp(padded_d_, sgm_detail::kCostUnit);
-  job.cost = cost_row_.data();
+  job.cost = CostsOfRow(y);
   sgm_detail::KernelsOf(kernel_).cost_row(job);
+}
+
+std::uint8_t* SgmMatcher::CostsOfRow(int y) {
+  return cost_volume_.data() +
+         static_cast<std::size_t>(y) * width_ *
+             static_cast<std::size_t>(RoundUp(padded_d_, sgm_detail::kCostUnit));
 }
 
 void SgmMatcher::PassRow(int y, bool forward, bool first_row, const frontend::GrayView& left) {
@@ -131,7 +138,7 @@ void SgmMatcher::PassRow(int y, bool forward, bool first_row, const frontend::Gr
   job.cost_stride = RoundUp(padded_d_, sgm_detail::kCostUnit);
   job.p1 = static_cast<std::int16_t>(options_.p1);
   job.p2_table = p2_table_.data();
-  job.cost = cost_row_.data();
+  job.cost = CostsOfRow(y);
   job.image = left.Row(y);
   job.image_prev = first_row ? nullptr : left.Row(forward ? y - 1 : y + 1);
   job.prev_rows = path_rows_.data() + (odd ? 0 : block);
@@ -198,7 +205,6 @@ core::Status SgmMatcher::Compute(const frontend::GrayView& left, const frontend:
   }
   num_valid_ = 0;
   for (int y = height_ - 1; y >= 0; --y) {
-    CostRow(y, min_disparity);
     PassRow(y, false, y == height_ - 1, left);
     SelectRow(y, min_disparity);
   }

@@ -14,13 +14,14 @@
 // Implementation: census planes of the whole pair, then two passes over the rows. The forward pass
 // (top-down, left to right) runs the paths that come from above and from the left and stores their
 // sum; the backward pass runs the others, adds the stored sum and selects the row's disparities at
-// once, so only the forward sum is a full volume. Costs are recomputed per row in each pass, not
-// stored. Every pixel's path vectors are 16-bit lanes, padded to a multiple of 16 disparities; the
-// kernels (SgmKernel) compute the same integers in the same order and give bit-identical results
-// (tested against a plain scalar SGM).
+// once, so the path vectors are never a full volume. The forward pass computes each row's costs
+// (1 byte per disparity) and keeps them for the backward pass. Every pixel's path vectors are
+// 16-bit lanes, padded to a multiple of 16 disparities; the kernels (SgmKernel) compute the same
+// integers in the same order and give bit-identical results (tested against a plain scalar SGM).
 //
-// Memory: every buffer is sized once by Configure() for the largest image and disparity count;
-// Compute() never allocates.
+// Memory: every buffer is sized once by Configure() for the largest image and disparity count
+// (about 3 bytes per pixel and padded disparity: the forward sum and the costs); Compute() never
+// allocates.
 #pragma once
 
 #include <cstdint>
@@ -91,6 +92,7 @@ class SgmMatcher {
  private:
   void CensusPair(const frontend::GrayView& left, const frontend::GrayView& right);
   void CostRow(int y, int min_disparity);
+  std::uint8_t* CostsOfRow(int y);
   void PassRow(int y, bool forward, bool first_row, const frontend::GrayView& left);
   void SelectRow(int y, int min_disparity);
 
@@ -107,7 +109,7 @@ class SgmMatcher {
   std::vector<std::int16_t> p2_table_;         // adaptive P2 by |dI| (0..255)
   std::vector<std::uint8_t> census_left_;      // 3 planes of 8 bits per pixel
   std::vector<std::uint8_t> census_right_;     // the same, each row reversed (x -> w - 1 - x)
-  std::vector<std::uint8_t> cost_row_;         // C(x, d) of one row: width * padded_d
+  std::vector<std::uint8_t> cost_volume_;      // C(x, d) of every row: height * width * stride
   std::vector<std::int16_t> forward_sum_;      // S of the forward paths: height * width * padded_d
   std::vector<std::int16_t> row_sum_;          // S of one row (backward pass): width * padded_d
   std::vector<std::int16_t> path_rows_;        // L_r of the vertical paths: previous and current
