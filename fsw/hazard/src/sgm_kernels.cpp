@@ -51,13 +51,6 @@ template <class V>
   v = Min(v, __builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5));
   return Min(v, __builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6));
 }
-[[gnu::always_inline]] inline V16s MinAll(V16s v) {
-  v = Min(v, __builtin_shufflevector(v, v, 8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7));
-  v = Min(v, __builtin_shufflevector(v, v, 4, 5, 6, 7, 0, 1, 2, 3, 12, 13, 14, 15, 8, 9, 10, 11));
-  v = Min(v, __builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13));
-  return Min(v,
-             __builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6, 9, 8, 11, 10, 13, 12, 15, 14));
-}
 
 // Bits set per byte, by the SWAR steps (two bits, then four, then eight).
 template <class B>
@@ -80,8 +73,11 @@ struct Portable {
 };
 
 #if defined(__x86_64__)
-// Bits set per byte by a table of the 16 nibbles (pshufb). The SSSE3 / AVX2 builtins (declared by
-// <immintrin.h>) are expanded in the target("avx2") functions these helpers are inlined into.
+#if !defined(__clang__)
+// Bits set per byte by a table of the 16 nibbles (pshufb). The SSSE3 / AVX2 / SSE4.1 builtins
+// (declared by <immintrin.h>) are expanded in the target("avx2") functions these helpers are
+// inlined into. Clang checks a builtin's ISA in the function that names it, before inlining, so its
+// builds (the sanitizer pass) take the generic vector code below: the same integers, slower.
 using C16 [[gnu::vector_size(16)]] = char;
 using C32 [[gnu::vector_size(32)]] = char;
 constexpr V32b kNibbleBits = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,
@@ -112,6 +108,19 @@ constexpr V32b kNibbleBits = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,
                        __builtin_shufflevector(v, v, 8, 9, 10, 11, 12, 13, 14, 15));
   return V16s{} + __builtin_ia32_phminposuw128(half)[0];
 }
+#else
+template <class B>
+[[gnu::always_inline]] inline B PopcountNibbles(B v) {
+  return PopcountBytes(v);
+}
+[[gnu::always_inline]] inline V16s MinAllUnsigned(V16s v) {
+  v = Min(v, __builtin_shufflevector(v, v, 8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7));
+  v = Min(v, __builtin_shufflevector(v, v, 4, 5, 6, 7, 0, 1, 2, 3, 12, 13, 14, 15, 8, 9, 10, 11));
+  v = Min(v, __builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13));
+  return Min(v,
+             __builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6, 9, 8, 11, 10, 13, 12, 15, 14));
+}
+#endif
 
 struct Wide {  // 256-bit: instantiated only inside target("avx2") functions
   using S = V16s;
