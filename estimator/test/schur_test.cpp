@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -73,7 +74,7 @@ Marginal Eliminate(const Matrix& lambda, const Vector& g, int o, Couple couple, 
   return m;
 }
 
-const auto kAll = [](int, int) { return true; };
+const auto kAll = [](int, int) { return SchurFill::kBlock; };
 
 TEST(Schur, OldestPoseMarginalEqualsTheDenseSchurComplement) {
   // [p0 | p1 | four landmarks] with 6-dof poses, and with 15-dim inertial states.
@@ -119,7 +120,11 @@ TEST(Schur, VsdfKeepsOnlyTheBlocksWithinEachVariable) {
   const auto variable = [](int chunk) { return chunk < 4 ? 0 : chunk; };  // p1 = chunks 2, 3
   bool ok = false;
   const Marginal m = Eliminate<6>(
-      lambda, g, 0, [&](int r, int c) { return variable(r) == variable(c); }, &ok);
+      lambda, g, 0,
+      [&](int r, int c) {
+        return variable(r) == variable(c) ? SchurFill::kBlock : SchurFill::kNone;
+      },
+      &ok);
   ASSERT_TRUE(ok);
   const Marginal exact = DenseSchur(lambda, g, 0, 6);
   const Matrix original = lambda.bottomRightCorner(15, 15);
@@ -131,6 +136,28 @@ TEST(Schur, VsdfKeepsOnlyTheBlocksWithinEachVariable) {
       const Matrix want =
           (a == b ? exact.lambda : original).block(starts[a], starts[b], widths[a], widths[b]);
       EXPECT_LT((got - want).norm(), 1e-10 * (1.0 + want.norm())) << a << "," << b;
+    }
+  }
+  EXPECT_LT((m.g - exact.g).norm(), 1e-10 * exact.g.norm());  // the vector is exact
+}
+
+TEST(Schur, VsdfScalarDiagonalKeepsOnlyTheDiagonalElements) {
+  // Eq. 12 read literally: only the diagonal elements of the Schur term are applied; every
+  // off-diagonal element, inside a variable's block too, keeps its old value.
+  Matrix lambda;
+  Vector g;
+  RandomSystem(6 + 6 + 9, 6, &lambda, &g);
+  bool ok = false;
+  const Marginal m = Eliminate<6>(
+      lambda, g, 0, [](int r, int c) { return r == c ? SchurFill::kDiagonal : SchurFill::kNone; },
+      &ok);
+  ASSERT_TRUE(ok);
+  const Marginal exact = DenseSchur(lambda, g, 0, 6);
+  const Matrix original = lambda.bottomRightCorner(15, 15);
+  for (int c = 0; c < 15; ++c) {
+    for (int r = 0; r < 15; ++r) {
+      const double want = r == c ? exact.lambda(r, c) : original(r, c);
+      EXPECT_NEAR(m.lambda(r, c), want, 1e-10 * (1.0 + std::abs(want))) << r << "," << c;
     }
   }
   EXPECT_LT((m.g - exact.g).norm(), 1e-10 * exact.g.norm());  // the vector is exact

@@ -56,7 +56,9 @@
 //   kBatch           never marginalize; the window must hold the whole sequence (full SLAM/BA)
 //   kVisualOdometry  delete the oldest pose and its measurements instead of marginalizing, and
 //                    hold the new oldest pose fixed (conditioning; section 4.2.4)
-//   kVsdf            marginalize with only the block diagonal of the Schur term (eq. 12)
+//   kVsdf            marginalize with only the block diagonal of the Schur term (eq. 12);
+//                    SwfOptions::vsdf_scalar_diagonal keeps only its scalar diagonal, the
+//                    paper's literal wording
 //
 // Memory: K (window), N (active landmarks), M (measurements per pose) and P (landmarks the prior
 // can hold) are template parameters; every buffer is a member, so the object is large: create it
@@ -111,6 +113,9 @@ struct SwfOptions {
   // Evaluate measurement Jacobians of prior landmarks at their estimate when they entered the
   // prior (FEJ, Huang/Mourikis/Roumeliotis). Off = relinearize everything (the paper's SWF).
   bool first_estimate_jacobians = true;
+  // kVsdf only: apply only the scalar diagonal of the Schur term (eq. 12 read literally,
+  // "only the diagonal elements") instead of its 3x3 / state blocks within each variable.
+  bool vsdf_scalar_diagonal = false;
   // Integrity gates (chi-square with 3 dof at gate_probability; 0 = no gates):
   //  * before fusion, a measurement of a known landmark is tested against its prediction with
   //    covariance R + J_p P_pose J_p^T + J_l P_l J_l^T (the predicted pose's and the landmark's
@@ -507,7 +512,7 @@ class SlidingWindowFilter {
   void AddPrior(int lm0);
   void MarginalizeOldestPose();
   void GrowPrior();
-  bool EliminateFirstPose(int dim, bool diagonal_only);
+  bool EliminateFirstPose(int dim);
   void DeleteOldestPose();
   void RetireUnsupportedLandmarks();
   bool EliminatePriorLandmark(int q);

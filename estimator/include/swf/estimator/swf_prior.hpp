@@ -166,8 +166,7 @@ void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
   }
   // Eliminate p0 (or condition on it when it is fixed).
   if (!p0.fixed) {
-    const bool diagonal_only = options_.mode == SwfMode::kVsdf;
-    if (!EliminateFirstPose(dim, diagonal_only)) fault_bits_ |= kFaultNotPositiveDefinite;
+    if (!EliminateFirstPose(dim)) fault_bits_ |= kFaultNotPositiveDefinite;
   }
   // The new prior is the [p1 | landmarks] part, linearized at the current estimate.
   prior_dim_ = dim - kStateDim;
@@ -199,14 +198,22 @@ void SlidingWindowFilter<Model, K, N, M, P>::GrowPrior() {
 }
 
 // Schur complement of the first kStateDim variables (p0) of the local system onto the rest
-// (eq. 9), or only its blocks within p1 and within each landmark (VSDF, eq. 12).
+// (eq. 9); in VSDF mode (eq. 12) only its blocks within p1 and within each landmark, or with
+// vsdf_scalar_diagonal only its scalar diagonal.
 template <typename Model, int K, int N, int M, int P>
-bool SlidingWindowFilter<Model, K, N, M, P>::EliminateFirstPose(int dim, bool diagonal_only) {
+bool SlidingWindowFilter<Model, K, N, M, P>::EliminateFirstPose(int dim) {
   // Chunks of p1 are one variable; every later chunk is a landmark of its own.
   const auto variable = [](int chunk) { return chunk < 2 * kStateDim / 3 ? 0 : chunk; };
+  const bool vsdf = options_.mode == SwfMode::kVsdf;
+  const bool scalar = options_.vsdf_scalar_diagonal;
   return EliminateVariable<kStateDim>(
-      local_, kMaxLocalDim, local_b_, dim, 0, x_, kXRows,
-      [&](int r, int c) { return !diagonal_only || variable(r) == variable(c); });
+      local_, kMaxLocalDim, local_b_, dim, 0, x_, kXRows, [&](int r, int c) {
+        if (!vsdf) return SchurFill::kBlock;
+        if (scalar) {
+          return r == c ? SchurFill::kDiagonal : SchurFill::kNone;
+        }
+        return variable(r) == variable(c) ? SchurFill::kBlock : SchurFill::kNone;
+      });
 }
 
 // VO mode: forget the oldest pose and everything attached to it; hold the next one fixed.
@@ -255,7 +262,7 @@ template <typename Model, int K, int N, int M, int P>
 bool SlidingWindowFilter<Model, K, N, M, P>::EliminatePriorLandmark(int q) {
   const int o = kStateDim + 3 * q;
   const bool ok = EliminateVariable<3>(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, x_, kXRows,
-                                       [](int, int) { return true; });
+                                       [](int, int) { return SchurFill::kBlock; });
   DropVariable(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, 3);
   prior_dim_ -= 3;
   landmarks_[prior_landmarks_[q]].prior_index = -1;
