@@ -89,8 +89,12 @@ void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<do
     const Eigen::Vector3d c = pose.ApplyInverse(p);
     if (!(c.z() > 0.0)) continue;
     const Eigen::Vector3d z = camera_.Project(c);
-    const double e = std::hypot(m.u_px - z.x(), m.v_px - z.z());
+    const double du = m.u_px - z.x();
+    const double dv = m.v_px - z.z();
+    const double e = std::hypot(du, dv);
     tracking_.all_px.push_back(e);
+    tracking_.du_px.push_back(du);
+    tracking_.dv_px.push_back(dv);
     app::NewSighting s;
     if (FirstSeen(m.id, &s) && s.frame_seq == first_frame_) {
       tracking_.first_frame_px.push_back(e);

@@ -1,5 +1,6 @@
 #include "swf/sil/sil.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -45,10 +46,54 @@ void WriteOutputs(std::FILE* f, const evaluation::RunScore& score) {
   std::fprintf(f, "},\n");
 }
 
+// The histogram of the signed errors (the paper's Fig. 2a): bins of kHistogramBinPx over
+// [-kHistogramHalfWidthPx, kHistogramHalfWidthPx), the rest counted as outside.
+constexpr double kHistogramBinPx = 0.05;
+constexpr double kHistogramHalfWidthPx = 1.5;
+
+// One signed error component as JSON: mean, sample standard deviation, robust sigma (1.4826 x
+// the median absolute deviation), the fractions within 1, 2 and 3 standard deviations of the
+// mean (a Gaussian: 0.683, 0.954, 0.997) and the histogram's counts.
+std::string SignedErrorJson(const std::vector<double>& e) {
+  const double mean = evaluation::Mean(e);
+  const double std_px = evaluation::SampleStd(e);
+  const double median = evaluation::Median(e);
+  std::vector<double> deviation;
+  deviation.reserve(e.size());
+  for (double x : e) deviation.push_back(std::abs(x - median));
+  const double robust = 1.4826 * evaluation::Median(deviation);
+  double within[3] = {0.0, 0.0, 0.0};
+  const int bins = static_cast<int>(std::lround(2.0 * kHistogramHalfWidthPx / kHistogramBinPx));
+  std::vector<long long> counts(static_cast<std::size_t>(bins), 0);
+  long long outside = 0;
+  for (double x : e) {
+    for (int k = 0; k < 3; ++k) within[k] += std::abs(x - mean) <= (k + 1) * std_px ? 1.0 : 0.0;
+    const double b = std::floor((x + kHistogramHalfWidthPx) / kHistogramBinPx);
+    if (b >= 0.0 && b < bins) {
+      ++counts[static_cast<std::size_t>(b)];
+    } else {
+      ++outside;
+    }
+  }
+  const double n = std::max<double>(1.0, static_cast<double>(e.size()));
+  std::string counts_text;
+  for (std::size_t k = 0; k < counts.size(); ++k) {
+    if (k > 0) counts_text += ", ";
+    counts_text += std::to_string(counts[k]);
+  }
+  return "{\"mean\": " + app::JsonNumber(mean) + ", \"std\": " + app::JsonNumber(std_px) +
+         ", \"robust_sigma\": " + app::JsonNumber(robust) +
+         ", \"within_1_std\": " + app::JsonNumber(within[0] / n) +
+         ", \"within_2_std\": " + app::JsonNumber(within[1] / n) +
+         ", \"within_3_std\": " + app::JsonNumber(within[2] / n) +
+         ", \"outside_histogram\": " + std::to_string(outside) + ", \"counts\": [" + counts_text +
+         "]}";
+}
+
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
 // The front end's measurements against the renderer's truth (Evaluation::Tracking): every fused
 // measurement of a known landmark, and the landmarks of the first frame, overall and once they
-// are 10 frames old (their drift).
+// are 10 frames old (their drift); the signed components with their histogram.
 void WriteTrackingErrors(std::FILE* f, const Evaluation::TrackingErrors& t) {
   std::vector<double> old_px;
   for (std::size_t i = 0; i < t.first_frame_px.size(); ++i) {
@@ -58,13 +103,38 @@ void WriteTrackingErrors(std::FILE* f, const Evaluation::TrackingErrors& t) {
       f,
       "  \"tracking_error_px\": {\"measurements\": %zu, \"median\": %s, \"p90\": %s, "
       "\"rms\": %s,\n    \"first_frame\": {\"measurements\": %zu, \"median\": %s, "
-      "\"p90\": %s, \"measurements_10_frames_old\": %zu, \"median_10_frames_old\": %s}},\n",
+      "\"p90\": %s, \"measurements_10_frames_old\": %zu, \"median_10_frames_old\": %s},\n"
+      "    \"signed\": {\"bin_px\": %.3f, \"first_bin_px\": %.3f,\n      \"u\": %s,\n      "
+      "\"v\": %s}},\n",
       t.all_px.size(), app::JsonNumber(evaluation::Median(t.all_px)).c_str(),
       app::JsonNumber(evaluation::Quantile(t.all_px, 0.9)).c_str(),
       app::JsonNumber(evaluation::Rms(t.all_px)).c_str(), t.first_frame_px.size(),
       app::JsonNumber(evaluation::Median(t.first_frame_px)).c_str(),
       app::JsonNumber(evaluation::Quantile(t.first_frame_px, 0.9)).c_str(), old_px.size(),
-      app::JsonNumber(evaluation::Median(old_px)).c_str());
+      app::JsonNumber(evaluation::Median(old_px)).c_str(), kHistogramBinPx, -kHistogramHalfWidthPx,
+      SignedErrorJson(t.du_px).c_str(), SignedErrorJson(t.dv_px).c_str());
+}
+
+// Every published landmark map's error against the truth, in frame order (the image-level
+// counterpart of the landmark-error curves of the paper's Figs. 12 and 13).
+void WriteLandmarkMaps(std::FILE* f, const std::vector<evaluation::MapScore>& maps) {
+  std::string frame;
+  std::string evaluated;
+  std::string rms;
+  for (std::size_t k = 0; k < maps.size(); ++k) {
+    if (k > 0) {
+      frame += ", ";
+      evaluated += ", ";
+      rms += ", ";
+    }
+    frame += std::to_string(maps[k].frame_seq);
+    evaluated += std::to_string(maps[k].landmarks_evaluated);
+    rms += app::JsonNumber(maps[k].rms_error_m);
+  }
+  std::fprintf(f,
+               "  \"landmark_maps_by_frame\": {\"frame\": [%s],\n    \"landmarks_evaluated\": "
+               "[%s],\n    \"rms_error_m\": [%s]},\n",
+               frame.c_str(), evaluated.c_str(), rms.c_str());
 }
 
 void WriteHazardEvaluation(std::FILE* f, const evaluation::HazardScore& e) {
@@ -284,6 +354,7 @@ void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
       score.final_pose_error_m, static_cast<long long>(score.outputs.size()),
       static_cast<long long>(score.maps.size()));
   WriteTrackingErrors(f, evaluation_.Tracking());
+  WriteLandmarkMaps(f, score.maps);
   const app::FrontendCounters& fc = frontend_;
   std::fprintf(f,
                "  \"frontend\": {\"refine_in_loop\": %s, \"reference_from_estimate\": %s, "

@@ -60,10 +60,13 @@ class Evaluation : public app::OutputObserver {
   // (false: never seen, or the ray misses the terrain).
   bool FirstSeen(std::int64_t id, app::NewSighting* sighting) const;
   bool TrueLandmark(std::int64_t id, Eigen::Vector3d* position);
-  // |(u, v) - true projection| of every fused measurement of a known landmark (pixels), and of
-  // those whose landmark was first seen in the first frame, with the frames since.
+  // |(u, v) - true projection| of every fused measurement of a known landmark (pixels), its
+  // signed components (the paper's Fig. 2a histogram), and of those whose landmark was first
+  // seen in the first frame, with the frames since.
   struct TrackingErrors {
     std::vector<double> all_px;
+    std::vector<double> du_px;  // u - true u, left image
+    std::vector<double> dv_px;  // v - true v
     std::vector<double> first_frame_px;
     std::vector<int> first_frame_age;
   };

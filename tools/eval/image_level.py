@@ -1,0 +1,253 @@
+#!/usr/bin/python3
+"""The paper's Fig. 2a and Fig. 13 at image level: the simulator renders the descent, the flight
+front end measures it and the flight filter fuses it (swf-sil, lockstep), and every measurement
+and landmark is scored against the renderer's truth.
+
+  image_level.py SWF-SIL CONFIG OUT [--frames N] [--windows 3,4,5] [--check]
+
+CONFIG is the demo's configuration (fsw/app/config/demo.cfg: 100 m -> 10 m, 512x384, 1 m
+baseline, stereo-inertial). One swf-sil run per window size, and one VO run (mode vo, the same
+window) for the smallest window. Writes, for `swf-plot curves` and docs/results.md:
+
+  OUT/fig02a_image_errors.dat     histogram of the signed front-end errors (u and v, left image)
+                                  against the Gaussian of the same standard deviation
+  OUT/fig13_image_descent.dat     landmark mean squared error of every published map by frame,
+                                  one series per window
+  OUT/image_level.json            the numbers the text quotes
+  OUT/image_level.md              the section of docs/results.md
+
+--check (the ctest): exit 1 unless the errors are what the filter assumes (standard deviation
+below the stated 0.5 px, at least 90% within two standard deviations), every SWF run's verdict
+is ok and its landmark error falls from its first map to its last, and the first SWF run ends
+below VO (section 4.2.4: VO, deleting instead of marginalizing, drifts). A run that ends
+without a summary, or with an exit code other than its verdict's, exits 1 with swf-sil's
+message; a failed or degraded verdict is reported in the table."""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+
+STATED_SIGMA_PX = 0.5  # measurement_sigma_px of the demo configuration
+
+
+def fly(sil, cfg, out, name, frames, settings):
+    summary = os.path.join(out, 'image_%s.json' % name)
+    cmd = [sil, '--config', cfg, '--set', 'pacing: lockstep', '--set', 'lcm.publish: false',
+           '--set', 'rt.mlockall: false', '--set', 'rt.priority: 0',
+           '--set', 'summary.path: ' + summary]
+    if frames > 0:
+        cmd += ['--set', 'sim.frames: %d' % frames]
+    for s in settings:
+        cmd += ['--set', s]
+    if os.path.exists(summary):
+        os.remove(summary)
+    run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # Exit 1 or 3 with a summary is the run's verdict (failed, degraded: docs/cli.md), which the
+    # report states; anything else, or no summary, is a run that did not happen.
+    if run.returncode not in (0, 1, 3) or not os.path.exists(summary):
+        sys.stderr.write(run.stderr)
+        raise SystemExit('image_level.py: %s: swf-sil exited %d: %s' %
+                         (name, run.returncode, ' '.join(cmd)))
+    with open(summary) as f:
+        s = json.load(f)
+    return s
+
+
+def write_chart(path, title, x_label, y_label, log_y, names, xs, columns):
+    """swf::plot's line-chart file (tools/plot/include/swf/plot/plot.hpp)."""
+    with open(path + '.tmp', 'w') as f:
+        f.write('# title: %s\n# x: %s\n# y: %s\n# y scale: %s\n' %
+                (title, x_label, y_label, 'log' if log_y else 'linear'))
+        f.write('# series: %s\n' % ' '.join('"%s"' % n for n in names))
+        for i, x in enumerate(xs):
+            values = ['nan' if c[i] is None else '%.9g' % c[i] for c in columns]
+            f.write('%.9g %s\n' % (x, ' '.join(values)))
+    os.replace(path + '.tmp', path)
+
+
+def histogram_chart(out, signed, measurements):
+    bin_px = signed['bin_px']
+    first = signed['first_bin_px']
+    u = signed['u']
+    v = signed['v']
+    n = len(u['counts'])
+    centers = [first + (k + 0.5) * bin_px for k in range(n)]
+    total = max(1, measurements)
+    sigma = 0.5 * (u['std'] + v['std'])
+    gauss = [bin_px * math.exp(-0.5 * (x / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))
+             for x in centers]
+    write_chart(os.path.join(out, 'fig02a_image_errors'),
+                'Fig. 2a at image level: front-end errors on the rendered descent (%d measurements)'
+                % measurements,
+                'error against the true projection (px)', 'fraction of measurements per 0.05 px',
+                False, ['u error', 'v error', 'Gaussian, sigma %.3f px' % sigma], centers,
+                [[c / total for c in u['counts']], [c / total for c in v['counts']], gauss])
+    return sigma
+
+
+def descent_chart(out, runs):
+    frames = sorted({f for _, s in runs for f in s['landmark_maps_by_frame']['frame']})
+    columns = []
+    for _, s in runs:
+        m = s['landmark_maps_by_frame']
+        by_frame = {f: (r * r if r is not None else None) for f, r in zip(m['frame'],
+                                                                          m['rms_error_m'])}
+        columns.append([by_frame.get(f) for f in frames])
+    write_chart(os.path.join(out, 'fig13_image_descent'),
+                'Fig. 13 at image level: landmark error of the published maps on the rendered '
+                'descent, 100 m to 10 m', 'frame number',
+                'landmark mean squared error (m^2)', True, [n for n, _ in runs], frames, columns)
+
+
+def first_last(s):
+    rms = [r for r in s['landmark_maps_by_frame']['rms_error_m'] if r is not None]
+    return (rms[0], rms[-1]) if rms else (None, None)
+
+
+def markdown(frames, runs, signed, measurements, sigma):
+    u, v = signed['u'], signed['v']
+    lines = ['## Image level: the rendered descent through the front end and the filter', '',
+             'The same experiments on images: `swf-sil` renders the demo descent '
+             '(`fsw/app/config/demo.cfg`: 100 m to 10 m at 10 m/s, %s frames, 512x384 px, 1 m '
+             'baseline, rock field, stereo-inertial with the simulated tactical IMU), the flight '
+             'front end measures it and the flight filter fuses it; every fused measurement and '
+             'every published landmark is scored against the renderer\'s truth '
+             '(`tools/eval/image_level.py`, run by `tools/run eval`). A landmark\'s true '
+             'position is where the ray through the pixel of its first sighting, from the true '
+             'pose, meets the terrain, so a measurement\'s error is how far the tracker has '
+             'moved off that surface point.' % ('all' if frames <= 0 else str(frames)), '',
+             '### Fig. 2a: front-end measurement errors', '',
+             '![fig02a image](eval/fig02a_image_errors.png)', '',
+             'Over the %d fused measurements of the %s run: u error mean %.4f px, standard deviation '
+             '%.4f px (robust sigma %.4f); v error mean %.4f px, standard deviation %.4f px '
+             '(robust sigma %.4f). Within one, two and three standard deviations: u %.1f%%, '
+             '%.1f%%, %.1f%%; v %.1f%%, %.1f%%, %.1f%% (a Gaussian: 68.3%%, 95.4%%, 99.7%%); '
+             '%d u and %d v errors fall outside the plotted +-1.5 px. The filter states 0.5 px '
+             '(`measurement_sigma_px`).' %
+             (measurements, runs[0][0], u['mean'], u['std'], u['robust_sigma'], v['mean'],
+              v['std'], v['robust_sigma'], 100 * u['within_1_std'], 100 * u['within_2_std'],
+              100 * u['within_3_std'], 100 * v['within_1_std'], 100 * v['within_2_std'],
+              100 * v['within_3_std'], u['outside_histogram'], v['outside_histogram']), '',
+             'Against the paper and the measurement level: the paper\'s histogram is of real '
+             'lab images and looks Gaussian; the measurement-level scenes draw their noise from a '
+             'Gaussian of exactly 0.5 px, so they have no histogram to show. On the rendered '
+             'descent the errors are %s, and %s' %
+             ('far below the 0.5 px the filter states' if max(u['std'], v['std']) < 0.25
+              else 'of the order the filter states',
+              'close to Gaussian (the fractions within one to three standard deviations are '
+              'near 68/95/99.7%).' if abs(u['within_1_std'] - 0.683) < 0.05 else
+              'not Gaussian: a narrow core (robust sigma %.3f px) with heavy tails (standard '
+              'deviation %.3f px, %.0f%% within one standard deviation against 68%%). Where the '
+              'tails come from is not measured here; the filter meets them with Huber weights '
+              '(section 3.1.3), not as Gaussian information.' %
+              (u['robust_sigma'], u['std'], 100 * u['within_1_std'])), '',
+             '### Fig. 13: the descent against the window size', '',
+             '![fig13 image](eval/fig13_image_descent.png)', '',
+             'Landmark error of each published map (the landmarks active in the filter at that '
+             'frame, not every landmark ever seen as at measurement level):', '',
+             '| run | first map RMS (m) | last map RMS (m) | pose RMS (m) | landmarks in the '
+             'last map | swf-sil verdict |', '|---|---|---|---|---|---|']
+    for name, s in runs:
+        first, last = first_last(s)
+        verdict = s['result'] + (': ' + s['result_reasons'] if s['result_reasons'] else '')
+        lines.append('| %s | %s | %s | %s | %s | %s |' % (
+            name, '%.4f' % first if first is not None else 'none',
+            '%.4f' % last if last is not None else 'none',
+            '%.4f' % s['pose_rms_error_m'] if s['pose_rms_error_m'] is not None else 'none',
+            s['landmarks_evaluated'], verdict))
+    swf = [(n, first_last(s)) for n, s in runs if n.startswith('SWF')]
+    vo_name, vo = runs[-1][0], first_last(runs[-1][1])
+    lasts = [l for _, (_, l) in swf if l is not None]
+    spread = max(lasts) / min(lasts) if lasts else float('nan')
+    lines += ['', 'The SWF windows end within %.2fx of each other (last map), each below its '
+              'first map; %s %s from %.3f m to %.3f m: deleting instead of marginalizing, it '
+              'drifts (section 4.2.4). The paper\'s batch is not flown here: the flight filter '
+              'holds at most %s poses.' %
+              (spread, vo_name, 'grows' if vo[1] is not None and vo[1] > vo[0] else 'goes',
+               vo[0], vo[1], 'ten'),
+              '', 'Where it differs from the measurement level (Fig. 13 above): there the same '
+              '150 landmarks are tracked from 100 m to 41.5 m, the error is over every landmark '
+              'seen and batch is the reference; here tracks come and go as the footprint shrinks '
+              'from 44 m to 4 m across, each map holds only the landmarks active in the filter, '
+              'the range shrinks tenfold (stereo depth error grows with the square of the '
+              'range), and the measurements carry the front end\'s errors (the histogram above) '
+              'instead of drawn Gaussian noise. Windows 10 and batch would need a smaller track '
+              'budget than the demo\'s 150 to fit the flight filter\'s compiled capacity.', '']
+    return '\n'.join(lines)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    p.add_argument('sil')
+    p.add_argument('config')
+    p.add_argument('out')
+    p.add_argument('--frames', type=int, default=0, help='frames to fly (0: all of the descent)')
+    p.add_argument('--windows', default='3,4,5',
+                   help='window sizes (150 tracks per frame fit the compiled capacity up to 5)')
+    p.add_argument('--check', action='store_true')
+    a = p.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    windows = [int(w) for w in a.windows.split(',')]
+    runs = []
+    for w in windows:
+        runs.append(('SWF(%d)' % w, fly(a.sil, a.config, a.out, 'swf%d' % w, a.frames,
+                                        ['mode: swf', 'window: %d' % w])))
+    runs.append(('VO(%d)' % windows[0], fly(a.sil, a.config, a.out, 'vo%d' % windows[0],
+                                            a.frames, ['mode: vo', 'window: %d' % windows[0]])))
+    t = runs[0][1]['tracking_error_px']
+    signed = t['signed']
+    sigma = histogram_chart(a.out, signed, t['measurements'])
+    descent_chart(a.out, runs)
+    numbers = {'frames': a.frames, 'measurements': t['measurements'], 'signed': signed,
+               'runs': [{'name': n, 'first_map_rms_m': first_last(s)[0],
+                         'last_map_rms_m': first_last(s)[1],
+                         'pose_rms_error_m': s['pose_rms_error_m'], 'result': s['result'],
+                         'result_reasons': s['result_reasons'],
+                         'landmarks_evaluated': s['landmarks_evaluated']} for n, s in runs]}
+    with open(os.path.join(a.out, 'image_level.json'), 'w') as f:
+        json.dump(numbers, f, indent=1)
+    with open(os.path.join(a.out, 'image_level.md'), 'w') as f:
+        f.write(markdown(a.frames, runs, signed, t['measurements'], sigma))
+    for n in numbers['runs']:
+        print('%s: landmark RMS first map %s m, last map %s m, pose RMS %s m' %
+              (n['name'], n['first_map_rms_m'], n['last_map_rms_m'], n['pose_rms_error_m']))
+    for c in ('u', 'v'):
+        e = signed[c]
+        print('%s error: mean %.4f px, std %.4f px, robust sigma %.4f px, within 1/2/3 std '
+              '%.3f/%.3f/%.3f' % (c, e['mean'], e['std'], e['robust_sigma'], e['within_1_std'],
+                                  e['within_2_std'], e['within_3_std']))
+    if not a.check:
+        return
+    failures = []
+    for c in ('u', 'v'):
+        e = signed[c]
+        if not e['std'] < STATED_SIGMA_PX:
+            failures.append('%s error standard deviation %.3f px is not below the stated %.1f px'
+                            % (c, e['std'], STATED_SIGMA_PX))
+        if not e['within_2_std'] >= 0.9:
+            failures.append('only %.1f%% of %s errors within two standard deviations' %
+                            (100 * e['within_2_std'], c))
+    for n in numbers['runs']:
+        if n['name'].startswith('SWF') and n['result'] != 'ok':
+            failures.append('%s: swf-sil verdict %s: %s' % (n['name'], n['result'],
+                                                             n['result_reasons']))
+        first, last = n['first_map_rms_m'], n['last_map_rms_m']
+        if n['name'].startswith('SWF') and (first is None or not last < first):
+            failures.append('%s: landmark RMS did not fall from the first map to the last '
+                            '(%s -> %s m)' % (n['name'], first, last))
+    # Section 4.2.4: marginalizing beats deleting (VO drifts, the SWF converges).
+    swf_last = numbers['runs'][0]['last_map_rms_m']
+    vo_last = numbers['runs'][-1]['last_map_rms_m']
+    if swf_last is None or vo_last is None or not swf_last < vo_last:
+        failures.append('%s last map %s m is not below %s\'s %s m' %
+                        (numbers['runs'][0]['name'], swf_last, numbers['runs'][-1]['name'],
+                         vo_last))
+    for f in failures:
+        print('FAIL: ' + f)
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == '__main__':
+    main()
