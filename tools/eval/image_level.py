@@ -3,7 +3,7 @@
 front end measures it and the flight filter fuses it (swf-sil, lockstep), and every measurement
 and landmark is scored against the renderer's truth.
 
-  image_level.py SWF-SIL CONFIG OUT [--frames N] [--windows 3,4,5] [--check]
+  image_level.py SWF-SIL CONFIG OUT [--frames N] [--windows 3,4,5] [--check] [--report-only]
 
 CONFIG is the demo's configuration (fsw/app/config/demo.cfg: 100 m -> 10 m, 512x384, 1 m
 baseline, stereo-inertial). One swf-sil run per window size, and one VO run (mode vo, the same
@@ -32,8 +32,11 @@ import sys
 STATED_SIGMA_PX = 0.5  # measurement_sigma_px of the demo configuration
 
 
-def fly(sil, cfg, out, name, frames, settings):
+def fly(sil, cfg, out, name, frames, settings, report_only=False):
     summary = os.path.join(out, 'image_%s.json' % name)
+    if report_only:  # the summaries of an earlier run
+        with open(summary) as f:
+            return json.load(f)
     cmd = [sil, '--config', cfg, '--set', 'pacing: lockstep', '--set', 'lcm.publish: false',
            '--set', 'rt.mlockall: false', '--set', 'rt.priority: 0',
            '--set', 'summary.path: ' + summary]
@@ -76,14 +79,18 @@ def histogram_chart(out, signed, measurements):
     centers = [first + (k + 0.5) * bin_px for k in range(n)]
     total = max(1, measurements)
     sigma = 0.5 * (u['std'] + v['std'])
-    gauss = [bin_px * math.exp(-0.5 * (x / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))
-             for x in centers]
-    write_chart(os.path.join(out, 'fig02a_image_errors'),
-                'Fig. 2a at image level: front-end errors on the rendered descent (%d measurements)'
-                % measurements,
+    core = 0.5 * (u['robust_sigma'] + v['robust_sigma'])
+
+    def gaussian(s):  # fraction of a zero-mean Gaussian per bin
+        return [bin_px * math.exp(-0.5 * (x / s) ** 2) / (s * math.sqrt(2 * math.pi))
+                for x in centers]
+    write_chart(os.path.join(out, 'fig02a_image_errors.dat'),
+                'Fig. 2a, image level: front-end errors (%d measurements)' % measurements,
                 'error against the true projection (px)', 'fraction of measurements per 0.05 px',
-                False, ['u error', 'v error', 'Gaussian, sigma %.3f px' % sigma], centers,
-                [[c / total for c in u['counts']], [c / total for c in v['counts']], gauss])
+                False, ['u error', 'v error', 'Gaussian, std %.3f px' % sigma,
+                        'Gaussian, robust sigma %.3f px' % core], centers,
+                [[c / total for c in u['counts']], [c / total for c in v['counts']],
+                 gaussian(sigma), gaussian(core)])
     return sigma
 
 
@@ -95,9 +102,8 @@ def descent_chart(out, runs):
         by_frame = {f: (r * r if r is not None else None) for f, r in zip(m['frame'],
                                                                           m['rms_error_m'])}
         columns.append([by_frame.get(f) for f in frames])
-    write_chart(os.path.join(out, 'fig13_image_descent'),
-                'Fig. 13 at image level: landmark error of the published maps on the rendered '
-                'descent, 100 m to 10 m', 'frame number',
+    write_chart(os.path.join(out, 'fig13_image_descent.dat'),
+                'Fig. 13, image level: landmark error of the maps, 100 m to 10 m', 'frame number',
                 'landmark mean squared error (m^2)', True, [n for n, _ in runs], frames, columns)
 
 
@@ -144,7 +150,8 @@ def markdown(frames, runs, signed, measurements, sigma):
               '(section 3.1.3), not as Gaussian information.' %
               (u['robust_sigma'], u['std'], 100 * u['within_1_std'])), '',
              '### Fig. 13: the descent against the window size', '',
-             '![fig13 image](eval/fig13_image_descent.png)', '',
+             '![fig13](eval/fig13_descent.png) ![fig13 image](eval/fig13_image_descent.png)',
+             '', 'Left the measurement-level figure (Fig. 13 above), right the rendered descent. '
              'Landmark error of each published map (the landmarks active in the filter at that '
              'frame, not every landmark ever seen as at measurement level):', '',
              '| run | first map RMS (m) | last map RMS (m) | pose RMS (m) | landmarks in the '
@@ -187,15 +194,18 @@ def main():
     p.add_argument('--windows', default='3,4,5',
                    help='window sizes (150 tracks per frame fit the compiled capacity up to 5)')
     p.add_argument('--check', action='store_true')
+    p.add_argument('--report-only', action='store_true',
+                   help='no flights: rewrite the charts and text from OUT/image_*.json')
     a = p.parse_args()
     os.makedirs(a.out, exist_ok=True)
     windows = [int(w) for w in a.windows.split(',')]
     runs = []
     for w in windows:
         runs.append(('SWF(%d)' % w, fly(a.sil, a.config, a.out, 'swf%d' % w, a.frames,
-                                        ['mode: swf', 'window: %d' % w])))
-    runs.append(('VO(%d)' % windows[0], fly(a.sil, a.config, a.out, 'vo%d' % windows[0],
-                                            a.frames, ['mode: vo', 'window: %d' % windows[0]])))
+                                        ['mode: swf', 'window: %d' % w], a.report_only)))
+    runs.append(('VO(%d)' % windows[0],
+                  fly(a.sil, a.config, a.out, 'vo%d' % windows[0], a.frames,
+                      ['mode: vo', 'window: %d' % windows[0]], a.report_only)))
     t = runs[0][1]['tracking_error_px']
     signed = t['signed']
     sigma = histogram_chart(a.out, signed, t['measurements'])
