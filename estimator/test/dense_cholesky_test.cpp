@@ -223,6 +223,47 @@ TEST(DenseCholesky, DiagonalBlocksOfTheInverseFromFactorInverseColumns) {
   }
 }
 
+// The multi-column solves (ComputeCovariances' kernels) give the bits of the one-column ones,
+// with both product kernels, for column groups inside, across and at the end of the 8-row panels
+// and partial groups; and the columns are those of the inverses themselves.
+TEST(DenseCholesky, ColumnGroupsMatchSingleColumnsBitForBit) {
+  using Chol = DenseCholesky<double, 300>;
+  auto chol = std::make_unique<Chol>();
+  for (const Chol::Kernel kernel : {Chol::Kernel::kPortable, Chol::Kernel::kAvx}) {
+    if (!chol->SetKernel(kernel)) continue;  // no AVX on this CPU
+    for (int n : {3, 9, 61, 137, 300}) {
+      const Eigen::MatrixXd a = RandomSpd(n, static_cast<std::uint64_t>(n) + 71);
+      chol->Reset(n);
+      chol->AddSymmetric(0, a.data(), n, n);
+      ASSERT_EQ(chol->Factorize(), core::Status::kOk) << n;
+      const Eigen::MatrixXd inverse = a.inverse();
+      for (int c0 : {0, 5, 8, n / 2 - 1, n - 8, n - 3}) {
+        for (int count : {1, 3, 8}) {
+          if (c0 < 0 || c0 + count > n) continue;
+          Eigen::MatrixXd group(n, count);
+          Eigen::MatrixXd factor_group(n, count);
+          chol->InverseColumns(c0, count, group.data(), n);
+          chol->FactorInverseColumns(c0, count, factor_group.data(), n);
+          Eigen::VectorXd single(n);
+          for (int k = 0; k < count; ++k) {
+            chol->InverseColumn(c0 + k, single.data());
+            EXPECT_EQ(std::memcmp(single.data(), group.col(k).data(), sizeof(double) * n), 0)
+                << n << " " << c0 << " " << k;
+            chol->FactorInverseColumn(c0 + k, single.data());
+            EXPECT_EQ(std::memcmp(single.data(), factor_group.col(k).data(), sizeof(double) * n), 0)
+                << n << " " << c0 << " " << k;
+          }
+          // Against the dense inverse: solves of a well-conditioned matrix (condition < 10),
+          // so 1e-12 relative covers their rounding.
+          EXPECT_LT((group - inverse.middleCols(c0, count)).cwiseAbs().maxCoeff(),
+                    1e-12 * inverse.cwiseAbs().maxCoeff())
+              << n << " " << c0;
+        }
+      }
+    }
+  }
+}
+
 TEST(DenseCholesky, FactorAndSolveNeverAllocate) {
   auto chol = std::make_unique<DenseCholesky<double, 300>>();
   const Eigen::MatrixXd a = RandomSpd(290, 7);
@@ -236,6 +277,8 @@ TEST(DenseCholesky, FactorAndSolveNeverAllocate) {
   chol->SolveInPlace(b.data());
   chol->InverseColumn(3, column.data());
   chol->FactorInverseColumn(3, factor_column.data());
+  chol->InverseColumns(3, 1, column.data(), 290);
+  chol->FactorInverseColumns(3, 1, factor_column.data(), 290);
   EXPECT_EQ(scope.Count(), 0u);
   EXPECT_LT((a * column - Eigen::VectorXd::Unit(290, 3)).norm(), 1e-12);
 }

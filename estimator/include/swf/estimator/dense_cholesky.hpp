@@ -245,6 +245,34 @@ class DenseCholesky {
     for (int i = c; i < n_; ++i) out[i] = y[i];
   }
 
+  // Columns c0 .. c0 + count - 1 of A^-1 (count <= kBlock; column k into out + k * ld, size()
+  // entries each) with the same bits as count InverseColumn calls: every element sees the same
+  // multiplies and subtracts in the same order, but the factor is streamed once for all of
+  // them and the products run kBlock columns wide (the factorization's AVX kernel where the CPU
+  // has it).
+  void InverseColumns(int c0, int count, S* out, int ld) const {
+    SWF_ASSERT(factorized_ && count >= 1 && count <= kBlock && c0 >= 0 && c0 + count <= n_);
+    SetUnitColumns(0, c0, count);
+    ForwardSubstituteColumns(0);
+    BackSubstituteColumns();
+    for (int k = 0; k < count; ++k)
+      for (int i = 0; i < n_; ++i) out[k * ld + i] = columns_[i * kBlock + k];
+  }
+
+  // The same for columns c0 .. c0 + count - 1 of L^-1 (the bits of FactorInverseColumn): the
+  // forward solve starts at the panel of row c0, since every column is zero above its own row.
+  void FactorInverseColumns(int c0, int count, S* out, int ld) const {
+    SWF_ASSERT(factorized_ && count >= 1 && count <= kBlock && c0 >= 0 && c0 + count <= n_);
+    const int ib0 = c0 / kBlock;
+    SetUnitColumns(ib0, c0, count);
+    ForwardSubstituteColumns(ib0);
+    for (int k = 0; k < count; ++k) {
+      S* o = out + k * ld;
+      for (int i = 0; i < c0 + k; ++i) o[i] = S(0);
+      for (int i = c0 + k; i < n_; ++i) o[i] = columns_[i * kBlock + k];
+    }
+  }
+
   bool IsFactorized() const { return factorized_; }
 
  private:
@@ -273,6 +301,146 @@ class DenseCholesky {
       }
     }
   }
+  // columns_ (row i of kBlock right-hand sides at columns_ + kBlock i, the layout of a panel's
+  // column, so the factorization's product kernels apply) = unit vectors e_c0.., from panel ib0
+  // on; the lanes past count stay zero.
+  void SetUnitColumns(int ib0, int c0, int count) const {
+    for (int i = ib0 * kBlock * kBlock; i < np_ * kBlock; ++i) columns_[i] = S(0);
+    for (int k = 0; k < count; ++k) columns_[(c0 + k) * kBlock + k] = S(1);
+  }
+
+  // ForwardSubstitute for the kBlock right-hand sides in columns_ at once (rows below 8 ib0 must
+  // be zero above each column's unit entry). Per element the same operations as the one-column
+  // version: y_I -= L(I, p) y_p for p ascending, then the diagonal tile.
+  void ForwardSubstituteColumns(int ib0) const {
+    const int p0 = ib0 * kBlock;
+    alignas(64) S tile[kBlock * kBlock];  // (row r, right-hand side k) at k * kBlock + r
+    for (int ib = ib0; ib < nb_; ++ib) {
+      const S* panel = a_ + PanelOffset(ib);
+      const int r0 = ib * kBlock;
+      for (int k = 0; k < kBlock; ++k)
+        for (int r = 0; r < kBlock; ++r) tile[k * kBlock + r] = columns_[(r0 + r) * kBlock + k];
+      if (r0 > p0)
+        SubtractColumnsProduct(tile, panel + p0 * kBlock, columns_ + p0 * kBlock, r0 - p0);
+      const S* diag = panel + r0 * kBlock;
+      for (int c = 0; c < kBlock; ++c) {
+        for (int k = 0; k < kBlock; ++k) {
+          const S v = tile[k * kBlock + c] * inv_diag_[r0 + c];
+          columns_[(r0 + c) * kBlock + k] = v;
+          for (int r = c + 1; r < kBlock; ++r) tile[k * kBlock + r] -= diag[c * kBlock + r] * v;
+        }
+      }
+    }
+  }
+
+  // tile (8x8, column-major) -= A B^T over len columns, A = a and B = b both 8 scalars per
+  // column p: the product of the factorization's AVX kernel, and a 2-wide version of it.
+  void SubtractColumnsProduct(S* tile, const S* a, const S* b, int len) const {
+#ifdef SWF_DENSE_CHOLESKY_AVX
+    if constexpr (std::is_same_v<S, double>) {
+      if (use_avx_) {
+        SubtractProductAvx(tile, a, b, len);
+        return;
+      }
+    }
+#endif
+    for (int k = 0; k < kBlock; ++k) {
+      S* t = tile + k * kBlock;
+      V c0 = dense_detail::Load(t);
+      V c1 = dense_detail::Load(t + 2);
+      V c2 = dense_detail::Load(t + 4);
+      V c3 = dense_detail::Load(t + 6);
+      for (int p = 0; p < len; ++p) {
+        const S* ap = a + p * kBlock;
+        const S bk = b[p * kBlock + k];
+        const V bv = {bk, bk};
+        c0 -= dense_detail::Load(ap) * bv;
+        c1 -= dense_detail::Load(ap + 2) * bv;
+        c2 -= dense_detail::Load(ap + 4) * bv;
+        c3 -= dense_detail::Load(ap + 6) * bv;
+      }
+      dense_detail::Store(t, c0);
+      dense_detail::Store(t + 2, c1);
+      dense_detail::Store(t + 4, c2);
+      dense_detail::Store(t + 6, c3);
+    }
+  }
+
+  // The backward half of SolveInPlace for the kBlock right-hand sides in columns_, per element
+  // the same operations: x_I from the transposed diagonal tile, then y_p -= sum_r L(8I + r, p)
+  // x_r (the eight products summed from zero, r ascending) for every p < 8I.
+  void BackSubstituteColumns() const {
+    alignas(64) S x[kBlock * kBlock];  // (row r, right-hand side k) at r * kBlock + k
+    for (int ib = nb_ - 1; ib >= 0; --ib) {
+      const S* panel = a_ + PanelOffset(ib);
+      const int r0 = ib * kBlock;
+      const S* diag = panel + r0 * kBlock;
+      for (int r = kBlock - 1; r >= 0; --r) {
+        for (int k = 0; k < kBlock; ++k) {
+          S v = columns_[(r0 + r) * kBlock + k];
+          for (int q = r + 1; q < kBlock; ++q) v -= diag[r * kBlock + q] * x[q * kBlock + k];
+          x[r * kBlock + k] = v * inv_diag_[r0 + r];
+          columns_[(r0 + r) * kBlock + k] = x[r * kBlock + k];
+        }
+      }
+      SubtractTransposedProduct(panel, x, r0);
+    }
+  }
+
+  // columns_ row p -= sum_r panel(r, p) x(r, .) for p < rows, the sums from zero, r ascending.
+  void SubtractTransposedProduct(const S* panel, const S* x, int rows) const {
+#ifdef SWF_DENSE_CHOLESKY_AVX
+    if constexpr (std::is_same_v<S, double>) {
+      if (use_avx_) {
+        SubtractTransposedProductAvx(panel, x, columns_, rows);
+        return;
+      }
+    }
+#endif
+    for (int p = 0; p < rows; ++p) {
+      const S* col = panel + p * kBlock;
+      V s0 = {S(0), S(0)};
+      V s1 = s0;
+      V s2 = s0;
+      V s3 = s0;
+      for (int r = 0; r < kBlock; ++r) {
+        const V l = {col[r], col[r]};
+        const S* xr = x + r * kBlock;
+        s0 += l * dense_detail::Load(xr);
+        s1 += l * dense_detail::Load(xr + 2);
+        s2 += l * dense_detail::Load(xr + 4);
+        s3 += l * dense_detail::Load(xr + 6);
+      }
+      S* y = columns_ + p * kBlock;
+      dense_detail::Store(y, dense_detail::Load(y) - s0);
+      dense_detail::Store(y + 2, dense_detail::Load(y + 2) - s1);
+      dense_detail::Store(y + 4, dense_detail::Load(y + 4) - s2);
+      dense_detail::Store(y + 6, dense_detail::Load(y + 6) - s3);
+    }
+  }
+
+#ifdef SWF_DENSE_CHOLESKY_AVX
+  __attribute__((target("avx"))) static void SubtractTransposedProductAvx(const double* panel,
+                                                                          const double* x,
+                                                                          double* y, int rows) {
+    using dense_detail::Quad;
+    const Quad* xv = static_cast<const Quad*>(__builtin_assume_aligned(x, 32));
+    Quad* yv = static_cast<Quad*>(__builtin_assume_aligned(y, 32));
+    for (int p = 0; p < rows; ++p) {
+      const double* col = panel + p * kBlock;
+      Quad s0 = {0.0, 0.0, 0.0, 0.0};
+      Quad s1 = s0;
+      for (int r = 0; r < kBlock; ++r) {
+        const Quad l = {col[r], col[r], col[r], col[r]};
+        s0 += l * xv[2 * r];
+        s1 += l * xv[2 * r + 1];
+      }
+      yv[2 * p] -= s0;
+      yv[2 * p + 1] -= s1;
+    }
+  }
+#endif
+
   // Unsigned arithmetic: callers guarantee 0 <= j <= i < np_ (and i / 8 becomes a shift).
   static unsigned Index(int i, int j) {
     const auto ui = static_cast<unsigned>(i);
@@ -446,6 +614,7 @@ class DenseCholesky {
   alignas(64) S dup_[2 * kBlock * kChunk];
   alignas(64) S inv_diag_[kMaxPadded];
   alignas(64) mutable S work_[kMaxPadded];
+  alignas(64) mutable S columns_[kMaxPadded * kBlock];  // InverseColumns' right-hand sides
   int n_ = 0;
   int nb_ = 0;
   int np_ = 0;

@@ -347,6 +347,13 @@ class SlidingWindowFilter {
   // reduced dimension: call it at the output rate, not inside the estimation loop.
   core::Status ComputeCovariances();
 
+  // Only the newest state's covariance (NewestStateCovariance, NewestPoseCovariance) and its
+  // correlation with the window: the factorization at the current estimate, O(n^3 / 3), and
+  // kStateDim columns of its inverse, O(n^2) each. The other poses' blocks and every landmark's
+  // marginal stay invalid (the prediction gate then skips, counted as unchecked) until
+  // ComputeCovariances(), which runs this first and gives the same bits for these blocks.
+  core::Status ComputeNewestCovariance();
+
   // ---- results -----------------------------------------------------------------------------
   int NumPoses() const { return num_poses_; }
   int WindowSize() const { return window_; }
@@ -369,7 +376,7 @@ class SlidingWindowFilter {
   // ComputeCovariances().
   bool GetLandmarkCovariance(std::int64_t id, Mat3<S>* covariance) const;
   // Covariance of state j's whole update vector and of its pose part ([rho; phi]), after
-  // ComputeCovariances().
+  // ComputeCovariances() (the newest state's also after ComputeNewestCovariance()).
   StateMat StateCovariance(int j) const;
   Mat6<S> PoseCovariance(int j) const { return StateCovariance(j).template topLeftCorner<6, 6>(); }
   const Mat6<S>& NewestPoseCovariance() const { return newest_pose_cov_; }
@@ -469,6 +476,7 @@ class SlidingWindowFilter {
   core::Status PushPose(const PoseType& estimate, const MotionType* u, const StateMat* sqrt_info);
   bool StateIsFinite() const;
   void RecordEvidence();
+  void ZeroFixedPoseCovariance();
 
   // Integrity gates (swf_gates.hpp).
   struct MotionGateResult {
@@ -559,8 +567,10 @@ class SlidingWindowFilter {
   AdjEntry adj_[kMaxObservations] = {};
   PoseType pose_backup_[kMaxPoses];
   S pose_cov_[kMaxPosesDim * kMaxPosesDim] = {};
-  S column_[kMaxDense] = {};
-  S factor_columns_[3][kMaxDense] = {};  // three columns of L^-1 (ComputeCovariances)
+  // Columns of S^-1 or L^-1 (ComputeCovariances): kCovarianceWidth per solve, 3 per prior
+  // landmark for kCovarianceWidth landmarks per round.
+  static constexpr int kCovarianceWidth = DenseCholesky<S, kMaxDense>::kBlock;
+  S covariance_columns_[3 * kCovarianceWidth * kMaxDense] = {};
   StateMat newest_state_cov_ = StateMat::Zero();
   Mat6<S> newest_pose_cov_ = Mat6<S>::Zero();  // its pose part
 

@@ -13,46 +13,92 @@
 namespace swf::estimator {
 
 template <typename Model, int K, int N, int M, int P>
-core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
+core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeNewestCovariance() {
   if (num_poses_ == 0) return core::Status::kNotConfigured;
+  covariances_current_ = false;
+  for (int i = 0; i < N; ++i) landmarks_[i].covariance_valid = false;
   EvaluateMeasurements(true);
   const core::Status status = BuildAndFactor();
   if (status != core::Status::kOk) return status;
+  // The newest state's columns of S^-1 (its rows of the pose block and its correlation with
+  // the prior landmarks) from the factor at the final estimate: a forward and a backward
+  // O(n^2) solve per kCovarianceWidth columns, nothing else of the inverse.
   const int npd = kStateDim * num_poses_;
-  // Pose block of S^-1 (needed for free landmarks) and the prior landmarks' diagonal blocks.
+  const int newest0 = npd - kStateDim;
   const int nq = static_cast<int>(prior_landmarks_.size());
-  for (int c = 0; c < npd; ++c) {
-    dense_.InverseColumn(c, column_);
-    for (int r = 0; r < npd; ++r) pose_cov_[c * kMaxPosesDim + r] = column_[r];
-    if (c < npd - kStateDim) continue;
-    for (int q = 0; q < nq; ++q)  // Cov(newest pose, prior landmark q)
-      for (int r = 0; r < 3; ++r)
-        landmarks_[prior_landmarks_[q]].cross_newest(c - (npd - kStateDim), r) =
-            column_[npd + 3 * q + r];
+  S* const columns = covariance_columns_;
+  for (int c0 = newest0; c0 < npd; c0 += kCovarianceWidth) {
+    const int count = std::min(kCovarianceWidth, npd - c0);
+    dense_.InverseColumns(c0, count, columns, kMaxDense);
+    for (int k = 0; k < count; ++k) {
+      const int c = c0 + k;
+      const S* column = columns + k * kMaxDense;
+      for (int r = 0; r < npd; ++r) pose_cov_[c * kMaxPosesDim + r] = column[r];
+      for (int q = 0; q < nq; ++q)  // Cov(newest pose, prior landmark q)
+        for (int r = 0; r < 3; ++r)
+          landmarks_[prior_landmarks_[q]].cross_newest(c - newest0, r) = column[npd + 3 * q + r];
+    }
   }
-  // A fixed pose is known exactly; its identity rows in S only stand in for "no update".
+  ZeroFixedPoseCovariance();
+  newest_state_cov_ = StateCovariance(num_poses_ - 1);
+  newest_pose_cov_ = newest_state_cov_.template topLeftCorner<6, 6>();
+  covariances_current_ = newest_state_cov_.allFinite();
+  return core::Status::kOk;
+}
+
+// A fixed pose is known exactly; its identity rows in S only stand in for "no update".
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::ZeroFixedPoseCovariance() {
+  const int npd = kStateDim * num_poses_;
   for (int j = 0; j < num_poses_; ++j) {
     if (!Slot(j).fixed) continue;
     for (int k = kStateDim * j; k < kStateDim * j + kStateDim; ++k)
       for (int m = 0; m < npd; ++m)
         pose_cov_[k * kMaxPosesDim + m] = pose_cov_[m * kMaxPosesDim + k] = S(0);
   }
-  for (int i = 0; i < N; ++i) landmarks_[i].covariance_valid = false;
+}
+
+template <typename Model, int K, int N, int M, int P>
+core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
+  const core::Status status = ComputeNewestCovariance();
+  if (status != core::Status::kOk) return status;
+  const int npd = kStateDim * num_poses_;
+  const int newest0 = npd - kStateDim;
+  const int nq = static_cast<int>(prior_landmarks_.size());
+  S* const columns = covariance_columns_;
+  // The rest of the pose block of S^-1 (free landmarks need every pair of their poses).
+  for (int c0 = 0; c0 < newest0; c0 += kCovarianceWidth) {
+    const int count = std::min(kCovarianceWidth, newest0 - c0);
+    dense_.InverseColumns(c0, count, columns, kMaxDense);
+    for (int k = 0; k < count; ++k)
+      for (int r = 0; r < npd; ++r)
+        pose_cov_[(c0 + k) * kMaxPosesDim + r] = columns[k * kMaxDense + r];
+  }
+  ZeroFixedPoseCovariance();
   // A prior landmark's marginal is the diagonal block of L^-T L^-1 over its three columns c:
-  // sums over rows >= c of the forward columns of L^-1 (a sixth of the InverseColumn flops).
+  // sums over rows >= c of the forward columns of L^-1 (a sixth of the InverseColumn flops),
+  // kCovarianceWidth columns per solve, kCovarianceWidth landmarks per round.
   const int n = dense_.size();
-  for (int q = 0; q < nq; ++q) {
-    LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
-    const int c0 = npd + 3 * q;
-    for (int k = 0; k < 3; ++k) dense_.FactorInverseColumn(c0 + k, factor_columns_[k]);
-    for (int k = 0; k < 3; ++k) {
-      for (int r = k; r < 3; ++r) {
-        S sum = S(0);
-        for (int i = c0 + r; i < n; ++i) sum += factor_columns_[k][i] * factor_columns_[r][i];
-        l.covariance(r, k) = l.covariance(k, r) = sum;
-      }
+  for (int q0 = 0; q0 < nq; q0 += kCovarianceWidth) {
+    const int lm_count = std::min(kCovarianceWidth, nq - q0);
+    const int first = npd + 3 * q0;
+    for (int c0 = first; c0 < first + 3 * lm_count; c0 += kCovarianceWidth) {
+      dense_.FactorInverseColumns(c0, std::min(kCovarianceWidth, first + 3 * lm_count - c0),
+                                  columns + (c0 - first) * kMaxDense, kMaxDense);
     }
-    l.covariance_valid = l.covariance.allFinite();
+    for (int q = q0; q < q0 + lm_count; ++q) {
+      LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
+      const int c0 = npd + 3 * q;
+      const S* fc = columns + (c0 - first) * kMaxDense;
+      for (int k = 0; k < 3; ++k) {
+        for (int r = k; r < 3; ++r) {
+          S sum = S(0);
+          for (int i = c0 + r; i < n; ++i) sum += fc[k * kMaxDense + i] * fc[r * kMaxDense + i];
+          l.covariance(r, k) = l.covariance(k, r) = sum;
+        }
+      }
+      l.covariance_valid = l.covariance.allFinite();
+    }
   }
   for (int i = 0; i < N; ++i) {
     LandmarkSlot& l = landmarks_[i];
@@ -78,9 +124,6 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
     l.covariance = l.h_inv + l.h_inv * cross * l.h_inv;
     l.covariance_valid = l.covariance.allFinite();
   }
-  newest_state_cov_ = StateCovariance(num_poses_ - 1);
-  newest_pose_cov_ = newest_state_cov_.template topLeftCorner<6, 6>();
-  covariances_current_ = newest_state_cov_.allFinite();
   return core::Status::kOk;
 }
 
