@@ -35,6 +35,23 @@ struct Evaluation {
   std::string notes;  // markdown after the comparison, computed by the command
 };
 
+// A real-data evaluation's results and the header fields that name it (experiment, build,
+// dataset directory), the same for every sequence command.
+template <typename SequenceResult>
+Evaluation EvaluationOf(const std::string& prefix, const std::string& dir,
+                        const SequenceResult& result) {
+  Evaluation e;
+  e.prefix = prefix;
+  e.sequence = &result.sequence;
+  e.runs = &result.runs;
+  e.diagnostics = &result.diagnostics;
+  e.header.String("experiment", prefix)
+      .String("version", cli::Version())
+      .String("commit", cli::Commit())
+      .String("dataset", dir);
+  return e;
+}
+
 std::string Key(const RunRecord& r) {
   if (r.options.imu) return "swf_imu";
   return r.options.mode == estimator::SwfMode::kSlidingWindow ? "swf" : "vo";
@@ -420,8 +437,7 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
     return 1;
   }
   const bool looped = options.loop_seconds > 0.0;
-  Evaluation e;
-  e.prefix = looped ? "euroc_loop" : "euroc";
+  Evaluation e = EvaluationOf(looped ? "euroc_loop" : "euroc", dir, result);
   e.title = looped ? Format(
                          "Real data: EuRoC looped, %.0f s at rest (`swf-eval euroc DIR "
                          "--loop-seconds %g`)",
@@ -429,14 +445,7 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
                    : "Real data: EuRoC (`swf-eval euroc DIR`)";
   e.dataset = looped ? Format("EuRoC V1_01 looped, %.0f s at rest", options.loop_seconds)
                      : std::string("EuRoC V1_01");
-  e.sequence = &result.sequence;
-  e.runs = &result.runs;
-  e.diagnostics = &result.diagnostics;
-  e.header.String("experiment", e.prefix)
-      .String("version", cli::Version())
-      .String("commit", cli::Commit())
-      .String("dataset", dir)
-      .Integer("recorded_frames", result.recorded_frames)
+  e.header.Integer("recorded_frames", result.recorded_frames)
       .Integer("frames", static_cast<long long>(result.sequence.frames.size()))
       .Number("loop_seconds", options.loop_seconds)
       .Integer("skipped_frames_without_truth", result.skipped_frames)
@@ -473,18 +482,10 @@ int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames)
                      [&](std::string* error) { return RunKitti(dir, options, &result, error); })) {
     return 1;
   }
-  Evaluation e;
-  e.prefix = "kitti_odometry";
+  Evaluation e = EvaluationOf("kitti_odometry", dir, result);
   e.title = "Real data: KITTI odometry excerpt, the whole pipeline (`swf-eval kitti DIR`)";
   e.dataset = "KITTI odometry excerpt";
-  e.sequence = &result.sequence;
-  e.runs = &result.runs;
-  e.diagnostics = &result.diagnostics;
-  e.header.String("experiment", e.prefix)
-      .String("version", cli::Version())
-      .String("commit", cli::Commit())
-      .String("dataset", dir)
-      .Integer("frames", static_cast<long long>(result.sequence.frames.size()))
+  e.header.Integer("frames", static_cast<long long>(result.sequence.frames.size()))
       .Integer("window", options.window)
       .Integer("max_tracks", static_cast<long long>(options.max_tracks))
       .Integer("max_disparity_px", options.max_disparity_px)
