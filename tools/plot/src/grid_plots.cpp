@@ -108,7 +108,7 @@ bool DrawGridPanels(const GridPanels& g, const std::string& title, const std::st
     << "set size ratio -1\nset xlabel 'world x (m)'\nset ylabel 'world y (m)'\n"
     << "set xrange [" << Number(x_lo) << ":" << Number(x_hi) << "]\n"
     << "set yrange [" << Number(y_lo) << ":" << Number(y_hi) << "]\n"
-    << "set key below left Left reverse\nunset grid\n"
+    << "set key below left Left reverse maxcols 2\nunset grid\n"
     << "set object 1 rectangle from graph 0,0 to graph 1,1 behind fc rgb '#f0f0f0' "
        "fs solid noborder\n"
     << ScaleBar(x_lo, x_hi, y_lo, y_hi) << "set title " << Quoted(g.height_title) << "\n"
