@@ -14,7 +14,7 @@ bool JudgeLog(const std::string& path, RunJudge* judge, LogTally* tally, std::st
     if (r < 0) return false;
     ++tally->events;
     judge->Add(event.channel, event.data.data(), event.data.size());
-    if (event.channel == judge->channels().hazard &&
+    if (event.channel == judge->Channels().hazard &&
         messages::CheckedDecode(event.data.data(), event.data.size(), &tally->last_hazard_map)
             .Ok()) {
       tally->has_hazard_map = true;

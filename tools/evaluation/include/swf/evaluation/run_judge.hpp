@@ -126,7 +126,7 @@ class RunJudge {
 
   RunScore Score() const;
 
-  const JudgeChannels& channels() const { return channels_; }
+  const JudgeChannels& Channels() const { return channels_; }
 
  private:
   struct Nav {
