@@ -271,10 +271,31 @@ TEST(FlightLoopTest, InjectedSlowStageIsAnOverrunAndTheGroupKeepsItsRate) {
 // simulator (their time passes) but never delivered: Next() says kTimeout, or kDeviceLost at the
 // outage's first frame when `lost`. A restart (Start(); the simulator was started by the rig)
 // fails `failed_starts` times first (a camera still away), then resumes where the simulator is.
-class OutageSource final : public drivers::StereoSource {
+// A camera in front of the simulated one that passes everything through; the scripted faults
+// below override what they change.
+class ForwardingSource : public drivers::StereoSource {
+ public:
+  explicit ForwardingSource(drivers::StereoSource* inner) : inner_(inner) {}
+  core::Status Start() override { return core::Status::kOk; }
+  core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override {
+    return inner_->Next(timeout_ns, pair);
+  }
+  void Release(const drivers::StereoPair& pair) override { inner_->Release(pair); }
+  void Stop() override {}
+  drivers::SourceStats Stats() const override { return inner_->Stats(); }
+  const char* LastError() const override { return ""; }
+
+ protected:
+  drivers::StereoSource* inner() const { return inner_; }
+
+ private:
+  drivers::StereoSource* inner_;
+};
+
+class OutageSource final : public ForwardingSource {
  public:
   OutageSource(drivers::StereoSource* inner, std::uint64_t first, std::uint64_t count)
-      : inner_(inner), first_(first), count_(count) {}
+      : ForwardingSource(inner), first_(first), count_(count) {}
   bool lost = false;
   int failed_starts = 0;
   int starts = 0;
@@ -284,19 +305,15 @@ class OutageSource final : public drivers::StereoSource {
     return failed_starts-- > 0 ? core::Status::kDeviceLost : core::Status::kOk;
   }
   core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override {
-    const core::Status s = inner_->Next(timeout_ns, pair);
+    const core::Status s = inner()->Next(timeout_ns, pair);
     if (s != core::Status::kOk || pair->seq < first_ || pair->seq >= first_ + count_) return s;
-    inner_->Release(*pair);
+    inner()->Release(*pair);
     return lost && pair->seq == first_ ? core::Status::kDeviceLost : core::Status::kTimeout;
   }
-  void Release(const drivers::StereoPair& pair) override { inner_->Release(pair); }
-  void Stop() override {}
-  drivers::SourceStats Stats() const override { return inner_->Stats(); }
   const char* Name() const override { return "outage"; }
   const char* LastError() const override { return "outage camera-7: no frame (scripted)"; }
 
  private:
-  drivers::StereoSource* inner_;
   std::uint64_t first_;
   std::uint64_t count_;
 };
@@ -390,26 +407,20 @@ TEST(FlightLoopTest, LostCameraIsRestartedOffTheRealTimeThread) {
 
 // A source whose right image is two columns narrower than the left for frames [first,
 // first + count): a camera delivering a pair the flight process cannot use.
-class MismatchedPairSource final : public drivers::StereoSource {
+class MismatchedPairSource final : public ForwardingSource {
  public:
   MismatchedPairSource(drivers::StereoSource* inner, std::uint64_t first, std::uint64_t count)
-      : inner_(inner), first_(first), count_(count) {}
-  core::Status Start() override { return core::Status::kOk; }
+      : ForwardingSource(inner), first_(first), count_(count) {}
   core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override {
-    const core::Status s = inner_->Next(timeout_ns, pair);
+    const core::Status s = inner()->Next(timeout_ns, pair);
     if (s == core::Status::kOk && pair->seq >= first_ && pair->seq < first_ + count_) {
       pair->right.width -= 2;
     }
     return s;
   }
-  void Release(const drivers::StereoPair& pair) override { inner_->Release(pair); }
-  void Stop() override {}
-  drivers::SourceStats Stats() const override { return inner_->Stats(); }
   const char* Name() const override { return "mismatched"; }
-  const char* LastError() const override { return ""; }
 
  private:
-  drivers::StereoSource* inner_;
   std::uint64_t first_;
   std::uint64_t count_;
 };
