@@ -286,7 +286,7 @@ class ForwardingSource : public drivers::StereoSource {
   const char* LastError() const override { return ""; }
 
  protected:
-  drivers::StereoSource* inner() const { return inner_; }
+  drivers::StereoSource* Inner() const { return inner_; }
 
  private:
   drivers::StereoSource* inner_;
@@ -305,9 +305,9 @@ class OutageSource final : public ForwardingSource {
     return failed_starts-- > 0 ? core::Status::kDeviceLost : core::Status::kOk;
   }
   core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override {
-    const core::Status s = inner()->Next(timeout_ns, pair);
+    const core::Status s = Inner()->Next(timeout_ns, pair);
     if (s != core::Status::kOk || pair->seq < first_ || pair->seq >= first_ + count_) return s;
-    inner()->Release(*pair);
+    Inner()->Release(*pair);
     return lost && pair->seq == first_ ? core::Status::kDeviceLost : core::Status::kTimeout;
   }
   const char* Name() const override { return "outage"; }
@@ -412,7 +412,7 @@ class MismatchedPairSource final : public ForwardingSource {
   MismatchedPairSource(drivers::StereoSource* inner, std::uint64_t first, std::uint64_t count)
       : ForwardingSource(inner), first_(first), count_(count) {}
   core::Status Next(core::TimeNs timeout_ns, drivers::StereoPair* pair) override {
-    const core::Status s = inner()->Next(timeout_ns, pair);
+    const core::Status s = Inner()->Next(timeout_ns, pair);
     if (s == core::Status::kOk && pair->seq >= first_ && pair->seq < first_ + count_) {
       pair->right.width -= 2;
     }
