@@ -1,7 +1,9 @@
 cmake_minimum_required(VERSION 3.25)  # a -P script sets no policies (IN_LIST below)
-# Run by the `lint` and `lint_sources` targets: clang-format must leave every tracked C++ file
+# Run by the `lint` and `lint_flight` targets: clang-format must leave every tracked C++ file
 # unchanged and clang-tidy (rules in .clang-tidy) must pass on every tracked .cpp in the compile
-# database (TIDY_TESTS=OFF: every one that is not a test).
+# database (TIDY_SCOPE=all) or on the flight code's (TIDY_SCOPE=flight: the modules under fsw/,
+# estimator/, messages/ and drivers/ without their tests, benchmarks and fuzz entry points; their
+# headers are checked in every unit that includes them).
 execute_process(COMMAND git ls-files "*.cpp" "*.hpp" WORKING_DIRECTORY ${SOURCE_DIR}
                 OUTPUT_VARIABLE files OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
@@ -20,15 +22,15 @@ set(instantiation_only
   fsw/app/src/flight_swf.cpp
   fsw/app/src/inertial_flight_swf.cpp)
 set(sources)
-set(tests_left_out 0)
+set(left_out 0)
 foreach(f IN LISTS files)
   # tests/layering holds deliberate include violations that must not compile.
   if(f MATCHES "\\.cpp$" AND NOT f MATCHES "^tests/layering/" AND NOT f IN_LIST instantiation_only)
-    # TIDY_TESTS=OFF (lint_sources): the tests' units are left to `lint`.
-    if(NOT TIDY_TESTS AND (f MATCHES "/test/" OR f MATCHES "^tests/"))
-      math(EXPR tests_left_out "${tests_left_out} + 1")
-    else()
+    if(TIDY_SCOPE STREQUAL "all" OR (f MATCHES "^(fsw|estimator|messages|drivers)/" AND
+                                     NOT f MATCHES "/(test|bench|fuzz)/"))
       list(APPEND sources ${f})
+    else()
+      math(EXPR left_out "${left_out} + 1")
     endif()
   endif()
 endforeach()
@@ -55,9 +57,9 @@ if(NOT rc EQUAL 0)
 endif()
 list(LENGTH files nfiles)
 list(LENGTH sources nsources)
-if(TIDY_TESTS)
+if(TIDY_SCOPE STREQUAL "all")
   message(STATUS "lint: clang-format clean on ${nfiles} files; clang-tidy clean on ${nsources} sources")
 else()
   message(STATUS "lint: clang-format clean on ${nfiles} files; clang-tidy clean on ${nsources} "
-                 "sources (${tests_left_out} test units not tidied: `lint` does them)")
+                 "flight sources (${left_out} ground, test and benchmark units: `lint` does them)")
 endif()
