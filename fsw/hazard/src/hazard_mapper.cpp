@@ -56,7 +56,69 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
   return p;
 }
 
+// Cells each side of the centre of a square analysis window of +-radius_m (at least 1).
+int HalfWindowCells(double radius_m, double cell_m) {
+  return std::max(1, static_cast<int>(std::lround(radius_m / cell_m)));
+}
+
+// Integral of the half-spheroid profile height sqrt(1 - (x^2 + y^2) / R^2) over [0, c]^2: in y
+// in closed form, in x by Simpson's rule (64 intervals; the integrand is smooth except for a
+// square-root edge at x = R, where the error stays below 1e-4 of the integral).
+double SpheroidQuadrantIntegral(double radius_m, double cell_m) {
+  constexpr int kIntervals = 64;
+  const double x_max = std::min(cell_m, radius_m);
+  const auto column = [&](double x) {
+    const double b2 = std::max(0.0, radius_m * radius_m - x * x);
+    const double b = std::sqrt(b2);
+    if (b <= 0.0) return 0.0;
+    const double y = std::min(cell_m, b);
+    // integral_0^y sqrt(b^2 - t^2) dt, over R (the profile's unit height).
+    const double s = std::sqrt(std::max(0.0, b2 - y * y));
+    return 0.5 * (y * s + b2 * std::asin(std::min(1.0, y / b))) / radius_m;
+  };
+  const double step = x_max / kIntervals;
+  double sum = column(0.0) + column(x_max);
+  for (int k = 1; k < kIntervals; ++k) sum += (k % 2 == 1 ? 4.0 : 2.0) * column(k * step);
+  return sum * step / 3.0;
+}
+
 }  // namespace
+
+RockCriterion::RockCriterion(const RockCriterionOptions& options, double cell_m)
+    : options_(options), cell_m_(cell_m) {
+  window_m_ = (2 * HalfWindowCells(options.window_radius_m, cell_m) + 1) * cell_m;
+  threshold_relief_m_ =
+      Relief(options.max_height_m, options.max_height_m / options.height_to_diameter);
+  resolved_sigma_m_ = threshold_relief_m_ / (options.false_alarm_sigmas + options.detection_sigmas);
+}
+
+double RockCriterion::Relief(double height_m, double diameter_m) const {
+  const double radius = 0.5 * diameter_m;
+  if (!(height_m > 0.0) || !(radius > 0.0)) return 0.0;
+  const double cell_mean =
+      height_m * SpheroidQuadrantIntegral(radius, cell_m_) / (cell_m_ * cell_m_);
+  constexpr double kTwoThirdsPi = 2.0943951023931953;
+  const double plane_lift = kTwoThirdsPi * radius * radius * height_m / (window_m_ * window_m_);
+  return std::max(0.0, cell_mean - plane_lift);
+}
+
+double RockCriterion::DecisionRelief(double sigma_m) const {
+  if (!(sigma_m <= resolved_sigma_m_)) return std::numeric_limits<double>::infinity();
+  return threshold_relief_m_ - options_.detection_sigmas * sigma_m;
+}
+
+bool RockCriterion::Resolvable(double height_m, double diameter_m, double sigma_m) const {
+  if (!(height_m >= options_.max_height_m)) return false;
+  return Relief(height_m, diameter_m) - options_.detection_sigmas * sigma_m >=
+         DecisionRelief(sigma_m);
+}
+
+RockCriterionOptions RockCriterionOf(const HazardMapperOptions& options) {
+  RockCriterionOptions r;
+  r.max_height_m = options.max_rock_height_m;
+  r.window_radius_m = options.rock_window_radius_m;
+  return r;
+}
 
 core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   configured_ = false;
@@ -501,9 +563,8 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
     for (int k = 0; k < kSatChannels; ++k) s[k] = a[k] - b[k] - c[k] + d[k];
     return s;
   };
-  const int rf = std::max(1, static_cast<int>(std::lround(options_.footprint_radius_m / cell_m_)));
-  const int rr =
-      std::max(1, static_cast<int>(std::lround(options_.rock_window_radius_m / cell_m_)));
+  const int rf = HalfWindowCells(options_.footprint_radius_m, cell_m_);
+  const int rr = HalfWindowCells(options_.rock_window_radius_m, cell_m_);
   const double min_f = options_.min_known_fraction * (2 * rf + 1) * (2 * rf + 1);
   const double min_r = options_.min_known_fraction * (2 * rr + 1) * (2 * rr + 1);
   const Eigen::Matrix<double, 6, 6>& cov = frame.pose_covariance;
@@ -512,6 +573,7 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       frame.world_T_camera.R * cov.block<3, 3>(3, 3) * frame.world_T_camera.R.transpose();
   const double var_tilt = std::max(0.0, rot_cov(0, 0)) + std::max(0.0, rot_cov(1, 1));
   const double k = options_.confidence_k;
+  const RockCriterion rocks(RockCriterionOf(options_), cell_m_);
   int safe = 0;
   int rock = 0;
   int slope = 0;
@@ -537,10 +599,10 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       slope_sigma_deg_[c] = static_cast<float>(slope_sigma_deg);
       rock_m_[c] = static_cast<float>(h);
       rough_m_[c] = static_cast<float>(std::sqrt(pf.rss / pf.n));
-      // A hazard is declared only where the map resolves it (sigma below a third of the
-      // threshold); elsewhere an exceedance is kUncertain.
-      if (h - k * sigma_h > options_.max_rock_height_m &&
-          sigma_h * 3.0 <= options_.max_rock_height_m) {
+      // A slope is declared only where the map resolves it (sigma below a third of the
+      // threshold), a rock where the rock criterion's test decides it; elsewhere an exceedance
+      // is kUncertain.
+      if (h > rocks.DecisionRelief(sigma_h)) {
         class_[c] = HazardClass::kRock;
         ++rock;
       } else if (slope_deg - k * slope_sigma_deg > options_.max_slope_deg &&

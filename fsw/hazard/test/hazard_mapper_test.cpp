@@ -169,6 +169,70 @@ TEST(HazardMapperTest, RocksDetectedAndAvoided) {
   }
 }
 
+// GIVEN a box just above the rock threshold and one well below it, seen sharp from 8 m THEN the
+// first is kRock (its relief, ~0.30 m after lifting its own 1.05 m plane window, exceeds the
+// criterion's decision relief of ~0.25 m; the former rule, relief - 2 sigma > 0.3 m, could never
+// declare it) and the second is not (hazard relevance: 0.18 m of relief stays below the decision
+// relief however small sigma is).
+TEST(HazardMapperTest, ThresholdRockDetectedSmallRockNot) {
+  SceneRun run;
+  Scene scene;
+  scene.boxes.push_back(Box{0.0, 0.0, 0.15, 0.33});
+  scene.boxes.push_back(Box{0.9, -0.8, 0.15, 0.2});
+  Prepare(scene, 8.0, &run);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  const RockCriterion criterion(RockCriterionOf(Options()), m.CellM());
+  int i = 0;
+  int j = 0;
+  ASSERT_TRUE(m.CellOf(0.0, 0.0, &i, &j));
+  const int c = j * m.GridCells() + i;
+  std::printf("0.33 m box: relief %.3f m, sigma %.4f m, decision relief %.3f m\n",
+              m.RockHeight()[c], m.Sigma()[c], criterion.DecisionRelief(m.Sigma()[c]));
+  EXPECT_EQ(m.Classes()[c], HazardClass::kRock);
+  EXPECT_LT(m.RockHeight()[c] - 2.0 * m.Sigma()[c], Options().max_rock_height_m);
+  ASSERT_TRUE(m.CellOf(0.9, -0.8, &i, &j));
+  EXPECT_NE(m.Classes()[j * m.GridCells() + i], HazardClass::kRock);
+  EXPECT_LT(m.Stats().rock_cells, 60);  // the 0.3 m box top: 36 cells of 5 cm, plus its rim
+}
+
+// The rock criterion's numbers, by hand (RockCriterionOptions defaults: h = 0.3 m, plane window
+// +-1.5 m, z_fa = 3.090, z_d = 1.645).
+TEST(RockCriterionTest, ReliefDecisionAndResolvability) {
+  // 5 cm cells: plane window 61 cells = 3.05 m. A 0.3 m x 0.6 m rock: quadrant mean of the
+  // spheroid 1 - c^2 / (3 R^2) - (0.6222 c^4) / (8 R^4) = 0.990731; plane lift (2/3) pi R^2 H /
+  // W^2 = 0.0060793 m; relief 0.3 x 0.990731 - 0.0060793 = 0.291140 m.
+  const RockCriterion fine(RockCriterionOptions{}, 0.05);
+  EXPECT_NEAR(fine.Relief(0.3, 0.6), 0.291140, 2e-5);
+  EXPECT_NEAR(fine.ThresholdRelief(), 0.291140, 2e-5);
+  // A 0.6 x 1.2 m rock: 0.6 x 0.997685 - 0.048636 = 0.549975 m.
+  EXPECT_NEAR(fine.Relief(0.6, 1.2), 0.549975, 2e-5);
+  // The threshold is resolved up to sigma_max = 0.291140 / 4.735 = 0.061487 m; the decision
+  // there is 0.291140 - 1.645 sigma, beyond it nothing is a rock.
+  EXPECT_NEAR(fine.ResolvedSigma(), 0.061487, 1e-5);
+  EXPECT_NEAR(fine.DecisionRelief(0.01), 0.274690, 2e-5);
+  EXPECT_NEAR(fine.DecisionRelief(0.06), 0.192440, 2e-5);
+  EXPECT_GE(fine.DecisionRelief(0.06), 3.090 * 0.06);  // flat ground: <= 1e-3 per cell
+  EXPECT_TRUE(std::isinf(fine.DecisionRelief(0.062)));
+  EXPECT_TRUE(std::isinf(fine.DecisionRelief(std::nan(""))));
+  // Resolvable: sigma <= sigma_max and a relief at least a threshold rock's.
+  EXPECT_TRUE(fine.Resolvable(0.3, 0.6, 0.061));
+  EXPECT_FALSE(fine.Resolvable(0.3, 0.6, 0.062));
+  EXPECT_TRUE(fine.Resolvable(0.6, 1.2, 0.061));
+  EXPECT_FALSE(fine.Resolvable(0.6, 1.2, 0.062));  // large, but the map does not resolve h there
+  EXPECT_FALSE(fine.Resolvable(0.29, 0.58, 0.0));  // below the threshold: never
+  // A rock narrower than the cell is averaged down: 0.8 m cells (window 5 cells = 4 m), a 0.3 m
+  // x 0.6 m rock whose quarter (volume (1/4)(2/3) pi R^2 H) fills one cell of 0.64 m^2:
+  // 0.3 x pi x 0.09 / (6 x 0.64) - 0.3 x (2/3) pi x 0.09 / 16 = 0.022089 - 0.003534 = 0.018555 m.
+  const RockCriterion coarse(RockCriterionOptions{}, 0.8);
+  EXPECT_NEAR(coarse.Relief(0.3, 0.6), 0.018555, 2e-5);
+  EXPECT_NEAR(coarse.ResolvedSigma(), 0.018555 / 4.735, 1e-5);
+  EXPECT_FALSE(coarse.Resolvable(0.3, 0.6, 0.0045));  // 4.735 sigma > 0.018555
+  EXPECT_TRUE(coarse.Resolvable(0.3, 0.6, 0.0039));
+  EXPECT_FALSE(coarse.Resolvable(0.3, 0.6, std::nan("")));
+}
+
 // GIVEN a pose covariance with 1 m vertical sigma THEN the fused sigma reflects it (absolute
 // elevation uncertain) while rocks are still detected (relative heights do not depend on it).
 TEST(HazardMapperTest, PoseCovarianceEntersSigma) {

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstddef>
 
+#include "swf/hazard/hazard_mapper.hpp"
+
 namespace swf::evaluation {
 
 HazardMapView ViewOf(const swf_msgs::hazard_map_t& m) {
@@ -69,6 +71,9 @@ void JudgeRocks(const HazardMapView& m, const swf_msgs::hazard_truth_t& t, Hazar
   const int n = m.cells_per_side;
   const double cell = m.cell_m;
   const double h = t.max_rock_height_m;
+  hazard::RockCriterionOptions criterion_options;
+  criterion_options.max_height_m = h;
+  const hazard::RockCriterion criterion(criterion_options, cell);
   for (std::int32_t k = 0; k < t.num_rocks; ++k) {
     const double rx = t.rock_center_world_m[k][0];
     const double ry = t.rock_center_world_m[k][1];
@@ -79,7 +84,7 @@ void JudgeRocks(const HazardMapView& m, const swf_msgs::hazard_truth_t& t, Hazar
     const int ci = static_cast<int>(fx);
     const int cj = static_cast<int>(fy);
     const float sigma = m.sigma_m[static_cast<std::size_t>(cj) * n + ci];
-    if (!(3.0 * sigma <= h)) continue;
+    if (!criterion.Resolvable(t.rock_height_m[k], t.rock_diameter_m[k], sigma)) continue;
     const int height_class = RockHeightClass(t.rock_height_m[k], h);
     ++r->rocks_resolved;
     ++r->rocks_resolved_by_height[height_class];

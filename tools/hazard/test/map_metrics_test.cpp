@@ -6,6 +6,11 @@
 // wide, so each occupies only the node at its centre; with threshold h = 0.08 m a cell is
 // rock-free unless a rock >= 0.04 m is within 0.25 + 0.3 = 0.55 m of its centre (its own cell and
 // the 4 neighbours at 0.5 m), and a rock is detected by a rock cell within 0.1 + 0.5 = 0.6 m.
+// Resolvability (hazard::RockCriterion): a rock of radius R <= c / 2 fits in a quarter of a cell,
+// so its relief is H (pi R^2 / (6 c^2) - (2/3) pi R^2 / W^2) with the plane window W = 7 cells =
+// 3.5 m: the threshold rock (0.08 m x 0.16 m) shows r_h = 0.98479 mm (averaged down), so the map
+// resolves the threshold where r_h >= (3.090 + 1.645) sigma: sigma <= 0.20798 mm. The truth rocks
+// (0.2 m wide) show 0.0192342 H >= r_h.
 #include "swf/hazard_eval/map_metrics.hpp"
 
 #include <gtest/gtest.h>
@@ -55,7 +60,7 @@ class MapMetricsTest : public ::testing::Test {
 
     const std::size_t cells = static_cast<std::size_t>(kN) * kN;
     elevation_.assign(cells, 0.0f);
-    sigma_.assign(cells, 0.5f);  // 3 sigma > h: unresolved unless set below
+    sigma_.assign(cells, 0.5f);  // unresolvable unless set below
     slope_.assign(cells, kTruthSlopeDeg + 1.0f);
     classes_.assign(cells, app::HazardClassCode(hazard::HazardClass::kSafe));
     for (int j = 0; j < kN; ++j) {
@@ -68,9 +73,10 @@ class MapMetricsTest : public ::testing::Test {
     At(&slope_, 0, 0) = NAN;                                    // no slope there
     const std::int8_t rock = app::HazardClassCode(hazard::HazardClass::kRock);
     const std::int8_t uncertain = app::HazardClassCode(hazard::HazardClass::kUncertain);
-    At(&sigma_, 2, 2) = 0.02f;   // A resolved (3 x 0.02 <= 0.08)
-    At(&classes_, 3, 2) = rock;  // 0.5 m from A: detected; A's neighbour, so no false alarm
-    At(&sigma_, 12, 2) = 0.02f;  // B resolved
+    At(&sigma_, 2, 2) = 0.0002f;   // A resolved (<= 0.00020798)
+    At(&classes_, 3, 2) = rock;    // 0.5 m from A: detected; A's neighbour, so no false alarm
+    At(&sigma_, 12, 2) = 0.0002f;  // B resolved
+    At(&sigma_, 2, 12) = 0.02f;    // C not, though 3 sigma <= h
     At(&classes_, 12, 2) = uncertain;
     At(&classes_, 13, 2) = uncertain;
     At(&classes_, 14, 2) = rock;  // 1.0 m from B (> 0.6): missed; rock-free: a false alarm
@@ -136,7 +142,7 @@ TEST_F(MapMetricsTest, RocksDetectedMissedUnresolvedAndOneFalseAlarm) {
   EXPECT_EQ(m.cell_m, kCellM);
   EXPECT_EQ(m.known_cells, 240);
   EXPECT_EQ(m.rock_cells, 4);      // (3, 2), (14, 2), (2, 12), (8, 8); not the unknown (5, 15)
-  EXPECT_EQ(m.rocks_resolved, 2);  // A and B; C unresolved, D below h, E outside
+  EXPECT_EQ(m.rocks_resolved, 2);  // A and B; C unresolved (averaged down), D below h, E outside
   EXPECT_EQ(m.rocks_detected, 1);  // A
   EXPECT_EQ(m.rocks_flagged, 2);   // A (rock), B (uncertain)
   EXPECT_EQ(m.rocks_resolved_by_height[0], 1);
@@ -162,7 +168,7 @@ TEST_F(MapMetricsTest, PerCellErrorsAgainstTheTerrain) {
     EXPECT_NEAR(m.elevation_errors_m[k], 0.05, 1e-6);
   }
   for (double e : m.slope_errors_deg) EXPECT_DOUBLE_EQ(e, 1.0);
-  EXPECT_EQ(m.elevation_sigmas_m[2 * kN + 2], 0.02f);  // A's cell, row-major over known cells
+  EXPECT_EQ(m.elevation_sigmas_m[2 * kN + 2], 0.0002f);  // A's cell, row-major over known cells
 
   HazardMapView no_slope = View();
   no_slope.slope_deg = nullptr;

@@ -24,10 +24,11 @@
 //  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
 //     lander footprint gives slope and roughness; a plane over rock_window_radius_m gives each
 //     cell's rock height. Sigma of slope from the fit and the attitude covariance; sigma of the
-//     rock height from the cell's stereo sigma and the fit. Classes: kRock / kSlope when the
-//     value exceeds its threshold by confidence_k sigma and the sigma resolves it (sigma <= a
-//     third of the threshold), kUncertain when value + k sigma exceeds the threshold otherwise,
-//     kSafe otherwise, kUnknown without data.
+//     rock height from the cell's stereo sigma and the fit. Classes: kRock when the rock height
+//     exceeds the rock criterion's decision relief (RockCriterion below); kSlope when the slope
+//     exceeds its threshold by confidence_k sigma and the sigma resolves it (sigma <= a third of
+//     the threshold); kUncertain when value + k sigma exceeds a threshold otherwise, kSafe
+//     otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
 //     is not kSafe or to the grid border; candidates need clearance >= footprint radius. Score in
 //     [0, 1] = (min(clearance / clearance_cap, 1) + 0.5 (1 - sigma / max_rock_height) +
@@ -47,6 +48,62 @@
 namespace swf::hazard {
 
 enum class HazardClass : std::uint8_t { kUnknown = 0, kSafe, kUncertain, kSlope, kRock };
+
+// The rock criterion (docs/hazard.md, "The rock criterion"): when a cell is declared a rock, and
+// which rocks a map resolves. One statement, used by the mapper's classification and by the
+// hazard-map-vs-truth metric (swf/evaluation/hazard_score.hpp), so the two cannot disagree.
+//  - Relief. A cell's rock height is its elevation above the plane fitted over +-window_radius_m
+//    (window side W = (2 round(window_radius_m / c) + 1) c at cell size c). A rock of height H and
+//    diameter D, modelled as a half spheroid (the simulator's and Golombek's rock shape), shows the
+//    noise-free relief r(H, D, c) = (mean of its profile over a c x c cell with a corner at the
+//    rock's centre) - (its volume / W^2). The corner is the worst alignment with the grid: a rock
+//    narrower than a cell is averaged down, and the criterion says so. The second term is the
+//    rock lifting its own reference plane.
+//  - Resolution. The map resolves the threshold at sigma (the relief's 1-sigma) when a
+//    threshold rock (height h, diameter h / height_to_diameter) stands out of flat ground by the
+//    false-alarm and the detection margins together: r_h = r(h, h / height_to_diameter, c) >=
+//    (z_fa + z_d) sigma, i.e. sigma <= sigma_max(c) = r_h / (z_fa + z_d): 0.061 / 0.060 / 0.052
+//    / 0.018 m at 5 / 10 / 20 / 40 cm cells (r_h 0.29 / 0.28 / 0.24 / 0.08 m: a rock narrower
+//    than the cell is averaged down).
+//  - Decision. Where the threshold is resolved, kRock when relief > T(sigma) = r_h - z_d sigma.
+//    Then T >= z_fa sigma: a cell of flat ground is declared with probability <= 1 - Phi(z_fa) =
+//    1e-3 (one-sided Gaussian); a threshold rock's cell exceeds T with probability Phi(z_d) =
+//    0.95. Hazard relevance: T sits at a threshold rock's relief less z_d sigma, never at a
+//    multiple of sigma alone, so a sharp map does not declare small rocks (at sigma = 0.02 m and
+//    5 cm cells a 0.2 m rock is declared with probability 7e-4, a 0.15 m one 5e-9). Where sigma
+//    > sigma_max nothing is declared a rock (an exceedance is kUncertain): those are the cells
+//    whose sigma is least trustworthy in its tails (SGM mismatches at altitude).
+//  - Resolvable. A rock H >= h is resolvable at sigma when its relief clears T by z_d sigma:
+//    sigma <= sigma_max and r(H, D, c) - z_d sigma >= T(sigma), i.e. r(H, D, c) >= r_h. The map
+//    must detect it with probability >= 0.95.
+struct RockCriterionOptions {
+  double max_height_m = 0.3;          // h: the rock hazard threshold
+  double window_radius_m = 1.5;       // of the relief's reference plane
+  double false_alarm_sigmas = 3.090;  // z_fa: 1 - Phi(z_fa) = 1e-3 per cell
+  double detection_sigmas = 1.645;    // z_d: Phi(z_d) = 0.95
+  double height_to_diameter = 0.5;    // the rock model's H / D (Golombek & Rapp 1997)
+};
+
+class RockCriterion {
+ public:
+  RockCriterion(const RockCriterionOptions& options, double cell_m);
+  // r(H, D, c): the relief a noise-free map at this cell size shows for a rock (>= 0).
+  double Relief(double height_m, double diameter_m) const;
+  // sigma_max: the largest relief sigma at which the map resolves the threshold.
+  double ResolvedSigma() const { return resolved_sigma_m_; }
+  // T(sigma): a cell is a rock when its relief exceeds this (infinite where sigma > sigma_max).
+  double DecisionRelief(double sigma_m) const;
+  // A rock the map must detect with probability >= Phi(z_d) at the relief sigma sigma_m.
+  bool Resolvable(double height_m, double diameter_m, double sigma_m) const;
+  double ThresholdRelief() const { return threshold_relief_m_; }  // r(h, h / (H / D), c)
+
+ private:
+  RockCriterionOptions options_;
+  double cell_m_ = 0.0;
+  double window_m_ = 0.0;
+  double threshold_relief_m_ = 0.0;
+  double resolved_sigma_m_ = 0.0;
+};
 
 struct HazardMapperOptions {
   // Full-resolution rectified camera and image size of the pairs Update() receives.
@@ -88,9 +145,9 @@ struct HazardMapperOptions {
   int max_landmarks = 1024;
   // Hazards (defaults: rocks above 0.3 m, slopes above 10 deg).
   double max_slope_deg = 10.0;
-  double max_rock_height_m = 0.3;
+  double max_rock_height_m = RockCriterionOptions{}.max_height_m;
   double footprint_radius_m = 1.5;
-  double rock_window_radius_m = 1.5;
+  double rock_window_radius_m = RockCriterionOptions{}.window_radius_m;
   double confidence_k = 2.0;
   double min_known_fraction = 0.6;  // of a window, for a plane fit
   // Safe site.
@@ -98,6 +155,9 @@ struct HazardMapperOptions {
   double target_weight = 0.5;     // weight of closeness to the target in the score
   double site_hysteresis = 0.05;  // score units ([0, 1])
 };
+
+// The rock criterion of a mapper's configuration (its threshold and plane window).
+RockCriterionOptions RockCriterionOf(const HazardMapperOptions& options);
 
 // A landmark of the SWF (world frame) with its marginal covariance.
 struct HazardLandmark {

@@ -6,11 +6,15 @@
 //
 // Definitions (threshold h = truth.max_rock_height_m, footprint radius r, cell size c):
 // - known cell: elevation not NaN.
-// - resolved rock: a truth rock of height >= h whose centre lies in a cell with 3 sigma <= h
-//   (the mapper's own criterion for declaring kRock; elsewhere a rock can only be kUncertain).
-//   Detected: a CLASS_ROCK cell centre within the rock's radius + c of its centre. Flagged: a
-//   CLASS_ROCK or CLASS_UNCERTAIN cell there (never a landing site). Counted also by height class
-//   [1, 2), [2, 4), [4, inf) x h.
+// - resolved rock: a truth rock of height >= h that the rock criterion (swf/hazard/
+//   hazard_mapper.hpp, RockCriterion: the mapper's own decision rule, window radius at its
+//   default) calls resolvable at the sigma of the cell holding its centre: the map must detect it
+//   with probability >= 0.95. The published sigma is the elevation's; the mapper decides with the
+//   relief's, which leaves out the pose error common to the plane window, so it is never larger
+//   (but for the plane fit's own term, ~1 % of it): the metric's resolved set is the
+//   conservative one. Detected: a CLASS_ROCK cell centre within the rock's radius + c of its
+//   centre. Flagged: a CLASS_ROCK or CLASS_UNCERTAIN cell there (never a landing site). Counted
+//   also by height class [1, 2), [2, 4), [4, inf) x h.
 // - false alarm: a CLASS_ROCK cell among the rock-free known cells (truth.rock_free).
 // - safe site: on hazard when the truth's clearance of the map's site is <= r. `<=` because a
 //   hazard at exactly r lies on the footprint's edge, inside the closed disc the lander occupies:
