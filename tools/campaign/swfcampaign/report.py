@@ -196,10 +196,21 @@ def hazard_by_altitude(done):
                      'detection_probability_by_height': [d / n if n else None
                                                          for d, n in zip(detected, resolved)],
                      'false_alarm_rate': false / free if free else None})
+    resolved = [sum(m['rocks_resolved_by_height'][c] for m in maps) for c in range(3)]
+    detected = [sum(m['rocks_detected_by_height'][c] for m in maps) for c in range(3)]
+    free = sum(m['rock_free_cells'] for m in maps)
+    false = sum(m['false_rock_cells'] for m in maps)
+    overall = {'rocks_resolved_by_height': resolved, 'rocks_detected_by_height': detected,
+               'detection_probability_by_height': [d / n if n else None
+                                                   for d, n in zip(detected, resolved)],
+               'detection_probability': sum(detected) / sum(resolved) if sum(resolved) else None,
+               'rock_free_cells': free, 'false_rock_cells': false,
+               'false_alarm_rate': false / free if free else None}
     sites = [r['summary'].get('safe_site') for r in done]
     with_site = [s for s in sites if s is not None]
     clear = sum(1 for s in with_site if not s.get('on_truth_hazard'))
     return {'maps': len(maps), 'height_classes': HEIGHT_CLASSES, 'by_altitude': rows,
+            'all_maps': overall,
             'runs_with_safe_site': len(with_site),
             'safe_site_clear_of_truth_hazards': clear,
             'safe_site_success_rate': clear / len(done) if done else None}
@@ -368,6 +379,27 @@ def plots(report, outputs, edges, done, report_dir):
         ax2.legend(fontsize=8)
         save(fig, 'hazard_by_altitude.png')
 
+    overall = report['hazard']['all_maps']
+    if any(overall['rocks_resolved_by_height']):
+        fig, ax = plt.subplots(figsize=(6.4, 3.8))
+        xs = [c for c in range(len(HEIGHT_CLASSES))
+              if overall['detection_probability_by_height'][c] is not None]
+        ax.bar(xs, [overall['detection_probability_by_height'][c] for c in xs], color='C0',
+               label='detected / resolved, every map')
+        for c in xs:
+            ax.annotate('%d / %d' % (overall['rocks_detected_by_height'][c],
+                                     overall['rocks_resolved_by_height'][c]),
+                        (c, overall['detection_probability_by_height'][c]), ha='center',
+                        va='bottom', fontsize=8)
+        ax.set_xticks(range(len(HEIGHT_CLASSES)))
+        ax.set_xticklabels(['rock height ' + h for h in HEIGHT_CLASSES], fontsize=8)
+        ax.set_ylabel('detection probability')
+        ax.set_ylim(0, 1.1)
+        ax.set_title('%s: hazard detection by rock height' % name)
+        ax.grid(True, axis='y', alpha=0.3)
+        ax.legend(fontsize=8, loc='lower right')
+        save(fig, 'hazard_by_rock_height.png')
+
     stages = {}
     for r in done:
         for st, s in (r['summary'].get('stages') or {}).items():
@@ -490,6 +522,13 @@ def markdown(report, pngs, reproduced, worst_plots=None):
                 ' / '.join(fmt(p) for p in b['detection_probability_by_height']),
                 ' / '.join(str(x) for x in b['rocks_resolved_by_height']),
                 fmt(b['false_alarm_rate'])))
+    a = h['all_maps']
+    lines += ['', 'Every map together: P_d %s (%d of %d resolved rocks; by rock height %s), '
+              'false-alarm rate %s (%d of %d rock-free cells).' % (
+                  fmt(a['detection_probability']), sum(a['rocks_detected_by_height']),
+                  sum(a['rocks_resolved_by_height']),
+                  ' / '.join(fmt(p) for p in a['detection_probability_by_height']),
+                  fmt(a['false_alarm_rate']), a['false_rock_cells'], a['rock_free_cells'])]
     sens = report['sensitivity']
     if sens['numeric'] or sens['choices']:
         lines += ['', '## Which dispersions go with the error', '',
