@@ -1,8 +1,10 @@
 #!/bin/sh
 # The flight demo's hazard results (issue 8): swf-sil on config/demo.cfg (full size: the rock
 # field, the orbital target, 512x384, 100 -> 10 m) under lockstep pacing, without LCM, must write
-# a summary whose final hazard map has a detection probability over resolved truth rocks and a
-# safe site outside the footprint of every truth hazard, and whose per-map and per-output columns
+# a summary whose hazard maps detect every truth rock they resolve (the rock criterion of
+# docs/hazard.md: since issue 16 the demo resolves none, its rocks being last seen from 16-32 m;
+# the hazard campaigns are where P_d is measured), whose final map has a safe site outside the
+# footprint of every truth hazard, and whose per-map and per-output columns
 # (what campaigns aggregate by altitude) agree with the totals. Then the same descent with the camera
 # blinded for 2 s mid-descent (black pairs, inject.black_from): the IMU carries the state (the
 # frames coasted and flagged, none INVALID, the position error inside its published covariance:
@@ -26,8 +28,12 @@ print("safe site", site)
 problems = []
 if target["mode"] != "orbital":
     problems.append("the demo no longer flies to the orbital target")
-if h is None or h["rocks_resolved"] < 1 or h["detection_probability"] is None:
-    problems.append("no resolved truth rock: detection probability is null")
+if h is None:
+    problems.append("no hazard map judged")
+for m in s["hazard_by_map"]:
+    if m["rocks_detected"] != m["rocks_resolved"]:
+        problems.append("map of frame %d detects %d of its %d resolved rocks" % (
+            m["frame"], m["rocks_detected"], m["rocks_resolved"]))
 if h is not None and h["false_alarm_rate"] > 0.01:
     problems.append("false-alarm rate %.4f > 0.01" % h["false_alarm_rate"])
 if site is None:
