@@ -49,6 +49,8 @@ NeesResult RunNees(const std::string& name, const NeesOptions& options) {
     so.seed = 5000 + static_cast<std::uint64_t>(r);
     const SyntheticScene scene(so);
     auto hook = [&](Filter* swf, std::size_t j) {
+      result.mean_poses += swf->NumPoses() / static_cast<double>(frames * options.runs);
+      result.max_poses = std::max(result.max_poses, swf->NumPoses());
       if (swf->ComputeCovariances() != core::Status::kOk) {
         ++result.covariance_failures;
         return;
@@ -56,6 +58,13 @@ NeesResult RunNees(const std::string& name, const NeesOptions& options) {
       const estimator::Pose<double>& est = swf->NewestPose();
       const Vec6<double> delta = est.LocalDifference(scene.frames()[j].truth);
       const double pose = Mahalanobis<6>(delta, swf->NewestPoseCovariance());
+      if (j + 1 == frames) {
+        for (int k = 0; k < 3; ++k) {
+          result.final_error_m[k] += delta[k] * delta[k] / options.runs;
+          result.final_sigma_m[k] +=
+              std::sqrt(std::max(0.0, swf->NewestPoseCovariance()(k, k))) / options.runs;
+        }
+      }
       if (pose < 0) {
         ++result.covariance_failures;
       } else {
@@ -81,13 +90,15 @@ NeesResult RunNees(const std::string& name, const NeesOptions& options) {
       }
     };
     const Trace t = RunFilter<Filter>(scene, options.mode, options.window,
-                                      9000 + static_cast<std::uint64_t>(r), hook);
+                                      9000 + static_cast<std::uint64_t>(r), hook, kMotionSigmaM,
+                                      kMotionSigmaRad, true, false, options.hold_sightings);
     result.update_failures += t.failures;
   }
   for (std::size_t j = 0; j < frames; ++j) {
     result.pose_nees[j] /= std::max(pose_count[j], 1);
     result.landmark_nees[j] /= std::max(landmark_count[j], 1);
   }
+  for (double& e : result.final_error_m) e = std::sqrt(e);
   const double n = options.runs;
   result.pose_lower = ChiSquareQuantile(0.025, 6 * n) / n;
   result.pose_upper = ChiSquareQuantile(0.975, 6 * n) / n;

@@ -21,6 +21,7 @@ struct NeesOptions {
   estimator::SwfMode mode = estimator::SwfMode::kSlidingWindow;
   int window = 5;
   int runs = 50;
+  int hold_sightings = 0;  // SwfOptions::hold_sightings
 };
 
 struct NeesResult {
@@ -42,6 +43,15 @@ struct NeesResult {
   double mean_landmark_nees = 0.0;
   double pose_fraction_inside = 0.0;  // frames whose run average lies inside the bounds
   double landmark_fraction_inside = 0.0;
+  // At the last frame: RMS over the runs of the newest pose's position error along x, y, z
+  // (metres) and the mean of its stated standard deviations (the covariance's, in the pose's
+  // update coordinates).
+  double final_error_m[3] = {0.0, 0.0, 0.0};
+  double final_sigma_m[3] = {0.0, 0.0, 0.0};
+  // Poses in the window after each Update, mean and largest over all frames and runs (more
+  // than the window size only with hold_sightings).
+  double mean_poses = 0.0;
+  int max_poses = 0;
   int covariance_failures = 0;  // ComputeCovariances errors or non-SPD blocks (skipped)
   int update_failures = 0;
 };

@@ -113,6 +113,14 @@ struct SwfOptions {
   // Evaluate measurement Jacobians of prior landmarks at their estimate when they entered the
   // prior (FEJ, Huang/Mourikis/Roumeliotis). Off = relinearize everything (the paper's SWF).
   bool first_estimate_jacobians = true;
+  // Hold the oldest pose in the window past window_size (up to the capacity K) while it sees a
+  // landmark that is not in the prior yet, is still tracked by the newest frame and has fewer
+  // than this many sightings; then marginalize it. A landmark's first estimate (above) is then
+  // taken where its sightings have pinned its depth down, not where its first few frames left it
+  // (at long range a few frames' depth is known to ~1 %, and that error put false information
+  // along the weakly observable tilt/sideways direction into the prior: docs/integrity.md,
+  // "Consistency on the descent from 100 m"). 0 = the paper's fixed window. Not in VO mode.
+  int hold_sightings = 0;
   // kVsdf only: apply only the scalar diagonal of the Schur term (eq. 12 read literally,
   // "only the diagonal elements") instead of its 3x3 / state blocks within each variable.
   bool vsdf_scalar_diagonal = false;
@@ -159,6 +167,7 @@ struct SwfOptions {
     if (!(max_gated_fraction >= 0.0 && max_gated_fraction <= 1.0))
       return core::Status::kInvalidArgument;
     if (max_gate_resolves < 0 || max_gate_resolves > 5) return core::Status::kInvalidArgument;
+    if (hold_sightings < 0 || hold_sightings > 1000) return core::Status::kInvalidArgument;
     if (!(max_init_sigma_m >= 0.0)) return core::Status::kInvalidArgument;
     if (motion_gate_min_inliers < 0 || !(motion_gate_weight > 0.0 && motion_gate_weight <= 1.0) ||
         !(motion_overrule_factor >= 1.0)) {
@@ -438,6 +447,7 @@ class SlidingWindowFilter {
     int prior_index = -1;              // position in prior_landmarks_, or -1 for a free landmark
     int obs_in_window = 0;
     int total_obs = 0;
+    std::int64_t last_frame = 0;  // frames_added_ when it was last measured
     // Per-iteration workspace.
     int lm_count = 0;
     Mat3<S> h = Mat3<S>::Zero();
@@ -475,6 +485,7 @@ class SlidingWindowFilter {
   // The frame cycle (swf_frame_cycle.hpp).
   core::Status PushPose(const PoseType& estimate, const MotionType* u, const StateMat* sqrt_info);
   bool StateIsFinite() const;
+  bool HoldsOldestPose() const;
   void RecordEvidence();
   void ZeroFixedPoseCovariance();
 

@@ -110,6 +110,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::AddObservation(
   (void)pose.obs.push_back(o);
   ++landmarks_[slot].obs_in_window;
   ++landmarks_[slot].total_obs;
+  landmarks_[slot].last_frame = frames_added_;
   return core::Status::kOk;
 }
 
@@ -139,13 +140,17 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::Update() {
   summary_.motion_chi2 = motion_gate.chi2;
   summary_.motion_gate_failed = motion_gate.failed;
   summary_.motion_overruled = motion_gate.overruled;
-  if (num_poses_ > window_) {
-    if (options_.mode == SwfMode::kVisualOdometry) {
+  if (options_.mode == SwfMode::kVisualOdometry) {
+    if (num_poses_ > window_) {
       DeleteOldestPose();
-    } else {
-      MarginalizeOldestPose();
+      summary_.poses_marginalized = 1;
     }
-    summary_.poses_marginalized = 1;
+  } else {
+    // At most kMaxPoses - window_ poses: each pass removes one.
+    while (num_poses_ > window_ && !HoldsOldestPose()) {
+      MarginalizeOldestPose();
+      ++summary_.poses_marginalized;
+    }
   }
   RetireUnsupportedLandmarks();
   core::Status status = Solve();
@@ -214,7 +219,9 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::PushPose(const PoseType& es
                                                               const MotionType* u,
                                                               const StateMat* sqrt_info) {
   if (!configured_) return core::Status::kNotConfigured;
-  const int limit = options_.mode == SwfMode::kBatch ? window_ : window_ + 1;
+  int limit = window_ + 1;
+  if (options_.mode == SwfMode::kBatch) limit = window_;
+  if (options_.hold_sightings > 0 && options_.mode != SwfMode::kVisualOdometry) limit = kMaxPoses;
   if (num_poses_ >= limit) return core::Status::kFull;
   if (num_poses_ == 0) head_ = 0;
   ++num_poses_;
@@ -234,6 +241,20 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::PushPose(const PoseType& es
   if (num_poses_ == 1) InitializePrior();
   ++frames_added_;
   return core::Status::kOk;
+}
+
+// Whether the oldest pose stays in the window (SwfOptions::hold_sightings): it sees a landmark
+// that has not entered the prior, is still tracked and is not yet converged, and the window has
+// room for the newest pose without it.
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::HoldsOldestPose() const {
+  if (options_.hold_sightings == 0 || num_poses_ >= kMaxPoses) return false;
+  for (const Observation& o : Slot(0).obs) {
+    const LandmarkSlot& l = landmarks_[o.landmark];
+    if (l.prior_index < 0 && l.last_frame == frames_added_ && l.total_obs < options_.hold_sightings)
+      return true;
+  }
+  return false;
 }
 
 template <typename Model, int K, int N, int M, int P>
