@@ -2,6 +2,7 @@
 // modes it compares. Host-only: they are too slow for the emulated aarch64 run.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -220,6 +221,38 @@ TEST(SwfScenario, DescentFromHundredMetresIsConsistentWhileYoungLandmarksHoldThe
   EXPECT_GT(held.nees, lower);
   EXPECT_LT(held.nees, upper);
   EXPECT_LE(held.x_error_m2, fixed.x_error_m2);
+}
+
+// The held window stops at the capacity K (then the oldest pose goes whatever it sees), and
+// batch mode, which never marginalizes, is the same filter with the option set or not.
+TEST(SwfScenario, HeldWindowStopsAtTheCapacityAndLeavesBatchAlone) {
+  SceneOptions so;
+  so.frames = 20;
+  so.num_landmarks = 40;
+  so.seed = 3;
+  const SyntheticScene scene(so);
+  SwfOptions options = ModeOptions(SwfMode::kSlidingWindow);
+  options.window_size = 2;
+  options.hold_sightings = 1000;  // never converged: only the capacity ends the hold
+  int most = 0;
+  int last = 0;
+  int marginalized = 0;
+  const RunResult held = scene::RunScene(
+      std::make_unique<StereoSwf<5>>().get(), scene, options,
+      scene::MotionInput(scene::MotionInput::kSigmaM, scene::MotionInput::kSigmaRad, 1003),
+      [&](StereoSwf<5>* swf, std::size_t) {
+        most = std::max(most, swf->NumPoses());
+        last = swf->NumPoses();
+        marginalized += swf->Summary().poses_marginalized;
+      });
+  EXPECT_EQ(held.failures, 0);
+  EXPECT_EQ(held.rejected_poses, 0);
+  EXPECT_EQ(most, 5);
+  EXPECT_EQ(marginalized, so.frames - last);  // every pose held back was marginalized later
+  SwfOptions batch = ModeOptions(SwfMode::kBatch);
+  const double plain = RunScene(std::make_unique<StereoSwf<40, 1>>().get(), scene, batch).rms_m;
+  batch.hold_sightings = 25;
+  EXPECT_EQ(RunScene(std::make_unique<StereoSwf<40, 1>>().get(), scene, batch).rms_m, plain);
 }
 
 }  // namespace

@@ -40,6 +40,9 @@
 //         Lambda_aa^-1 g_a
 //     becomes the new prior over [p2 ; Lp'] with x_bar = the current estimate. This is exactly
 //     the fill-in of Figs. 6-8: among landmarks seen from p1, between p2 and those landmarks.
+//   * with SwfOptions::hold_sightings (not in the paper) the oldest pose is held back while it
+//     sees a tracked landmark not yet in the prior with fewer sightings than that, up to the
+//     capacity K; then every pose held back is marginalized as above, oldest first.
 //   * every landmark with no measurement left in the window is removed the same way; if it is
 //     in the prior this only touches Pi (Fig. 7c), otherwise it carries no information.
 //   * first-estimate Jacobians (option, on by default; not in the paper): a landmark that enters

@@ -220,8 +220,11 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::PushPose(const PoseType& es
                                                               const StateMat* sqrt_info) {
   if (!configured_) return core::Status::kNotConfigured;
   int limit = window_ + 1;
-  if (options_.mode == SwfMode::kBatch) limit = window_;
-  if (options_.hold_sightings > 0 && options_.mode != SwfMode::kVisualOdometry) limit = kMaxPoses;
+  if (options_.mode == SwfMode::kBatch) {
+    limit = window_;
+  } else if (options_.hold_sightings > 0 && options_.mode != SwfMode::kVisualOdometry) {
+    limit = kMaxPoses;  // the window may be held up to the capacity
+  }
   if (num_poses_ >= limit) return core::Status::kFull;
   if (num_poses_ == 0) head_ = 0;
   ++num_poses_;
