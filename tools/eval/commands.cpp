@@ -16,6 +16,7 @@
 #include "swf/cli/cli.hpp"
 #include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/config.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 
 namespace swf::eval {
 namespace {
@@ -30,25 +31,27 @@ struct Evaluation {
   const StereoSequence* sequence = nullptr;
   const std::vector<RunRecord>* runs = nullptr;
   const std::vector<RunRecord>* diagnostics = nullptr;  // re-runs of failed runs, may be empty
-  JsonObject header;                                    // dataset fields, first in the JSON
-  std::string description;                              // markdown before the table
-  std::string notes;  // markdown after the comparison, computed by the command
+  Json header;                                          // dataset fields, first in the JSON
+  Json run;                 // swf::ground_cli::RunEcho of the command line, last in every JSON
+  std::string description;  // markdown before the table
+  std::string notes;        // markdown after the comparison, computed by the command
 };
 
 // A real-data evaluation's results and the header fields that name it (experiment, build,
 // dataset directory), the same for every sequence command.
 template <typename SequenceResult>
-Evaluation EvaluationOf(const std::string& prefix, const std::string& dir,
+Evaluation EvaluationOf(const std::string& prefix, const SequenceArgs& args,
                         const SequenceResult& result) {
   Evaluation e;
   e.prefix = prefix;
   e.sequence = &result.sequence;
   e.runs = &result.runs;
   e.diagnostics = &result.diagnostics;
-  e.header.String("experiment", prefix)
-      .String("version", cli::Version())
-      .String("commit", cli::Commit())
-      .String("dataset", dir);
+  e.header = {{"experiment", prefix},
+              {"version", cli::Version()},
+              {"commit", cli::Commit()},
+              {"dataset", args.dir}};
+  e.run = args.run;
   return e;
 }
 
@@ -109,27 +112,28 @@ bool WriteTrajectories(const std::string& out, const Evaluation& e, std::string*
   return true;
 }
 
-std::string JsonText(const Evaluation& e) {
-  JsonObject o = e.header;
-  JsonObject ate;
+Json JsonOf(const Evaluation& e) {
+  Json o = e.header;
+  Json ate = Json::object();
   for (const RunRecord& r : *e.runs) {
     if (r.Ok()) {
-      ate.Number(Key(r), r.errors.ate_rmse_m, r.errors.reason);
+      SetNumber(&ate, Key(r), r.errors.ate_rmse_m, r.errors.reason);
     } else {
-      ate.Null(Key(r), "no score: " + std::string(ToString(r.verdict)) + ", " + r.reason);
+      SetNull(&ate, Key(r), "no score: " + std::string(ToString(r.verdict)) + ", " + r.reason);
     }
   }
-  o.Raw("ate_rmse_m", ate.Text(4));
-  o.Bool("all_runs_ok", AllOk(*e.runs));
+  o["ate_rmse_m"] = ate;
+  o["all_runs_ok"] = AllOk(*e.runs);
   for (const RunRecord& r : *e.runs) {
-    o.Raw(Key(r), RunJson(r, *e.sequence, e.prefix + "_" + Key(r) + "_tum.txt", 4));
+    o[Key(r)] = RunJson(r, *e.sequence, e.prefix + "_" + Key(r) + "_tum.txt");
   }
-  JsonObject diagnosis;
+  Json diagnosis = Json::object();
   for (const RunRecord& r : *e.diagnostics) {
-    diagnosis.Raw(Key(r) + "_true_motion", RunJson(r, *e.sequence, "", 6));
+    diagnosis[Key(r) + "_true_motion"] = RunJson(r, *e.sequence, "");
   }
-  o.Raw("diagnostics", diagnosis.Text(4));
-  return o.Text(2) + "\n";
+  o["diagnostics"] = diagnosis;
+  o["run"] = e.run;
+  return o;
 }
 
 bool WriteErrorSeries(const std::string& out, const Evaluation& e) {
@@ -154,8 +158,8 @@ bool WriteErrorSeries(const std::string& out, const Evaluation& e) {
   }
   const Figure figure{e.dataset + ": position error of each run, frame by frame", "frame number",
                       "position error (m)", false};
-  return WriteExperiment(out, e.prefix + "_error", figure, series,
-                         "  \"dataset\": " + JsonString(e.sequence->dir));
+  return WriteExperiment({out, e.run}, e.prefix + "_error", figure, series,
+                         {{"dataset", e.sequence->dir}});
 }
 
 // What the re-runs with the true motion say about the failed runs.
@@ -208,7 +212,7 @@ std::string Markdown(const Evaluation& e) {
 int WriteEvaluation(const std::string& out, const Evaluation& e) {
   std::string error;
   if (!WriteTrajectories(out, e, &error) ||
-      !WriteJsonFile(out + "/" + e.prefix + ".json", JsonText(e), &error)) {
+      !ground_cli::WriteJson(out + "/" + e.prefix + ".json", JsonOf(e), &error)) {
     std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
     return 1;
   }
@@ -437,7 +441,7 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
     return 1;
   }
   const bool looped = options.loop_seconds > 0.0;
-  Evaluation e = EvaluationOf(looped ? "euroc_loop" : "euroc", dir, result);
+  Evaluation e = EvaluationOf(looped ? "euroc_loop" : "euroc", a, result);
   e.title = looped ? Format(
                          "Real data: EuRoC looped, %.0f s at rest (`swf-eval euroc DIR "
                          "--loop-seconds %g`)",
@@ -445,18 +449,19 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
                    : "Real data: EuRoC (`swf-eval euroc DIR`)";
   e.dataset = looped ? Format("EuRoC V1_01 looped, %.0f s at rest", options.loop_seconds)
                      : std::string("EuRoC V1_01");
-  e.header.Integer("recorded_frames", result.recorded_frames)
-      .Integer("frames", static_cast<long long>(result.sequence.frames.size()))
-      .Number("loop_seconds", options.loop_seconds)
-      .Integer("skipped_frames_without_truth", result.skipped_frames)
-      .Integer("window", options.window)
-      .Integer("max_tracks", static_cast<long long>(options.max_tracks))
-      .Number("rectified_focal_px", result.sequence.camera.fx)
-      .Number("baseline_m", result.sequence.camera.baseline_m)
-      .Number("gt_path_length_m", result.gt_path_length_m)
-      .Number("gt_extent_m", result.gt_extent_m)
-      .Number("divergence_limit_m", options.divergence_m)
-      .String("alignment", "SE(3), Horn/Umeyama without scale, all frames; camera positions");
+  Json& h = e.header;
+  h["recorded_frames"] = result.recorded_frames;
+  h["frames"] = result.sequence.frames.size();
+  SetNumber(&h, "loop_seconds", options.loop_seconds);
+  h["skipped_frames_without_truth"] = result.skipped_frames;
+  h["window"] = options.window;
+  h["max_tracks"] = options.max_tracks;
+  SetNumber(&h, "rectified_focal_px", result.sequence.camera.fx);
+  SetNumber(&h, "baseline_m", result.sequence.camera.baseline_m);
+  SetNumber(&h, "gt_path_length_m", result.gt_path_length_m);
+  SetNumber(&h, "gt_extent_m", result.gt_extent_m);
+  SetNumber(&h, "divergence_limit_m", options.divergence_m);
+  h["alignment"] = "SE(3), Horn/Umeyama without scale, all frames; camera positions";
   e.description =
       Format("On `%s` (%d recorded stereo frames%s). ", dir.c_str(), result.recorded_frames,
              looped ? Format(", looped into %zu", result.sequence.frames.size()).c_str() : "") +
@@ -482,19 +487,20 @@ int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames)
                      [&](std::string* error) { return RunKitti(dir, options, &result, error); })) {
     return 1;
   }
-  Evaluation e = EvaluationOf("kitti_odometry", dir, result);
+  Evaluation e = EvaluationOf("kitti_odometry", a, result);
   e.title = "Real data: KITTI odometry excerpt, the whole pipeline (`swf-eval kitti DIR`)";
   e.dataset = "KITTI odometry excerpt";
-  e.header.Integer("frames", static_cast<long long>(result.sequence.frames.size()))
-      .Integer("window", options.window)
-      .Integer("max_tracks", static_cast<long long>(options.max_tracks))
-      .Integer("max_disparity_px", options.max_disparity_px)
-      .Number("focal_px", result.sequence.camera.fx)
-      .Number("baseline_m", result.sequence.camera.baseline_m)
-      .Number("gt_path_length_m", result.gt_path_length_m)
-      .Number("divergence_limit_m", options.divergence_m)
-      .String("alignment", "SE(3), Horn/Umeyama without scale, all frames; left camera positions")
-      .String("relative_error", "per frame-to-frame motion: truth_step^-1 * estimate_step");
+  Json& h = e.header;
+  h["frames"] = result.sequence.frames.size();
+  h["window"] = options.window;
+  h["max_tracks"] = options.max_tracks;
+  h["max_disparity_px"] = options.max_disparity_px;
+  SetNumber(&h, "focal_px", result.sequence.camera.fx);
+  SetNumber(&h, "baseline_m", result.sequence.camera.baseline_m);
+  SetNumber(&h, "gt_path_length_m", result.gt_path_length_m);
+  SetNumber(&h, "divergence_limit_m", options.divergence_m);
+  h["alignment"] = "SE(3), Horn/Umeyama without scale, all frames; left camera positions";
+  h["relative_error"] = "per frame-to-frame motion: truth_step^-1 * estimate_step";
   e.description =
       Format("On `%s` (%zu rectified stereo pairs, 10 Hz). ", dir.c_str(),
              result.sequence.frames.size()) +

@@ -4,14 +4,17 @@
 //   swf-eval kitti DIR [--out OUT] [--window K] [--max-tracks N] [--max-disparity D]
 //                      [--motion-sigma M,RAD] [--divergence-m M] [--frames N]
 // Each writes OUT/<prefix>.json (valid JSON: a value that does not exist is null with a
-// "<key>_reason"), OUT/<prefix>.md (text computed from the same numbers), OUT/<prefix>_error.dat
-// and .json (per-frame errors) and the estimated trajectories. Exit status: 0 when every run
-// is scored, 1 for unusable input or unwritable output (with the reason on stderr), 2 for bad
-// arguments (swf-eval's command line), 3 when a run failed (non-finite, diverged, or frames without
-// a tracked landmark; the reason names the frame and the line of the input it came from).
+// "<key>_reason"; the command line echoed as "run"), OUT/<prefix>.md (text computed from the same
+// numbers), OUT/<prefix>_error.dat and .json (per-frame errors) and the estimated trajectories.
+// Exit status: 0 when every run is scored, 1 for unusable input or unwritable output (with the
+// reason on stderr), 2 for bad arguments (swf-eval's command line), 3 when a run failed
+// (non-finite, diverged, or frames without a tracked landmark; the reason names the frame and the
+// line of the input it came from).
 #pragma once
 
 #include <string>
+
+#include "json.hpp"
 
 namespace swf::eval {
 
@@ -26,6 +29,7 @@ struct SequenceArgs {
   double motion_sigma_m = 0.0;  // 0: the command's default (with motion_sigma_rad)
   double motion_sigma_rad = 0.0;
   double divergence_m = 0.0;  // 0: the command's default
+  Json run;                   // echoed into every JSON file: swf::ground_cli::RunEcho
 };
 
 // `loop_seconds` > 0: the recorded frames played forwards and backwards for that long.

@@ -3,10 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <system_error>
 
-#include "json.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/plot/plot.hpp"
 
 namespace swf::eval {
@@ -37,10 +35,10 @@ bool ChartOf(const Figure& figure, const std::vector<Series>& series, const std:
 
 }  // namespace
 
-bool WriteExperiment(const std::string& out, const std::string& name, const Figure& figure,
-                     const std::vector<Series>& series, const std::string& extra_json,
+bool WriteExperiment(const Output& out, const std::string& name, const Figure& figure,
+                     const std::vector<Series>& series, const Json& summary,
                      const std::vector<double>& x) {
-  const std::string dat = out + "/" + name + ".dat";
+  const std::string dat = out.dir + "/" + name + ".dat";
   plot::LineChart chart;
   std::string error;
   if (!ChartOf(figure, series, x, &chart, &error)) {
@@ -51,23 +49,20 @@ bool WriteExperiment(const std::string& out, const std::string& name, const Figu
     std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
     return false;
   }
-  std::string json = "{\n  \"experiment\": " + JsonString(name) +
-                     ",\n  \"title\": " + JsonString(figure.title) +
-                     ",\n  \"x\": " + JsonString(figure.x_label) +
-                     ",\n  \"y\": " + JsonString(figure.y_label) + ",\n";
-  if (!extra_json.empty()) json += extra_json + ",\n";
-  if (!x.empty()) json += "  \"x_values\": " + JsonArray(x) + ",\n";
-  json += "  \"series\": {\n";
-  for (std::size_t i = 0; i < series.size(); ++i) {
-    json += "    " + JsonString(series[i].name) + ": " + JsonArray(series[i].y) +
-            (i + 1 < series.size() ? ",\n" : "\n");
-  }
-  json += "  }\n}\n";
-  if (!WriteJsonFile(out + "/" + name + ".json", json, &error)) {
+  Json json = {
+      {"experiment", name}, {"title", figure.title}, {"x", figure.x_label}, {"y", figure.y_label}};
+  if (summary.is_object()) json.update(summary);
+  if (!x.empty()) json["x_values"] = Numbers(x);
+  Json values = Json::object();
+  for (const Series& s : series) values[s.name] = Numbers(s.y);
+  json["series"] = values;
+  json["run"] = out.run;
+  const std::string path = out.dir + "/" + name + ".json";
+  if (!ground_cli::WriteJson(path, json, &error)) {
     std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
     return false;
   }
-  std::printf("swf-eval: wrote %s/%s.json\n", out.c_str(), name.c_str());
+  std::printf("swf-eval: wrote %s\n", path.c_str());
   return true;
 }
 

@@ -5,49 +5,42 @@
 #include <cstdarg>
 #include <cstdio>
 
-#include "json.hpp"
-
 namespace swf::eval {
 namespace {
 
 // Ten evenly spaced frames and the last: where a long run's error grew.
-std::string Checkpoints(const RunRecord& run, const StereoSequence& s, int indent) {
+Json Checkpoints(const RunRecord& run, const StereoSequence& s) {
   const std::size_t n = run.frames.size();
   std::vector<std::size_t> frames;
   for (int k = 1; k <= 10; ++k) frames.push_back(std::min(n - 1, k * n / 10));
   frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
-  std::string out = "[";
-  const std::string pad(static_cast<std::size_t>(indent), ' ');
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const std::size_t j = frames[i];
+  Json checkpoints = Json::array();
+  for (const std::size_t j : frames) {
     const FrameRecord& f = run.frames[j];
-    JsonObject o;
-    o.Integer("frame", static_cast<long long>(j))
-        .Number("t_s", 1e-9 * static_cast<double>(s.frames[j].stamp_ns - s.frames[0].stamp_ns))
-        .Number("anchored_error_m", f.anchored_error_m)
-        .Number("position_sigma_m", f.position_sigma_m)
-        .Integer("tracked", f.tracked)
-        .Integer("window_measurements", f.window_measurements)
-        .Integer("fault_bits", f.fault_bits)
-        .Integer("integrity", f.integrity)
-        .Number("hpl_m", f.hpl_m)
-        .Number("vpl_m", f.vpl_m);
-    out += (i ? ",\n" : "\n") + pad + "  " + o.Text(indent + 4);
+    Json o = {{"frame", j}};
+    SetNumber(&o, "t_s", 1e-9 * static_cast<double>(s.frames[j].stamp_ns - s.frames[0].stamp_ns));
+    SetNumber(&o, "anchored_error_m", f.anchored_error_m);
+    SetNumber(&o, "position_sigma_m", f.position_sigma_m);
+    o["tracked"] = f.tracked;
+    o["window_measurements"] = f.window_measurements;
+    o["fault_bits"] = f.fault_bits;
+    o["integrity"] = f.integrity;
+    SetNumber(&o, "hpl_m", f.hpl_m);
+    SetNumber(&o, "vpl_m", f.vpl_m);
+    checkpoints.push_back(o);
   }
-  return out + "\n" + pad + "]";
+  return checkpoints;
 }
 
 // What the navigation output claimed against what the truth says: frames per status, and frames
 // whose error exceeded a protection level (misleading when the status was VALID).
-std::string IntegrityJson(const RunRecord& run, int indent) {
-  JsonObject o;
-  o.Integer("frames_valid", run.frames_by_integrity[0])
-      .Integer("frames_degraded", run.frames_by_integrity[1])
-      .Integer("frames_invalid", run.frames_by_integrity[2])
-      .Integer("misleading_frames", run.misleading_frames)
-      .Integer("first_misleading_frame", run.first_misleading_frame)
-      .Integer("degraded_beyond_protection", run.degraded_beyond_protection);
-  return o.Text(indent);
+Json IntegrityJson(const RunRecord& run) {
+  return {{"frames_valid", run.frames_by_integrity[0]},
+          {"frames_degraded", run.frames_by_integrity[1]},
+          {"frames_invalid", run.frames_by_integrity[2]},
+          {"misleading_frames", run.misleading_frames},
+          {"first_misleading_frame", run.first_misleading_frame},
+          {"degraded_beyond_protection", run.degraded_beyond_protection}};
 }
 
 std::string Verdicted(const RunRecord& run) {
@@ -69,65 +62,65 @@ bool AllOk(const std::vector<RunRecord>& runs) {
   return std::all_of(runs.begin(), runs.end(), [](const RunRecord& r) { return r.Ok(); });
 }
 
-std::string RunJson(const RunRecord& run, const StereoSequence& sequence,
-                    const std::string& trajectory, int indent) {
+Json RunJson(const RunRecord& run, const StereoSequence& sequence, const std::string& trajectory) {
   const TrajectoryErrors& e = run.errors;
   // A failed run has no score: its numbers would rank a broken run (a still estimate without
   // measurements scores well on a still camera).
   const std::string why =
       run.Ok() ? "" : "no score: " + std::string(ToString(run.verdict)) + ", " + run.reason;
-  auto score = [&](JsonObject* o, const char* key, double value) {
+  Json o = {{"name", run.options.name},
+            {"status", ToString(run.verdict)},
+            {"window", run.options.window},
+            {"frames", run.frames.size()}};
+  auto score = [&](const char* key, double value) {
     if (run.Ok()) {
-      o->Number(key, value, e.finite ? "" : e.reason);
+      SetNumber(&o, key, value, e.finite ? "" : e.reason);
     } else {
-      o->Null(key, why);
+      SetNull(&o, key, why);
     }
   };
-  JsonObject o;
-  o.String("name", run.options.name)
-      .String("status", ToString(run.verdict))
-      .Integer("window", run.options.window)
-      .Integer("frames", static_cast<long long>(run.frames.size()));
-  if (!run.Ok()) o.String("reason", run.reason).Integer("failure_frame", run.failure_frame);
-  score(&o, "ate_rmse_m", e.ate_rmse_m);
-  score(&o, "ate_max_m", e.ate_max_m);
-  score(&o, "final_error_m", e.final_aligned_error_m);
-  score(&o, "final_anchored_error_m", e.final_anchored_error_m);
-  score(&o, "step_translation_mean_m", e.step_translation_mean_m);
-  score(&o, "step_translation_max_m", e.step_translation_max_m);
-  score(&o, "step_rotation_mean_deg", e.step_rotation_mean_deg);
-  score(&o, "step_rotation_max_deg", e.step_rotation_max_deg);
+  if (!run.Ok()) {
+    o["reason"] = run.reason;
+    o["failure_frame"] = run.failure_frame;
+  }
+  score("ate_rmse_m", e.ate_rmse_m);
+  score("ate_max_m", e.ate_max_m);
+  score("final_error_m", e.final_aligned_error_m);
+  score("final_anchored_error_m", e.final_anchored_error_m);
+  score("step_translation_mean_m", e.step_translation_mean_m);
+  score("step_translation_max_m", e.step_translation_max_m);
+  score("step_rotation_mean_deg", e.step_rotation_mean_deg);
+  score("step_rotation_max_deg", e.step_rotation_max_deg);
   if (run.Ok() && !std::isfinite(e.step_translation_percent) && e.finite) {
-    o.Null("step_translation_percent", "the truth moved less than 1 cm: no percentage");
-    o.Null("step_rotation_deg_per_m", "the truth moved less than 1 cm: no rate per metre");
+    SetNull(&o, "step_translation_percent", "the truth moved less than 1 cm: no percentage");
+    SetNull(&o, "step_rotation_deg_per_m", "the truth moved less than 1 cm: no rate per metre");
   } else {
-    score(&o, "step_translation_percent", e.step_translation_percent);
-    score(&o, "step_rotation_deg_per_m", e.step_rotation_deg_per_m);
+    score("step_translation_percent", e.step_translation_percent);
+    score("step_rotation_deg_per_m", e.step_rotation_deg_per_m);
   }
   // Not scores but what happened: kept for failed runs too (null when not finite).
-  o.Number("max_anchored_error_m", e.max_anchored_error_m,
-           e.finite ? "" : "not computed: " + e.reason)
-      .Integer("update_failures", run.estimate_failures)
-      .Integer("frames_without_tracks", run.frames_without_tracks)
-      .Number("tracked_per_frame", run.mean_tracked, "no frame was processed")
-      .Number("seconds", run.seconds, "", 3);
-  o.Raw("integrity", IntegrityJson(run, indent + 2));
+  SetNumber(&o, "max_anchored_error_m", e.max_anchored_error_m,
+            e.finite ? "" : "not computed: " + e.reason);
+  o["update_failures"] = run.estimate_failures;
+  o["frames_without_tracks"] = run.frames_without_tracks;
+  SetNumber(&o, "tracked_per_frame", run.mean_tracked, "no frame was processed");
+  SetNumber(&o, "seconds", run.seconds);
+  o["integrity"] = IntegrityJson(run);
   if (run.options.imu) {
-    JsonObject imu;
-    imu.Integer("samples_accepted", run.imu_samples_accepted)
-        .Integer("samples_dropped", run.imu_samples_dropped)
-        .Integer("intervals_bridged", run.imu_intervals_bridged);
+    Json imu = {{"samples_accepted", run.imu_samples_accepted},
+                {"samples_dropped", run.imu_samples_dropped},
+                {"intervals_bridged", run.imu_intervals_bridged}};
     if (run.has_biases) {
       const Vec3D& g = run.gyro_bias_radps;
       const Vec3D& a = run.accel_bias_mps2;
-      imu.Raw("gyro_bias_radps", JsonArray({g.x(), g.y(), g.z()}))
-          .Raw("accel_bias_mps2", JsonArray({a.x(), a.y(), a.z()}));
+      imu["gyro_bias_radps"] = Numbers({g.x(), g.y(), g.z()});
+      imu["accel_bias_mps2"] = Numbers({a.x(), a.y(), a.z()});
     }
-    o.Raw("imu", imu.Text(indent + 2));
+    o["imu"] = imu;
   }
-  if (!trajectory.empty()) o.String("trajectory", trajectory);
-  if (!run.frames.empty()) o.Raw("checkpoints", Checkpoints(run, sequence, indent));
-  return o.Text(indent);
+  if (!trajectory.empty()) o["trajectory"] = trajectory;
+  if (!run.frames.empty()) o["checkpoints"] = Checkpoints(run, sequence);
+  return o;
 }
 
 std::string RunsTable(const std::vector<RunRecord>& runs) {

@@ -7,14 +7,14 @@
 #include <string>
 #include <vector>
 
+#include "json.hpp"
 #include "sequence.hpp"
 
 namespace swf::eval {
 
 // The run as a JSON object (accuracy fields null with "<field>_reason" unless the run is ok).
 // `trajectory`: the file the estimate was written to ("" = none).
-std::string RunJson(const RunRecord& run, const StereoSequence& sequence,
-                    const std::string& trajectory, int indent);
+Json RunJson(const RunRecord& run, const StereoSequence& sequence, const std::string& trajectory);
 
 // Markdown table of the runs: verdict, ATE, final anchored error, relative errors, tracks.
 std::string RunsTable(const std::vector<RunRecord>& runs);

@@ -17,6 +17,7 @@
 #include "commands.hpp"
 #include "experiment_file.hpp"
 #include "experiments.hpp"
+#include "json.hpp"
 #include "kitti_vo.hpp"
 #include "run_filter.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
@@ -38,10 +39,15 @@ using swf::estimator::Vec3;
 using swf::eval::BigBatch;
 using swf::eval::Filter;
 using swf::eval::InverseDepthFilter;
+using swf::eval::Json;
 using swf::eval::kMotionSigmaM;
 using swf::eval::kMotionSigmaRad;
+using swf::eval::Numbers;
+using swf::eval::Output;
 using swf::eval::RunFilter;
 using swf::eval::Series;
+using swf::eval::SetNumber;
+using swf::eval::SetNumbers;
 using swf::eval::Trace;
 using swf::eval::WriteExperiment;
 using Figure = swf::eval::Figure;
@@ -170,7 +176,7 @@ std::string NeesVerdict(const char* what, double mean, double dof, double lower,
   return text;
 }
 
-bool AddNees(const std::string& out, int runs, std::string* md) {
+bool AddNees(const Output& out, int runs, std::string* md) {
   using swf::eval::NeesOptions;
   using swf::eval::NeesResult;
   // The Fig. 15 scene (sideways at 50 m, ~25 features per frame, landmarks entering and leaving)
@@ -222,7 +228,7 @@ bool AddNees(const std::string& out, int runs, std::string* md) {
   const NeesResult& first = results.front();
   std::vector<Series> pose;
   std::vector<Series> landmark;
-  std::string summary = "  \"runs\": " + std::to_string(runs) + ",\n  \"configs\": [";
+  Json config_json = Json::array();
   char buf[2048];
   for (std::size_t i = 0; i < results.size(); ++i) {
     const NeesResult& r = results[i];
@@ -230,29 +236,29 @@ bool AddNees(const std::string& out, int runs, std::string* md) {
     pose.push_back({r.name, std::vector<double>(r.pose_nees.begin() + 1, r.pose_nees.end())});
     landmark.push_back(
         {r.name, std::vector<double>(r.landmark_nees.begin() + 1, r.landmark_nees.end())});
-    std::snprintf(
-        buf, sizeof(buf),
-        "%s\n    {\"name\": \"%s\", \"mean_pose_nees\": %.6g, \"mean_landmark_nees\": %.6g, "
-        "\"pose_fraction_inside\": %.4g, \"landmark_fraction_inside\": %.4g, "
-        "\"pose_consistent\": %s, \"landmark_consistent\": %s, \"covariance_failures\": %d, "
-        "\"update_failures\": %d, \"final_error_m\": [%.4g, %.4g, %.4g], "
-        "\"final_sigma_m\": [%.4g, %.4g, %.4g], \"mean_poses\": %.4g, \"max_poses\": %d}",
-        i ? "," : "", r.name.c_str(), r.mean_pose_nees, r.mean_landmark_nees,
-        r.pose_fraction_inside, r.landmark_fraction_inside,
-        r.mean_pose_nees >= r.pose_lower && r.mean_pose_nees <= r.pose_upper ? "true" : "false",
-        r.mean_landmark_nees >= r.landmark_lower && r.mean_landmark_nees <= r.landmark_upper
-            ? "true"
-            : "false",
-        r.covariance_failures, r.update_failures, r.final_error_m[0], r.final_error_m[1],
-        r.final_error_m[2], r.final_sigma_m[0], r.final_sigma_m[1], r.final_sigma_m[2],
-        r.mean_poses, r.max_poses);
-    summary += buf;
+    Json config = {{"name", r.name}};
+    SetNumber(&config, "mean_pose_nees", r.mean_pose_nees);
+    SetNumber(&config, "mean_landmark_nees", r.mean_landmark_nees);
+    SetNumber(&config, "pose_fraction_inside", r.pose_fraction_inside);
+    SetNumber(&config, "landmark_fraction_inside", r.landmark_fraction_inside);
+    config["pose_consistent"] =
+        r.mean_pose_nees >= r.pose_lower && r.mean_pose_nees <= r.pose_upper;
+    config["landmark_consistent"] =
+        r.mean_landmark_nees >= r.landmark_lower && r.mean_landmark_nees <= r.landmark_upper;
+    config["covariance_failures"] = r.covariance_failures;
+    config["update_failures"] = r.update_failures;
+    config["final_error_m"] = Numbers({r.final_error_m[0], r.final_error_m[1], r.final_error_m[2]});
+    config["final_sigma_m"] = Numbers({r.final_sigma_m[0], r.final_sigma_m[1], r.final_sigma_m[2]});
+    SetNumber(&config, "mean_poses", r.mean_poses);
+    config["max_poses"] = r.max_poses;
+    config_json.push_back(config);
   }
-  std::snprintf(buf, sizeof(buf),
-                "\n  ],\n  \"pose_dof\": 6, \"pose_lower_95\": %.6g, \"pose_upper_95\": %.6g,\n"
-                "  \"landmark_dof\": 3, \"landmark_lower_95\": %.6g, \"landmark_upper_95\": %.6g",
-                first.pose_lower, first.pose_upper, first.landmark_lower, first.landmark_upper);
-  summary += buf;
+  Json summary = {{"runs", runs}, {"configs", config_json}, {"pose_dof", 6}};
+  SetNumber(&summary, "pose_lower_95", first.pose_lower);
+  SetNumber(&summary, "pose_upper_95", first.pose_upper);
+  summary["landmark_dof"] = 3;
+  SetNumber(&summary, "landmark_lower_95", first.landmark_lower);
+  SetNumber(&summary, "landmark_upper_95", first.landmark_upper);
   const std::size_t frames = first.pose_nees.size() - 1;
   std::vector<double> frame_numbers;
   for (std::size_t k = 0; k < frames; ++k) frame_numbers.push_back(static_cast<double>(k + 2));
@@ -352,7 +358,7 @@ bool AddNees(const std::string& out, int runs, std::string* md) {
 // Fig. 2b: depth error against the distance off the optical axis after 25 frames of a descent
 // at 10 m/s and 10 Hz from 100 m to 75 m (the focus of expansion is the nadir): the estimators'
 // RMS error of the landmarks' heights and the Cramer-Rao bound, after one frame and after all.
-bool AddFig02b(const std::string& out, int monte_carlo_runs, std::string* md) {
+bool AddFig02b(const Output& out, int monte_carlo_runs, std::string* md) {
   // Four scenes per Monte Carlo run: a 2 m bin at the axis holds about 2 of a scene's landmarks.
   const int runs = 4 * monte_carlo_runs;
   SceneOptions so;
@@ -436,20 +442,14 @@ bool AddFig02b(const std::string& out, int monte_carlo_runs, std::string* md) {
   const std::vector<double>& bt = series[1].y;
   const std::vector<double>& cl = series[2].y;
   const std::vector<double>& c1 = series[3].y;
-  const auto json_list = [](const std::vector<double>& v) {
-    std::string text;
-    for (double e : v)
-      text +=
-          (text.empty() ? "" : ", ") + (std::isfinite(e) ? std::to_string(e) : std::string("null"));
-    return "[" + text + "]";
-  };
-  std::vector<double> counts;
-  for (int b = 0; b < kBins; ++b) counts.push_back(swf5.count[b]);
-  const std::string json =
-      "  \"runs\": " + std::to_string(runs) +
-      ", \"bin_m\": 2, \"landmarks_per_bin\": " + json_list(counts) +
-      ", \"swf5_rms_m\": " + json_list(s) + ", \"batch_rms_m\": " + json_list(bt) +
-      ", \"crlb_25_frames_m\": " + json_list(cl) + ", \"crlb_first_frame_m\": " + json_list(c1);
+  // An empty bin has no RMS: null in the lists.
+  const Json json = {{"runs", runs},
+                     {"bin_m", kBinM},
+                     {"landmarks_per_bin", swf5.count},
+                     {"swf5_rms_m", Numbers(s)},
+                     {"batch_rms_m", Numbers(bt)},
+                     {"crlb_25_frames_m", Numbers(cl)},
+                     {"crlb_first_frame_m", Numbers(c1)}};
   const Figure figure{
       "Fig. 2b: height error off the optical axis, 100 m to 75 m (" + RunsText(runs) + ")",
       "distance off the optical axis at the ground after 25 frames (m)",
@@ -480,7 +480,7 @@ bool AddFig02b(const std::string& out, int monte_carlo_runs, std::string* md) {
   return true;
 }
 
-bool AddFig16(const std::string& out, int runs, std::string* md) {
+bool AddFig16(const Output& out, int runs, std::string* md) {
   swf::eval::TrackLengthOptions o;
   o.runs = runs;
   const auto points = swf::eval::RunTrackLengthStudy(o);
@@ -489,26 +489,20 @@ bool AddFig16(const std::string& out, int runs, std::string* md) {
   for (std::size_t w = 0; w < o.windows.size(); ++w) {
     series.push_back({"SWF(" + std::to_string(o.windows[w]) + ")", {}});
   }
-  std::string rows;
+  Json rows = Json::array();
   char buf[2048];
   double features = 0.0;
   for (const auto& p : points) {
     x.push_back(p.mean_track_length);
     features += p.mean_features_per_frame / static_cast<double>(points.size());
     for (std::size_t w = 0; w < o.windows.size(); ++w) series[w].y.push_back(p.final_mse_m2[w]);
-    std::string mse;
-    for (std::size_t w = 0; w < o.windows.size(); ++w) {
-      mse += (w ? ", " : "") + std::to_string(p.final_mse_m2[w]);
-    }
-    std::snprintf(buf, sizeof(buf),
-                  "%s\n    {\"step_m\": %.4g, \"mean_track_length\": %.4g, "
-                  "\"features_per_frame\": %.4g, \"final_mse_m2\": [",
-                  rows.empty() ? "" : ",", p.step_m, p.mean_track_length,
-                  p.mean_features_per_frame);
-    rows += buf + mse + "]}";
+    Json row = Json::object();
+    SetNumber(&row, "step_m", p.step_m);
+    SetNumber(&row, "mean_track_length", p.mean_track_length);
+    SetNumber(&row, "features_per_frame", p.mean_features_per_frame);
+    row["final_mse_m2"] = Numbers(p.final_mse_m2);
+    rows.push_back(row);
   }
-  std::string windows;
-  for (int k : o.windows) windows += (windows.empty() ? "" : ", ") + std::to_string(k);
   // How much each axis moves the MSE: the largest max/min ratio along a row (window, fixed track
   // length) and along a column (track length, fixed window).
   double across_windows = 1.0;
@@ -521,17 +515,15 @@ bool AddFig16(const std::string& out, int runs, std::string* md) {
     const auto [lo, hi] = std::minmax_element(s.y.begin(), s.y.end());
     across_tracks = std::max(across_tracks, *hi / *lo);
   }
-  std::snprintf(buf, sizeof(buf),
-                "  \"runs\": %d, \"frames\": %d, \"windows\": [%s],\n"
-                "  \"max_ratio_across_windows\": %.4g, \"max_ratio_across_track_lengths\": %.4g,\n"
-                "  \"points\": [",
-                runs, o.frames, windows.c_str(), across_windows, across_tracks);
+  Json summary = {{"runs", runs}, {"frames", o.frames}, {"windows", o.windows}};
+  SetNumber(&summary, "max_ratio_across_windows", across_windows);
+  SetNumber(&summary, "max_ratio_across_track_lengths", across_tracks);
+  summary["points"] = rows;
   const Figure figure{"Fig. 16: final landmark error against track length, per window size (" +
                           RunsText(runs) + ")",
                       "average track length (frames)", "final landmark mean squared error (m^2)",
                       true};
-  if (!WriteExperiment(out, "fig16_track_length", figure, series, std::string(buf) + rows + "\n  ]",
-                       x)) {
+  if (!WriteExperiment(out, "fig16_track_length", figure, series, summary, x)) {
     return false;
   }
   auto add = [md](const std::string& line) { *md += line + "\n"; };
@@ -663,6 +655,9 @@ int main(int argc, char** argv) {
   if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
     return code;
   }
+  // Echoed as "run" into every JSON file the command writes (docs/cli.md).
+  const swf::eval::Json run(swf::ground_cli::RunEcho(app, "swf-eval", argc, argv));
+  sequence.run = run;
   if (motion_sigma.size() == 2) {
     sequence.motion_sigma_m = motion_sigma[0];
     sequence.motion_sigma_rad = motion_sigma[1];
@@ -678,6 +673,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "swf-eval paper: %s\n", dir_error.c_str());
     return 1;
   }
+  const Output output{out, run};
   auto want = [&only](const char* name) {
     return only.empty() || only.find("," + std::string(name) + ",") != std::string::npos;
   };
@@ -708,7 +704,7 @@ int main(int argc, char** argv) {
   add("");
 
   // Fig. 2b: depth error at the focus of expansion against the CRLB.
-  if (want("fig02b") && !AddFig02b(out, runs, &md)) return 1;
+  if (want("fig02b") && !AddFig02b(output, runs, &md)) return 1;
   // Fig. 12: static cameras, 30 landmarks.
   if (want("fig12")) {
     SceneOptions so = swf::scene::StaticRig();
@@ -718,13 +714,14 @@ int main(int argc, char** argv) {
     for (std::size_t k = 0; k < swf5.y.size(); ++k) one_over_m.y.push_back(swf5.y[0] / (k + 1));
     so.seed = 100;
     Series crlb{"CRLB", CramerRao(so)};
-    std::snprintf(buf, sizeof(buf),
-                  "  \"runs\": %d, \"mse_m2_at_40\": %.6g, \"crlb_m2_at_40\": %.6g", runs,
-                  swf5.y.back(), crlb.y.back());
+    Json summary = {{"runs", runs}};
+    SetNumbers(&summary, {{"mse_m2_at_40", swf5.y.back()}, {"crlb_m2_at_40", crlb.y.back()}});
     const Figure figure{
         "Fig. 12: landmark error with static cameras, 30 landmarks (" + RunsText(runs) + ")",
         "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(out, "fig12_static", figure, {swf5, one_over_m, crlb}, buf)) return 1;
+    if (!WriteExperiment(output, "fig12_static", figure, {swf5, one_over_m, crlb}, summary)) {
+      return 1;
+    }
     add_figure("## Fig. 12: static cameras, 30 landmarks", "![fig12](eval/fig12_static.png)");
     const double vs_one_over_m = swf5.y.back() / one_over_m.y.back();
     std::snprintf(
@@ -766,24 +763,26 @@ int main(int argc, char** argv) {
     so.seed = 100;
     s.push_back(Series{"CRLB", CramerRao(so)});
     // The paper's claim: over 10 frames SWF error ~76% below VO, std ~3.5x smaller.
-    std::snprintf(
-        buf, sizeof(buf),
-        "  \"runs\": %d, \"final_rms_m\": {\"batch\": %.6g, \"swf3\": %.6g, \"swf10\": %.6g, "
-        "\"vo10\": %.6g, \"swf3_relinearized\": %.6g},\n"
-        "  \"swf10_error_below_vo10_percent\": %.3g,\n"
-        "  \"vo10_std_over_swf10_std\": %.3g,\n  \"vo2_final_rms_m\": %.6g, "
-        "\"swf10_error_below_vo2_percent\": %.3g, \"vo2_std_over_swf10_std\": %.3g",
-        runs, Mean(rms_batch), Mean(rms_s3), Mean(rms_s10), Mean(rms_vo), Mean(rms_plain3),
-        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)),
-        SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12), Mean(rms_vo2),
-        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
-        SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12));
+    Json final_rms = Json::object();
+    SetNumbers(&final_rms, {{"batch", Mean(rms_batch)},
+                            {"swf3", Mean(rms_s3)},
+                            {"swf10", Mean(rms_s10)},
+                            {"vo10", Mean(rms_vo)},
+                            {"swf3_relinearized", Mean(rms_plain3)}});
+    Json summary = {{"runs", runs}, {"final_rms_m", final_rms}};
+    SetNumbers(
+        &summary,
+        {{"swf10_error_below_vo10_percent", 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo))},
+         {"vo10_std_over_swf10_std", SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12)},
+         {"vo2_final_rms_m", Mean(rms_vo2)},
+         {"swf10_error_below_vo2_percent", 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2))},
+         {"vo2_std_over_swf10_std", SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12)}});
     const Figure figure{
         "Fig. 13: landmark error against window size on the descent, 150 "
         "landmarks, 100 m to 41.5 m (" +
             RunsText(runs) + ")",
         "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(out, "fig13_descent", figure, s, buf)) return 1;
+    if (!WriteExperiment(output, "fig13_descent", figure, s, summary)) return 1;
     add_figure("## Fig. 13: descent, 150 landmarks tracked throughout (100 m to 41.5 m)",
                "![fig13](eval/fig13_descent.png)");
     std::snprintf(
@@ -836,30 +835,31 @@ int main(int argc, char** argv) {
     }
     const Trace s10 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 10, 1);
     const Trace s20 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 20, 1);
-    std::snprintf(buf, sizeof(buf), "  \"note\": \"wall-clock ms of Update() on the 2-core VM\"");
     const Figure runtime{"Fig. 14a: time of one filter update, sideways motion (one run)",
                          "frame number", "Update() wall-clock time (ms)", true};
     if (!WriteExperiment(
-            out, "fig14a_runtime", runtime,
+            output, "fig14a_runtime", runtime,
             {{"batch", batch.update_ms}, {"SWF(10)", s10.update_ms}, {"SWF(20)", s20.update_ms}},
-            buf))
+            {{"note", "wall-clock ms of Update() on the 2-core VM"}})) {
       return 1;
+    }
     so.step_m = 4.4;  // ~5-frame tracks
     so.landmark_density_per_m2 = 0.08;
     so.frames = 100;
     const SyntheticScene scene_b(so);
     const Trace with = RunFilter<Filter>(scene_b, SwfMode::kSlidingWindow, 2, 1);
     const Trace without = RunFilter<BigBatch>(scene_b, SwfMode::kBatch, 100, 1);
-    std::snprintf(buf, sizeof(buf),
-                  "  \"mean_state_dim_swf2\": %.4g, \"final_state_dim_batch\": %.4g",
-                  Mean(with.state_dim), without.state_dim.back());
+    Json state_summary = Json::object();
+    SetNumbers(&state_summary, {{"mean_state_dim_swf2", Mean(with.state_dim)},
+                                {"final_state_dim_batch", without.state_dim.back()}});
     const Figure state{"Fig. 14b: state-vector size with and without marginalization",
                        "frame number", "state dimension (scalars)", false};
-    if (!WriteExperiment(out, "fig14b_state_size", state,
+    if (!WriteExperiment(output, "fig14b_state_size", state,
                          {{"SWF(2) with marginalization", with.state_dim},
                           {"without marginalization", without.state_dim}},
-                         buf))
+                         state_summary)) {
       return 1;
+    }
     add_figure("## Fig. 14: run time and state size",
                "![fig14a](eval/fig14a_runtime.png) ![fig14b](eval/fig14b_state_size.png)");
     std::snprintf(
@@ -896,11 +896,10 @@ int main(int argc, char** argv) {
         MonteCarlo("SWF(2) relinearized", so, runs, plain(SwfMode::kSlidingWindow, 2, false)));
     s.push_back(MonteCarlo("SWF(2) relinearized, inverse depth", so, runs,
                            plain(SwfMode::kSlidingWindow, 2, true)));
-    std::snprintf(buf, sizeof(buf), "  \"runs\": %d", runs);
     const Figure figure{
         "Fig. 15: landmark error with sideways motion, ~85% overlap (" + RunsText(runs) + ")",
         "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(out, "fig15_sideways", figure, s, buf)) return 1;
+    if (!WriteExperiment(output, "fig15_sideways", figure, s, {{"runs", runs}})) return 1;
     add_figure("## Fig. 15: sideways motion, ~85% overlap", "![fig15](eval/fig15_sideways.png)");
     std::snprintf(
         buf, sizeof(buf),
@@ -918,7 +917,7 @@ int main(int argc, char** argv) {
     add("");
   }
   // Fig. 16: final map MSE against average track length and window size.
-  if (want("fig16") && !AddFig16(out, runs, &md)) return 1;
+  if (want("fig16") && !AddFig16(output, runs, &md)) return 1;
   // Fig. 17: VSDF against SWF with three active frames, every landmark in every frame. The VSDF
   // twice: eq. 12 as we fly it (the Schur term's blocks within each variable) and read literally
   // (only its scalar diagonal, SwfOptions::vsdf_scalar_diagonal).
@@ -948,21 +947,27 @@ int main(int argc, char** argv) {
     const double diagonal = Median(mse_diagonal);
     int diverged = 0;  // runs ending above 10x the median SWF(3) MSE
     for (double m : mse_diagonal) diverged += m > 10.0 * swf3 ? 1 : 0;
-    std::snprintf(
-        buf, sizeof(buf),
-        "  \"runs\": %d, \"final_mse_m2_mean\": {\"swf3\": %.6g, \"vsdf3_block\": "
-        "%.6g, \"batch\": %.6g, \"vsdf3_diagonal\": %.6g},\n  "
-        "\"final_mse_m2_median\": {\"swf3\": %.6g, \"vsdf3_block\": %.6g, "
-        "\"vsdf3_diagonal\": %.6g},\n  \"failed_updates\": {\"swf3\": %d, "
-        "\"vsdf3_block\": %d, \"vsdf3_diagonal\": %d}, \"vsdf3_diagonal_diverged_runs\": %d",
-        runs, s[0].y.back(), s[1].y.back(), s[2].y.back(), s[3].y.back(), swf3, block, diagonal,
-        failed_swf, failed_block, failed_diagonal, diverged);
+    Json mean_mse = Json::object();
+    SetNumbers(&mean_mse, {{"swf3", s[0].y.back()},
+                           {"vsdf3_block", s[1].y.back()},
+                           {"batch", s[2].y.back()},
+                           {"vsdf3_diagonal", s[3].y.back()}});
+    Json median_mse = Json::object();
+    SetNumbers(&median_mse, {{"swf3", swf3}, {"vsdf3_block", block}, {"vsdf3_diagonal", diagonal}});
+    const Json summary = {{"runs", runs},
+                          {"final_mse_m2_mean", mean_mse},
+                          {"final_mse_m2_median", median_mse},
+                          {"failed_updates",
+                           {{"swf3", failed_swf},
+                            {"vsdf3_block", failed_block},
+                            {"vsdf3_diagonal", failed_diagonal}}},
+                          {"vsdf3_diagonal_diverged_runs", diverged}};
     const Figure figure{
         "Fig. 17: landmark error of VSDF and SWF, 3 active frames, 100 "
         "landmarks (" +
             RunsText(runs) + ")",
         "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(out, "fig17_vsdf", figure, s, buf)) return 1;
+    if (!WriteExperiment(output, "fig17_vsdf", figure, s, summary)) return 1;
     add_figure("## Fig. 17: VSDF against SWF, 3 active frames", "![fig17](eval/fig17_vsdf.png)");
     const auto verdict = [swf3](double vsdf) {
       return vsdf > 1.2 * swf3 ? "worse than SWF(3), the paper's ordering"
@@ -1005,7 +1010,7 @@ int main(int argc, char** argv) {
     add("");
   }
   // Consistency: NEES over Monte Carlo runs.
-  if (want("nees") && !AddNees(out, nees_runs, &md)) return 1;
+  if (want("nees") && !AddNees(output, nees_runs, &md)) return 1;
   // Real data: kitti-vo batch against sliding windows on the same global cost.
   if (want("kitti")) {
     swf::tools::KittiVoProblem problem;
@@ -1020,7 +1025,7 @@ int main(int argc, char** argv) {
     const auto batch = solver.Solve(problem, 0);
     Series cost{"final cost", {}};
     Series dpos{"max position difference to batch (m)", {}};
-    std::string list;
+    Json list = Json::array();
     std::vector<double> windows;
     for (int k : {2, 3, 5, 10, 20}) {
       windows.push_back(k);
@@ -1030,20 +1035,18 @@ int main(int argc, char** argv) {
         worst = std::max(worst, (r.poses[j].t - batch.poses[j].t).norm());
       cost.y.push_back(r.final_cost);
       dpos.y.push_back(worst);
-      std::snprintf(buf, sizeof(buf),
-                    "%s{\"window\": %d, \"final_cost\": %.10g, \"max_position_diff_m\": %.6g}",
-                    list.empty() ? "" : ", ", k, r.final_cost, worst);
-      list += buf;
+      Json row = {{"window", k}};
+      SetNumbers(&row, {{"final_cost", r.final_cost}, {"max_position_diff_m", worst}});
+      list.push_back(row);
     }
-    std::snprintf(buf, sizeof(buf),
-                  "  \"initial_cost\": %.10g, \"batch_final_cost\": %.10g,\n  \"windows\": [",
-                  batch.initial_cost, batch.final_cost);
+    Json summary = Json::object();
+    SetNumbers(&summary,
+               {{"initial_cost", batch.initial_cost}, {"batch_final_cost", batch.final_cost}});
+    summary["windows"] = list;
     const Figure figure{"kitti-vo: sliding windows against batch on the same global cost",
                         "window size (frames)",
                         "final cost (unitless), position difference to batch (m)", true};
-    if (!WriteExperiment(out, "kitti_windows", figure, {cost, dpos}, std::string(buf) + list + "]",
-                         windows))
-      return 1;
+    if (!WriteExperiment(output, "kitti_windows", figure, {cost, dpos}, summary, windows)) return 1;
     add("## Real data: kitti-vo, batch against sliding windows");
     add("");
     std::snprintf(

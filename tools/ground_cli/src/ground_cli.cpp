@@ -117,9 +117,26 @@ nlohmann::json RunEcho(const CLI::App& app, const char* tool, int argc, char** a
           {"options", OptionsOf(app)}};
 }
 
+namespace {
+
+template <typename Document>
+bool WriteDocument(const std::string& path, const Document& document, std::string* error,
+                   int indent) {
+  const std::string text =
+      document.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+  return cli::WriteFileAtomically(path, text, error);
+}
+
+}  // namespace
+
 bool WriteJson(const std::string& path, const nlohmann::json& document, std::string* error,
                int indent) {
-  return cli::WriteFileAtomically(path, document.dump(indent) + "\n", error);
+  return WriteDocument(path, document, error, indent);
+}
+
+bool WriteJson(const std::string& path, const nlohmann::ordered_json& document, std::string* error,
+               int indent) {
+  return WriteDocument(path, document, error, indent);
 }
 
 nlohmann::json Number(double value) {

@@ -26,8 +26,12 @@ int Parse(CLI::App* app, int argc, char** argv);
 nlohmann::json RunEcho(const CLI::App& app, const char* tool, int argc, char** argv);
 
 // A JSON document, dumped with `indent`, into `path` through swf::cli::OutputFile (directories
-// created, whole or not at all). JSON has no inf or nan: nlohmann writes them as null.
+// created, whole or not at all). JSON has no inf or nan: nlohmann writes them as null; bytes that
+// are not UTF-8 (a path from the command line) are replaced, not thrown on.
 bool WriteJson(const std::string& path, const nlohmann::json& document, std::string* error,
+               int indent = 2);
+// The same for a document whose fields keep their insertion order.
+bool WriteJson(const std::string& path, const nlohmann::ordered_json& document, std::string* error,
                int indent = 2);
 
 // A finite number, or null (JSON has no inf/nan).
