@@ -1,12 +1,15 @@
 // swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth.
 //   swf-sim --out DIR [--scenario descent|hover|sideways|lab] [--terrain plains|craters|rocks]
 //           [--frames N] [--every K] [--seed S] [--shared DIR] [--spp 1|4] [--lcm URL] [--no-png]
+//           [--summary PATH]
 // --out is required: the whole default descent is ~160 MB of PNGs, not something to start by
 // accident (`swf-sim` alone prints its usage, exit 2).
 // Writes DIR/left_NNNN.png, right_NNNN.png, poses.csv (t_ns, position, quaternion x y z w of
 // world_T_camera), landmarks.csv + observations.csv (measurement-level truth on the same terrain),
 // craters.csv, rocks.csv, terrain_hazard.png (terrain height | hazard truth) and
 // contact_sheet.png (12 left frames labelled with frame and altitude), drawn by swf::plot.
+// The summary (default DIR/summary.json): "ok", or "failed" with the reason; the files written,
+// the counts and the run echoed (docs/cli.md).
 // Progress goes to stderr.
 // --lcm URL also publishes every rendered pair as it is rendered: STEREO (stereo_frame_t), TRUTH
 // (truth_state_t) and TRUTH_LANDMARKS (landmark_map_t), see swf/sim/lcm_publisher.hpp; --no-png
@@ -33,14 +36,37 @@ namespace {
 
 using swf::core::Status;
 
-int Fail(const char* what, Status s) {
-  std::fprintf(stderr, "swf-sim: %s failed: %s\n", what, swf::core::ToString(s));
-  return 1;
+using Json = nlohmann::ordered_json;
+
+// What the command line asked for.
+struct Settings {
+  std::string scenario = "descent";
+  std::string terrain_name = "craters";
+  std::string out;
+  std::string shared = "../shared";
+  int max_frames = -1;
+  int every = 1;
+  int spp = 1;
+  std::uint64_t seed = 1;
+  std::string lcm_url;
+  bool no_png = false;
+};
+
+// The failure into the summary ("reason") and on stderr; the exit status.
+int Failed(const std::string& reason, Json* summary) {
+  std::fprintf(stderr, "swf-sim: %s\n", reason.c_str());
+  (*summary)["reason"] = reason;
+  return swf::cli::kExitFailed;
 }
 
-// The terrain and its hazard truth (swf::plot); false with the reason on stderr.
+int Fail(const char* what, Status s, Json* summary) {
+  return Failed(std::string(what) + " failed: " + swf::core::ToString(s), summary);
+}
+
+// The terrain and its hazard truth (swf::plot); false with *error saying why.
 bool DrawTerrainHazard(const swf::sim::Terrain& terrain, const swf::sim::HazardMap& hazard,
-                       const std::string& terrain_name, const std::string& path) {
+                       const std::string& terrain_name, const std::string& path,
+                       std::string* error) {
   swf::plot::HeightGrid grid;
   grid.size = terrain.Size();
   grid.cell_m = terrain.CellM();
@@ -49,11 +75,10 @@ bool DrawTerrainHazard(const swf::sim::Terrain& terrain, const swf::sim::HazardM
   grid.height_m = terrain.Heights();
   grid.hazard_bits = hazard.hazard;
   const double origin[2] = {0.0, 0.0};
-  std::string error;
   if (swf::plot::DrawTerrainHazard(
-          grid, false, origin, "Terrain '" + terrain_name + "' and its hazard truth", path, &error))
+          grid, false, origin, "Terrain '" + terrain_name + "' and its hazard truth", path, error))
     return true;
-  std::fprintf(stderr, "swf-sim: cannot draw %s\n", error.c_str());
+  *error = "cannot draw " + *error;
   return false;
 }
 
@@ -69,64 +94,28 @@ Status WritePngWhole(const std::string& path, const std::uint8_t* pixels, std::i
   return s;
 }
 
-// A CSV file written whole (swf::cli::OutputFile): the header, then `rows` writes the lines.
+// A CSV file written whole (swf::cli::OutputFile): the header, then `rows` writes the lines;
+// false with *error saying why.
 template <typename Rows>
-bool WriteCsv(const std::string& path, const char* header, const Rows& rows) {
+bool WriteCsv(const std::string& path, const char* header, const Rows& rows, std::string* error) {
   swf::cli::OutputFile out;
-  std::string error;
-  if (out.Open(path, &error)) {
-    std::fputs(header, out.Stream());
-    rows(out.Stream());
-    if (out.Commit(&error)) return true;
-  }
-  std::fprintf(stderr, "swf-sim: %s\n", error.c_str());
-  return false;
+  if (!out.Open(path, error)) return false;
+  std::fputs(header, out.Stream());
+  rows(out.Stream());
+  return out.Commit(error);
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  std::string scenario = "descent";
-  std::string terrain_name = "craters";
-  std::string out;
-  std::string shared = "../shared";
-  if (const char* env = std::getenv("SWF_SHARED_DIR")) shared = env;
-  int max_frames = -1;
-  int every = 1;
-  int spp = 1;
-  std::uint64_t seed = 1;
-  std::string lcm_url;
-  bool no_png = false;
-  CLI::App app{
-      "swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth "
-      "(sim/README.md)"};
-  swf::ground_cli::Adopt(&app, "swf-sim");
-  app.add_option("--out", out, "output directory (created); the default descent is ~160 MB")
-      ->required();
-  app.add_option("--scenario", scenario)
-      ->capture_default_str()
-      ->check(CLI::IsMember({"descent", "hover", "sideways", "lab"}));
-  app.add_option("--terrain", terrain_name)
-      ->capture_default_str()
-      ->check(CLI::IsMember({"plains", "craters", "rocks"}));
-  app.add_option("--frames", max_frames, "at most N frames (default: the whole scenario)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--every", every, "render every K-th frame")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  app.add_option("--seed", seed)->capture_default_str();
-  app.add_option("--shared", shared, "the shared data directory (orbital imagery)")
-      ->capture_default_str();
-  app.add_option("--spp", spp, "samples per pixel")
-      ->capture_default_str()
-      ->check(CLI::IsMember({1, 4}));
-  app.add_option("--lcm", lcm_url, "also publish every pair and its truth on this LCM URL");
-  app.add_flag("--no-png", no_png, "no per-frame PNG files (streaming only)");
-  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
-    return code;
-  }
-  const bool write_png = !no_png;
-  swf::cli::RemovePartialOutputsOnSignal();
+// Renders the scenario into settings.out; the exit status, with what was written (or why not)
+// in *summary.
+int Simulate(const Settings& settings, Json* summary) {
+  const std::string& scenario = settings.scenario;
+  const std::string& terrain_name = settings.terrain_name;
+  const std::string& out = settings.out;
+  const std::uint64_t seed = settings.seed;
+  const std::string& lcm_url = settings.lcm_url;
+  const bool write_png = !settings.no_png;
   swf::sim::RigOptions rig = swf::sim::EdlRig();
   swf::sim::TrajectoryOptions traj;
   double scale = 1.0;
@@ -141,95 +130,108 @@ int main(int argc, char** argv) {
     traj = swf::sim::LabTrajectory(15.0);
     scale = 0.1;
   } else {
-    std::fprintf(stderr, "swf-sim: unknown scenario '%s'\n", scenario.c_str());
-    return 2;
+    return Failed("unknown scenario '" + scenario + "'", summary);
   }
   traj.seed = seed;
   swf::sim::TerrainPreset preset;
   if (!swf::sim::ParseTerrainPreset(terrain_name.c_str(), &preset)) {
-    std::fprintf(stderr, "swf-sim: unknown terrain '%s'\n", terrain_name.c_str());
-    return 2;
+    return Failed("unknown terrain '" + terrain_name + "'", summary);
   }
-  if (std::string error; !swf::cli::MakeDirectories(out, &error)) {
-    std::fprintf(stderr, "swf-sim: --out: %s\n", error.c_str());
-    return swf::cli::kExitFailed;
-  }
+  std::string error;
+  if (!swf::cli::MakeDirectories(out, &error)) return Failed("--out: " + error, summary);
+  Json written = Json::array();  // every file, in the order written
 
   std::fprintf(stderr, "swf-sim: terrain '%s' (seed %llu) ...\n", terrain_name.c_str(),
                static_cast<unsigned long long>(seed));
   swf::sim::Terrain terrain;
   swf::sim::TerrainOptions terrain_options =
       swf::sim::ScaleTerrain(swf::sim::TerrainPresetOptions(preset, seed), scale);
-  if (Status s = terrain.Configure(terrain_options); s != Status::kOk) return Fail("terrain", s);
-  swf::sim::AppearanceOptions look = swf::sim::DefaultImagery(shared);
+  if (Status s = terrain.Configure(terrain_options); s != Status::kOk)
+    return Fail("terrain", s, summary);
+  swf::sim::AppearanceOptions look = swf::sim::DefaultImagery(settings.shared);
   look.image_pixel_m *= scale;
   look.seed = seed;
   swf::sim::Appearance appearance;
   if (Status s = appearance.Configure(terrain, look); s != Status::kOk) {
-    return Fail("appearance (is --shared right?)", s);
+    return Fail("appearance (is --shared right?)", s, summary);
   }
   swf::sim::HazardOptions hazard_options;
   hazard_options.max_rock_height_m *= scale;
   hazard_options.slope_baseline_m *= scale;
   swf::sim::HazardMap hazard;
   if (Status s = swf::sim::ComputeHazardTruth(terrain, hazard_options, &hazard); s != Status::kOk) {
-    return Fail("hazard truth", s);
+    return Fail("hazard truth", s, summary);
   }
-  if (!DrawTerrainHazard(terrain, hazard, terrain_name, out + "/terrain_hazard.png"))
-    return swf::cli::kExitFailed;
+  if (!DrawTerrainHazard(terrain, hazard, terrain_name, out + "/terrain_hazard.png", &error)) {
+    return Failed(error, summary);
+  }
+  written.push_back(out + "/terrain_hazard.png");
   const bool terrain_written =
-      WriteCsv(out + "/rocks.csv", "x_m,y_m,diameter_m,height_m,base_z_m\n",
-               [&](std::FILE* f) {
-                 for (const auto& r : terrain.Rocks()) {
-                   std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", r.center_m.x(), r.center_m.y(),
-                                r.diameter_m, r.height_m, r.base_z_m);
-                 }
-               }) &&
-      WriteCsv(out + "/craters.csv", "x_m,y_m,diameter_m,depth_m,rim_height_m\n",
-               [&](std::FILE* f) {
-                 for (const auto& c : terrain.Craters()) {
-                   std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", c.center_m.x(), c.center_m.y(),
-                                c.diameter_m, c.depth_m, c.rim_height_m);
-                 }
-               });
-  if (!terrain_written) return swf::cli::kExitFailed;
+      WriteCsv(
+          out + "/rocks.csv", "x_m,y_m,diameter_m,height_m,base_z_m\n",
+          [&](std::FILE* f) {
+            for (const auto& r : terrain.Rocks()) {
+              std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", r.center_m.x(), r.center_m.y(),
+                           r.diameter_m, r.height_m, r.base_z_m);
+            }
+          },
+          &error) &&
+      WriteCsv(
+          out + "/craters.csv", "x_m,y_m,diameter_m,depth_m,rim_height_m\n",
+          [&](std::FILE* f) {
+            for (const auto& c : terrain.Craters()) {
+              std::fprintf(f, "%.6f,%.6f,%.6f,%.6f,%.6f\n", c.center_m.x(), c.center_m.y(),
+                           c.diameter_m, c.depth_m, c.rim_height_m);
+            }
+          },
+          &error);
+  if (!terrain_written) return Failed(error, summary);
+  written.push_back(out + "/rocks.csv");
+  written.push_back(out + "/craters.csv");
 
   swf::sim::Trajectory trajectory;
-  if (Status s = trajectory.Configure(traj); s != Status::kOk) return Fail("trajectory", s);
+  if (Status s = trajectory.Configure(traj); s != Status::kOk)
+    return Fail("trajectory", s, summary);
   swf::sim::MeasurementOptions mo;
   mo.trajectory = traj;
   mo.rig = rig;
   mo.surface = &terrain;
   mo.seed = seed;
   swf::sim::MeasurementScenario measurements;
-  if (Status s = measurements.Configure(mo); s != Status::kOk) return Fail("measurements", s);
+  if (Status s = measurements.Configure(mo); s != Status::kOk)
+    return Fail("measurements", s, summary);
   const bool measurements_written =
-      WriteCsv(out + "/landmarks.csv", "id,x_m,y_m,z_m\n",
-               [&](std::FILE* f) {
-                 for (size_t i = 0; i < measurements.Landmarks().size(); ++i) {
-                   const auto& l = measurements.Landmarks()[i];
-                   std::fprintf(f, "%zu,%.6f,%.6f,%.6f\n", i, l.x(), l.y(), l.z());
-                 }
-               }) &&
-      WriteCsv(out + "/observations.csv",
-               "frame,landmark_id,u_left_px,u_right_px,v_px,is_outlier\n", [&](std::FILE* f) {
-                 for (int k = 0; k < measurements.NumFrames(); ++k) {
-                   for (const auto& o : measurements.Frame(k).observations) {
-                     std::fprintf(f, "%d,%d,%.6f,%.6f,%.6f,%d\n", k, o.landmark_id, o.u_left_px,
-                                  o.u_right_px, o.v_px, o.is_outlier ? 1 : 0);
-                   }
-                 }
-               });
-  if (!measurements_written) return swf::cli::kExitFailed;
+      WriteCsv(
+          out + "/landmarks.csv", "id,x_m,y_m,z_m\n",
+          [&](std::FILE* f) {
+            for (size_t i = 0; i < measurements.Landmarks().size(); ++i) {
+              const auto& l = measurements.Landmarks()[i];
+              std::fprintf(f, "%zu,%.6f,%.6f,%.6f\n", i, l.x(), l.y(), l.z());
+            }
+          },
+          &error) &&
+      WriteCsv(
+          out + "/observations.csv", "frame,landmark_id,u_left_px,u_right_px,v_px,is_outlier\n",
+          [&](std::FILE* f) {
+            for (int k = 0; k < measurements.NumFrames(); ++k) {
+              for (const auto& o : measurements.Frame(k).observations) {
+                std::fprintf(f, "%d,%d,%.6f,%.6f,%.6f,%d\n", k, o.landmark_id, o.u_left_px,
+                             o.u_right_px, o.v_px, o.is_outlier ? 1 : 0);
+              }
+            }
+          },
+          &error);
+  if (!measurements_written) return Failed(error, summary);
+  written.push_back(out + "/landmarks.csv");
+  written.push_back(out + "/observations.csv");
 
   swf::sim::SimLcmPublisher publisher;
   if (!lcm_url.empty()) {
     if (Status s = publisher.Open(lcm_url); s != Status::kOk) {
-      std::fprintf(stderr,
-                   "swf-sim: cannot open LCM at '%s' (udpm needs a multicast route: run inside "
-                   "`unshare -rn` with `ip route add 239.0.0.0/8 dev lo`, see RECIPES.md)\n",
-                   lcm_url.c_str());
-      return 1;
+      return Failed("cannot open LCM at '" + lcm_url +
+                        "' (udpm needs a multicast route: run inside `unshare -rn` with `ip "
+                        "route add 239.0.0.0/8 dev lo`, see RECIPES.md)",
+                    summary);
     }
   }
   std::vector<std::int32_t> times_observed(measurements.Landmarks().size(), 0);
@@ -238,12 +240,14 @@ int main(int argc, char** argv) {
   swf::sim::RenderOptions ro;
   ro.rig = rig;
   ro.seed = seed;
-  ro.samples_per_pixel = spp;
+  ro.samples_per_pixel = settings.spp;
   swf::sim::Renderer renderer;
-  if (Status s = renderer.Configure(ro); s != Status::kOk) return Fail("renderer", s);
+  if (Status s = renderer.Configure(ro); s != Status::kOk) return Fail("renderer", s, summary);
   std::vector<int> frames;
-  for (int k = 0; k < trajectory.NumFrames(); k += every) frames.push_back(k);
-  if (max_frames >= 0 && static_cast<int>(frames.size()) > max_frames) frames.resize(max_frames);
+  for (int k = 0; k < trajectory.NumFrames(); k += settings.every) frames.push_back(k);
+  if (settings.max_frames >= 0 && static_cast<int>(frames.size()) > settings.max_frames) {
+    frames.resize(settings.max_frames);
+  }
 
   // The contact sheet: 12 left frames spread over the run.
   constexpr int kSheetFrames = 12;
@@ -254,13 +258,11 @@ int main(int argc, char** argv) {
   std::vector<swf::plot::ContactFrame> sheet;
 
   swf::cli::OutputFile poses_file;
-  if (std::string error; !poses_file.Open(out + "/poses.csv", &error)) {
-    std::fprintf(stderr, "swf-sim: %s\n", error.c_str());
-    return swf::cli::kExitFailed;
-  }
+  if (!poses_file.Open(out + "/poses.csv", &error)) return Failed(error, summary);
   std::FILE* poses = poses_file.Stream();
   std::fprintf(poses, "frame,t_ns,x_m,y_m,z_m,qx,qy,qz,qw\n");
   swf::sim::StereoImages images;
+  int png_pairs = 0;
   const swf::core::TimeNs start = swf::core::MonotonicNs();
   for (size_t n = 0; n < frames.size(); ++n) {
     const int k = frames[n];
@@ -268,16 +270,24 @@ int main(int argc, char** argv) {
     if (Status s =
             renderer.Render(terrain, appearance, pose, static_cast<std::uint64_t>(k), &images);
         s != Status::kOk) {
-      return Fail("render", s);
+      return Fail("render", s, summary);
     }
     if (write_png) {
-      char name[64];
-      std::snprintf(name, sizeof(name), "/left_%04d.png", k);
-      (void)WritePngWhole(out + name, images.left.data(), images.width, images.height, 1,
-                          images.width);
-      std::snprintf(name, sizeof(name), "/right_%04d.png", k);
-      (void)WritePngWhole(out + name, images.right.data(), images.width, images.height, 1,
-                          images.width);
+      char left[64];
+      char right[64];
+      std::snprintf(left, sizeof(left), "/left_%04d.png", k);
+      std::snprintf(right, sizeof(right), "/right_%04d.png", k);
+      if (Status s = WritePngWhole(out + left, images.left.data(), images.width, images.height, 1,
+                                   images.width);
+          s != Status::kOk) {
+        return Fail((out + left).c_str(), s, summary);
+      }
+      if (Status s = WritePngWhole(out + right, images.right.data(), images.width, images.height, 1,
+                                   images.width);
+          s != Status::kOk) {
+        return Fail((out + right).c_str(), s, summary);
+      }
+      ++png_pairs;
     }
     if (!lcm_url.empty()) {
       const std::int64_t utime = trajectory.FrameTimeNs(k) / 1000;
@@ -299,16 +309,16 @@ int main(int argc, char** argv) {
       }
       for (auto& l : visible) l.num_observations = times_observed[static_cast<size_t>(l.id)];
       if (Status s = publisher.PublishFrame(images, k, utime); s != Status::kOk) {
-        return Fail("LCM stereo frame", s);
+        return Fail("LCM stereo frame", s, summary);
       }
       const double altitude_m = pose.t.z() - terrain.HeightAt(pose.t.x(), pose.t.y());
       if (Status s =
               publisher.PublishTruthPose(pose, traj.velocity_world_mps, altitude_m, k, utime);
           s != Status::kOk) {
-        return Fail("LCM truth pose", s);
+        return Fail("LCM truth pose", s, summary);
       }
       if (Status s = publisher.PublishTruthLandmarks(visible, k, utime); s != Status::kOk) {
-        return Fail("LCM truth landmarks", s);
+        return Fail("LCM truth landmarks", s, summary);
       }
     }
     const Eigen::Quaterniond q(pose.R);
@@ -324,17 +334,21 @@ int main(int argc, char** argv) {
                  frames.size(), pose.t.z(), elapsed_s / static_cast<double>(n + 1));
   }
   std::fprintf(stderr, "\n");
-  if (std::string error; !poses_file.Commit(&error)) {
-    std::fprintf(stderr, "swf-sim: %s\n", error.c_str());
-    return swf::cli::kExitFailed;
-  }
-  std::string sheet_error;
+  if (!poses_file.Commit(&error)) return Failed(error, summary);
+  written.push_back(out + "/poses.csv");
   if (!swf::plot::DrawContactSheet(
           sheet, "Left camera, scenario '" + scenario + "' over terrain '" + terrain_name + "'",
-          out + "/contact_sheet.png", &sheet_error)) {
-    std::fprintf(stderr, "swf-sim: cannot draw %s\n", sheet_error.c_str());
-    return swf::cli::kExitFailed;
+          out + "/contact_sheet.png", &error)) {
+    return Failed("cannot draw " + error, summary);
   }
+  written.push_back(out + "/contact_sheet.png");
+  (*summary)["written"] = written;
+  (*summary)["png_pairs"] = png_pairs;  // left_NNNN.png, right_NNNN.png
+  (*summary)["frames"] = frames.size();
+  (*summary)["landmarks"] = measurements.Summary().num_landmarks;
+  (*summary)["rocks"] = terrain.Rocks().size();
+  (*summary)["craters"] = terrain.Craters().size();
+  if (!lcm_url.empty()) (*summary)["lcm_messages"] = publisher.Published();
   std::fprintf(stderr, "swf-sim: wrote %zu pairs, %d landmarks, %zu rocks, %zu craters to %s\n",
                frames.size(), measurements.Summary().num_landmarks, terrain.Rocks().size(),
                terrain.Craters().size(), out.c_str());
@@ -343,4 +357,52 @@ int main(int argc, char** argv) {
                  static_cast<long long>(publisher.Published()), lcm_url.c_str());
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  Settings settings;
+  if (const char* env = std::getenv("SWF_SHARED_DIR")) settings.shared = env;
+  std::string summary_path;
+  CLI::App app{
+      "swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth "
+      "(sim/README.md)"};
+  swf::ground_cli::Adopt(&app, "swf-sim");
+  app.add_option("--out", settings.out,
+                 "output directory (created); the default descent is ~160 MB")
+      ->required();
+  app.add_option("--scenario", settings.scenario)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"descent", "hover", "sideways", "lab"}));
+  app.add_option("--terrain", settings.terrain_name)
+      ->capture_default_str()
+      ->check(CLI::IsMember({"plains", "craters", "rocks"}));
+  app.add_option("--frames", settings.max_frames, "at most N frames (default: the whole scenario)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--every", settings.every, "render every K-th frame")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--seed", settings.seed)->capture_default_str();
+  app.add_option("--shared", settings.shared, "the shared data directory (orbital imagery)")
+      ->capture_default_str();
+  app.add_option("--spp", settings.spp, "samples per pixel")
+      ->capture_default_str()
+      ->check(CLI::IsMember({1, 4}));
+  app.add_option("--lcm", settings.lcm_url,
+                 "also publish every pair and its truth on this LCM URL");
+  app.add_flag("--no-png", settings.no_png, "no per-frame PNG files (streaming only)");
+  app.add_option("--summary", summary_path, "the JSON summary (default: OUT/summary.json)");
+  if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
+    return code;
+  }
+  if (summary_path.empty()) summary_path = settings.out + "/summary.json";
+  swf::cli::RemovePartialOutputsOnSignal();
+  Json summary = {{"result", "failed"}};
+  const int code = Simulate(settings, &summary);
+  if (code == swf::cli::kExitOk) summary["result"] = "ok";
+  summary["run"] = swf::ground_cli::RunEcho(app, "swf-sim", argc, argv);
+  if (std::string error; !swf::ground_cli::WriteJson(summary_path, summary, &error)) {
+    std::fprintf(stderr, "swf-sim: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
+  }
+  return code;
 }

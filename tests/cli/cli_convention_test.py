@@ -2,13 +2,15 @@
 """Every swf-* program the build makes, and tools/run, follows the command-line convention
 (docs/cli.md): --help exits 0 and prints the usage; --version exits 0 and prints the version and
 the commit; an unknown option is refused with exit 2 naming it; an output in a directory that does
-not exist is written there (the directory created).
+not exist is written there (the directory created); a JSON summary parses as strict JSON (no
+NaN / Infinity) and echoes the run (`"run": {"tool": NAME, ...}`).
 
 The program list comes from the build (swf_programs.txt: every executable target named swf-*),
 so a new program without a case below fails this test until it gets one.
 
 usage: cli_convention_test.py PROGRAMS_TXT REPO_DIR SHARED_DIR
 """
+import json
 import os
 import re
 import shutil
@@ -59,7 +61,8 @@ FLIGHT_SETS = ['--set', 'rt.mlockall: false', '--set', 'rt.priority: 0', '--set'
 
 def output_cases(programs, work):
     """name -> (command, the output it must write inside a directory that did not exist). Run in
-    order: later cases use earlier outputs (the simulated descent's log)."""
+    order: later cases use earlier outputs (the simulated descent's log). SUMMARY below names the
+    cases whose output is a JSON summary, or which write one beside it."""
     new = lambda *parts: os.path.join(work, 'missing', *parts)  # noqa: E731
     sil_log = new('sil', 'descent.lcmlog')
     euroc_log = new('convert', 'euroc.lcmlog')
@@ -118,6 +121,29 @@ def output_cases(programs, work):
     ]
 
 
+# name -> a further summary a case writes beside its output (a .json output is checked too).
+SUMMARY = {'swf-sim': 'summary.json', 'swf-vo-synth': 'summary.json',
+           'swf-eval': 'kitti_odometry_error.json'}
+
+
+def _refuse_constant(name):
+    raise ValueError('%s is not JSON' % name)
+
+
+def check_summary(name, path):
+    """A summary: strict JSON whose "run" names the program."""
+    try:
+        with open(path) as f:
+            summary = json.load(f, parse_constant=_refuse_constant)
+    except (OSError, ValueError) as e:
+        check(name, False, 'summary %s: %s' % (os.path.basename(path), e))
+        return
+    run = summary.get('run') if isinstance(summary, dict) else None
+    check(name, isinstance(run, dict) and run.get('tool') == name,
+          'summary %s echoes the run (run.tool %r)' % (
+              os.path.basename(path), run.get('tool') if isinstance(run, dict) else None))
+
+
 # Programs that write no file: their output is stdout (a JSON object).
 STDOUT_ONLY = {'swf-vo': 'prints one JSON object on stdout'}
 
@@ -156,6 +182,10 @@ def main():
                       '' if made else ' NOT WRITTEN',
                       (' partial files left: %s' % partial) if partial else '') +
                   ('' if made else '\n' + r.stderr[-600:]))
+            if made and output.endswith('.json'):
+                check_summary(name, output)
+            if name in SUMMARY:
+                check_summary(name, os.path.join(os.path.dirname(output), SUMMARY[name]))
         for name, why in STDOUT_ONLY.items():
             check(name, True, 'no output file (%s)' % why)
     finally:
