@@ -20,7 +20,12 @@ this test treats it:
 
 And in every document, prose included: a build directory named build/NAME must be one a preset
 makes (CMakePresets.json), a command in an sh block must not call an swf-* program by its bare
-name (the build does not put them on PATH), and no sh block may write into docs/ (tracked)."""
+name (the build does not put them on PATH), and no sh block may write into docs/ (tracked).
+
+Commands inline in prose (`build/release/bin/swf-eval euroc DIR --loop-seconds S`, `swf-sim
+--out DIR`, `tools/run eval`) are checked too: the program must be one the build makes (or a
+tools/run verb), and every --option must be one its --help (or its subcommand's) lists; a
+stale one is named with its file and line."""
 import json
 import os
 import re
@@ -140,6 +145,72 @@ def check_program(program, args, bin_dir, verbs):
     return None if shutil.which(program) else '%s: not installed (not on PATH)' % program
 
 
+INLINE_CODE = re.compile(r'(?<!`)`([^`\n]+)`(?!`)')
+INLINE_PROGRAM = re.compile(r'^(?:build/[^/\s]+/bin/)?(swf-[a-z-]+)$')
+
+
+def inline_commands(path):
+    """(line number, words) of every code span in prose (outside fenced blocks) that starts with
+    an swf-* program or tools/run."""
+    out, fenced = [], False
+    with open(os.path.join(ROOT, path)) as f:
+        for n, line in enumerate(f, 1):
+            if FENCE.match(line):
+                fenced = not fenced
+                continue
+            if fenced:
+                continue
+            for span in INLINE_CODE.findall(line):
+                try:
+                    words = shlex.split(span)
+                except ValueError:
+                    words = span.split()
+                if words and (INLINE_PROGRAM.match(words[0]) or words[0] == 'tools/run'):
+                    out.append((n, words))
+    return out
+
+
+class HelpTexts:
+    """What each program (and subcommand) says it accepts: its --help output, run once."""
+
+    def __init__(self, bin_dir):
+        self.bin_dir, self.cache = bin_dir, {}
+
+    def text(self, program, *sub):
+        key = (program,) + sub
+        if key not in self.cache:
+            path = os.path.join(self.bin_dir, program)
+            try:
+                r = subprocess.run([path] + list(sub) + ['--help'], stdout=subprocess.PIPE,
+                                   stderr=subprocess.STDOUT, text=True, timeout=20)
+                self.cache[key] = r.stdout if r.returncode == 0 else ''
+            except (OSError, subprocess.TimeoutExpired):
+                self.cache[key] = ''
+        return self.cache[key]
+
+
+def check_inline(words, bin_dir, verbs, helps):
+    """Why an inline command is stale, or None."""
+    if words[0] == 'tools/run':
+        verb = words[1] if len(words) > 1 else 'help'
+        return None if verb in verbs | {'help'} or verb.startswith('-') else \
+            'tools/run has no verb %r' % verb
+    program = INLINE_PROGRAM.match(words[0]).group(1)
+    if not os.access(os.path.join(bin_dir, program), os.X_OK):
+        return 'the build makes no program %s' % program
+    texts = [helps.text(program)]
+    if len(words) > 1 and re.match(r'^[a-z][a-z-]*$', words[1]):
+        texts.append(helps.text(program, words[1]))  # a subcommand's own options
+    for w in words[1:]:
+        w = w.lstrip('[(').split('=', 1)[0].rstrip('])|.,;:')  # [--set KEY]... names --set
+        if not w.startswith('--') or w == '--':
+            continue
+        option = w
+        if not any(re.search(r'(?<![\w-])%s(?![\w-])' % re.escape(option), t) for t in texts):
+            return '%s does not accept %s (not in its --help)' % (program, option)
+    return None
+
+
 def writes_into_docs(words):
     return any(w.startswith('docs/') or w.startswith('./docs/') for w in words)
 
@@ -149,8 +220,15 @@ def main():
     list_only = '--list' in sys.argv[2:]
     presets = preset_build_dirs()
     verbs = tools_run_verbs()
+    helps = HelpTexts(bin_dir)
     errors, ran, checked, skipped = [], [], [], []
+    inline = 0
     for path in documents():
+        for n, words in inline_commands(path):
+            inline += 1
+            problem = check_inline(words, bin_dir, verbs, helps)
+            if problem:
+                errors.append('%s:%d: inline `%s`: %s' % (path, n, ' '.join(words), problem))
         with open(os.path.join(ROOT, path)) as f:
             for n, line in enumerate(f, 1):
                 for name in BUILD_DIR.findall(line):
@@ -209,6 +287,7 @@ def main():
     print('run (%d): %s' % (len(ran), ', '.join(ran)))
     print('checked (%d): %s' % (len(checked), ', '.join(checked)))
     print('skipped (%d): %s' % (len(skipped), '; '.join(skipped)))
+    print('inline commands checked: %d' % inline)
     for e in errors:
         print('FAIL: ' + e)
     if not ran:
