@@ -62,7 +62,7 @@ std::array<double, N> MeanRms(SceneOptions so, std::initializer_list<std::uint64
 TEST(SwfScenario, DescentWindowOfTenApproachesBatchAndBeatsVisualOdometry) {
   const auto [batch, swf3, swf5, swf10, vo5, vsdf5] = MeanRms<6>(
       SceneOptions{}, {1, 2},
-      {RunOf<StereoSwf<40, 1>>(SwfMode::kBatch), RunOf<StereoSwf<3>>(SwfMode::kSlidingWindow),
+      {RunOf<StereoSwf<40>>(SwfMode::kBatch), RunOf<StereoSwf<3>>(SwfMode::kSlidingWindow),
        RunOf<StereoSwf<5>>(SwfMode::kSlidingWindow), RunOf<StereoSwf<10>>(SwfMode::kSlidingWindow),
        RunOf<StereoSwf<5>>(SwfMode::kVisualOdometry), RunOf<StereoSwf<5>>(SwfMode::kVsdf)});
   std::printf(
@@ -87,7 +87,7 @@ TEST(SwfScenario, SidewaysEarlyMarginalizationInverseDepthAndFirstEstimates) {
   const SwfOptions fej = ModeOptions(SwfMode::kSlidingWindow);
   const auto [batch, xyz, inv, xyz_fej, inv_fej] = MeanRms<5>(
       testing::Fig15Sideways(), {1, 2},
-      {RunOf<StereoSwf<40, 1>>(SwfMode::kBatch), RunOf<StereoSwf<2>>(plain),
+      {RunOf<StereoSwf<40>>(SwfMode::kBatch), RunOf<StereoSwf<2>>(plain),
        RunOf<InverseDepthSwf<2>>(plain), RunOf<StereoSwf<2>>(fej), RunOf<InverseDepthSwf<2>>(fej)});
   std::printf(
       "sideways landmark RMS, mean of 2 seeds (m): batch %.4f; SWF(2) world point %.4f, inverse "
@@ -104,7 +104,7 @@ TEST(SwfScenario, SidewaysEarlyMarginalizationInverseDepthAndFirstEstimates) {
 TEST(SwfScenario, StaticRigVisualOdometryStopsConverging) {
   const auto [batch, swf3, vo3, vsdf3] = MeanRms<4>(
       testing::StaticRig(), {1, 2, 3},
-      {RunOf<StereoSwf<40, 1>>(SwfMode::kBatch), RunOf<StereoSwf<3>>(SwfMode::kSlidingWindow),
+      {RunOf<StereoSwf<40>>(SwfMode::kBatch), RunOf<StereoSwf<3>>(SwfMode::kSlidingWindow),
        RunOf<StereoSwf<3>>(SwfMode::kVisualOdometry), RunOf<StereoSwf<3>>(SwfMode::kVsdf)});
   std::printf(
       "static landmark RMS (m): batch %.4f  SWF(3) %.4f  VO(3) %.4f (SWF %.0f%% below VO)"
@@ -250,9 +250,9 @@ TEST(SwfScenario, HeldWindowStopsAtTheCapacityAndLeavesBatchAlone) {
   EXPECT_EQ(most, 5);
   EXPECT_EQ(marginalized, so.frames - last);  // every pose held back was marginalized later
   SwfOptions batch = ModeOptions(SwfMode::kBatch);
-  const double plain = RunScene(std::make_unique<StereoSwf<40, 1>>().get(), scene, batch).rms_m;
+  const double plain = RunScene(std::make_unique<StereoSwf<40>>().get(), scene, batch).rms_m;
   batch.hold_sightings = 25;
-  EXPECT_EQ(RunScene(std::make_unique<StereoSwf<40, 1>>().get(), scene, batch).rms_m, plain);
+  EXPECT_EQ(RunScene(std::make_unique<StereoSwf<40>>().get(), scene, batch).rms_m, plain);
 }
 
 }  // namespace
