@@ -109,8 +109,8 @@ endfunction()
 # `lint`: clang-format over every tracked C++ file and clang-tidy (.clang-tidy) over every source,
 # ground tools and tests included (tools/run lint). `lint_flight`, CI's: clang-format over every
 # file and clang-tidy over the flight code only (cmake/lint.cmake says which): clang-tidy parses
-# and instantiates each unit as a compiler does, and the ground tools' and tests' units are three
-# quarters of its time, more than CI's 30-minute budget leaves for it.
+# and instantiates each unit as a compiler does, and the ground tools' and tests' units take about
+# two thirds of its time, more than CI's 30-minute budget leaves for it.
 function(swf_add_lint_target)
   find_program(CLANG_FORMAT NAMES clang-format)
   find_program(CLANG_TIDY NAMES clang-tidy)
