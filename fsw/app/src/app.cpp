@@ -735,6 +735,7 @@ int Preallocate(FlightProcess* fp) {
   oo.lcm_url = config.publish ? config.lcm_url : "";
   oo.channel_prefix = config.channel_prefix;
   oo.record_path = config.record_path;
+  oo.record_frames = config.record_frames;
   if (const core::Status s = AssembleFlightParts(po, ho, oo, &fp->parts, &fp->error);
       s != core::Status::kOk) {
     return s == core::Status::kInvalidArgument ? fp->Refuse() : fp->RunError();
@@ -806,7 +807,10 @@ int ConfigureLoop(FlightProcess* fp) {
   lo.pacing = fp->replay && config.pacing == Pacing::kRealtime ? Pacing::kLockstep : config.pacing;
   lo.hazard_every = config.hazard_every;
   lo.health_every = config.health_every;
-  lo.record_frames = config.record_frames && !config.record_path.empty();
+  // Frames go to the output thread when they are recorded, and in a replay that publishes, so a
+  // viewer on the bus sees the images (published only: they are in the replayed log already).
+  lo.record_frames =
+      (config.record_frames && !config.record_path.empty()) || (fp->replay && config.publish);
   lo.max_frames = config.max_frames;
   lo.nav_mode = fp->nav_mode;
   lo.hazard_priority = config.priority > 1 ? config.priority - 1 : 0;

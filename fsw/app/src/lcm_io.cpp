@@ -25,6 +25,7 @@ struct OutputThread::Impl {
   std::unique_ptr<lcm::LCM> lcm;
   lcm_eventlog_t* log = nullptr;
   std::string prefix;
+  Route frame_route = Route::kBusAndLog;
   std::vector<std::uint8_t> buffer;  // encode target, sized at Open
   std::string channel;               // reused: capacity reserved at Open
   swf_msgs::stereo_frame_t frame;
@@ -48,6 +49,7 @@ bool OutputThread::Open(const OutputOptions& options, OutputChannels* channels,
                         std::string* error) {
   channels_ = channels;
   impl_->prefix = options.channel_prefix;
+  impl_->frame_route = options.record_frames ? Route::kBusAndLog : Route::kBusOnly;
   impl_->channel.reserve(64);
   if (!options.lcm_url.empty()) {
     impl_->lcm = std::make_unique<lcm::LCM>(options.lcm_url);
@@ -120,28 +122,28 @@ void OutputThread::DrainOnce() {
 }
 
 void OutputThread::Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data, int size,
-                        bool record_only) {
+                        Route route) {
   impl_->channel.assign(impl_->prefix);
   impl_->channel.append(suffix);
-  EmitOn(impl_->channel, utime, data, size, record_only);
+  EmitOn(impl_->channel, utime, data, size, route);
 }
 
 void OutputThread::Send(const std::string& channel, std::int64_t utime, const std::uint8_t* data,
                         int size) {
-  EmitOn(channel, utime, data, size, /*record_only=*/false);
+  EmitOn(channel, utime, data, size, Route::kBusAndLog);
 }
 
 void OutputThread::EmitOn(const std::string& channel, std::int64_t utime, const std::uint8_t* data,
-                          int size, bool record_only) {
+                          int size, Route route) {
   for (OutputObserver* o : observers_) o->OnMessage(channel, data, size);
-  if (impl_->lcm && !record_only) {
+  if (impl_->lcm && route != Route::kLogOnly) {
     if (impl_->lcm->publish(channel, data, static_cast<unsigned>(size)) == 0) {
       ++counters_.published;
     } else {
       ++counters_.publish_errors;
     }
   }
-  if (impl_->log != nullptr) {
+  if (impl_->log != nullptr && route != Route::kBusOnly) {
     lcm_eventlog_event_t event{};
     event.timestamp = utime;  // the data's own time: logs of identical runs are identical
     event.channellen = static_cast<std::int32_t>(channel.size());
@@ -315,14 +317,15 @@ void FillHealth(const HealthRecord& r, swf_msgs::health_t* m) {
 void OutputThread::Handle(const RecordRef& ref) {
   std::uint8_t* buf = impl_->buffer.data();
   const int max = static_cast<int>(impl_->buffer.size());
-  const auto publish = [&](auto& message, auto& pool, const char* suffix) {
+  const auto publish = [&](auto& message, auto& pool, const char* suffix,
+                           Route route = Route::kBusAndLog) {
     const int n = message.encode(buf, 0, max);
     pool.Release(ref.slot);
     if (n < 0) {
       ++counters_.encode_errors;
       return;
     }
-    Emit(suffix, message.utime, buf, n);
+    Emit(suffix, message.utime, buf, n, route);
   };
   // The records the observers see: filled into their message, shown to them, then published.
   const auto observe_and_publish = [&](auto& pool, auto fill, auto on_record, auto& message,
@@ -335,7 +338,7 @@ void OutputThread::Handle(const RecordRef& ref) {
   switch (ref.kind) {
     case RecordKind::kFrame:
       FillFrame(channels_->frames[ref.slot], &impl_->frame);
-      publish(impl_->frame, channels_->frames, kStereoSuffix);
+      publish(impl_->frame, channels_->frames, kStereoSuffix, impl_->frame_route);
       return;
     case RecordKind::kImu: {
       const ImuRecord& r = channels_->imus[ref.slot];
@@ -347,7 +350,7 @@ void OutputThread::Handle(const RecordRef& ref) {
           ++counters_.encode_errors;
           continue;
         }
-        Emit(kImuSuffix, m.utime, buf, n, /*record_only=*/true);
+        Emit(kImuSuffix, m.utime, buf, n, Route::kLogOnly);
       }
       channels_->imus.Release(ref.slot);
       return;

@@ -52,6 +52,9 @@ struct OutputOptions {
   std::int32_t max_width = 0;  // largest frame recorded (sizes the encode buffer)
   std::int32_t max_height = 0;
   std::int32_t max_hazard_cells = 0;  // cells per side of the largest hazard map
+  // False: the input frames are published but not recorded (a replay's frames are in the log it
+  // replays already; a viewer on the bus still wants them).
+  bool record_frames = true;
 };
 
 struct OutputCounters {
@@ -87,11 +90,12 @@ class OutputThread {
  private:
   struct Impl;
   void Handle(const RecordRef& ref);
-  // Publishes (unless record_only) and records one encoded message.
+  // Where one encoded message goes: the bus, the recording, or both.
+  enum class Route { kBusAndLog, kLogOnly, kBusOnly };
   void Emit(const char* suffix, std::int64_t utime, const std::uint8_t* data, int size,
-            bool record_only = false);
+            Route route = Route::kBusAndLog);
   void EmitOn(const std::string& channel, std::int64_t utime, const std::uint8_t* data, int size,
-              bool record_only);
+              Route route);
 
   std::unique_ptr<Impl> impl_;
   OutputChannels* channels_ = nullptr;
