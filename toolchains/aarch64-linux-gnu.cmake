@@ -35,7 +35,7 @@ set(ENV{PKG_CONFIG_PATH} "")
 # The loader and C library at run time are Debian's arm64 glibc (libc6:arm64, multiarch, the one a
 # Debian flight computer runs; its libm decides the transcendental functions' bits), found at its
 # real paths; liblcm through the run path CMake links into every program.
-set(CMAKE_CROSSCOMPILING_EMULATOR qemu-aarch64-static -L /)
+set(CMAKE_CROSSCOMPILING_EMULATOR qemu-aarch64 -L /)
 
 # Eigen's NEON multiply-add (pmadd) is fused when __ARM_FEATURE_FMA is defined, which it always is
 # on ARMv8; the host's SSE2 build multiplies and adds, rounding twice. With the macro undefined,
