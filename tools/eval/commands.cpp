@@ -261,6 +261,7 @@ void ApplyCommon(const SequenceArgs& a, DatasetOptions* options) {
     options->motion_sigma_rad = a.motion_sigma_rad;
   }
   if (a.divergence_m > 0.0) options->divergence_m = a.divergence_m;
+  options->measurements_path = a.measurements;
 }
 
 // Shared paragraph: what ran.

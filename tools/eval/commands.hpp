@@ -1,8 +1,9 @@
 // swf-eval's real-data commands on image sequences through the flight pipeline:
 //   swf-eval euroc DIR [--out OUT] [--window K] [--max-tracks N] [--motion-sigma M,RAD]
-//                      [--loop-seconds S] [--divergence-m M]
+//                      [--loop-seconds S] [--divergence-m M] [--measurements FILE]
 //   swf-eval kitti DIR [--out OUT] [--window K] [--max-tracks N] [--max-disparity D]
 //                      [--motion-sigma M,RAD] [--divergence-m M] [--frames N]
+//                      [--measurements FILE]
 // Each writes OUT/<prefix>.json (valid JSON: a value that does not exist is null with a
 // "<key>_reason"; the command line echoed as "run"), OUT/<prefix>.md (text computed from the same
 // numbers), OUT/<prefix>_error.dat and .json (per-frame errors) and the estimated trajectories.
@@ -29,6 +30,7 @@ struct SequenceArgs {
   double motion_sigma_m = 0.0;  // 0: the command's default (with motion_sigma_rad)
   double motion_sigma_rad = 0.0;
   double divergence_m = 0.0;  // 0: the command's default
+  std::string measurements;   // non-empty: the SWF run's measurements as JSON (RunOptions)
   Json run;                   // echoed into every JSON file: swf::ground_cli::RunEcho
 };
 

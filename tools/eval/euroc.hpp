@@ -67,7 +67,8 @@ struct EurocOptions {
   double motion_sigma_rad = 0.02;
   // > 0: loop the recorded frames forwards and backwards into this many seconds.
   double loop_seconds = 0.0;
-  double divergence_m = 1.0;  // anchored position error that calls a run diverged
+  double divergence_m = 1.0;      // anchored position error that calls a run diverged
+  std::string measurements_path;  // non-empty: the SWF run's measurements (RunOptions)
 };
 
 struct EurocResult {

@@ -21,8 +21,9 @@ struct KittiOptions {
   double sigma_px = 0.5;
   double motion_sigma_m = 0.5;  // per frame: the car changes speed and heading slowly
   double motion_sigma_rad = 0.02;
-  double divergence_m = 10.0;  // anchored position error that calls a run diverged
-  int max_frames = 0;          // > 0: only the first max_frames frames
+  double divergence_m = 10.0;     // anchored position error that calls a run diverged
+  int max_frames = 0;             // > 0: only the first max_frames frames
+  std::string measurements_path;  // non-empty: the SWF run's measurements (RunOptions)
 };
 
 struct KittiResult {

@@ -13,6 +13,7 @@
 #include "report.hpp"
 #include "swf/app/pipeline.hpp"
 #include "swf/drivers/process_input.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 #include "swf/image_io/image_io.hpp"
 
 namespace swf::eval {
@@ -200,6 +201,71 @@ void Judge(const StereoSequence& s, std::size_t j, const RunOptions& o, RunRecor
   }
 }
 
+// RunOptions::measurements_path: per frame the true pose in the estimate's world (the first
+// camera), the front end's features of the left image with their fate, and the filter's
+// landmarks (MakeMap: the estimate and its marginal covariance). Read by
+// tools/eval/real_frames.py, which triangulates every track with the true poses held.
+class MeasurementLog {
+ public:
+  void Add(const StereoSequence& s, std::size_t j, const PoseD& estimate, app::Pipeline* pipeline) {
+    const PoseD truth = s.frames[0].truth.Inverse() * s.frames[j].truth;
+    Json frame;
+    frame["frame"] = j;
+    frame["record"] = s.frames[j].record;
+    AddPose(truth, "true", &frame);
+    AddPose(estimate, "estimated", &frame);
+    Json features = Json::array();  // [id, u, v, fate]: app::FeatureFate
+    const app::FeatureMark* marks = pipeline->FeatureMarks();
+    for (int k = 0; k < pipeline->NumFeatureMarks(); ++k) {
+      features.push_back(
+          {marks[k].id, marks[k].u_px, marks[k].v_px, static_cast<int>(marks[k].fate)});
+    }
+    frame["features"] = features;
+    Json landmarks = Json::array();  // [id, x, y, z, xx, xy, xz, yy, yz, zz]
+    if (pipeline->MakeMap(map_.get()) == Status::kOk) {
+      for (std::int32_t k = 0; k < map_->num_landmarks; ++k) {
+        const app::MapLandmark& l = map_->landmarks[k];
+        Json row = {l.id};
+        const auto number = [](double x) { return std::isfinite(x) ? Json(x) : Json(nullptr); };
+        for (double x : l.position_world_m) row.push_back(number(x));
+        for (double c : l.covariance_m2) row.push_back(number(c));
+        landmarks.push_back(row);
+      }
+    }
+    frame["landmarks"] = landmarks;
+    frames_.push_back(frame);
+  }
+
+  static void AddPose(const PoseD& pose, const std::string& which, Json* frame) {
+    Json r = Json::array();
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 3; ++col) r.push_back(pose.R(row, col));
+    (*frame)[which + "_world_R_camera"] = r;
+    (*frame)[which + "_world_t_camera_m"] = {pose.t.x(), pose.t.y(), pose.t.z()};
+  }
+
+  bool Write(const std::string& path, const StereoSequence& s, const RunOptions& o,
+             std::string* error) const {
+    Json doc;
+    doc["sequence"] = s.dir;
+    doc["run"] = o.name;
+    doc["camera"] = {{"fx", s.camera.fx},
+                     {"fy", s.camera.fy},
+                     {"cx", s.camera.cx},
+                     {"cy", s.camera.cy},
+                     {"baseline_m", s.camera.baseline_m},
+                     {"width_px", s.width},
+                     {"height_px", s.height}};
+    doc["fates"] = {"tracked", "new", "rejected", "gated"};
+    doc["frames"] = frames_;
+    return ground_cli::WriteJson(path, doc, error, -1);
+  }
+
+ private:
+  Json frames_ = Json::array();
+  std::unique_ptr<app::MapOutput> map_ = std::make_unique<app::MapOutput>();
+};
+
 }  // namespace
 
 app::PipelineOptions PipelineFor(const StereoSequence& s, const RunOptions& r) {
@@ -240,10 +306,12 @@ std::vector<RunRecord> RunSwfAndVo(const StereoSequence& sequence, const RunOpti
     RunOptions o = base;
     o.name = (mode == estimator::SwfMode::kSlidingWindow ? "SWF(" : "VO(") + k + ")";
     o.mode = mode;
+    if (mode != estimator::SwfMode::kSlidingWindow) o.measurements_path.clear();  // SWF's only
     runs.push_back(RunSequence(sequence, o));
   }
   if (sequence.HasImu()) {
     RunOptions o = base;
+    o.measurements_path.clear();
     o.name = "SWF(" + k + ") + IMU";
     o.imu = true;
     runs.push_back(RunSequence(sequence, o));
@@ -282,9 +350,12 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
   double tracked = 0.0;
   drivers::StoredImuProvider imu;
   imu.Reset(&sequence.imu);
+  std::unique_ptr<MeasurementLog> log;
+  if (!options.measurements_path.empty()) log = std::make_unique<MeasurementLog>();
   for (std::size_t j = 0; j < sequence.frames.size(); ++j) {
     FrameRecord record;
     if (!ProcessFrame(sequence, j, &images, &imu, pipeline.get(), &run, &record)) break;
+    if (log) log->Add(sequence, j, record.estimate, pipeline.get());
     Judge(sequence, j, options, &run, &record);
     CountIntegrity(j, record, &run);
     tracked += record.tracked;
@@ -292,6 +363,9 @@ RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options)
     if (run.verdict == Verdict::kNonFinite) break;  // nothing later can be scored
   }
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::string error;
+  if (log && !log->Write(options.measurements_path, sequence, options, &error))
+    Fail(&run, Verdict::kInputError, -1, "--measurements: " + error);
   if (const estimator::NavState<double>* x = pipeline->NewestNavState()) {
     run.has_biases = true;
     run.gyro_bias_radps = x->biases.gyro_radps;
@@ -323,6 +397,7 @@ std::vector<RunRecord> DiagnoseFailures(const StereoSequence& sequence,
     if (r.verdict != Verdict::kDiverged && r.verdict != Verdict::kNonFinite) continue;
     RunOptions o = r.options;
     o.truth_motion = true;
+    o.measurements_path.clear();
     o.name += " with the true motion as input";
     out.push_back(RunSequence(sequence, o));
   }

@@ -75,6 +75,10 @@ struct RunOptions {
   bool imu = false;
   double gyro_bias_sigma_radps = 0.1;
   double accel_bias_sigma_mps2 = 0.2;
+  // Non-empty: the run writes every frame's front-end measurements (left image), the filter's
+  // landmarks and the true pose there, as JSON (WriteMeasurements), for the measurement-error
+  // histogram on real frames (tools/eval/real_frames.py).
+  std::string measurements_path;
 };
 
 struct FrameRecord {
@@ -142,6 +146,7 @@ RunOptions RunOptionsFrom(const DatasetOptions& d) {
   o.process_sigma_m = d.motion_sigma_m;
   o.process_sigma_rad = d.motion_sigma_rad;
   o.divergence_m = d.divergence_m;
+  o.measurements_path = d.measurements_path;
   return o;
 }
 

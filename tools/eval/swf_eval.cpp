@@ -617,6 +617,9 @@ int main(int argc, char** argv) {
     cmd->add_option("--divergence-m", sequence.divergence_m,
                     "error without fit that calls a run diverged")
         ->check(CLI::PositiveNumber);
+    cmd->add_option("--measurements", sequence.measurements,
+                    "write the SWF run's front-end measurements, landmarks and true poses to "
+                    "this JSON file (tools/eval/real_frames.py)");
   };
   double loop_seconds = 0.0;
   CLI::App* euroc = app.add_subcommand("euroc", "a EuRoC ASL sequence through the pipeline");

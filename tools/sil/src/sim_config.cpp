@@ -89,8 +89,8 @@ void AddDispersionFields(std::map<std::string, ConfigSetter>* fields) {
 // the dispersions and the blinded camera.
 std::map<std::string, ConfigSetter> SimFields() {
   std::map<std::string, ConfigSetter> f;
-  f["sim.scenario"] =
-      OneOf([](FswConfig* c) { return &c->sim.scenario; }, {"descent", "hover", "sideways", "lab"});
+  f["sim.scenario"] = OneOf([](FswConfig* c) { return &c->sim.scenario; },
+                            {"descent", "hover", "sideways", "lab", "lab_static"});
   f["sim.terrain"] =
       OneOf([](FswConfig* c) { return &c->sim.terrain; }, {"plains", "craters", "rocks"});
   f["sim.width_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->sim.width_px; }, 32,

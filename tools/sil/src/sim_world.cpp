@@ -19,6 +19,13 @@ using core::Status;
 
 namespace {
 
+// The lab scenarios (the paper's lab rig, section 4.2.2) see the terrain and its texture scaled by
+// 0.1: the EDL scene at a tenth of the size, as the lab rig's 0.1 m baseline is the EDL rig's
+// 1 m at a tenth.
+double SceneScale(const app::FswConfig& config) {
+  return config.sim.scenario == "lab" || config.sim.scenario == "lab_static" ? 0.1 : 1.0;
+}
+
 std::string SharedDir(const app::FswConfig& config) {
   if (!config.sim.shared_dir.empty()) return config.sim.shared_dir;
   if (const char* env = std::getenv("SWF_SHARED_DIR")) return env;
@@ -33,7 +40,7 @@ bool SimTerrain(const app::FswConfig& config, sim::Terrain* terrain, std::string
     *error = "sim.terrain: unknown preset";
     return false;
   }
-  const double scale = config.sim.scenario == "lab" ? 0.1 : 1.0;
+  const double scale = SceneScale(config);
   sim::TerrainOptions to =
       sim::ScaleTerrain(sim::TerrainPresetOptions(preset, config.sim.seed), scale);
   // A smaller grid keeps the same cell size (the terrain shrinks, the texture stays).
@@ -46,7 +53,7 @@ bool SimTerrain(const app::FswConfig& config, sim::Terrain* terrain, std::string
 }
 
 sim::RigOptions SimRig(const app::FswConfig& config) {
-  sim::RigOptions rig = config.sim.scenario == "lab" ? sim::LabRig() : sim::EdlRig();
+  sim::RigOptions rig = SceneScale(config) < 1.0 ? sim::LabRig() : sim::EdlRig();
   rig.width_px = config.sim.width_px;
   rig.height_px = config.sim.height_px;
   rig.horizontal_fov_deg = config.sim.hfov_deg;
@@ -72,6 +79,10 @@ bool SimTrajectory(const app::FswConfig& config, sim::Trajectory* trajectory, si
         deg;
   } else if (config.sim.scenario == "hover") {
     t = sim::HoverTrajectory(50.0, 60);
+    t.rate_hz = config.rate_hz;
+  } else if (config.sim.scenario == "lab_static") {
+    // Fig. 12 with the lab rig: the hover scaled like the lab scene (5 m above the surface).
+    t = sim::HoverTrajectory(5.0, 60);
     t.rate_hz = config.rate_hz;
   } else if (config.sim.scenario == "sideways") {
     t = sim::SidewaysTrajectory(*rig, 50.0, 0.85, 40);
@@ -112,7 +123,7 @@ bool SimWorld::Build(const app::FswConfig& config, std::string* error) {
   if (!SimTerrain(config, &terrain_, error)) return false;
   if (!SimTrajectory(config, &trajectory_, &rig_, error, &terrain_, &target_)) return false;
   num_frames_ = trajectory_.NumFrames();
-  const double scale = config.sim.scenario == "lab" ? 0.1 : 1.0;
+  const double scale = SceneScale(config);
   sim::AppearanceOptions look = sim::DefaultImagery(SharedDir(config));
   look.image_pixel_m *= scale;
   look.seed = config.sim.seed;

@@ -22,7 +22,7 @@ namespace swf::app {
 enum class SourceKind : std::uint8_t { kSim, kV4l2, kAravis, kLog, kLcm };
 
 struct SimConfig {
-  std::string scenario = "descent";  // descent | hover | sideways | lab
+  std::string scenario = "descent";  // descent | hover | sideways | lab | lab_static
   std::string terrain = "craters";   // plains | craters | rocks
   std::int32_t width_px = 512;
   std::int32_t height_px = 384;
