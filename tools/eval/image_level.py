@@ -29,10 +29,14 @@ import os
 import subprocess
 import sys
 
+import image_figures
+from image_figures import write_chart
+
 STATED_SIGMA_PX = 0.5  # measurement_sigma_px of the demo configuration
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def fly(sil, cfg, out, name, frames, settings, report_only=False):
+def fly(sil, cfg, out, name, frames, settings, report_only=False, record=False):
     summary = os.path.join(out, 'image_%s.json' % name)
     if report_only:  # the summaries of an earlier run
         with open(summary) as f:
@@ -44,6 +48,8 @@ def fly(sil, cfg, out, name, frames, settings, report_only=False):
         cmd += ['--set', 'sim.frames: %d' % frames]
     for s in settings:
         cmd += ['--set', s]
+    if record:  # the outputs and the truth, for what the summary does not hold (logs.py)
+        cmd += ['--set', 'record.path: ' + log_path(out, name), '--set', 'record.frames: false']
     if os.path.exists(summary):
         os.remove(summary)
     run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -58,16 +64,8 @@ def fly(sil, cfg, out, name, frames, settings, report_only=False):
     return s
 
 
-def write_chart(path, title, x_label, y_label, log_y, names, xs, columns):
-    """swf::plot's line-chart file (tools/plot/include/swf/plot/plot.hpp)."""
-    with open(path + '.tmp', 'w') as f:
-        f.write('# title: %s\n# x: %s\n# y: %s\n# y scale: %s\n' %
-                (title, x_label, y_label, 'log' if log_y else 'linear'))
-        f.write('# series: %s\n' % ' '.join('"%s"' % n for n in names))
-        for i, x in enumerate(xs):
-            values = ['nan' if c[i] is None else '%.9g' % c[i] for c in columns]
-            f.write('%.9g %s\n' % (x, ' '.join(values)))
-    os.replace(path + '.tmp', path)
+def log_path(out, name):
+    return os.path.join(out, 'image_%s.lcmlog' % name)
 
 
 def histogram_chart(out, signed, measurements):
@@ -91,7 +89,6 @@ def histogram_chart(out, signed, measurements):
                         'Gaussian, robust sigma %.3f px' % core], centers,
                 [[c / total for c in u['counts']], [c / total for c in v['counts']],
                  gaussian(sigma), gaussian(core)])
-    return sigma
 
 
 def descent_chart(out, runs):
@@ -112,7 +109,7 @@ def first_last(s):
     return (rms[0], rms[-1]) if rms else (None, None)
 
 
-def markdown(frames, runs, signed, measurements, sigma):
+def markdown(frames, runs, signed, measurements):
     u, v = signed['u'], signed['v']
     lines = ['## Image level: the rendered descent through the front end and the filter', '',
              'The same experiments on images: `swf-sil` renders the demo descent '
@@ -185,20 +182,8 @@ def markdown(frames, runs, signed, measurements, sigma):
     return '\n'.join(lines)
 
 
-def main():
-    p = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    p.add_argument('sil')
-    p.add_argument('config')
-    p.add_argument('out')
-    p.add_argument('--frames', type=int, default=0, help='frames to fly (0: all of the descent)')
-    p.add_argument('--windows', default='3,4,5',
-                   help='window sizes (150 tracks per frame fit the compiled capacity up to 5)')
-    p.add_argument('--check', action='store_true')
-    p.add_argument('--report-only', action='store_true',
-                   help='no flights: rewrite the charts and text from OUT/image_*.json')
-    a = p.parse_args()
-    os.makedirs(a.out, exist_ok=True)
-    windows = [int(w) for w in a.windows.split(',')]
+def descent_runs(a, windows):
+    """One swf-sil descent per window, and VO with the smallest window."""
     runs = []
     for w in windows:
         runs.append(('SWF(%d)' % w, fly(a.sil, a.config, a.out, 'swf%d' % w, a.frames,
@@ -206,9 +191,14 @@ def main():
     runs.append(('VO(%d)' % windows[0],
                   fly(a.sil, a.config, a.out, 'vo%d' % windows[0], a.frames,
                       ['mode: vo', 'window: %d' % windows[0]], a.report_only)))
+    return runs
+
+
+def descent_numbers(a, runs):
+    """Figs. 2a and 13 from the descents: their charts and the numbers the text quotes."""
     t = runs[0][1]['tracking_error_px']
     signed = t['signed']
-    sigma = histogram_chart(a.out, signed, t['measurements'])
+    histogram_chart(a.out, signed, t['measurements'])
     descent_chart(a.out, runs)
     numbers = {'frames': a.frames, 'measurements': t['measurements'], 'signed': signed,
                'runs': [{'name': n, 'first_map_rms_m': first_last(s)[0],
@@ -216,10 +206,6 @@ def main():
                          'pose_rms_error_m': s['pose_rms_error_m'], 'result': s['result'],
                          'result_reasons': s['result_reasons'],
                          'landmarks_evaluated': s['landmarks_evaluated']} for n, s in runs]}
-    with open(os.path.join(a.out, 'image_level.json'), 'w') as f:
-        json.dump(numbers, f, indent=1)
-    with open(os.path.join(a.out, 'image_level.md'), 'w') as f:
-        f.write(markdown(a.frames, runs, signed, t['measurements'], sigma))
     for n in numbers['runs']:
         print('%s: landmark RMS first map %s m, last map %s m, pose RMS %s m' %
               (n['name'], n['first_map_rms_m'], n['last_map_rms_m'], n['pose_rms_error_m']))
@@ -228,8 +214,12 @@ def main():
         print('%s error: mean %.4f px, std %.4f px, robust sigma %.4f px, within 1/2/3 std '
               '%.3f/%.3f/%.3f' % (c, e['mean'], e['std'], e['robust_sigma'], e['within_1_std'],
                                   e['within_2_std'], e['within_3_std']))
-    if not a.check:
-        return
+    return numbers
+
+
+def descent_failures(numbers):
+    """--check for Figs. 2a and 13."""
+    signed = numbers['signed']
     failures = []
     for c in ('u', 'v'):
         e = signed[c]
@@ -254,6 +244,83 @@ def main():
         failures.append('%s last map %s m is not below %s\'s %s m' %
                         (numbers['runs'][0]['name'], swf_last, numbers['runs'][-1]['name'],
                          vo_last))
+    return failures
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    p.add_argument('sil')
+    p.add_argument('config')
+    p.add_argument('out')
+    p.add_argument('--frames', type=int, default=0, help='frames to fly (0: all of the descent)')
+    p.add_argument('--windows', default='3,4,5',
+                   help='window sizes (150 tracks per frame fit the compiled capacity up to 5)')
+    p.add_argument('--figures', default='2a,12,13,16',
+                   help='which: 2a and 13 (the descents), 12 (the static lab rig), 16 (frame '
+                        'rates x windows)')
+    p.add_argument('--lab-config', default=os.path.join(HERE, 'lab_static.cfg'),
+                   help='Fig. 12: the static lab scene')
+    p.add_argument('--lab-frames', type=int, default=40, help='Fig. 12: frames (0: all 60)')
+    p.add_argument('--fig16-rates', default='10,5,2.5',
+                   help='Fig. 16: frame rates (Hz) of the descent, setting the track length')
+    p.add_argument('--fig16-windows', default='2,3,5', help='Fig. 16: window sizes')
+    p.add_argument('--fig16-seconds', type=float, default=0.0,
+                   help='Fig. 16: seconds of descent per run, the same stretch at every rate '
+                        '(0: the whole descent)')
+    p.add_argument('--fig16-set', action='append', default=[], metavar='"KEY: VALUE"',
+                   help='Fig. 16: a further swf-sil setting (the reduced ctest: a smaller '
+                        'terrain)')
+    p.add_argument('--check', action='store_true')
+    p.add_argument('--report-only', action='store_true',
+                   help='no flights: rewrite the charts and text from OUT/image_*.json')
+    a = p.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    figures = set(a.figures.split(','))
+    unknown = figures - {'2a', '12', '13', '16'}
+    if unknown:
+        p.error('--figures: unknown %s (2a, 12, 13, 16)' % ','.join(sorted(unknown)))
+
+    def fly_in_out(name, cfg, frames, settings, record=False):
+        return fly(a.sil, cfg, a.out, name, frames, settings, a.report_only, record)
+    windows = [int(w) for w in a.windows.split(',')]
+    numbers = {}
+    sections = []
+    failures = []
+    if figures & {'2a', '13'}:
+        runs = descent_runs(a, windows)
+        numbers.update(descent_numbers(a, runs))
+        sections.append(markdown(a.frames, runs, numbers['signed'], numbers['measurements']))
+        failures += descent_failures(numbers)
+    if '12' in figures:
+        r = image_figures.fig12(fly_in_out, a.sil, a.out, a.lab_config, a.lab_frames,
+                                a.report_only)
+        numbers['fig12'] = r
+        sections.append(image_figures.fig12_markdown(
+            r, image_figures.read_config(a.lab_config)))
+        s = r['series']
+        print('Fig. 12 image: %d landmarks, MSE %.3g -> %.3g m^2 (1/m: %.3g), relative %.3g, '
+              'stated %.3g; left-image error common %.4f px, varying %.4f px' % (
+                  r['landmarks'], s['mse'][0], s['mse'][-1], r['one_over_m'][-1],
+                  s['mse_relative'][-1], s['stated'][-1], r['tracking']['common_rms_px'],
+                  r['tracking']['varying_rms_px']))
+        failures += image_figures.fig12_failures(r)
+    if '16' in figures:
+        rates = [float(x) for x in a.fig16_rates.split(',')]
+        w16 = [int(w) for w in a.fig16_windows.split(',')]
+        r = image_figures.fig16(fly_in_out, a.sil, a.out, a.config, rates, w16,
+                                a.fig16_seconds, a.fig16_set)
+        numbers['fig16'] = r
+        sections.append(image_figures.fig16_markdown(r, w16))
+        for x in r['runs']:
+            print('Fig. 16 image: %g Hz SWF(%d): track length %s frames, final MSE %s m^2, %s' %
+                  (x['rate_hz'], x['window'], x['track_length'], x['final_mse'], x['result']))
+        failures += image_figures.fig16_failures(r)
+    with open(os.path.join(a.out, 'image_level.json'), 'w') as f:
+        json.dump(numbers, f, indent=1)
+    with open(os.path.join(a.out, 'image_level.md'), 'w') as f:
+        f.write('\n'.join(sections))
+    if not a.check:
+        return
     for f in failures:
         print('FAIL: ' + f)
     sys.exit(1 if failures else 0)

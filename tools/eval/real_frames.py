@@ -23,7 +23,7 @@ enter every residual).
 
 Writes OUT/fig02a_real_errors.dat (for `swf-plot curves`), OUT/real_frames.json and
 OUT/real_frames.md. --check (ctest): exit 1 unless every sequence gives at least 500 residuals and
-its robust sigma is below the stated 0.5 px."""
+its robust sigma is below its --limit (default the stated 0.5 px)."""
 import argparse
 import json
 import math
@@ -120,9 +120,67 @@ def track_residuals(cam, frames, observations, prior):
     return np.array(res) * math.sqrt(n / (n - p_eff)), p_eff
 
 
-def analyse(path):
+def load(path):
     with open(path) as f:
         doc = json.load(f)
+    missing = [k for k in ('camera', 'frames') if not isinstance(doc, dict) or k not in doc]
+    if missing:
+        raise ValueError('not a `swf-eval --measurements` file (no %s)' % ', '.join(missing))
+    return doc
+
+
+def sil_document(sil, log, config):
+    """The same document from a swf-sil recording (record.path) of a rendered flight, with the
+    renderer's truth of every landmark beside it: the method checked where the truth is known."""
+    import image_figures as fig
+    m = fig.read_channels(sil, log, ['SIM_TRUTH', 'SWF_NAV', 'SWF_FEATURES', 'SWF_LANDMARKS',
+                                     'SIM_TRUTH_LANDMARKS'])
+    fx, cx, cy = fig.camera_of(fig.read_config(config))
+    nav = {n.frame_seq: n for n in m['SWF_NAV']}
+    features = {f.frame_seq: f for f in m['SWF_FEATURES']}
+    maps = {x.frame_seq: x for x in m['SWF_LANDMARKS']}
+    frames = []
+    for t in m['SIM_TRUTH']:
+        n = nav.get(t.frame_seq)
+        f = features.get(t.frame_seq)
+        if n is None or f is None:
+            continue
+        lm = maps.get(t.frame_seq)
+        frames.append({
+            'frame': t.frame_seq,
+            'true_world_R_camera': sum(fig.rotation(t.orientation_world_q), []),
+            'true_world_t_camera_m': list(t.position_world_m),
+            'estimated_world_R_camera': sum(fig.rotation(n.orientation_world_q), []),
+            'estimated_world_t_camera_m': list(n.position_world_m),
+            'features': [[f.id[k], f.u_px[k], f.v_px[k], f.status[k]]
+                         for k in range(f.num_features)],
+            'landmarks': [] if lm is None else
+            [[lm.id[k]] + list(lm.position_world_m[k]) + list(lm.covariance_m2[k])
+             for k in range(lm.num_landmarks)]})
+    truth = {}
+    for x in m['SIM_TRUTH_LANDMARKS']:
+        for k in range(x.num_landmarks):
+            truth.setdefault(x.id[k], list(x.position_world_m[k]))
+    return {'sequence': log, 'camera': {'fx': fx, 'fy': fx, 'cx': cx, 'cy': cy},
+            'frames': frames, 'truth': truth}
+
+
+def true_errors(doc, tracks):
+    """Renderer truth: each fused measurement of the analysed tracks against the projection of
+    the landmark's true position from the true pose."""
+    cam = doc['camera']
+    e = []
+    for j, fr in enumerate(doc['frames']):
+        r, t = pose(fr, 'true')
+        for lid, u, v, fate in fr['features']:
+            if fate in FUSED and lid in tracks and lid in doc['truth']:
+                p, c = project(cam, r, t, np.array(doc['truth'][lid], dtype=float))
+                if c[2] > 0.0:
+                    e += [u - p[0], v - p[1]]
+    return stats(e)
+
+
+def analyse(doc):
     cam = doc['camera']
     frames = doc['frames']
     obs = {}
@@ -138,6 +196,7 @@ def analyse(path):
             rows.setdefault(row[0], []).append((j, row))
     du, dv, p_effs, lengths = [], [], [], []
     skipped_short = skipped_prior = skipped_fit = 0
+    fitted = set()
     for lid, o in obs.items():
         if len(o) < MIN_FRAMES:
             skipped_short += 1
@@ -153,6 +212,7 @@ def analyse(path):
         r, p_eff = fit
         du += list(r[:, 0])
         dv += list(r[:, 1])
+        fitted.add(lid)
         p_effs.append(p_eff)
         lengths.append(len(o))
     return {'sequence': doc['sequence'], 'frames': len(frames), 'tracks': len(lengths),
@@ -160,7 +220,8 @@ def analyse(path):
             'mean_p_eff': float(np.mean(p_effs)) if p_effs else None,
             'tracks_shorter_than_min': skipped_short, 'tracks_without_prior': skipped_prior,
             'tracks_fit_failed': skipped_fit, 'measurements_not_fused': excluded,
-            'u': stats(du), 'v': stats(dv), 'both': stats(du + dv)}
+            'u': stats(du), 'v': stats(dv), 'both': stats(du + dv),
+            'renderer_truth': true_errors(doc, fitted) if 'truth' in doc else None}
 
 
 def stats(e):
@@ -206,7 +267,7 @@ def write_chart(out, results):
     os.replace(path + '.tmp', path)
 
 
-def markdown(results):
+def markdown(results, validation):
     lines = ['## Fig. 2a on real frames: EuRoC and KITTI', '',
              '![fig02a real](eval/fig02a_real_errors.png) '
              '![fig02a image](eval/fig02a_image_errors.png)', '',
@@ -239,6 +300,22 @@ def markdown(results):
                       name, r['both']['outside_histogram'], r['tracks_shorter_than_min'],
                       MIN_FRAMES, r['tracks_without_prior'], r['measurements_not_fused'])
                   for name, r in results), '']
+    if validation is not None:
+        name, r = validation
+        b, t = r['both'], r['renderer_truth']
+        lines += ['The method\'s own error, measured where the truth is known: the same '
+                  'triangulation on %s (a recorded `swf-sil` flight: the true poses from the '
+                  'simulator, the range prior from the published maps) gives std %.3f px, robust '
+                  'sigma %.3f px over %d residuals; the renderer\'s truth on the same measurements '
+                  'gives std %.3f px, robust sigma %.3f px. The ratio of robust sigmas, %.2f, is '
+                  'how much of the error the method sees there; what it misses is the part of a '
+                  'track\'s error common to all its measurements (it moves the fitted landmark). '
+                  'On the real sequences the ground truth\'s own pose errors add to the residuals '
+                  '(EuRoC: Vicon; KITTI: GPS/INS, where a 0.01 deg attitude error is 0.13 px at '
+                  'f = 718 px), so the real figures are upper bounds on what varies from frame to '
+                  'frame and lower bounds on the whole error.' % (
+                      name, b['std'], b['robust_sigma'], b['n'], t['std'], t['robust_sigma'],
+                      b['robust_sigma'] / t['robust_sigma']), '']
     return '\n'.join(lines)
 
 
@@ -246,7 +323,12 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     p.add_argument('out')
     p.add_argument('--sequence', action='append', required=True, metavar='NAME=FILE')
+    p.add_argument('--rendered', metavar='NAME=SWF-SIL,LOG,CONFIG',
+                   help='the method on a recorded swf-sil flight, against the renderer\'s truth')
     p.add_argument('--check', action='store_true')
+    p.add_argument('--limit', action='append', default=[], metavar='NAME=PX',
+                   help='--check: the robust sigma a sequence must stay below (default the '
+                        'stated 0.5 px)')
     a = p.parse_args()
     os.makedirs(a.out, exist_ok=True)
     results = []
@@ -255,14 +337,31 @@ def main():
             p.error('--sequence %s: expected NAME=FILE' % s)
         name, path = s.split('=', 1)
         try:
-            results.append((name, analyse(path)))
+            results.append((name, analyse(load(path))))
         except (OSError, ValueError, KeyError, TypeError, IndexError) as e:
             raise SystemExit('real_frames.py: %s: %s' % (path, e))
+    validation = None
+    if a.rendered:
+        name, rest = a.rendered.split('=', 1)
+        sil, log, config = rest.split(',')
+        validation = (name, analyse(sil_document(sil, log, config)))
     write_chart(a.out, [(n, r) for n, r in results if r['both']['n'] > 0])
     with open(os.path.join(a.out, 'real_frames.json'), 'w') as f:
-        json.dump({n: r for n, r in results}, f, indent=1)
+        json.dump({'sequences': {n: r for n, r in results},
+                   'rendered': None if validation is None else {validation[0]: validation[1]}},
+                  f, indent=1)
     with open(os.path.join(a.out, 'real_frames.md'), 'w') as f:
-        f.write(markdown(results))
+        f.write(markdown(results, validation))
+    if validation is not None:
+        b, t = validation[1]['both'], validation[1]['renderer_truth']
+        print('%s: the method %d residuals, std %.4f robust %.4f px; renderer truth on the same '
+              'measurements std %.4f robust %.4f px' % (validation[0], b['n'], b['std'],
+                                                         b['robust_sigma'], t['std'],
+                                                         t['robust_sigma']))
+    limits = {}
+    for x in a.limit:
+        name, px = x.split('=', 1)
+        limits[name] = float(px)
     failures = []
     for name, r in results:
         b = r['both']
@@ -275,9 +374,10 @@ def main():
                                              b['within_2_std'], b['within_3_std']))
         if b['n'] < 500:
             failures.append('%s: only %d residuals' % (name, b['n']))
-        if not b['robust_sigma'] < STATED_SIGMA_PX:
-            failures.append('%s: robust sigma %.3f px not below the stated %.1f px' %
-                            (name, b['robust_sigma'], STATED_SIGMA_PX))
+        limit = limits.get(name, STATED_SIGMA_PX)
+        if not b['robust_sigma'] < limit:
+            failures.append('%s: robust sigma %.3f px not below %.2f px' %
+                            (name, b['robust_sigma'], limit))
     if a.check:
         for f in failures:
             print('FAIL: ' + f)
