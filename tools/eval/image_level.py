@@ -261,7 +261,7 @@ def main():
     p.add_argument('--lab-config', default=os.path.join(HERE, 'lab_static.cfg'),
                    help='Fig. 12: the static lab scene')
     p.add_argument('--lab-frames', type=int, default=40, help='Fig. 12: frames (0: all 60)')
-    p.add_argument('--fig16-rates', default='10,5,2.5',
+    p.add_argument('--fig16-rates', default='10,5,2',
                    help='Fig. 16: frame rates (Hz) of the descent, setting the track length')
     p.add_argument('--fig16-windows', default='2,3,5', help='Fig. 16: window sizes')
     p.add_argument('--fig16-seconds', type=float, default=0.0,
