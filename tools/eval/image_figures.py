@@ -143,7 +143,7 @@ def persistent_errors(log, camera, min_frames=10):
             'varying_rms_px': rms(varying)}
 
 
-def fig12(fly, sil, out, cfg_path, frames, report_only):
+def fig12(fly, sil, out, cfg_path, frames):
     s = fly('lab_static', cfg_path, frames, [], record=True)
     name = 'lab_static'
     log = read_channels(sil, os.path.join(out, 'image_%s.lcmlog' % name),
