@@ -1130,6 +1130,7 @@ ImuOptions ImuOptionsFor(const FswConfig& c) {
   o.gravity_world_mps2 = estimator::Vec3<double>(0.0, 0.0, -k.gravity_mps2);
   o.first_gyro_bias_sigma_radps = k.gyro_bias_sigma_radps;
   o.first_accel_bias_sigma_mps2 = k.accel_bias_sigma_mps2;
+  o.first_velocity_sigma_mps = k.velocity_sigma_mps;
   o.static_start = k.static_start;
   o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / k.rate_hz));
   estimator::Pose<double> camera_T_imu;

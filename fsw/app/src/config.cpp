@@ -192,6 +192,7 @@ void AddImuFields(std::map<std::string, ConfigSetter>* fields) {
   f["imu.gravity_mps2"] = ImuNumber(&ImuConfig::gravity_mps2, 100.0);
   f["imu.gyro_bias_sigma_radps"] = ImuNumber(&ImuConfig::gyro_bias_sigma_radps, 10.0);
   f["imu.accel_bias_sigma_mps2"] = ImuNumber(&ImuConfig::accel_bias_sigma_mps2, 100.0);
+  f["imu.velocity_sigma_mps"] = ImuNumber(&ImuConfig::velocity_sigma_mps, 1000.0);
   f["imu.camera_t_imu_m"] = Vector3([](FswConfig* c) { return c->imu.camera_t_imu_m; });
   f["imu.camera_r_imu_rad"] = Vector3([](FswConfig* c) { return c->imu.camera_r_imu_rad; });
   f["imu.initial_velocity_mps"] = Vector3([](FswConfig* c) { return c->imu.initial_velocity_mps; });
@@ -692,6 +693,10 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   }
   if (c.imu.enabled && c.sim.imu_unit == "none" && !(c.imu.rate_hz >= 10.0)) {
     return fail("imu.rate_hz", "must be at least 10 Hz for the stereo-inertial estimator");
+  }
+  // The first state's prior: a zero sigma would be infinite information.
+  if (c.imu.enabled && !(c.imu.velocity_sigma_mps > 0.0)) {
+    return fail("imu.velocity_sigma_mps", "must be positive (the prior of the first velocity)");
   }
   if (c.inject_ms > 0.0 && c.inject_stage.empty()) {
     return fail("inject.stage", "required when inject.ms is set");

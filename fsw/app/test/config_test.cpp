@@ -198,7 +198,7 @@ TEST(ConfigTest, ImuKeysParseAndBadOnesAreRefusedNamingTheField) {
   ASSERT_TRUE(Accepted(
       "source: sim\nsim.imu_unit: tactical\nimu.enabled: true\nimu.camera_t_imu_m: 0.1, -0.2, 0.3\n"
       "imu.camera_r_imu_rad: 0 0 1.5\nimu.initial_velocity_mps: 0 0 -10\nimu.rate_hz: 400\n"
-      "imu.gyro_noise_density: 2e-5\nimu.channel: LANDER_IMU\n",
+      "imu.gyro_noise_density: 2e-5\nimu.channel: LANDER_IMU\nimu.velocity_sigma_mps: 0.02\n",
       &c));
   EXPECT_TRUE(c.imu.enabled);
   EXPECT_EQ(c.sim.imu_unit, "tactical");
@@ -208,6 +208,7 @@ TEST(ConfigTest, ImuKeysParseAndBadOnesAreRefusedNamingTheField) {
   EXPECT_EQ(c.imu.rate_hz, 400.0);
   EXPECT_EQ(c.imu.gyro_noise_density, 2e-5);
   EXPECT_EQ(c.imu.channel, "LANDER_IMU");
+  EXPECT_EQ(c.imu.velocity_sigma_mps, 0.02);
   Refused("source: sim\nimu.enabled: true\n",
           "t.cfg:2: imu.enabled: the simulator carries no IMU: set sim.imu_unit");
   Refused("source: sim\nsim.imu_unit: consumer\n",
@@ -219,6 +220,8 @@ TEST(ConfigTest, ImuKeysParseAndBadOnesAreRefusedNamingTheField) {
   Refused("source: sim\nimu.initial_velocity_mps: 0 nan 0\n", "t.cfg:2: imu.initial_velocity_mps:");
   Refused("source: log\nlog.path: x.lcmlog\nimu.enabled: true\nimu.rate_hz: 1\n",
           "imu.rate_hz: must be at least 10 Hz");
+  Refused("source: log\nlog.path: x.lcmlog\nimu.enabled: true\nimu.velocity_sigma_mps: 0\n",
+          "imu.velocity_sigma_mps: must be positive");
 }
 
 // The dispersions of the simulated flight (a Monte Carlo campaign's --set keys): every key parses,

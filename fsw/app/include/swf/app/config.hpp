@@ -109,6 +109,11 @@ struct ImuConfig {
   // The IMU's velocity at the first frame, world frame (the state guidance hands over;
   // initial: truth in the simulator takes the true one).
   double initial_velocity_mps[3] = {0.0, 0.0, 0.0};
+  // 1-sigma of that velocity per axis. It matters more than it looks: with a narrow field of
+  // view and distant terrain a tilt rate (a gyroscope bias b) and a sideways velocity Z b (Z the
+  // range) move the image alike, so until the range has shrunk the velocity's prior is what
+  // separates the gyroscope bias from a drift (docs/imu.md, "Measured").
+  double velocity_sigma_mps = 0.1;
   // The vehicle stands still before the first frame (on the pad, a parked rover): the samples up
   // to it give the gyroscope bias and level the attitude, the velocity starts at zero
   // (ImuOptions::static_start). An IMU cannot tell rest from constant velocity: set it only when
