@@ -45,10 +45,18 @@
 // (right-hand sides at step k). Bias drift between frames (random walk) is not part of this
 // covariance: it belongs to the bias states' own process noise (BiasRandomWalkCovariance).
 //
+// Re-integration. The increments are exactly linear in the accelerometer bias (it never enters
+// the rotation), so Corrected() is exact for it; the gyroscope bias enters through the rotation,
+// and the correction leaves out terms of order (|dbg| dT)^2. The steps of an interval are kept
+// (up to kMaxKeptSteps), so when the estimate has moved far from the linearization biases the
+// interval is integrated again at the new ones (Reintegrate) instead of being carried further by
+// the correction.
+//
 // Flight code: fixed size, no allocation, no exceptions; every call bounded by its sample count.
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 
@@ -143,6 +151,9 @@ class ImuPreintegration {
   static constexpr int kRotation = 0;
   static constexpr int kVelocity = 3;
   static constexpr int kPosition = 6;
+  // Steps kept for Reintegrate: a frame interval at up to 2.5 kHz / 10 Hz (400 Hz: 0.64 s). A
+  // longer one (a camera outage coasted on the IMU) is carried by the first-order correction.
+  static constexpr int kMaxKeptSteps = 256;
 
   // Increments corrected to other biases (first order in the bias change).
   struct Deltas {
@@ -157,16 +168,8 @@ class ImuPreintegration {
     if (!noise.Valid() || !biases.gyro_radps.allFinite() || !biases.accel_mps2.allFinite())
       return core::Status::kInvalidArgument;
     noise_ = noise;
-    biases_ = biases;
-    delta_ = Deltas{};
-    dt_s_ = S(0);
+    Restart(biases);
     num_steps_ = 0;
-    covariance_.setZero();
-    d_rotation_d_gyro_bias_.setZero();
-    d_velocity_d_gyro_bias_.setZero();
-    d_velocity_d_accel_bias_.setZero();
-    d_position_d_gyro_bias_.setZero();
-    d_position_d_accel_bias_.setZero();
     return core::Status::kOk;
   }
 
@@ -177,34 +180,31 @@ class ImuPreintegration {
     if (!(dt_s > S(0)) || !std::isfinite(dt_s) || !gyro_radps.allFinite() ||
         !accel_mps2.allFinite())
       return core::Status::kInvalidArgument;
-    const Vec3<S> a = accel_mps2 - biases_.accel_mps2;
-    const Vec3<S> phi = (gyro_radps - biases_.gyro_radps) * dt_s;
-    Step step;
-    step.dt = dt_s;
-    step.rotation = ExpSO3<S>(phi);
-    step.jr_dt = RightJacobianSO3<S>(phi) * dt_s;
-    const Vec3<S> half_phi = S(0.5) * phi;
-    step.half_rotation_t = ExpSO3<S>(half_phi).transpose();
-    step.half_jr_dt = RightJacobianSO3<S>(half_phi) * (S(0.5) * dt_s);
-    step.mid_dt = delta_.rotation * step.half_rotation_t.transpose() * dt_s;
-    step.mid_a_skew_dt = step.mid_dt * Skew(a);
-
-    PropagateCovariance(step);
-    PropagateBiasJacobians(step);
-
-    const Vec3<S> dv_step = step.mid_dt * a;
-    delta_.position_m += dt_s * delta_.velocity_mps + S(0.5) * dt_s * dv_step;
-    delta_.velocity_mps += dv_step;
-    delta_.rotation = delta_.rotation * step.rotation;
-    dt_s_ += dt_s;
+    if (num_steps_ < kMaxKeptSteps) kept_[num_steps_] = KeptStep{gyro_radps, accel_mps2, dt_s};
+    Advance(gyro_radps, accel_mps2, dt_s);
     ++num_steps_;
+    return core::Status::kOk;
+  }
+
+  // Whether Reintegrate can replay the whole interval (its steps were all kept).
+  bool Replayable() const { return num_steps_ <= kMaxKeptSteps; }
+
+  // The same interval integrated again from its kept steps at new linearization biases
+  // (bounded by kMaxKeptSteps). kFull, and nothing changed, when the interval was longer than
+  // the steps kept; kInvalidArgument for non-finite biases.
+  core::Status Reintegrate(const ImuBiases<S>& biases) {
+    if (!Replayable()) return core::Status::kFull;
+    if (!biases.gyro_radps.allFinite() || !biases.accel_mps2.allFinite())
+      return core::Status::kInvalidArgument;
+    Restart(biases);
+    for (int k = 0; k < num_steps_; ++k) Advance(kept_[k].gyro, kept_[k].accel, kept_[k].dt);
     return core::Status::kOk;
   }
 
   // The increments at the linearization biases.
   const Deltas& Increments() const { return delta_; }
   // The increments for `biases`, by the first-order correction (exact at the linearization
-  // point; the caller re-integrates when the change grows large enough to matter).
+  // point; Reintegrate when the change grows large enough to matter).
   Deltas Corrected(const ImuBiases<S>& biases) const {
     const Vec3<S> dbg = biases.gyro_radps - biases_.gyro_radps;
     const Vec3<S> dba = biases.accel_mps2 - biases_.accel_mps2;
@@ -258,6 +258,43 @@ class ImuPreintegration {
     Mat3<S> mid_a_skew_dt;    // M [a]x dt
   };
 
+  // One step at the current linearization biases (file comment); the caller checked it.
+  void Advance(const Vec3<S>& gyro_radps, const Vec3<S>& accel_mps2, S dt_s) {
+    const Vec3<S> a = accel_mps2 - biases_.accel_mps2;
+    const Vec3<S> phi = (gyro_radps - biases_.gyro_radps) * dt_s;
+    Step step;
+    step.dt = dt_s;
+    step.rotation = ExpSO3<S>(phi);
+    step.jr_dt = RightJacobianSO3<S>(phi) * dt_s;
+    const Vec3<S> half_phi = S(0.5) * phi;
+    step.half_rotation_t = ExpSO3<S>(half_phi).transpose();
+    step.half_jr_dt = RightJacobianSO3<S>(half_phi) * (S(0.5) * dt_s);
+    step.mid_dt = delta_.rotation * step.half_rotation_t.transpose() * dt_s;
+    step.mid_a_skew_dt = step.mid_dt * Skew(a);
+
+    PropagateCovariance(step);
+    PropagateBiasJacobians(step);
+
+    const Vec3<S> dv_step = step.mid_dt * a;
+    delta_.position_m += dt_s * delta_.velocity_mps + S(0.5) * dt_s * dv_step;
+    delta_.velocity_mps += dv_step;
+    delta_.rotation = delta_.rotation * step.rotation;
+    dt_s_ += dt_s;
+  }
+
+  // Empty increments, covariance and Jacobians at `biases` (the kept steps stay).
+  void Restart(const ImuBiases<S>& biases) {
+    biases_ = biases;
+    delta_ = Deltas{};
+    dt_s_ = S(0);
+    covariance_.setZero();
+    d_rotation_d_gyro_bias_.setZero();
+    d_velocity_d_gyro_bias_.setZero();
+    d_velocity_d_accel_bias_.setZero();
+    d_position_d_gyro_bias_.setZero();
+    d_position_d_accel_bias_.setZero();
+  }
+
   void PropagateCovariance(const Step& step) {
     const S dt = step.dt;
     Mat9<S> a = Mat9<S>::Identity();
@@ -296,6 +333,12 @@ class ImuPreintegration {
     d_rotation_d_gyro_bias_ = step.rotation.transpose() * d_rotation_d_gyro_bias_ - step.jr_dt;
   }
 
+  struct KeptStep {
+    Vec3<S> gyro;
+    Vec3<S> accel;
+    S dt;
+  };
+
   ImuNoise<S> noise_;
   ImuBiases<S> biases_;
   Deltas delta_;
@@ -307,6 +350,7 @@ class ImuPreintegration {
   Mat3<S> d_velocity_d_accel_bias_ = Mat3<S>::Zero();
   Mat3<S> d_position_d_gyro_bias_ = Mat3<S>::Zero();
   Mat3<S> d_position_d_accel_bias_ = Mat3<S>::Zero();
+  std::array<KeptStep, kMaxKeptSteps> kept_{};
 };
 
 // How a sample stands for the signal between its time and the next sample's.

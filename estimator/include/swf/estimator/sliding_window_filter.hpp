@@ -70,6 +70,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <concepts>
 #include <cstdint>
 
 #include "swf/core/id_map.hpp"
@@ -240,6 +241,8 @@ struct SwfSummary {
   double motion_chi2 = 0.0;
   bool motion_gate_failed = false;
   bool motion_overruled = false;
+  // Process inputs integrated again at their first state's new estimate (ReintegratingModel).
+  int motions_reintegrated = 0;
 
   // The solve stopped for one of the three converged reasons.
   bool Converged() const {
@@ -254,6 +257,15 @@ struct SwfSummary {
 template <typename Model>
 concept RelativeMotionModel = requires(const Model& m, const typename Model::PoseType& p) {
   m.RelativeMotion(p, p);
+};
+
+// A model whose process input is integrated at a linearization point of the state it starts
+// from (the IMU's biases) and can be integrated again at that state's current estimate
+// (InertialStereoModel::RefreshMotion; true when it did).
+template <typename Model>
+concept ReintegratingModel = requires(const Model& m, const typename Model::PoseType& p,
+                                      typename Model::MotionType* u) {
+  { m.RefreshMotion(p, u) } -> std::same_as<bool>;
 };
 
 // A landmark that left the estimator in the last Update (its final estimate).
@@ -489,6 +501,7 @@ class SlidingWindowFilter {
   core::Status PushPose(const PoseType& estimate, const MotionType* u, const StateMat* sqrt_info);
   bool StateIsFinite() const;
   bool HoldsOldestPose() const;
+  void RefreshMotions();
   void RecordEvidence();
   void ZeroFixedPoseCovariance();
 

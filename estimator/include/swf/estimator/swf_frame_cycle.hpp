@@ -130,11 +130,27 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ReplaceNewestObservation(
   return core::Status::kEmpty;
 }
 
+// Before the solve, each process input in the window is offered to the model with the current
+// estimate of the state it starts from (ReintegratingModel): an IMU interval whose biases have
+// moved far is integrated again rather than carried on by its first-order bias correction.
+// Once per Update, not between iterations, so a solve minimizes one cost throughout.
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::RefreshMotions() {
+  if constexpr (ReintegratingModel<Model>) {
+    for (int j = 1; j < num_poses_; ++j) {
+      PoseSlot& p = Slot(j);
+      if (p.has_process && model_.RefreshMotion(Slot(j - 1).pose, &p.motion))
+        ++summary_.motions_reintegrated;
+    }
+  }
+}
+
 template <typename Model, int K, int N, int M, int P>
 core::Status SlidingWindowFilter<Model, K, N, M, P>::Update() {
   if (!configured_) return core::Status::kNotConfigured;
   summary_ = SwfSummary{};
   retired_.clear();
+  RefreshMotions();
   const MotionGateResult motion_gate = GateNewestMotion();
   ApplyPredictionGate();
   summary_.motion_chi2 = motion_gate.chi2;
