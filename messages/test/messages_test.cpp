@@ -50,6 +50,7 @@ swf_msgs::hazard_map_t SafeAndRockCells() {
   hazard.num_cells = 2;
   hazard.elevation_m = {0.5f, 0.25f};
   hazard.sigma_m = {0.1f, 0.1f};
+  hazard.relief_sigma_m = {0.05f, 0.05f};
   hazard.slope_deg = {1.0f, 2.0f};
   hazard.roughness_m = {0.0f, 0.3f};
   hazard.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_ROCK};

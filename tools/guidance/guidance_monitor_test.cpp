@@ -70,6 +70,7 @@ TEST_F(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
   good.num_cells = 2;
   good.elevation_m = {0.5f, 0.25f};
   good.sigma_m = {0.1f, 0.1f};
+  good.relief_sigma_m = {0.05f, 0.05f};
   good.slope_deg = {1.0f, 2.0f};
   good.roughness_m = {0.0f, 0.3f};
   good.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_UNCERTAIN};

@@ -28,6 +28,7 @@ Status FillHazardRecord(const hazard::HazardMapper& m, HazardRecord* out) {
   for (std::int32_t c = 0; c < cells; ++c) {
     out->elevation_m[c] = m.Elevation()[c];
     out->sigma_m[c] = m.Sigma()[c];
+    out->relief_sigma_m[c] = m.ReliefSigma()[c];
     out->slope_deg[c] = m.SlopeDeg()[c];
     out->roughness_m[c] = m.Roughness()[c];
     out->hazard_class[c] = HazardClassCode(m.Classes()[c]);

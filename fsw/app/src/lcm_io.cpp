@@ -86,10 +86,11 @@ bool OutputThread::Open(const OutputOptions& options, OutputChannels* channels,
       static_cast<std::size_t>(options.max_hazard_cells) * options.max_hazard_cells;
   impl_->hazard.elevation_m.reserve(cells);
   impl_->hazard.sigma_m.reserve(cells);
+  impl_->hazard.relief_sigma_m.reserve(cells);
   impl_->hazard.slope_deg.reserve(cells);
   impl_->hazard.roughness_m.reserve(cells);
   impl_->hazard.hazard_class.reserve(cells);
-  impl_->buffer.assign(std::max(2 * pixels, 17 * cells) + 128 * kMaxMapLandmarks + 65536, 0);
+  impl_->buffer.assign(std::max(2 * pixels, 21 * cells) + 128 * kMaxMapLandmarks + 65536, 0);
   return true;
 }
 
@@ -250,6 +251,7 @@ void FillHazard(const HazardRecord& r, swf_msgs::hazard_map_t* m) {
   m->num_cells = r.cells_per_side * r.cells_per_side;
   m->elevation_m.assign(r.elevation_m.get(), r.elevation_m.get() + m->num_cells);
   m->sigma_m.assign(r.sigma_m.get(), r.sigma_m.get() + m->num_cells);
+  m->relief_sigma_m.assign(r.relief_sigma_m.get(), r.relief_sigma_m.get() + m->num_cells);
   m->slope_deg.assign(r.slope_deg.get(), r.slope_deg.get() + m->num_cells);
   m->roughness_m.assign(r.roughness_m.get(), r.roughness_m.get() + m->num_cells);
   m->hazard_class.assign(r.hazard_class.get(), r.hazard_class.get() + m->num_cells);

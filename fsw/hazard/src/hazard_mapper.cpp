@@ -57,6 +57,17 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
 }
 
 // Cells each side of the centre of a square analysis window of +-radius_m (at least 1).
+// 1-sigma of the position's horizontal error along its worst direction (largest eigenvalue of the
+// covariance's world x-y block).
+double HorizontalSigma(const Eigen::Matrix<double, 6, 6>& cov) {
+  const double a = cov(0, 0);
+  const double b = 0.5 * (cov(0, 1) + cov(1, 0));
+  const double c = cov(1, 1);
+  const double mean = 0.5 * (a + c);
+  const double half_diff = 0.5 * (a - c);
+  return std::sqrt(std::max(0.0, mean + std::sqrt(half_diff * half_diff + b * b)));
+}
+
 int HalfWindowCells(double radius_m, double cell_m) {
   return std::max(1, static_cast<int>(std::lround(radius_m / cell_m)));
 }
@@ -133,6 +144,7 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
       !(o.frame_error_correlation >= 0.0 && o.frame_error_correlation < 1.0) ||
       !positive(o.max_slope_deg) || !positive(o.max_rock_height_m) ||
       !positive(o.footprint_radius_m) || !positive(o.rock_window_radius_m) ||
+      !positive(o.local_slope_baseline_m) || !(o.site_margin_sigmas >= 0.0) ||
       !(o.confidence_k >= 0.0) || !(o.min_known_fraction >= 0.0 && o.min_known_fraction <= 1.0) ||
       !positive(o.clearance_cap_m) || !(o.target_weight >= 0.0) || !(o.site_hysteresis >= 0.0) ||
       o.max_landmarks < 0 || o.min_calibration_landmarks < 3 || !std::isfinite(o.ground_z_hint_m) ||
@@ -182,11 +194,15 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   class_.assign(cells, HazardClass::kUnknown);
   slope_deg_.assign(cells, kNaN);
   slope_sigma_deg_.assign(cells, kNaN);
+  local_slope_deg_.assign(cells, kNaN);
+  local_slope_sigma_deg_.assign(cells, kNaN);
   rock_m_.assign(cells, kNaN);
+  relief_sigma_.assign(cells, kNaN);
   rough_m_.assign(cells, kNaN);
   clearance_m_.assign(cells, 0.0f);
   sat_.assign(static_cast<std::size_t>(n_ + 1) * static_cast<std::size_t>(n_ + 1) * kSatChannels,
               0.0);
+  rock_sat_.assign(static_cast<std::size_t>(n_ + 1) * static_cast<std::size_t>(n_ + 1), 0);
   dt_f_.assign(cells, 0.0f);
   dt_d_.assign(static_cast<std::size_t>(n_), 0.0f);
   dt_z_.assign(static_cast<std::size_t>(n_) + 1, 0.0f);
@@ -209,7 +225,9 @@ void HazardMapper::Reset() {
   std::fill(sigma_rel_.begin(), sigma_rel_.end(), kNaN);
   std::fill(class_.begin(), class_.end(), HazardClass::kUnknown);
   std::fill(slope_deg_.begin(), slope_deg_.end(), kNaN);
+  std::fill(local_slope_deg_.begin(), local_slope_deg_.end(), kNaN);
   std::fill(rock_m_.begin(), rock_m_.end(), kNaN);
+  std::fill(relief_sigma_.begin(), relief_sigma_.end(), kNaN);
   std::fill(rough_m_.begin(), rough_m_.end(), kNaN);
   std::fill(clearance_m_.begin(), clearance_m_.end(), 0.0f);
   site_ = SafeSite{};
@@ -564,8 +582,10 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
     return s;
   };
   const int rf = HalfWindowCells(options_.footprint_radius_m, cell_m_);
+  const int rl = HalfWindowCells(0.5 * options_.local_slope_baseline_m, cell_m_);
   const int rr = HalfWindowCells(options_.rock_window_radius_m, cell_m_);
   const double min_f = options_.min_known_fraction * (2 * rf + 1) * (2 * rf + 1);
+  const double min_l = options_.min_known_fraction * (2 * rl + 1) * (2 * rl + 1);
   const double min_r = options_.min_known_fraction * (2 * rr + 1) * (2 * rr + 1);
   const Eigen::Matrix<double, 6, 6>& cov = frame.pose_covariance;
   // Tilt of the map from attitude error: rotations about the horizontal world axes.
@@ -574,6 +594,22 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   const double var_tilt = std::max(0.0, rot_cov(0, 0)) + std::max(0.0, rot_cov(1, 1));
   const double k = options_.confidence_k;
   const RockCriterion rocks(RockCriterionOf(options_), cell_m_);
+  // A plane's slope and its sigma (the fit's and the map's tilt from attitude error), degrees.
+  const auto slope_of = [&](const Plane& p, double* sigma_deg) {
+    const double g = core::Hypot(p.b, p.c) / cell_m_;
+    const double var_g = (p.var_b + p.var_c) / (cell_m_ * cell_m_) + var_tilt;
+    *sigma_deg = std::sqrt(var_g) / (1.0 + g * g) * kRadToDeg;
+    return std::atan(g) * kRadToDeg;
+  };
+  // A slope is a hazard where it exceeds the threshold by k sigma and the map resolves it (sigma
+  // below a third of the threshold); it cannot be excluded where value + k sigma exceeds it.
+  const auto slope_declared = [&](double deg, double sigma_deg) {
+    return deg - k * sigma_deg > options_.max_slope_deg &&
+           sigma_deg * 3.0 <= options_.max_slope_deg;
+  };
+  const auto slope_possible = [&](double deg, double sigma_deg) {
+    return deg + k * sigma_deg > options_.max_slope_deg;
+  };
   int safe = 0;
   int rock = 0;
   int slope = 0;
@@ -581,36 +617,75 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   for (int j = 0; j < n_; ++j) {
     for (int i = 0; i < n_; ++i) {
       const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
-      slope_deg_[c] = slope_sigma_deg_[c] = rock_m_[c] = rough_m_[c] = kNaN;
+      slope_deg_[c] = slope_sigma_deg_[c] = rock_m_[c] = relief_sigma_[c] = rough_m_[c] = kNaN;
+      local_slope_deg_[c] = local_slope_sigma_deg_[c] = kNaN;
       class_[c] = HazardClass::kUnknown;
       if (std::isnan(elevation_[c])) continue;
       const Plane pf = FitPlane(window(i, j, rf), min_f);
+      const Plane pl = FitPlane(window(i, j, rl), min_l);
       const Plane pr = FitPlane(window(i, j, rr), min_r);
-      if (!pf.ok || !pr.ok) continue;
-      const double g = core::Hypot(pf.b, pf.c) / cell_m_;
-      const double var_g = (pf.var_b + pf.var_c) / (cell_m_ * cell_m_) + var_tilt;
-      const double slope_deg = std::atan(g) * kRadToDeg;
-      const double slope_sigma_deg = std::sqrt(var_g) / (1.0 + g * g) * kRadToDeg;
+      if (!pf.ok || !pr.ok || !pl.ok) continue;
+      double slope_sigma_deg = 0.0;
+      const double slope_deg = slope_of(pf, &slope_sigma_deg);
+      double local_sigma_deg = 0.0;
+      const double local_deg = slope_of(pl, &local_sigma_deg);
       const double plane_here = pr.mz + pr.b * (i - pr.mx) + pr.c * (j - pr.my);
       const double h = (elevation_[c] - z_ref) - plane_here;
       const double sr = sigma_rel_[c];
       const double sigma_h = std::sqrt(sr * sr + pr.mean_var / pr.n);
       slope_deg_[c] = static_cast<float>(slope_deg);
       slope_sigma_deg_[c] = static_cast<float>(slope_sigma_deg);
+      local_slope_deg_[c] = static_cast<float>(local_deg);
+      local_slope_sigma_deg_[c] = static_cast<float>(local_sigma_deg);
       rock_m_[c] = static_cast<float>(h);
+      relief_sigma_[c] = static_cast<float>(sigma_h);
       rough_m_[c] = static_cast<float>(std::sqrt(pf.rss / pf.n));
-      // A slope is declared only where the map resolves it (sigma below a third of the
-      // threshold), a rock where the rock criterion's test decides it; elsewhere an exceedance
-      // is kUncertain.
+      // A rock where the rock criterion's test decides it.
       if (h > rocks.DecisionRelief(sigma_h)) {
         class_[c] = HazardClass::kRock;
         ++rock;
-      } else if (slope_deg - k * slope_sigma_deg > options_.max_slope_deg &&
-                 slope_sigma_deg * 3.0 <= options_.max_slope_deg) {
+      }
+    }
+  }
+  // Declared rocks per window: a 1 m plane over a rock tilts with the rock, which is a hazard
+  // already (and kept a footprint away from any site); the truth's slopes are the rock-free
+  // surface's, so the local slope is judged only where its window holds no declared rock.
+  for (int j = 0; j < n_; ++j) {
+    std::int32_t row = 0;
+    for (int i = 0; i < n_; ++i) {
+      row += class_[static_cast<std::size_t>(j) * n_ + i] == HazardClass::kRock ? 1 : 0;
+      rock_sat_[static_cast<std::size_t>(j + 1) * n1 + i + 1] =
+          rock_sat_[static_cast<std::size_t>(j) * n1 + i + 1] + row;
+    }
+  }
+  const auto rocks_within = [&](int ci, int cj, int r) {
+    const int i0 = std::max(0, ci - r);
+    const int j0 = std::max(0, cj - r);
+    const int i1 = std::min(n_, ci + r + 1);
+    const int j1 = std::min(n_, cj + r + 1);
+    const auto at = [&](int a, int b) { return rock_sat_[static_cast<std::size_t>(b) * n1 + a]; };
+    return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
+  };
+  // A slope (footprint or 1 m scale) where the map resolves it; elsewhere an exceedance of either
+  // threshold is kUncertain.
+  for (int j = 0; j < n_; ++j) {
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      if (class_[c] == HazardClass::kRock || std::isnan(slope_deg_[c])) continue;
+      const double slope_deg = slope_deg_[c];
+      const double slope_sigma_deg = slope_sigma_deg_[c];
+      const bool local = rocks_within(i, j, rl) == 0;
+      const double local_deg = local ? local_slope_deg_[c] : 0.0;
+      const double local_sigma_deg = local ? local_slope_sigma_deg_[c] : 0.0;
+      const double h = rock_m_[c];
+      const double sigma_h = relief_sigma_[c];
+      if (slope_declared(slope_deg, slope_sigma_deg) ||
+          slope_declared(local_deg, local_sigma_deg)) {
         class_[c] = HazardClass::kSlope;
         ++slope;
       } else if (h + k * sigma_h > options_.max_rock_height_m ||
-                 slope_deg + k * slope_sigma_deg > options_.max_slope_deg) {
+                 slope_possible(slope_deg, slope_sigma_deg) ||
+                 slope_possible(local_deg, local_sigma_deg)) {
         class_[c] = HazardClass::kUncertain;
         ++uncertain;
       } else {
@@ -687,7 +762,7 @@ void HazardMapper::DistanceTransform() {
 
 void HazardMapper::SelectSite() {
   DistanceTransform();
-  const double radius = options_.footprint_radius_m;
+  const double radius = options_.footprint_radius_m + site_margin_m_;
   const double half_extent = 0.5 * n_ * cell_m_;
   const auto score_of = [&](std::size_t c, int i, int j) {
     const double x = corner_x_ + (i + 0.5) * cell_m_;
@@ -743,6 +818,7 @@ void HazardMapper::SelectSite() {
   site_.clearance_m = clearance_m_[c];
   site_.slope_deg = slope_deg_[c];
   site_.sigma_m = sigma_[c];
+  site_.margin_m = site_margin_m_;
 }
 
 core::Status HazardMapper::Update(const HazardFrame& frame) {
@@ -786,6 +862,7 @@ core::Status HazardMapper::Update(const HazardFrame& frame) {
   FuseStereo(frame);
   FuseLandmarks(frame);
   Analyze(frame);
+  site_margin_m_ = options_.site_margin_sigmas * HorizontalSigma(frame.pose_covariance);
   SelectSite();
   ++stats_.updates;
   return core::Status::kOk;

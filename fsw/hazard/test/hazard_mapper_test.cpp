@@ -44,8 +44,8 @@ struct SceneRun {
   HazardFrame frame;
 };
 
-void Prepare(const Scene& scene, double altitude, SceneRun* run) {
-  const HazardMapperOptions o = Options();
+void Prepare(const Scene& scene, double altitude, SceneRun* run,
+             const HazardMapperOptions& o = Options()) {
   ASSERT_EQ(run->mapper->Configure(o), core::Status::kOk);
   estimator::Pose<double> pose;
   pose.R = testing::Nadir();
@@ -138,6 +138,109 @@ TEST(HazardMapperTest, TiltedPlaneIsSlopeHazard) {
   EXPECT_GT(within, fitted * 95 / 100);
   EXPECT_GT(slopes, fitted * 9 / 10);
   EXPECT_FALSE(m.Site().valid);
+}
+
+// GIVEN a ripple of 3 m wavelength and 0.15 m amplitude (the metre-scale relief of a crater rim)
+// seen from 12 m with the flight footprint (radius 1.5 m) THEN the footprint plane, which spans a
+// whole wavelength, tilts at most ~5.5 deg (< 8 deg where its window is whole), but the plane
+// over 1 m follows the flanks (up to ~16 deg; within 5 deg of the least-squares slope of the true
+// surface over the same window: the whole ripple is +-0.5 px of disparity at 12 m, where SGM's
+// subpixel bias shapes it, measured 95 %), the steep flanks are not kSafe, the crests are, and no
+// 3 m disc fits between the flanks: no site. With the footprint slope alone a site is chosen.
+TEST(HazardMapperTest, MetreScaleSlopeIsAHazardTheFootprintPlaneMisses) {
+  HazardMapperOptions o = Options();
+  o.grid_cells = 128;
+  o.footprint_radius_m = 1.5;
+  Scene scene;
+  scene.ripple_amplitude_m = 0.15;
+  scene.ripple_wavelength_m = 3.0;
+  SceneRun run;
+  Prepare(scene, 12.0, &run, o);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  const double k = 2.0 * M_PI / scene.ripple_wavelength_m;
+  // Least-squares slope of A sin(k x) over the cells of the 1 m window, per unit A cos(k x).
+  const int half = static_cast<int>(std::lround(0.5 / m.CellM()));
+  double sxz = 0.0;
+  double sxx = 0.0;
+  for (int d = -half; d <= half; ++d) {
+    sxz += d * m.CellM() * std::sin(k * d * m.CellM());
+    sxx += d * m.CellM() * d * m.CellM();
+  }
+  const double gain = scene.ripple_amplitude_m * sxz / sxx;
+  int fitted = 0;
+  int whole_footprints = 0;
+  int close = 0;
+  int flanks = 0;
+  int flanks_flagged = 0;
+  int crests = 0;
+  int crests_safe = 0;
+  for (int j = 0; j < m.GridCells(); ++j) {
+    for (int i = 0; i < m.GridCells(); ++i) {
+      const int c = j * m.GridCells() + i;
+      if (std::isnan(m.LocalSlopeDeg()[c]) || std::isnan(m.SlopeDeg()[c])) continue;
+      ++fitted;
+      // The footprint plane over a whole window (a truncated one at the map's edge spans less than
+      // a wavelength).
+      const int rf = static_cast<int>(std::lround(o.footprint_radius_m / m.CellM()));
+      const auto known = [&](int a, int b) {
+        return a >= 0 && b >= 0 && a < m.GridCells() && b < m.GridCells() &&
+               !std::isnan(m.Elevation()[b * m.GridCells() + a]);
+      };
+      if (known(i - rf, j - rf) && known(i + rf, j - rf) && known(i - rf, j + rf) &&
+          known(i + rf, j + rf)) {
+        ++whole_footprints;
+        EXPECT_LT(m.SlopeDeg()[c], 8.0);
+      }
+      const double x = m.CornerX() + (i + 0.5) * m.CellM();
+      const double expected = std::atan(std::fabs(gain * std::cos(k * x))) * 180.0 / M_PI;
+      close += std::fabs(m.LocalSlopeDeg()[c] - expected) < 5.0;
+      if (expected > 13.0) {
+        ++flanks;
+        flanks_flagged += m.Classes()[c] != HazardClass::kSafe;
+      } else if (expected < 4.0) {
+        ++crests;
+        crests_safe += m.Classes()[c] == HazardClass::kSafe;
+      }
+    }
+  }
+  std::printf(
+      "ripple: %d cells fitted, %d within 5 deg of the 1 m slope, flanks %d/%d flagged, "
+      "crests %d/%d safe\n",
+      fitted, close, flanks_flagged, flanks, crests_safe, crests);
+  ASSERT_GT(fitted, 2000);
+  EXPECT_GT(whole_footprints, 1000);
+  EXPECT_GT(close, fitted * 9 / 10);
+  ASSERT_GT(flanks, 200);
+  EXPECT_GT(flanks_flagged, flanks * 95 / 100);
+  ASSERT_GT(crests, 200);
+  EXPECT_GT(crests_safe, crests * 8 / 10);
+  EXPECT_FALSE(m.Site().valid);
+
+  // The same scene with slopes judged at footprint scale only: a site.
+  HazardMapperOptions footprint_only = o;
+  footprint_only.local_slope_baseline_m = 2.0 * o.footprint_radius_m;
+  SceneRun coarse;
+  Prepare(scene, 12.0, &coarse, footprint_only);
+  ASSERT_EQ(coarse.mapper->Update(coarse.frame), core::Status::kOk);
+  ASSERT_EQ(coarse.mapper->Update(coarse.frame), core::Status::kOk);
+  EXPECT_TRUE(coarse.mapper->Site().valid);
+}
+
+// GIVEN a flat plane WHEN the navigation's horizontal sigma grows THEN the site keeps the
+// footprint radius plus site_margin_sigmas x that sigma from every non-safe cell (the grid border
+// included), and says so in its margin.
+TEST(HazardMapperTest, SiteMarginFollowsTheHorizontalSigma) {
+  SceneRun run;
+  Prepare(Scene{}, 8.0, &run);
+  run.frame.pose_covariance(0, 0) = 0.04;  // 0.2 m along x, 0.1 m along y
+  run.frame.pose_covariance(1, 1) = 0.01;
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  ASSERT_TRUE(m.Site().valid);
+  EXPECT_NEAR(m.Site().margin_m, 2.0 * 0.2, 1e-9);
+  EXPECT_GE(m.Site().clearance_m, Options().footprint_radius_m + 0.4);
 }
 
 // GIVEN two 0.5 m boxes (rocks) and a 0.1 m one on flat ground THEN the big ones are kRock at

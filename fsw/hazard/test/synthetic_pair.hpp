@@ -1,5 +1,6 @@
 // Synthetic rectified stereo pairs for the hazard tests: a nadir camera over a textured plane
-// z = tilt_x * x (plus optional flat-topped square rocks), rendered by exact ray casting.
+// z = tilt_x * x (plus an optional ripple along x and flat-topped square rocks), rendered by ray
+// casting (exact for the plane and the boxes, iterated to convergence for the ripple).
 #pragma once
 
 #include <Eigen/Core>
@@ -17,6 +18,10 @@ struct Box {
 
 struct Scene {
   double tilt_x = 0.0;
+  // A ripple along x, z += ripple_amplitude_m sin(2 pi x / ripple_wavelength_m): metre-scale
+  // slopes that a plane over a whole wavelength does not see.
+  double ripple_amplitude_m = 0.0;
+  double ripple_wavelength_m = 3.0;
   std::vector<Box> boxes;
   double texture_cell_m = 0.04;
 
@@ -39,7 +44,9 @@ struct Scene {
     const double b = Hash(i, j + 1) * (1 - ax) + Hash(i + 1, j + 1) * ax;
     return a * (1 - ay) + b * ay;
   }
-  double GroundZ(double x) const { return tilt_x * x; }
+  double GroundZ(double x) const {
+    return tilt_x * x + ripple_amplitude_m * std::sin(2.0 * M_PI * x / ripple_wavelength_m);
+  }
   // True height at (x, y).
   double HeightAt(double x, double y) const {
     double z = GroundZ(x);
@@ -52,7 +59,7 @@ struct Scene {
   }
   // Intersects origin + s * dir (dir.z < 0) with the scene; returns the hit point.
   Eigen::Vector3d Cast(const Eigen::Vector3d& o, const Eigen::Vector3d& dir) const {
-    // Box tops first (nearest), then the tilted plane z = tilt_x x.
+    // Box tops first (nearest), then the ground.
     double best_s = 1e30;
     for (const Box& b : boxes) {
       const double top = GroundZ(b.x) + b.height;
@@ -62,7 +69,12 @@ struct Scene {
         best_s = std::min(best_s, s);
       }
     }
-    const double s_plane = (o.z() - tilt_x * o.x()) / (tilt_x * dir.x() - dir.z());
+    double s_plane = (o.z() - tilt_x * o.x()) / (tilt_x * dir.x() - dir.z());
+    // The ripple by fixed-point iteration on the ray's height: a contraction for near-nadir
+    // rays (|dz/dx| |dir.x / dir.z| well below 1).
+    for (int k = 0; k < 40 && ripple_amplitude_m != 0.0; ++k) {
+      s_plane = (o.z() - GroundZ(o.x() + s_plane * dir.x())) / -dir.z();
+    }
     if (s_plane < best_s) {
       const Eigen::Vector3d p = o + s_plane * dir;
       // A ground hit under a box footprint is a side wall: the wall's texture (height-coded).

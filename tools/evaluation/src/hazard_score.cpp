@@ -19,6 +19,7 @@ HazardMapView ViewOf(const swf_msgs::hazard_map_t& m) {
   v.cells_per_side = square ? m.rows : 0;
   v.elevation_m = m.elevation_m.data();
   v.sigma_m = m.sigma_m.data();
+  v.relief_sigma_m = m.relief_sigma_m.data();
   v.slope_deg = m.slope_deg.data();
   v.hazard_class = m.hazard_class.data();
   v.site_valid = m.safe_site_valid;
@@ -83,7 +84,7 @@ void JudgeRocks(const HazardMapView& m, const swf_msgs::hazard_truth_t& t, Hazar
     if (!(fx >= 0.0 && fy >= 0.0 && fx < n && fy < n)) continue;
     const int ci = static_cast<int>(fx);
     const int cj = static_cast<int>(fy);
-    const float sigma = m.sigma_m[static_cast<std::size_t>(cj) * n + ci];
+    const float sigma = m.relief_sigma_m[static_cast<std::size_t>(cj) * n + ci];
     if (!criterion.Resolvable(t.rock_height_m[k], t.rock_diameter_m[k], sigma)) continue;
     const int height_class = RockHeightClass(t.rock_height_m[k], h);
     ++r->rocks_resolved;

@@ -53,8 +53,9 @@ std::vector<std::uint8_t> Encode(const Msg& m) {
   return bytes;
 }
 
-// A 4 x 4 map of 1 m cells at the origin: all known but cell (0, 3), sigma 0.05 m but 0.002 m at
-// cell (1, 1), safe but a rock at cell (1, 1) and one at (3, 3); its site at (0.5, 0.5).
+// A 4 x 4 map of 1 m cells at the origin: all known but cell (0, 3), elevation sigma 0.05 m (the
+// pose's share), relief sigma 0.05 m but 0.002 m at cell (1, 1), safe but a rock at cell (1, 1)
+// and one at (3, 3); its site at (0.5, 0.5).
 swf_msgs::hazard_map_t HazardMap(std::int64_t frame) {
   swf_msgs::hazard_map_t m{};
   m.frame_seq = frame;
@@ -65,7 +66,8 @@ swf_msgs::hazard_map_t HazardMap(std::int64_t frame) {
   m.elevation_m.assign(16, 0.0f);
   m.elevation_m[3 * 4 + 0] = NAN;
   m.sigma_m.assign(16, 0.05f);
-  m.sigma_m[1 * 4 + 1] = 0.002f;
+  m.relief_sigma_m.assign(16, 0.05f);
+  m.relief_sigma_m[1 * 4 + 1] = 0.002f;
   m.slope_deg.assign(16, 1.0f);
   m.roughness_m.assign(16, 0.0f);
   m.hazard_class.assign(16, swf_msgs::hazard_map_t::CLASS_SAFE);
@@ -223,8 +225,9 @@ TEST(RunJudge, JudgesHazardMapsAgainstTheTruthOfTheirGrid) {
   EXPECT_EQ(m.rock_cells, 2);
   // Resolved (hazard::RockCriterion): 1 m cells, a 5 m plane window; the threshold rock (0.3 m x
   // 0.6 m) fits in a cell's quarter and shows 0.3 (pi 0.09 / 6 - (2/3) pi 0.09 / 25) = 11.875 mm,
-  // so the threshold is resolved for sigma <= 11.875 / 4.735 = 2.508 mm (0.002 m at the rock's
-  // cell; not the others' 0.05 m, although 3 sigma <= h there); the 0.5 m rock shows more.
+  // so the threshold is resolved for a relief sigma <= 11.875 / 4.735 = 2.508 mm (0.002 m at the
+  // rock's cell, whose elevation sigma of 0.05 m would not resolve it; not the others' 0.05 m,
+  // although 3 sigma <= h there); the 0.5 m rock shows more.
   EXPECT_EQ(m.rocks_resolved, 1);
   EXPECT_EQ(m.rocks_detected, 1);               // the rock cell (1, 1) lies on it
   EXPECT_EQ(m.rocks_resolved_by_height[0], 1);  // 0.5 m: [1, 2) x 0.3 m

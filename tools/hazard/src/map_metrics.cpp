@@ -16,6 +16,7 @@ HazardMapView ViewOf(const app::HazardRecord& r) {
   v.cells_per_side = r.cells_per_side;
   v.elevation_m = r.elevation_m.get();
   v.sigma_m = r.sigma_m.get();
+  v.relief_sigma_m = r.relief_sigma_m.get();
   v.slope_deg = r.slope_deg.get();
   v.hazard_class = r.hazard_class.get();
   v.site_valid = r.safe_site_valid;

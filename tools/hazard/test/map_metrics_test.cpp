@@ -9,8 +9,9 @@
 // Resolvability (hazard::RockCriterion): a rock of radius R <= c / 2 fits in a quarter of a cell,
 // so its relief is H (pi R^2 / (6 c^2) - (2/3) pi R^2 / W^2) with the plane window W = 7 cells =
 // 3.5 m: the threshold rock (0.08 m x 0.16 m) shows r_h = 0.98479 mm (averaged down), so the map
-// resolves the threshold where r_h >= (3.090 + 1.645) sigma: sigma <= 0.20798 mm. The truth rocks
-// (0.2 m wide) show 0.0192342 H >= r_h.
+// resolves the threshold where r_h >= (3.090 + 1.645) sigma: sigma <= 0.20798 mm, sigma being the
+// published relief sigma (the elevation sigma, 0.25 m everywhere here as if the pose error
+// dominated it, resolves nothing). The truth rocks (0.2 m wide) show 0.0192342 H >= r_h.
 #include "swf/hazard_eval/map_metrics.hpp"
 
 #include <gtest/gtest.h>
@@ -60,7 +61,8 @@ class MapMetricsTest : public ::testing::Test {
 
     const std::size_t cells = static_cast<std::size_t>(kN) * kN;
     elevation_.assign(cells, 0.0f);
-    sigma_.assign(cells, 0.5f);  // unresolvable unless set below
+    sigma_.assign(cells, 0.25f);
+    relief_sigma_.assign(cells, 0.5f);  // unresolvable unless set below
     slope_.assign(cells, kTruthSlopeDeg + 1.0f);
     classes_.assign(cells, app::HazardClassCode(hazard::HazardClass::kSafe));
     for (int j = 0; j < kN; ++j) {
@@ -73,10 +75,10 @@ class MapMetricsTest : public ::testing::Test {
     At(&slope_, 0, 0) = NAN;                                    // no slope there
     const std::int8_t rock = app::HazardClassCode(hazard::HazardClass::kRock);
     const std::int8_t uncertain = app::HazardClassCode(hazard::HazardClass::kUncertain);
-    At(&sigma_, 2, 2) = 0.0002f;   // A resolved (<= 0.00020798)
-    At(&classes_, 3, 2) = rock;    // 0.5 m from A: detected; A's neighbour, so no false alarm
-    At(&sigma_, 12, 2) = 0.0002f;  // B resolved
-    At(&sigma_, 2, 12) = 0.02f;    // C not, though 3 sigma <= h
+    At(&relief_sigma_, 2, 2) = 0.0002f;  // A resolved (<= 0.00020798)
+    At(&classes_, 3, 2) = rock;          // 0.5 m from A: detected; A's neighbour, so no false alarm
+    At(&relief_sigma_, 12, 2) = 0.0002f;  // B resolved
+    At(&relief_sigma_, 2, 12) = 0.02f;    // C not, though 3 sigma <= h
     At(&classes_, 12, 2) = uncertain;
     At(&classes_, 13, 2) = uncertain;
     At(&classes_, 14, 2) = rock;  // 1.0 m from B (> 0.6): missed; rock-free: a false alarm
@@ -116,6 +118,7 @@ class MapMetricsTest : public ::testing::Test {
     v.cells_per_side = kN;
     v.elevation_m = elevation_.data();
     v.sigma_m = sigma_.data();
+    v.relief_sigma_m = relief_sigma_.data();
     v.slope_deg = slope_.data();
     v.hazard_class = classes_.data();
     return v;
@@ -133,6 +136,7 @@ class MapMetricsTest : public ::testing::Test {
   std::vector<sim::Rock> rocks_;
   std::vector<float> elevation_;
   std::vector<float> sigma_;
+  std::vector<float> relief_sigma_;
   std::vector<float> slope_;
   std::vector<std::int8_t> classes_;
 };
@@ -159,6 +163,17 @@ TEST_F(MapMetricsTest, RocksDetectedMissedUnresolvedAndOneFalseAlarm) {
   EXPECT_EQ(m.site_clearance_m, -1.0);
 }
 
+// GIVEN a rock whose cell has no relief sigma (no plane was fitted there) THEN it is not resolved,
+// whatever the elevation sigma says: the metric judges with the number the mapper decided with.
+TEST_F(MapMetricsTest, ACellWithoutReliefSigmaResolvesNothing) {
+  At(&relief_sigma_, 12, 2) = NAN;  // B
+  At(&sigma_, 12, 2) = 0.0001f;
+  const HazardMapMetrics m = Evaluate(View());
+  EXPECT_EQ(m.rocks_resolved, 1);  // A only
+  EXPECT_EQ(m.rocks_detected, 1);
+  EXPECT_DOUBLE_EQ(m.detection_probability, 1.0);
+}
+
 TEST_F(MapMetricsTest, PerCellErrorsAgainstTheTerrain) {
   const HazardMapMetrics m = Evaluate(View());
   ASSERT_EQ(m.elevation_errors_m.size(), 240u);
@@ -168,7 +183,8 @@ TEST_F(MapMetricsTest, PerCellErrorsAgainstTheTerrain) {
     EXPECT_NEAR(m.elevation_errors_m[k], 0.05, 1e-6);
   }
   for (double e : m.slope_errors_deg) EXPECT_DOUBLE_EQ(e, 1.0);
-  EXPECT_EQ(m.elevation_sigmas_m[2 * kN + 2], 0.0002f);  // A's cell, row-major over known cells
+  EXPECT_EQ(m.elevation_sigmas_m[2 * kN + 2],
+            0.25f);  // A's cell: the elevation's, not the relief's
 
   HazardMapView no_slope = View();
   no_slope.slope_deg = nullptr;
@@ -235,6 +251,7 @@ TEST(MapViewTest, ViewOfAPublishedRecord) {
   EXPECT_EQ(v.cells_per_side, 2);
   EXPECT_EQ(v.elevation_m, r.elevation_m.get());
   EXPECT_EQ(v.sigma_m, r.sigma_m.get());
+  EXPECT_EQ(v.relief_sigma_m, r.relief_sigma_m.get());
   EXPECT_EQ(v.slope_deg, r.slope_deg.get());
   EXPECT_EQ(v.hazard_class, r.hazard_class.get());
   EXPECT_TRUE(v.site_valid);

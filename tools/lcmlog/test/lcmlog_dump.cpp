@@ -115,6 +115,7 @@ json Fields(const swf_msgs::hazard_map_t& m) {
           {"num_cells", V(m.num_cells)},
           {"elevation_m", V(m.elevation_m)},
           {"sigma_m", V(m.sigma_m)},
+          {"relief_sigma_m", V(m.relief_sigma_m)},
           {"slope_deg", V(m.slope_deg)},
           {"roughness_m", V(m.roughness_m)},
           {"hazard_class", V(m.hazard_class)},

@@ -165,6 +165,7 @@ void Evaluation::OnHazard(const app::HazardRecord& r) {
   m.cells_per_side = r.cells_per_side;
   std::copy_n(r.elevation_m.get(), cells, m.elevation_m.get());
   std::copy_n(r.sigma_m.get(), cells, m.sigma_m.get());
+  std::copy_n(r.relief_sigma_m.get(), cells, m.relief_sigma_m.get());
   std::copy_n(r.slope_deg.get(), cells, m.slope_deg.get());
   std::copy_n(r.roughness_m.get(), cells, m.roughness_m.get());
   std::copy_n(r.hazard_class.get(), cells, m.hazard_class.get());

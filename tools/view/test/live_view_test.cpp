@@ -164,6 +164,7 @@ TEST(LiveModel, JsonStaysValidWithNonFiniteNumbers) {
   h.cell_size_m = 1.0;
   h.elevation_m.assign(4, std::numeric_limits<float>::quiet_NaN());
   h.sigma_m.assign(4, 0.1f);
+  h.relief_sigma_m.assign(4, 0.05f);
   h.slope_deg.assign(4, 0.0f);
   h.roughness_m.assign(4, 0.0f);
   h.hazard_class = {0, 1, 3, 5};

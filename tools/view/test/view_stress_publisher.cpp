@@ -121,6 +121,7 @@ swf_msgs::hazard_map_t Hazard(std::int64_t seq, std::int64_t frame_seq) {
   h.num_cells = 64 * 64;
   h.elevation_m.assign(h.num_cells, 0.0f);
   h.sigma_m.assign(h.num_cells, 0.05f);
+  h.relief_sigma_m.assign(h.num_cells, 0.02f);
   h.slope_deg.assign(h.num_cells, 2.0f);
   h.roughness_m.assign(h.num_cells, 0.01f);
   h.hazard_class.resize(h.num_cells);

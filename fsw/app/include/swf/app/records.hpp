@@ -126,6 +126,7 @@ struct HazardRecord {
   std::int32_t capacity_cells = 0;
   std::unique_ptr<float[]> elevation_m;
   std::unique_ptr<float[]> sigma_m;
+  std::unique_ptr<float[]> relief_sigma_m;
   std::unique_ptr<float[]> slope_deg;
   std::unique_ptr<float[]> roughness_m;
   std::unique_ptr<std::int8_t[]> hazard_class;
@@ -138,10 +139,12 @@ struct HazardRecord {
   core::Status Allocate(std::int32_t cells) {
     elevation_m.reset(new (std::nothrow) float[cells]);
     sigma_m.reset(new (std::nothrow) float[cells]);
+    relief_sigma_m.reset(new (std::nothrow) float[cells]);
     slope_deg.reset(new (std::nothrow) float[cells]);
     roughness_m.reset(new (std::nothrow) float[cells]);
     hazard_class.reset(new (std::nothrow) std::int8_t[cells]);
-    if (!elevation_m || !sigma_m || !slope_deg || !roughness_m || !hazard_class) {
+    if (!elevation_m || !sigma_m || !relief_sigma_m || !slope_deg || !roughness_m ||
+        !hazard_class) {
       capacity_cells = 0;
       return core::Status::kFull;
     }

@@ -22,15 +22,18 @@
 //     (pixels_per_cell working pixels per cell, a power of 2 times min_cell_m) and only ever
 //     refined: on refinement the grid is resampled (information per child = parent / 4).
 //  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
-//     lander footprint gives slope and roughness; a plane over rock_window_radius_m gives each
-//     cell's rock height. Sigma of slope from the fit and the attitude covariance; sigma of the
-//     rock height from the cell's stereo sigma and the fit. Classes: kRock when the rock height
-//     exceeds the rock criterion's decision relief (RockCriterion below); kSlope when the slope
-//     exceeds its threshold by confidence_k sigma and the sigma resolves it (sigma <= a third of
-//     the threshold); kUncertain when value + k sigma exceeds a threshold otherwise, kSafe
-//     otherwise, kUnknown without data.
+//     lander footprint gives slope and roughness, one over local_slope_baseline_m (1 m) the
+//     metre-scale slope; a plane over rock_window_radius_m gives each cell's rock height. Sigma
+//     of a slope from its fit and the attitude covariance; sigma of the rock height from the
+//     cell's stereo sigma and the fit. Classes: kRock when the rock height exceeds the rock
+//     criterion's decision relief (RockCriterion below); kSlope when either slope exceeds its
+//     threshold by confidence_k sigma and its sigma resolves it (sigma <= a third of the
+//     threshold; the 1 m slope only where its window holds no kRock cell, since a plane over a
+//     rock tilts with it and the rock is the hazard there); kUncertain when value + k sigma
+//     exceeds a threshold otherwise, kSafe otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
-//     is not kSafe or to the grid border; candidates need clearance >= footprint radius. Score in
+//     is not kSafe or to the grid border; candidates need clearance >= footprint radius + margin
+//     (site_margin_sigmas x the horizontal position sigma). Score in
 //     [0, 1] = (min(clearance / clearance_cap, 1) + 0.5 (1 - sigma / max_rock_height) +
 //     target_weight (1 - distance to target / grid half extent)) / (1.5 + target_weight); the
 //     previous site is kept while still valid and within site_hysteresis of the best score.
@@ -147,10 +150,18 @@ struct HazardMapperOptions {
   double max_slope_deg = 10.0;
   double max_rock_height_m = RockCriterionOptions{}.max_height_m;
   double footprint_radius_m = 1.5;
+  // Slopes are hazards at two scales: over the footprint (the lander's tilt at rest) and over
+  // this baseline (a footpad on a metre-scale slope: crater rims and walls that a 3 m plane
+  // averages below the threshold; the simulator's truth measures slope over 1 m).
+  double local_slope_baseline_m = 1.0;
   double rock_window_radius_m = RockCriterionOptions{}.window_radius_m;
   double confidence_k = 2.0;
   double min_known_fraction = 0.6;  // of a window, for a plane fit
-  // Safe site.
+  // Safe site. Its clearance to every non-safe cell must exceed the footprint radius plus
+  // site_margin_sigmas times the horizontal position sigma (the pose covariance's worst horizontal
+  // direction): the map's hazards are placed with the navigation's position, so a site a bare
+  // footprint radius from a mapped hazard is that close only up to the navigation error.
+  double site_margin_sigmas = 2.0;
   double clearance_cap_m = 5.0;
   double target_weight = 0.5;     // weight of closeness to the target in the score
   double site_hysteresis = 0.05;  // score units ([0, 1])
@@ -180,6 +191,7 @@ struct SafeSite {
   double elevation_m = 0.0;
   double score = 0.0;
   double clearance_m = 0.0;  // to the nearest non-safe cell or the grid border
+  double margin_m = 0.0;     // required beyond the footprint radius (site_margin_sigmas)
   double slope_deg = 0.0;
   double sigma_m = 0.0;
   int stable_updates = 0;  // consecutive updates the site has been kept
@@ -223,10 +235,17 @@ class HazardMapper {
   double CornerY() const { return corner_y_; }
   const float* Elevation() const { return elevation_.data(); }  // NaN = unknown
   const float* Sigma() const { return sigma_.data(); }          // NaN = unknown
+  // The 1-sigma of RockHeight(): the cell's pose-free stereo sigma and the plane fit's. The rock
+  // criterion decides with it (the pose error common to the plane window cancels); NaN where no
+  // plane was fitted.
+  const float* ReliefSigma() const { return relief_sigma_.data(); }
   const std::uint16_t* Count() const { return count_.data(); }  // frames + landmarks fused
   const HazardClass* Classes() const { return class_.data(); }
   const float* SlopeDeg() const { return slope_deg_.data(); }  // footprint plane, NaN unknown
-  const float* RockHeight() const { return rock_m_.data(); }   // NaN unknown
+  // Slope of the plane over local_slope_baseline_m (1 m) and its sigma, degrees; NaN unknown.
+  const float* LocalSlopeDeg() const { return local_slope_deg_.data(); }
+  const float* LocalSlopeSigmaDeg() const { return local_slope_sigma_deg_.data(); }
+  const float* RockHeight() const { return rock_m_.data(); }  // NaN unknown
   // RMS residual of the footprint plane fit (not the largest deviation); NaN unknown.
   const float* Roughness() const { return rough_m_.data(); }
   const float* ClearanceM() const { return clearance_m_.data(); }
@@ -264,6 +283,7 @@ class HazardMapper {
   double corner_y_ = 0.0;
   Eigen::Vector2d target_{0.0, 0.0};
   double predicted_depth_m_ = 1.0;
+  double site_margin_m_ = 0.0;
   double disparity_scale_ = 1.0;
   std::vector<double> calib_abs_;    // |SGM - landmark disparity| per matched landmark
   std::vector<double> calib_var_;    // the landmark's own disparity variance
@@ -287,11 +307,15 @@ class HazardMapper {
   std::vector<HazardClass> class_;
   std::vector<float> slope_deg_;
   std::vector<float> slope_sigma_deg_;
+  std::vector<float> local_slope_deg_;
+  std::vector<float> local_slope_sigma_deg_;
   std::vector<float> rock_m_;
+  std::vector<float> relief_sigma_;
   std::vector<float> rough_m_;
   std::vector<float> clearance_m_;
   // Summed-area tables, (n+1)^2 each: count, x, y, z, xx, xy, yy, xz, yz, zz, sigma^2.
   std::vector<double> sat_;
+  std::vector<std::int32_t> rock_sat_;  // (n+1)^2: declared rocks (row 0 and column 0 stay 0)
   // Distance transform scratch.
   std::vector<float> dt_f_;
   std::vector<float> dt_d_;

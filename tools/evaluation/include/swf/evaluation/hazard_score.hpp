@@ -8,13 +8,12 @@
 // - known cell: elevation not NaN.
 // - resolved rock: a truth rock of height >= h that the rock criterion (swf/hazard/
 //   hazard_mapper.hpp, RockCriterion: the mapper's own decision rule, window radius at its
-//   default) calls resolvable at the sigma of the cell holding its centre: the map must detect it
-//   with probability >= 0.95. The published sigma is the elevation's; the mapper decides with the
-//   relief's, which leaves out the pose error common to the plane window, so it is never larger
-//   (but for the plane fit's own term, ~1 % of it): the metric's resolved set is the
-//   conservative one. Detected: a CLASS_ROCK cell centre within the rock's radius + c of its
-//   centre. Flagged: a CLASS_ROCK or CLASS_UNCERTAIN cell there (never a landing site). Counted
-//   also by height class [1, 2), [2, 4), [4, inf) x h.
+//   default) calls resolvable at the relief sigma of the cell holding its centre (the published
+//   relief_sigma_m: the number the mapper decided that cell with, the pose error common to the
+//   plane window left out): the map must detect it with probability >= 0.95. A cell without a
+//   relief sigma (no plane fitted) resolves nothing. Detected: a CLASS_ROCK cell centre within the
+//   rock's radius + c of its centre. Flagged: a CLASS_ROCK or CLASS_UNCERTAIN cell there (never a
+//   landing site). Counted also by height class [1, 2), [2, 4), [4, inf) x h.
 // - false alarm: a CLASS_ROCK cell among the rock-free known cells (truth.rock_free).
 // - safe site: on hazard when the truth's clearance of the map's site is <= r. `<=` because a
 //   hazard at exactly r lies on the footprint's edge, inside the closed disc the lander occupies:
@@ -39,8 +38,9 @@ struct HazardMapView {
   double origin_world_m[2] = {0.0, 0.0};
   double cell_m = 0.0;
   int cells_per_side = 0;
-  const float* elevation_m = nullptr;  // NaN: unknown
-  const float* sigma_m = nullptr;
+  const float* elevation_m = nullptr;         // NaN: unknown
+  const float* sigma_m = nullptr;             // the elevation's
+  const float* relief_sigma_m = nullptr;      // the relief's (the rock criterion's); NaN: no plane
   const float* slope_deg = nullptr;           // may be null (no slope errors then)
   const std::int8_t* hazard_class = nullptr;  // hazard_map_t.CLASS_*
   bool site_valid = false;
