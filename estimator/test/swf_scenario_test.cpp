@@ -167,60 +167,100 @@ TEST(SwfScenario, ConstantVelocityFallbackTracksASteadyDescent) {
   EXPECT_LT(worst, 5.0);  // a runaway goes beyond 20 m
 }
 
+// How the window is held (SwfOptions::hold_sightings, hold_depth_precision).
+struct Hold {
+  int sightings = 0;
+  double depth_precision = 0.0;
+};
+
+struct HeldDescent {
+  double nees = 0.0;        // newest pose, mean over frames 2-40 and the runs
+  double x_error_m2 = 0.0;  // squared x error at the last frame, mean over the runs
+  double mean_poses = 0.0;  // poses in the window after each Update
+  int max_poses = 0;
+};
+
+// SWF(5) on `runs` descents of 40 frames over 40 landmarks, the newest pose's NEES each frame.
+HeldDescent RunHeldDescent(SceneOptions so, int runs, const Hold& hold) {
+  so.frames = 40;
+  so.num_landmarks = 40;
+  HeldDescent result;
+  for (int seed = 1; seed <= runs; ++seed) {
+    so.seed = static_cast<std::uint64_t>(seed);
+    const SyntheticScene scene(so);
+    SwfOptions options = ModeOptions(SwfMode::kSlidingWindow);
+    options.window_size = 5;
+    options.hold_sightings = hold.sightings;
+    options.hold_depth_precision = hold.depth_precision;
+    auto swf = std::make_unique<StereoSwf<40>>();
+    const auto nees = [&](StereoSwf<40>* filter, std::size_t j) {
+      ASSERT_EQ(filter->ComputeNewestCovariance(), core::Status::kOk);
+      const Vec6<double> e = filter->NewestPose().LocalDifference(scene.frames()[j].truth);
+      if (j > 0) result.nees += e.dot(filter->NewestPoseCovariance().ldlt().solve(e));
+      if (j + 1 == scene.frames().size()) result.x_error_m2 += e[0] * e[0] / runs;
+      result.mean_poses += filter->NumPoses() / static_cast<double>(runs * so.frames);
+      result.max_poses = std::max(result.max_poses, filter->NumPoses());
+    };
+    const RunResult r = scene::RunScene(
+        swf.get(), scene, options,
+        scene::MotionInput(scene::MotionInput::kSigmaM, scene::MotionInput::kSigmaRad,
+                           static_cast<std::uint64_t>(seed) + 1000),
+        nees);
+    EXPECT_EQ(r.configured, core::Status::kOk);
+    EXPECT_EQ(r.rejected_poses, 0);
+  }
+  result.nees /= runs * (so.frames - 1);
+  return result;
+}
+
 // The descent from 100 m (docs/integrity.md, "Consistency on the descent from 100 m"): a
 // landmark's first estimate after five frames knows its depth to ~1.4 %, and the prior built at
 // it holds information along the weakly observable tilt/sideways direction that the data do not
-// (SWF(5) pose NEES ~4x its 6). Holding the oldest pose until its tracked landmarks have 25
-// sightings (hold_sightings) makes the same filter consistent, and more accurate, not less.
+// (SWF(5) pose NEES ~2x its 6). Holding the oldest pose until its tracked landmarks have 25
+// sightings (hold_sightings), or until their sightings know their depth to 0.5 %
+// (hold_depth_precision), makes the same filter consistent, and more accurate, not less.
 TEST(SwfScenario, DescentFromHundredMetresIsConsistentWhileYoungLandmarksHoldTheWindow) {
-  SceneOptions so;
-  so.frames = 40;
-  so.num_landmarks = 40;
   constexpr int kRuns = 8;
-  struct Result {
-    double nees = 0.0;        // newest pose, mean over frames 2-40 and the runs
-    double x_error_m2 = 0.0;  // squared x error at the last frame, mean over the runs
-  };
-  const auto run = [&](int hold_sightings) {
-    Result result;
-    for (int seed = 1; seed <= kRuns; ++seed) {
-      so.seed = static_cast<std::uint64_t>(seed);
-      const SyntheticScene scene(so);
-      SwfOptions options = ModeOptions(SwfMode::kSlidingWindow);
-      options.window_size = 5;
-      options.hold_sightings = hold_sightings;
-      auto swf = std::make_unique<StereoSwf<40>>();
-      const auto nees = [&](StereoSwf<40>* filter, std::size_t j) {
-        ASSERT_EQ(filter->ComputeNewestCovariance(), core::Status::kOk);
-        const Vec6<double> e = filter->NewestPose().LocalDifference(scene.frames()[j].truth);
-        if (j > 0) result.nees += e.dot(filter->NewestPoseCovariance().ldlt().solve(e));
-        if (j + 1 == scene.frames().size()) result.x_error_m2 += e[0] * e[0] / kRuns;
-      };
-      const RunResult r = scene::RunScene(
-          swf.get(), scene, options,
-          scene::MotionInput(scene::MotionInput::kSigmaM, scene::MotionInput::kSigmaRad,
-                             static_cast<std::uint64_t>(seed) + 1000),
-          nees);
-      EXPECT_EQ(r.configured, core::Status::kOk);
-      EXPECT_EQ(r.rejected_poses, 0);
-    }
-    result.nees /= kRuns * (so.frames - 1);
-    return result;
-  };
-  const Result fixed = run(0);
-  const Result held = run(25);
+  const SceneOptions so;
+  const HeldDescent fixed = RunHeldDescent(so, kRuns, {});
+  const HeldDescent count = RunHeldDescent(so, kRuns, {25, 0.0});
+  const HeldDescent depth = RunHeldDescent(so, kRuns, {0, 0.005});
   // Two-sided 95 % band of an 8-run mean of a chi-square(6): chi2(48) / 8.
   const double lower = 30.755 / kRuns;
   const double upper = 69.023 / kRuns;
   std::printf(
-      "descent from 100 m, SWF(5), %d runs: pose NEES %.2f fixed window, %.2f held (band "
-      "[%.2f, %.2f]); RMS x error at the last frame %.3f / %.3f m\n",
-      kRuns, fixed.nees, held.nees, lower, upper, std::sqrt(fixed.x_error_m2),
-      std::sqrt(held.x_error_m2));
+      "descent from 100 m, SWF(5), %d runs: pose NEES %.2f fixed window, %.2f held by count, "
+      "%.2f by depth precision (band [%.2f, %.2f]); RMS x error at the last frame %.3f / %.3f / "
+      "%.3f m; window mean %.1f / %.1f / %.1f, at most %d / %d / %d poses\n",
+      kRuns, fixed.nees, count.nees, depth.nees, lower, upper, std::sqrt(fixed.x_error_m2),
+      std::sqrt(count.x_error_m2), std::sqrt(depth.x_error_m2), fixed.mean_poses, count.mean_poses,
+      depth.mean_poses, fixed.max_poses, count.max_poses, depth.max_poses);
   EXPECT_GT(fixed.nees, upper);
-  EXPECT_GT(held.nees, lower);
-  EXPECT_LT(held.nees, upper);
-  EXPECT_LE(held.x_error_m2, fixed.x_error_m2);
+  for (const HeldDescent* held : {&count, &depth}) {
+    EXPECT_GT(held->nees, lower);
+    EXPECT_LT(held->nees, upper);
+    EXPECT_LE(held->x_error_m2, fixed.x_error_m2);
+    EXPECT_GT(held->max_poses, fixed.max_poses);
+  }
+}
+
+// At 30 m the disparity is 3.3x that at 100 m: five sightings already know a landmark's depth
+// to 0.4 %. The depth criterion then holds nothing, while a sighting count holds the window
+// there just as long as at 100 m.
+TEST(SwfScenario, DepthPrecisionHoldsTheWindowOnlyWhereTheRangeNeedsIt) {
+  SceneOptions so;
+  so.start_altitude_m = 30.0;
+  so.step_m = 0.5;
+  constexpr int kRuns = 2;
+  const HeldDescent count = RunHeldDescent(so, kRuns, {25, 0.0});
+  const HeldDescent depth = RunHeldDescent(so, kRuns, {0, 0.005});
+  std::printf(
+      "descent from 30 m, SWF(5): window mean %.1f / %.1f, at most %d / %d poses held by count "
+      "/ by depth precision\n",
+      count.mean_poses, depth.mean_poses, count.max_poses, depth.max_poses);
+  EXPECT_GT(count.max_poses, 10);
+  EXPECT_LE(depth.max_poses, 7);
+  EXPECT_LT(depth.mean_poses, count.mean_poses - 2.0);
 }
 
 // The held window stops at the capacity K (then the oldest pose goes whatever it sees), and
@@ -233,25 +273,30 @@ TEST(SwfScenario, HeldWindowStopsAtTheCapacityAndLeavesBatchAlone) {
   const SyntheticScene scene(so);
   SwfOptions options = ModeOptions(SwfMode::kSlidingWindow);
   options.window_size = 2;
-  options.hold_sightings = 1000;  // never converged: only the capacity ends the hold
-  int most = 0;
-  int last = 0;
-  int marginalized = 0;
-  const RunResult held = scene::RunScene(
-      std::make_unique<StereoSwf<5>>().get(), scene, options,
-      scene::MotionInput(scene::MotionInput::kSigmaM, scene::MotionInput::kSigmaRad, 1003),
-      [&](StereoSwf<5>* swf, std::size_t) {
-        most = std::max(most, swf->NumPoses());
-        last = swf->NumPoses();
-        marginalized += swf->Summary().poses_marginalized;
-      });
-  EXPECT_EQ(held.failures, 0);
-  EXPECT_EQ(held.rejected_poses, 0);
-  EXPECT_EQ(most, 5);
-  EXPECT_EQ(marginalized, so.frames - last);  // every pose held back was marginalized later
+  // Never converged, by either criterion: only the capacity ends the hold.
+  for (const Hold& hold : {Hold{1000, 0.0}, Hold{0, 1e-6}}) {
+    options.hold_sightings = hold.sightings;
+    options.hold_depth_precision = hold.depth_precision;
+    int most = 0;
+    int last = 0;
+    int marginalized = 0;
+    const RunResult held = scene::RunScene(
+        std::make_unique<StereoSwf<5>>().get(), scene, options,
+        scene::MotionInput(scene::MotionInput::kSigmaM, scene::MotionInput::kSigmaRad, 1003),
+        [&](StereoSwf<5>* swf, std::size_t) {
+          most = std::max(most, swf->NumPoses());
+          last = swf->NumPoses();
+          marginalized += swf->Summary().poses_marginalized;
+        });
+    EXPECT_EQ(held.failures, 0);
+    EXPECT_EQ(held.rejected_poses, 0);
+    EXPECT_EQ(most, 5) << hold.sightings << " " << hold.depth_precision;
+    EXPECT_EQ(marginalized, so.frames - last);  // every pose held back was marginalized later
+  }
   SwfOptions batch = ModeOptions(SwfMode::kBatch);
   const double plain = RunScene(std::make_unique<StereoSwf<40>>().get(), scene, batch).rms_m;
   batch.hold_sightings = 25;
+  batch.hold_depth_precision = 0.005;
   EXPECT_EQ(RunScene(std::make_unique<StereoSwf<40>>().get(), scene, batch).rms_m, plain);
 }
 

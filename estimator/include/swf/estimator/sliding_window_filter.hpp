@@ -40,9 +40,10 @@
 //         Lambda_aa^-1 g_a
 //     becomes the new prior over [p2 ; Lp'] with x_bar = the current estimate. This is exactly
 //     the fill-in of Figs. 6-8: among landmarks seen from p1, between p2 and those landmarks.
-//   * with SwfOptions::hold_sightings (not in the paper) the oldest pose is held back while it
-//     sees a tracked landmark not yet in the prior with fewer sightings than that, up to the
-//     capacity K; then every pose held back is marginalized as above, oldest first.
+//   * with SwfOptions::hold_sightings or hold_depth_precision (not in the paper) the oldest pose
+//     is held back while it sees a tracked landmark not yet in the prior that is still young
+//     (fewer sightings than that, or its depth known to worse than that relative precision), up
+//     to the capacity K; then every pose held back is marginalized as above, oldest first.
 //   * every landmark with no measurement left in the window is removed the same way; if it is
 //     in the prior this only touches Pi (Fig. 7c), otherwise it carries no information.
 //   * first-estimate Jacobians (option, on by default; not in the paper): a landmark that enters
@@ -125,6 +126,18 @@ struct SwfOptions {
   // along the weakly observable tilt/sideways direction into the prior: docs/integrity.md,
   // "Consistency on the descent from 100 m"). 0 = the paper's fixed window. Not in VO mode.
   int hold_sightings = 0;
+  // The same hold, with "young" judged by the landmark's own depth precision instead of a count:
+  // while the relative 1-sigma of its depth, from the disparities of its stereo sightings
+  // (sigma_Z / Z = sigma_d / d per sighting, information added over the sightings), is above
+  // this. Why a precision and not a count: the weakly observable tilt/sideways direction shows
+  // in a ground point's image only through the fraction of the tilt its off-axis angle and the
+  // relief leave, a few per cent over a 25 deg field (mean (r/f)^2 ~ 0.026 at 4:3); a first
+  // estimate whose depth is off by dZ/Z changes that signal by dZ/Z of the tilt, so the prior is
+  // linearized right along it only once dZ/Z is well below those few per cent. A few sightings
+  // reach that at 30 m (77 px of disparity, 0.9 % each) but not at 100 m (23 px, 3.1 % each),
+  // so the window is held only where the range needs it. 0 = off; both set: held while either
+  // says young. Not in VO mode.
+  double hold_depth_precision = 0.0;
   // kVsdf only: apply only the scalar diagonal of the Schur term (eq. 12 read literally,
   // "only the diagonal elements") instead of its 3x3 / state blocks within each variable.
   bool vsdf_scalar_diagonal = false;
@@ -172,6 +185,8 @@ struct SwfOptions {
       return core::Status::kInvalidArgument;
     if (max_gate_resolves < 0 || max_gate_resolves > 5) return core::Status::kInvalidArgument;
     if (hold_sightings < 0 || hold_sightings > 1000) return core::Status::kInvalidArgument;
+    if (!(hold_depth_precision >= 0.0 && hold_depth_precision < 1.0))
+      return core::Status::kInvalidArgument;
     if (!(max_init_sigma_m >= 0.0)) return core::Status::kInvalidArgument;
     if (motion_gate_min_inliers < 0 || !(motion_gate_weight > 0.0 && motion_gate_weight <= 1.0) ||
         !(motion_overrule_factor >= 1.0)) {
@@ -463,6 +478,9 @@ class SlidingWindowFilter {
     int obs_in_window = 0;
     int total_obs = 0;
     std::int64_t last_frame = 0;  // frames_added_ when it was last measured
+    // Sum over its sightings of (disparity / its sigma)^2: the inverse square of the relative
+    // depth precision its stereo measurements give (SwfOptions::hold_depth_precision).
+    S depth_information = S(0);
     // Per-iteration workspace.
     int lm_count = 0;
     Mat3<S> h = Mat3<S>::Zero();
@@ -500,8 +518,10 @@ class SlidingWindowFilter {
   // The frame cycle (swf_frame_cycle.hpp).
   core::Status PushPose(const PoseType& estimate, const MotionType* u, const StateMat* sqrt_info);
   bool StateIsFinite() const;
+  bool HoldEnabled() const;
   bool HoldsOldestPose() const;
   void RefreshMotions();
+  bool IsYoung(const LandmarkSlot& l) const;
   void RecordEvidence();
   void ZeroFixedPoseCovariance();
 

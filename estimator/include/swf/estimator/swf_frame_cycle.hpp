@@ -4,6 +4,7 @@
 // it leaves behind. Included by sliding_window_filter.hpp; not a header to include alone.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "swf/estimator/chi_square.hpp"
@@ -108,9 +109,17 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::AddObservation(
   o.sqrt_info = sqrt_information;
   o.gate_failed = gate_failed;
   (void)pose.obs.push_back(o);
-  ++landmarks_[slot].obs_in_window;
-  ++landmarks_[slot].total_obs;
-  landmarks_[slot].last_frame = frames_added_;
+  LandmarkSlot& l = landmarks_[slot];
+  ++l.obs_in_window;
+  ++l.total_obs;
+  l.last_frame = frames_added_;
+  // Relative depth information of this sighting, (d / sigma_d)^2: with Z = f b / d, sigma_Z / Z
+  // = sigma_d / d, and sigma_d^2 = e^T R e for the disparity e = (1, -1, 0) of z = (uL, uR, v).
+  const Vec3<S> e(S(1), S(-1), S(0));
+  const S sigma_d2 = (sqrt_information.inverse().transpose() * e).squaredNorm();
+  const S disparity = z[0] - z[1];
+  if (disparity > S(0) && sigma_d2 > S(0) && std::isfinite(sigma_d2))
+    l.depth_information += disparity * disparity / sigma_d2;
   return core::Status::kOk;
 }
 
@@ -238,7 +247,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::PushPose(const PoseType& es
   int limit = window_ + 1;
   if (options_.mode == SwfMode::kBatch) {
     limit = window_;
-  } else if (options_.hold_sightings > 0 && options_.mode != SwfMode::kVisualOdometry) {
+  } else if (HoldEnabled()) {
     limit = kMaxPoses;  // the window may be held up to the capacity
   }
   if (num_poses_ >= limit) return core::Status::kFull;
@@ -262,16 +271,31 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::PushPose(const PoseType& es
   return core::Status::kOk;
 }
 
-// Whether the oldest pose stays in the window (SwfOptions::hold_sightings): it sees a landmark
-// that has not entered the prior, is still tracked and is not yet converged, and the window has
-// room for the newest pose without it.
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::HoldEnabled() const {
+  return (options_.hold_sightings > 0 || options_.hold_depth_precision > 0.0) &&
+         options_.mode != SwfMode::kVisualOdometry && options_.mode != SwfMode::kBatch;
+}
+
+// A landmark whose first estimate would still be poor: fewer sightings than hold_sightings, or
+// a relative depth precision from its sightings worse than hold_depth_precision
+// (1 / sqrt(depth_information) > p, i.e. depth_information * p^2 < 1).
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::IsYoung(const LandmarkSlot& l) const {
+  if (l.total_obs < options_.hold_sightings) return true;
+  const S p = S(options_.hold_depth_precision);
+  return p > S(0) && l.depth_information * p * p < S(1);
+}
+
+// Whether the oldest pose stays in the window (SwfOptions::hold_sightings,
+// hold_depth_precision): it sees a landmark that has not entered the prior, is still tracked
+// and is still young, and the window has room for the newest pose without it.
 template <typename Model, int K, int N, int M, int P>
 bool SlidingWindowFilter<Model, K, N, M, P>::HoldsOldestPose() const {
-  if (options_.hold_sightings == 0 || num_poses_ >= kMaxPoses) return false;
+  if (!HoldEnabled() || num_poses_ >= kMaxPoses) return false;
   for (const Observation& o : Slot(0).obs) {
     const LandmarkSlot& l = landmarks_[o.landmark];
-    if (l.prior_index < 0 && l.last_frame == frames_added_ && l.total_obs < options_.hold_sightings)
-      return true;
+    if (l.prior_index < 0 && l.last_frame == frames_added_ && IsYoung(l)) return true;
   }
   return false;
 }
