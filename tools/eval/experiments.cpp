@@ -89,9 +89,10 @@ NeesResult RunNees(const std::string& name, const NeesOptions& options) {
         ++landmark_count[j];
       }
     };
-    const Trace t = RunFilter<Filter>(scene, options.mode, options.window,
-                                      9000 + static_cast<std::uint64_t>(r), hook, kMotionSigmaM,
-                                      kMotionSigmaRad, true, false, options.hold_sightings);
+    const Trace t =
+        RunFilter<Filter>(scene, options.mode, options.window, 9000 + static_cast<std::uint64_t>(r),
+                          hook, kMotionSigmaM, kMotionSigmaRad, true, false, options.hold_sightings,
+                          options.hold_depth_precision);
     result.update_failures += t.failures;
   }
   for (std::size_t j = 0; j < frames; ++j) {

@@ -21,7 +21,8 @@ struct NeesOptions {
   estimator::SwfMode mode = estimator::SwfMode::kSlidingWindow;
   int window = 5;
   int runs = 50;
-  int hold_sightings = 0;  // SwfOptions::hold_sightings
+  int hold_sightings = 0;             // SwfOptions::hold_sightings
+  double hold_depth_precision = 0.0;  // SwfOptions::hold_depth_precision
 };
 
 struct NeesResult {

@@ -48,13 +48,14 @@ Trace RunFilter(const SyntheticScene& scene, estimator::SwfMode mode, int window
                 std::uint64_t seed, const std::function<void(F*, std::size_t)>& after_update = {},
                 double q_t = kMotionSigmaM, double q_r = kMotionSigmaRad,
                 bool first_estimate_jacobians = true, bool vsdf_scalar_diagonal = false,
-                int hold_sightings = 0) {
+                int hold_sightings = 0, double hold_depth_precision = 0.0) {
   auto swf = std::make_unique<F>();
   estimator::SwfOptions options = scene::FilterOptions(mode);
   options.window_size = window;
   options.first_estimate_jacobians = first_estimate_jacobians;
   options.vsdf_scalar_diagonal = vsdf_scalar_diagonal;
   options.hold_sightings = hold_sightings;
+  options.hold_depth_precision = hold_depth_precision;
   const Trace trace =
       scene::RunScene(swf.get(), scene, options, scene::MotionInput(q_t, q_r, seed), after_update);
   if (trace.configured != core::Status::kOk) std::abort();
