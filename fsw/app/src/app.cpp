@@ -109,6 +109,7 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
   estimator::SwfOptions o;
   o.window_size = c.window;
   o.max_iterations = c.max_iterations;
+  o.hold_depth_precision = c.hold_depth_precision;
   using Nav = swf_msgs::nav_state_t;
   if (c.mode == "vo") {
     o.mode = estimator::SwfMode::kVisualOdometry;

@@ -260,6 +260,7 @@ void AddEstimatorFields(std::map<std::string, ConfigSetter>* fields) {
   f["max_tracks"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_tracks; }, 8,
                                       static_cast<std::int64_t>(frontend::kMaxTracks),
                                       " (frontend::kMaxTracks, the compiled track capacity)");
+  f["hold_depth_precision"] = Double(&FswConfig::hold_depth_precision, 0.0, 0.5);
   f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
                                             frontend::kMaxDisparity);
   f["frontend.refine_in_loop"] = Bool([](FswConfig* c) { return &c->frontend_refine_in_loop; });
@@ -571,19 +572,38 @@ bool Extends(const FswConfig& c, const char* source) {
 }
 
 // Capacities compiled into the flight estimator (pipeline.hpp). The window holds window + 1 poses
-// until the oldest is marginalized, and each can bring max_tracks landmarks the others do not see:
-// beyond kMaxLandmarks new landmarks would be refused in flight (kFaultLandmarkCapacity).
+// until the oldest is marginalized, or, held (hold_depth_precision), up to kMaxWindow + 1, and
+// each can bring max_tracks landmarks the others do not see: beyond kMaxLandmarks new landmarks
+// would be refused in flight (kFaultLandmarkCapacity). A hold needs room above the window and a
+// mode that marginalizes a window of more than one pose.
 bool CapacitiesHold(const FswConfig& c, const std::string& origin, std::string* error) {
-  const std::int64_t poses = static_cast<std::int64_t>(c.window) + 1;
+  const bool held = c.hold_depth_precision > 0.0;
+  if (held && (c.mode == "ekf" || c.mode == "vo")) {
+    *error = ConfigWhere(c, "hold_depth_precision", origin) +
+             ": hold_depth_precision: only in mode swf or vsdf (the EKF keeps one pose, VO "
+             "deletes its oldest pose instead of marginalizing it)";
+    return false;
+  }
+  if (held && c.window >= kMaxWindow) {
+    *error = ConfigWhere(c, "hold_depth_precision", origin) +
+             ": hold_depth_precision: cannot hold a pose beyond window " +
+             std::to_string(c.window) + ": the compiled capacity kMaxWindow is " +
+             std::to_string(kMaxWindow) + " (a window below it leaves the hold room)";
+    return false;
+  }
+  const std::int64_t poses = static_cast<std::int64_t>(held ? kMaxWindow : c.window) + 1;
   const std::int64_t worst = poses * c.max_tracks;
   if (worst > kMaxLandmarks) {
+    const std::string held_to =
+        held ? "kMaxWindow " + std::to_string(kMaxWindow) + " (held: hold_depth_precision)"
+             : "window " + std::to_string(c.window);
     *error = ConfigWhere(c, "max_tracks", origin) +
-             ": max_tracks: " + std::to_string(c.max_tracks) + " with window " +
-             std::to_string(c.window) + " can keep (" + std::to_string(c.window) + " + 1) x " +
-             std::to_string(c.max_tracks) + " = " + std::to_string(worst) +
+             ": max_tracks: " + std::to_string(c.max_tracks) + " with " + held_to + " can keep (" +
+             std::to_string(poses - 1) + " + 1) x " + std::to_string(c.max_tracks) + " = " +
+             std::to_string(worst) +
              " landmarks active, above the compiled capacity kMaxLandmarks = " +
              std::to_string(kMaxLandmarks) + " (at most " + std::to_string(kMaxLandmarks / poses) +
-             " tracks at window " + std::to_string(c.window) + ")";
+             " tracks at " + held_to + ")";
     return false;
   }
   return true;

@@ -820,5 +820,39 @@ TEST(ConfigTest, RefusesWindowsAndTracksTheCompiledCapacitiesCannotHold) {
            std::to_string(frontend::kMaxTracks) + "\n");
 }
 
+// The held window (hold_depth_precision) grows to the compiled capacity whatever `window` says:
+// the landmark bound is checked at kMaxWindow + 1 poses, and a hold that has no room above the
+// window, or a mode that does not marginalize a window, is refused.
+TEST(ConfigTest, HeldWindowIsCheckedAtTheCompiledCapacity) {
+  const std::string k = std::to_string(kMaxWindow);
+  const int fit = kMaxLandmarks / (kMaxWindow + 1);
+  const std::string held = "source: sim\nhold_depth_precision: 0.005\nmax_tracks: ";
+  Accepted(held + std::to_string(fit) + "\n");
+  Refused(held + std::to_string(fit + 1) + "\n",
+          "t.cfg:3: max_tracks: " + std::to_string(fit + 1) + " with kMaxWindow " + k +
+              " (held: hold_depth_precision) can keep (" + k + " + 1) x " +
+              std::to_string(fit + 1) + " = " + std::to_string((kMaxWindow + 1) * (fit + 1)) +
+              " landmarks active, above the compiled capacity kMaxLandmarks = " +
+              std::to_string(kMaxLandmarks) + " (at most " + std::to_string(fit) +
+              " tracks at kMaxWindow " + k + " (held: hold_depth_precision))");
+  // The same track count at the same window without the hold is the window's business only.
+  const int fit5 = kMaxLandmarks / 6;
+  static_assert(kMaxLandmarks / 6 > kMaxLandmarks / (kMaxWindow + 1));
+  Accepted("source: sim\nmax_tracks: " + std::to_string(fit5) + "\n");
+  Refused(held + std::to_string(fit5) + "\n", "t.cfg:3: max_tracks: ");
+  Refused("source: sim\nwindow: " + k + "\nhold_depth_precision: 0.005\nmax_tracks: 8\n",
+          "t.cfg:3: hold_depth_precision: cannot hold a pose beyond window " + k +
+              ": the compiled capacity kMaxWindow is " + k);
+  Refused("source: sim\nmode: ekf\nwindow: 1\nhold_depth_precision: 0.005\nmax_tracks: 8\n",
+          "t.cfg:4: hold_depth_precision: only in mode swf or vsdf");
+  Refused("source: sim\nmode: vo\nhold_depth_precision: 0.005\nmax_tracks: 8\n",
+          "t.cfg:3: hold_depth_precision: only in mode swf or vsdf");
+  Accepted("source: sim\nmode: vsdf\nhold_depth_precision: 0.005\nmax_tracks: 8\n");
+  Refused("source: sim\nhold_depth_precision: 0.6\n",
+          "t.cfg:2: hold_depth_precision: 0.6 is outside [0, 0.5]");
+  Refused("source: sim\nhold_depth_precision: -0.01\n",
+          "t.cfg:2: hold_depth_precision: -0.01 is outside [0, 0.5]");
+}
+
 }  // namespace
 }  // namespace swf::app

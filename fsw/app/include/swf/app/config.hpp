@@ -202,6 +202,10 @@ struct FswConfig {
   double calibration_disparity_sigma_px = 0.0;
   std::int32_t max_tracks = 150;
   std::int32_t max_disparity_px = 128;
+  // The held window (SwfOptions::hold_depth_precision): the oldest pose stays while it sees a
+  // tracked landmark whose depth its stereo sightings know to worse than this relative 1-sigma,
+  // up to the compiled capacity kMaxWindow. 0 = off (the fixed window of `window` poses).
+  double hold_depth_precision = 0.0;
   // The front end's paper 4.1 steps, each switchable to measure its effect (docs/frontend.md):
   // refinement in the loop (PipelineOptions::refine_in_loop), templates referenced to the
   // estimated pose so every track is warped, and the search that recovers lost tracks
