@@ -4,6 +4,7 @@
 // argument 1: its samples up to each exposure are handed over inside the timed group) and with
 // the idealized motion input (0: the stereo filter). The frames are rendered before timing; each
 // benchmark iteration flies the whole descent and reports the per-frame p50, p99 and max.
+// Third argument 1: the held window (hold_depth_precision 0.5 %, growing to kMaxWindow + 1).
 // Run with SWF_SHARED_DIR set (the simulator's terrain texture).
 #include <benchmark/benchmark.h>
 
@@ -72,6 +73,7 @@ const Descent* RenderedDescent(int width, int height, bool inertial) {
 void BM_FrameGroup(benchmark::State& state) {
   const int width = static_cast<int>(state.range(0));
   const bool inertial = state.range(1) != 0;
+  const bool held = state.range(2) != 0;  // the held window (hold_depth_precision: 0.005)
   const Descent* d = RenderedDescent(width, width * 3 / 4, inertial);
   if (d == nullptr || (inertial && d->world->ImuUnit() == nullptr)) {
     state.SkipWithError("the descent could not be built (SWF_SHARED_DIR?)");
@@ -84,15 +86,19 @@ void BM_FrameGroup(benchmark::State& state) {
   std::vector<double> ms;
   std::vector<double> cpu_ms;
   std::vector<double> estimate_cpu_ms;
+  std::vector<double> poses;  // in the window after each frame
   for (auto _ : state) {
     auto pipeline = std::make_unique<Pipeline>();
-    if (pipeline->Configure(d->options) != core::Status::kOk) {
+    PipelineOptions options = d->options;
+    if (held) options.swf.hold_depth_precision = 0.005;
+    if (pipeline->Configure(options) != core::Status::kOk) {
       state.SkipWithError("pipeline configuration refused");
       return;
     }
     ms.clear();
     cpu_ms.clear();
     estimate_cpu_ms.clear();
+    poses.clear();
     std::size_t next_sample = 0;
     for (std::int32_t k = 0; k < world.NumFrames(); ++k) {
       PipelineFrame frame;
@@ -127,6 +133,7 @@ void BM_FrameGroup(benchmark::State& state) {
         return;
       }
       ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+      poses.push_back(pipeline->NumPoses());
     }
   }
   state.counters["frames"] = static_cast<double>(ms.size());
@@ -139,13 +146,17 @@ void BM_FrameGroup(benchmark::State& state) {
   state.counters["cpu_p99_ms"] = evaluation::Quantile(cpu_ms, 0.99);
   state.counters["estimate_cpu_p50_ms"] = evaluation::Quantile(estimate_cpu_ms, 0.50);
   state.counters["estimate_cpu_p99_ms"] = evaluation::Quantile(estimate_cpu_ms, 0.99);
+  state.counters["median_poses"] = evaluation::Quantile(poses, 0.5);
+  state.counters["max_poses"] = evaluation::Quantile(poses, 1.0);
 }
 BENCHMARK(BM_FrameGroup)
-    ->ArgNames({"width_px", "imu"})
-    ->Args({512, 0})
-    ->Args({1024, 0})
-    ->Args({512, 1})
-    ->Args({1024, 1})
+    ->ArgNames({"width_px", "imu", "held"})
+    ->Args({512, 0, 0})
+    ->Args({1024, 0, 0})
+    ->Args({512, 1, 0})
+    ->Args({1024, 1, 0})
+    ->Args({512, 1, 1})
+    ->Args({1024, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
     ->Repetitions(3);

@@ -38,9 +38,12 @@
 
 namespace swf::app {
 
-// Compile-time capacities of the flight estimator (STYLE.md, memory).
-inline constexpr int kMaxWindow = 10;                                 // K
-inline constexpr int kMaxLandmarks = 1024;                            // N (active in the window)
+// Compile-time capacities of the flight estimator (STYLE.md, memory). K is what the held window
+// (hold_depth_precision, docs/integrity.md) needs on the descent from 100 m: its first landmarks
+// reach 0.5 % depth precision after 25 frames. N lets each of those K + 1 poses bring the demo's
+// 150 tracks (26 x 150 = 3900); the configuration check refuses what does not fit.
+inline constexpr int kMaxWindow = 25;                                 // K
+inline constexpr int kMaxLandmarks = 4096;                            // N (active in the window)
 inline constexpr int kMaxMeasurementsPerPose = frontend::kMaxTracks;  // M
 inline constexpr int kMaxPriorLandmarks = 96;                         // P
 inline constexpr int kMaxMapLandmarks = kMaxLandmarks;  // landmarks in one published map
@@ -259,6 +262,8 @@ class Pipeline {
 
   int NumFeatures() const { return static_cast<int>(output_->measurements.size()); }
   int NumLandmarks() const;
+  // Poses in the filter's window (above `window` while the held window holds them).
+  int NumPoses() const;
   std::uint32_t FaultBits() const;
   bool Inertial() const { return inertial_ != nullptr; }
   // The stereo-inertial filter's newest state (nullptr: stereo-only, or no state yet).
@@ -299,7 +304,6 @@ class Pipeline {
   decltype(auto) Visit(F&& f) const {
     return inertial_ ? f(*inertial_) : f(*swf_);
   }
-  int NumPoses() const;
   bool AddObservation(std::int64_t landmark_id, const estimator::Vec3<double>& z);
   estimator::Pose<double> NewestCameraPose() const;
   // The filter's covariances, and the newest camera pose's 6x6 from them (camera_covariance_).
