@@ -796,8 +796,8 @@ TEST(ConfigTest, RefusesWindowsAndTracksTheCompiledCapacitiesCannotHold) {
   const std::string above = std::to_string(kMaxWindow + 1);
   Refused("source: sim\nwindow: " + above + "\n",
           "window: " + above + " is outside [1, " + k + "] (kMaxWindow");
-  // window + 1 poses x max_tracks landmarks must fit in kMaxLandmarks (1024: at window 10, 93
-  // tracks; the demo's 150 tracks need window <= 5).
+  // window + 1 poses x max_tracks landmarks must fit in kMaxLandmarks (4096: at window 25, 157
+  // tracks; the demo's 150 tracks fit every window).
   const int fit = kMaxLandmarks / (kMaxWindow + 1);
   const std::string at_k = "source: sim\nwindow: " + k + "\nmax_tracks: ";
   Accepted(at_k + std::to_string(fit) + "\n");
