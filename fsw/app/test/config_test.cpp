@@ -808,12 +808,13 @@ TEST(ConfigTest, RefusesWindowsAndTracksTheCompiledCapacitiesCannotHold) {
               " landmarks active, above the compiled capacity kMaxLandmarks = " +
               std::to_string(kMaxLandmarks) + " (at most " + std::to_string(fit) +
               " tracks at window " + k + ")");
-  // The defaults (window 5, 150 tracks) hold; at window 5 the limit is kMaxLandmarks / 6.
+  // The defaults (window 5, 150 tracks) hold; at window 10 the limit is kMaxLandmarks / 11.
   Accepted("source: sim\n");
-  const int fit5 = kMaxLandmarks / 6;
-  Accepted("source: sim\nmax_tracks: " + std::to_string(fit5) + "\n");
-  Refused("source: sim\nmax_tracks: " + std::to_string(fit5 + 1) + "\n",
-          "t.cfg:2: max_tracks: " + std::to_string(fit5 + 1) + " with window 5");
+  const int fit10 = kMaxLandmarks / 11;
+  static_assert(kMaxLandmarks / 11 < static_cast<int>(frontend::kMaxTracks));
+  Accepted("source: sim\nwindow: 10\nmax_tracks: " + std::to_string(fit10) + "\n");
+  Refused("source: sim\nwindow: 10\nmax_tracks: " + std::to_string(fit10 + 1) + "\n",
+          "t.cfg:3: max_tracks: " + std::to_string(fit10 + 1) + " with window 10");
   // The EKF's window of one holds every track count the front end allows.
   static_assert(2 * frontend::kMaxTracks <= static_cast<std::size_t>(kMaxLandmarks));
   Accepted("source: sim\nmode: ekf\nwindow: 1\nmax_tracks: " +
@@ -836,10 +837,12 @@ TEST(ConfigTest, HeldWindowIsCheckedAtTheCompiledCapacity) {
               std::to_string(kMaxLandmarks) + " (at most " + std::to_string(fit) +
               " tracks at kMaxWindow " + k + " (held: hold_depth_precision))");
   // The same track count at the same window without the hold is the window's business only.
-  const int fit5 = kMaxLandmarks / 6;
-  static_assert(kMaxLandmarks / 6 > kMaxLandmarks / (kMaxWindow + 1));
-  Accepted("source: sim\nmax_tracks: " + std::to_string(fit5) + "\n");
-  Refused(held + std::to_string(fit5) + "\n", "t.cfg:3: max_tracks: ");
+  const int fit10 = kMaxLandmarks / 11;
+  static_assert(kMaxLandmarks / 11 > kMaxLandmarks / (kMaxWindow + 1));
+  Accepted("source: sim\nwindow: 10\nmax_tracks: " + std::to_string(fit10) + "\n");
+  Refused("source: sim\nwindow: 10\nhold_depth_precision: 0.005\nmax_tracks: " +
+              std::to_string(fit10) + "\n",
+          "t.cfg:4: max_tracks: " + std::to_string(fit10) + " with kMaxWindow " + k);
   Refused("source: sim\nwindow: " + k + "\nhold_depth_precision: 0.005\nmax_tracks: 8\n",
           "t.cfg:3: hold_depth_precision: cannot hold a pose beyond window " + k +
               ": the compiled capacity kMaxWindow is " + k);
