@@ -117,7 +117,7 @@ rc=0
 "$fsw" --config "$dir/bad.cfg" 2> "$dir/err" || rc=$?
 cat "$dir/err"
 [ "$rc" -eq 2 ] || fail "exit code $rc for a bad configuration"
-grep -q "bad.cfg:2: window: 99 is outside \[1, 10\]" "$dir/err" || fail "the field is not named"
+grep -q "bad.cfg:2: window: 99 is outside \[1, 25\]" "$dir/err" || fail "the field is not named"
 rc=0
 "$fsw" --config "$cfg" --set "rate_hz: -3" 2> "$dir/err" || rc=$?
 [ "$rc" -eq 2 ] && grep -q "rate_hz" "$dir/err" || fail "a bad --set is not refused"
