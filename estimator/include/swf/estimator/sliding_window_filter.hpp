@@ -522,6 +522,8 @@ class SlidingWindowFilter {
   bool HoldsOldestPose() const;
   void RefreshMotions();
   bool IsYoung(const LandmarkSlot& l) const;
+  static void AddDepthInformation(const Vec3<S>& z, const Mat3<S>& sqrt_information,
+                                  LandmarkSlot* l);
   void RecordEvidence();
   void ZeroFixedPoseCovariance();
 

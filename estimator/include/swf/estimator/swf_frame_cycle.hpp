@@ -113,14 +113,22 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::AddObservation(
   ++l.obs_in_window;
   ++l.total_obs;
   l.last_frame = frames_added_;
-  // Relative depth information of this sighting, (d / sigma_d)^2: with Z = f b / d, sigma_Z / Z
-  // = sigma_d / d, and sigma_d^2 = e^T R e for the disparity e = (1, -1, 0) of z = (uL, uR, v).
+  if (options_.hold_depth_precision > 0.0) AddDepthInformation(z, sqrt_information, &l);
+  return core::Status::kOk;
+}
+
+// Relative depth information of one sighting, (d / sigma_d)^2: with Z = f b / d, sigma_Z / Z =
+// sigma_d / d, and sigma_d^2 = e^T R e for the disparity e = (1, -1, 0) of z = (uL, uR, v). Only
+// SwfOptions::hold_depth_precision reads it, so only then is it accumulated (Configure resets).
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::AddDepthInformation(const Vec3<S>& z,
+                                                                 const Mat3<S>& sqrt_information,
+                                                                 LandmarkSlot* l) {
   const Vec3<S> e(S(1), S(-1), S(0));
   const S sigma_d2 = (sqrt_information.inverse().transpose() * e).squaredNorm();
   const S disparity = z[0] - z[1];
   if (disparity > S(0) && sigma_d2 > S(0) && std::isfinite(sigma_d2))
-    l.depth_information += disparity * disparity / sigma_d2;
-  return core::Status::kOk;
+    l->depth_information += disparity * disparity / sigma_d2;
 }
 
 template <typename Model, int K, int N, int M, int P>
