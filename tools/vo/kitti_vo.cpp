@@ -15,6 +15,7 @@
 
 #include "kitti_vo_instance.hpp"
 #include "swf/estimator/stereo_model.hpp"
+#include "swf/ground_cli/ground_cli.hpp"
 
 namespace swf::tools {
 namespace {
@@ -461,45 +462,43 @@ double KittiVoCost(const KittiVoProblem& problem, const std::vector<Pose<double>
 
 namespace {
 
-std::string Number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  return buf;
+nlohmann::ordered_json CapacityJson(const KittiVoCapacity& c) {
+  return {{"K", c.window_poses},
+          {"N", c.landmarks},
+          {"M", c.factors_per_pose},
+          {"P", c.prior_landmarks}};
 }
 
-std::string CapacityJson(const KittiVoCapacity& c) {
-  std::ostringstream os;
-  os << "{\"K\": " << c.window_poses << ", \"N\": " << c.landmarks
-     << ", \"M\": " << c.factors_per_pose << ", \"P\": " << c.prior_landmarks << "}";
-  return os.str();
-}
+// A finite number, or null (JSON has no inf or nan).
+nlohmann::ordered_json Number(double v) { return nlohmann::ordered_json(ground_cli::Number(v)); }
 
 }  // namespace
 
-std::string KittiVoJson(const KittiVoProblem& problem, const KittiVoResult& r, int window) {
-  std::ostringstream os;
-  os << "{\n  \"mode\": \"" << (window > 0 ? "sliding_window" : "batch") << "\",\n"
-     << "  \"window\": " << std::max(window, 0) << ",\n"
-     << "  \"instance\": {\"name\": \"" << r.instance.name
-     << "\", \"capacity\": " << CapacityJson(r.instance.capacity)
-     << ", \"bytes\": " << r.instance.bytes << "},\n"
-     << "  \"needs\": " << CapacityJson(r.needs) << ",\n"
-     << "  \"initial_cost\": " << Number(r.initial_cost) << ",\n"
-     << "  \"final_cost\": " << Number(r.final_cost) << ",\n"
-     << "  \"iterations\": " << r.iterations << ",\n"
-     << "  \"solve_time_ms\": " << Number(r.solve_time_ms) << ",\n"
-     << "  \"max_prior_landmarks\": " << r.max_prior_landmarks << ",\n"
-     << "  \"factors_behind_camera\": " << r.factors_behind_camera << ",\n"
-     << "  \"fault_bits\": " << r.fault_bits << ",\n  \"poses\": [\n";
+nlohmann::ordered_json KittiVoReport(const KittiVoProblem& problem, const KittiVoResult& r,
+                                     int window) {
+  nlohmann::ordered_json report;
+  report["mode"] = window > 0 ? "sliding_window" : "batch";
+  report["window"] = std::max(window, 0);
+  report["instance"] = {{"name", r.instance.name},
+                        {"capacity", CapacityJson(r.instance.capacity)},
+                        {"bytes", r.instance.bytes}};
+  report["needs"] = CapacityJson(r.needs);
+  report["initial_cost"] = Number(r.initial_cost);
+  report["final_cost"] = Number(r.final_cost);
+  report["iterations"] = r.iterations;
+  report["solve_time_ms"] = Number(r.solve_time_ms);
+  report["max_prior_landmarks"] = r.max_prior_landmarks;
+  report["factors_behind_camera"] = r.factors_behind_camera;
+  report["fault_bits"] = r.fault_bits;
+  nlohmann::ordered_json poses = nlohmann::ordered_json::array();
   for (std::size_t j = 0; j < r.poses.size(); ++j) {
     const Eigen::Matrix4d m = r.poses[j].Matrix();
-    os << "    {\"id\": " << problem.pose_ids[j] << ", \"camera_to_world\": [";
-    for (int k = 0; k < 16; ++k) os << (k == 0 ? "" : ", ") << Number(m(k / 4, k % 4));
-    os << "]}" << (j + 1 < r.poses.size() ? "," : "") << "\n";
+    nlohmann::ordered_json camera_to_world = nlohmann::ordered_json::array();
+    for (int k = 0; k < 16; ++k) camera_to_world.push_back(Number(m(k / 4, k % 4)));
+    poses.push_back({{"id", problem.pose_ids[j]}, {"camera_to_world", camera_to_world}});
   }
-  os << "  ]\n}\n";
-  return os.str();
+  report["poses"] = std::move(poses);
+  return report;
 }
 
 }  // namespace swf::tools

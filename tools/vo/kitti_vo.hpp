@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <istream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -151,8 +152,9 @@ double KittiVoCost(const KittiVoProblem& problem, const std::vector<estimator::P
                    const std::vector<estimator::Vec3<double>>& landmarks,
                    int* behind_camera = nullptr);
 
-// swf-vo's output: one JSON object. Numbers that are not finite are written as null (JSON has
-// no inf or nan).
-std::string KittiVoJson(const KittiVoProblem& problem, const KittiVoResult& result, int window);
+// swf-vo's output: one JSON object, its fields in this order. Numbers that are not finite are
+// null (JSON has no inf or nan).
+nlohmann::ordered_json KittiVoReport(const KittiVoProblem& problem, const KittiVoResult& result,
+                                     int window);
 
 }  // namespace swf::tools

@@ -45,10 +45,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "swf-vo: %s\n", r.error.c_str());
     return swf::cli::kExitFailed;
   }
-  // In the order KittiVoJson writes it, with the run echoed (docs/cli.md).
-  auto report = nlohmann::ordered_json::parse(swf::tools::KittiVoJson(problem, r, window));
-  report["run"] =
-      nlohmann::ordered_json::parse(swf::ground_cli::RunEcho(app, "swf-vo", argc, argv).dump());
+  // The run echoed after the results (docs/cli.md).
+  nlohmann::ordered_json report = swf::tools::KittiVoReport(problem, r, window);
+  report["run"] = nlohmann::ordered_json(swf::ground_cli::RunEcho(app, "swf-vo", argc, argv));
   std::printf("%s\n", report.dump(2).c_str());
   return swf::cli::kExitOk;
 }
