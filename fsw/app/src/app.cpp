@@ -116,6 +116,7 @@ estimator::SwfOptions SwfFor(const FswConfig& c, std::int8_t* nav_mode) {
     *nav_mode = Nav::MODE_VO;
   } else if (c.mode == "vsdf") {
     o.mode = estimator::SwfMode::kVsdf;
+    o.vsdf_scalar_diagonal = c.vsdf_scalar_diagonal;
     *nav_mode = Nav::MODE_VSDF;
   } else {
     o.mode = estimator::SwfMode::kSlidingWindow;

@@ -261,6 +261,8 @@ void AddEstimatorFields(std::map<std::string, ConfigSetter>* fields) {
                                       static_cast<std::int64_t>(frontend::kMaxTracks),
                                       " (frontend::kMaxTracks, the compiled track capacity)");
   f["hold_depth_precision"] = Double(&FswConfig::hold_depth_precision, 0.0, 0.5);
+  f["vsdf.schur"] = OneOf<bool>([](FswConfig* c) { return &c->vsdf_scalar_diagonal; },
+                                {{"block", false}, {"diagonal", true}});
   f["max_disparity_px"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_disparity_px; }, 8,
                                             frontend::kMaxDisparity);
   f["frontend.refine_in_loop"] = Bool([](FswConfig* c) { return &c->frontend_refine_in_loop; });
@@ -698,6 +700,9 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
     return fail("camera.right", "the same device as camera.left");
   }
   if (c.mode == "ekf" && c.window != 1) return fail("window", "must be 1 in mode ekf");
+  if (c.vsdf_scalar_diagonal && c.mode != "vsdf") {
+    return fail("vsdf.schur", "diagonal: only in mode vsdf (how the VSDF marginalizes)");
+  }
   if (c.source == SourceKind::kSim && !Extends(c, "sim")) {
     return fail("source",
                 "'sim' is the simulated descent, flown by swf-sil (this program flies "

@@ -851,6 +851,14 @@ TEST(ConfigTest, HeldWindowIsCheckedAtTheCompiledCapacity) {
   Refused("source: sim\nmode: vo\nhold_depth_precision: 0.005\nmax_tracks: 8\n",
           "t.cfg:3: hold_depth_precision: only in mode swf or vsdf");
   Accepted("source: sim\nmode: vsdf\nhold_depth_precision: 0.005\nmax_tracks: 8\n");
+  // The VSDF's Schur term, whole blocks or the scalar diagonal, is the VSDF's alone.
+  FswConfig diagonal;
+  EXPECT_TRUE(Accepted("source: sim\nmode: vsdf\nvsdf.schur: diagonal\n", &diagonal));
+  EXPECT_TRUE(diagonal.vsdf_scalar_diagonal);
+  Accepted("source: sim\nvsdf.schur: block\n");
+  Refused("source: sim\nmode: swf\nvsdf.schur: diagonal\n",
+          "t.cfg:3: vsdf.schur: diagonal: only in mode vsdf");
+  Refused("source: sim\nmode: vsdf\nvsdf.schur: scalar\n", "t.cfg:3: vsdf.schur: ");
   Refused("source: sim\nhold_depth_precision: 0.6\n",
           "t.cfg:2: hold_depth_precision: 0.6 is outside [0, 0.5]");
   Refused("source: sim\nhold_depth_precision: -0.01\n",

@@ -206,6 +206,10 @@ struct FswConfig {
   // tracked landmark whose depth its stereo sightings know to worse than this relative 1-sigma,
   // up to the compiled capacity kMaxWindow. 0 = off (the fixed window of `window` poses).
   double hold_depth_precision = 0.0;
+  // Mode vsdf: which part of the Schur term its marginalization applies (eq. 12), `vsdf.schur:
+  // block` (the blocks within each variable, the default) or `diagonal` (only its scalar
+  // diagonal, the paper's wording; SwfOptions::vsdf_scalar_diagonal).
+  bool vsdf_scalar_diagonal = false;
   // The front end's paper 4.1 steps, each switchable to measure its effect (docs/frontend.md):
   // refinement in the loop (PipelineOptions::refine_in_loop), templates referenced to the
   // estimated pose so every track is warped, and the search that recovers lost tracks
