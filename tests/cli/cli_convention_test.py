@@ -144,6 +144,28 @@ def check_summary(name, path):
               os.path.basename(path), run.get('tool') if isinstance(run, dict) else None))
 
 
+def measurements_refused(swf_eval, work):
+    """swf-eval's --measurements FILE naming a file its own report writes (once silently
+    overwritten by it): exit 2 before any run, saying so, and nothing written; relative to the
+    working directory and through `..` as well."""
+    out = os.path.join(work, 'refused')
+    cases = [(['euroc', EUROC, '--out', out, '--measurements', os.path.join(out, 'euroc.json')],
+              None),
+             (['euroc', EUROC, '--loop-seconds', '5', '--out', out, '--measurements',
+               os.path.join(out, '..', 'refused', 'euroc_loop_swf_tum.txt')], None),
+             (['kitti', os.path.join(DATA, 'kitti-odometry-excerpt'), '--out', '.',
+               '--measurements', 'kitti_odometry.md'], out)]
+    for args, cwd in cases:
+        if cwd:
+            os.makedirs(cwd, exist_ok=True)
+        r = subprocess.run([swf_eval] + args, capture_output=True, text=True, timeout=60,
+                           cwd=cwd or REPO)
+        written = os.listdir(out) if os.path.isdir(out) else []
+        check('swf-eval', r.returncode == 2 and 'own report file' in r.stderr and not written,
+              '--measurements naming the report\'s %s: exit %d, %r, written %s' % (
+                  os.path.basename(args[-1]), r.returncode, r.stderr.strip()[:100], written))
+
+
 # Programs that write no file: their output is stdout (a JSON object).
 STDOUT_ONLY = {'swf-vo': 'prints one JSON object on stdout'}
 
@@ -186,6 +208,8 @@ def main():
                 check_summary(name, output)
             if name in SUMMARY:
                 check_summary(name, os.path.join(os.path.dirname(output), SUMMARY[name]))
+        if 'swf-eval' in programs:
+            measurements_refused(programs['swf-eval'], work)
         for name, why in STDOUT_ONLY.items():
             check(name, True, 'no output file (%s)' % why)
     finally:

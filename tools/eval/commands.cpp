@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -58,6 +59,39 @@ Evaluation EvaluationOf(const std::string& prefix, const SequenceArgs& args,
 std::string Key(const RunRecord& r) {
   if (r.options.imu) return "swf_imu";
   return r.options.mode == estimator::SwfMode::kSlidingWindow ? "swf" : "vo";
+}
+
+// Every file a command with this prefix can write into OUT (each Key() a run can have): what
+// --measurements must not name, or the report would overwrite it after the run.
+std::vector<std::string> ReportFiles(const std::string& prefix) {
+  std::vector<std::string> names = {prefix + ".json", prefix + ".md", prefix + "_error.dat",
+                                    prefix + "_error.json"};
+  for (const char* key : {"swf", "vo", "swf_imu"}) {
+    names.push_back(prefix + "_" + key + "_tum.txt");
+    names.push_back(prefix + "_" + key + "_frames.tsv");
+  }
+  return names;
+}
+
+// False, after saying why, when --measurements names one of the report's own files (compared
+// as absolute paths with `.`, `..` and existing symbolic links resolved).
+bool MeasurementsApartFromReport(const char* tool, const SequenceArgs& a,
+                                 const std::string& prefix) {
+  if (a.measurements.empty()) return true;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path measurements = fs::weakly_canonical(fs::absolute(a.measurements, ec), ec);
+  for (const std::string& name : ReportFiles(prefix)) {
+    const fs::path report = fs::weakly_canonical(fs::absolute(fs::path(a.out) / name, ec), ec);
+    if (!ec && report == measurements) {
+      std::fprintf(stderr,
+                   "%s: --measurements %s is the run's own report file %s/%s, which the run "
+                   "writes after the measurements: name another file\n",
+                   tool, a.measurements.c_str(), a.out.c_str(), name.c_str());
+      return false;
+    }
+  }
+  return true;
 }
 
 // Every frame of a run, to see where and how a run went wrong.
@@ -436,13 +470,15 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
   EurocOptions options;
   options.loop_seconds = loop_seconds;
   ApplyCommon(a, &options);
+  const bool looped = options.loop_seconds > 0.0;
+  const std::string prefix = looped ? "euroc_loop" : "euroc";
+  if (!MeasurementsApartFromReport("swf-eval euroc", a, prefix)) return kExitBadArguments;
   EurocResult result;
   if (!PrepareAndRun("swf-eval euroc", a.out,
                      [&](std::string* error) { return RunEuroc(dir, options, &result, error); })) {
     return 1;
   }
-  const bool looped = options.loop_seconds > 0.0;
-  Evaluation e = EvaluationOf(looped ? "euroc_loop" : "euroc", a, result);
+  Evaluation e = EvaluationOf(prefix, a, result);
   e.title = looped ? Format(
                          "Real data: EuRoC looped, %.0f s at rest (`swf-eval euroc DIR "
                          "--loop-seconds %g`)",
@@ -483,12 +519,14 @@ int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames)
   options.max_disparity_px = max_disparity_px;
   options.max_frames = max_frames;
   ApplyCommon(a, &options);
+  const std::string prefix = "kitti_odometry";
+  if (!MeasurementsApartFromReport("swf-eval kitti", a, prefix)) return kExitBadArguments;
   KittiResult result;
   if (!PrepareAndRun("swf-eval kitti", a.out,
                      [&](std::string* error) { return RunKitti(dir, options, &result, error); })) {
     return 1;
   }
-  Evaluation e = EvaluationOf("kitti_odometry", a, result);
+  Evaluation e = EvaluationOf(prefix, a, result);
   e.title = "Real data: KITTI odometry excerpt, the whole pipeline (`swf-eval kitti DIR`)";
   e.dataset = "KITTI odometry excerpt";
   Json& h = e.header;

@@ -8,9 +8,9 @@
 // "<key>_reason"; the command line echoed as "run"), OUT/<prefix>.md (text computed from the same
 // numbers), OUT/<prefix>_error.dat and .json (per-frame errors) and the estimated trajectories.
 // Exit status: 0 when every run is scored, 1 for unusable input or unwritable output (with the
-// reason on stderr), 2 for bad arguments (swf-eval's command line), 3 when a run failed
-// (non-finite, diverged, or frames without a tracked landmark; the reason names the frame and the
-// line of the input it came from).
+// reason on stderr), 2 for bad arguments (swf-eval's command line, and a --measurements FILE that
+// is one of the files the report writes), 3 when a run failed (non-finite, diverged, or frames
+// without a tracked landmark; the reason names the frame and the line of the input it came from).
 #pragma once
 
 #include <string>
@@ -19,6 +19,8 @@
 
 namespace swf::eval {
 
+inline constexpr int kExitBadArguments = 2;  // as CLI11's refusals, and --measurements naming
+                                             // a file of the report
 inline constexpr int kExitRunFailed = 3;
 
 // The options both commands share (swf-eval's command line checks their ranges).
