@@ -1,8 +1,8 @@
-"""The paper's Figs. 12 and 16 at image level (image_level.py runs them): what needs more than
+"""The paper's Figs. 12, 16 and 17 at image level (image_level.py runs them): what needs more than
 swf-sil's summary is read from the run's recording (`record.path`, read with tools/lcmlog's
 swf_lcmlog): the filter's landmark maps with their covariance (SWF_LANDMARKS), the renderer's
-truth of the same landmarks (SIM_TRUTH_LANDMARKS), the true poses (SIM_TRUTH) and the front end's
-features with their fate (SWF_FEATURES)."""
+truth of the same landmarks (SIM_TRUTH_LANDMARKS), the true poses (SIM_TRUTH), the front end's
+features with their fate (SWF_FEATURES) and the estimator's integrity status (SWF_NAV)."""
 import math
 import os
 import sys
@@ -381,6 +381,176 @@ def fig16_markdown(r, windows):
               'landmarks of the last frames near 10 m, whose error is set by their few, close '
               'views more than by the descent before.', '']
     return '\n'.join(lines)
+
+
+# ---- Fig. 17: VSDF against SWF ----
+
+# The three marginalizations of Fig. 17 (swf-sil settings): SWF(3) the exact Schur complement
+# (eq. 9), the VSDF with its Schur term's blocks within each variable (what mode vsdf flies) and
+# with only its scalar diagonal (eq. 12 read literally, vsdf.schur: diagonal).
+FIG17_RUNS = [('SWF(3)', 'swf3', ['mode: swf']),
+              ('VSDF(3), block diagonal', 'vsdf3_block', ['mode: vsdf']),
+              ('VSDF(3), diagonal elements', 'vsdf3_diagonal',
+               ['mode: vsdf', 'vsdf.schur: diagonal'])]
+# The measurement-level scene's shape (swf_eval.cpp fig17: the descent from 100 m, 100 landmarks,
+# window 3, a relative-motion input instead of the IMU), a map every frame; the hazard mapper,
+# which runs with every map and plays no part here, at its cheapest. 90 tracks, not 100: the
+# flight prior holds at most kMaxPriorLandmarks = 96 landmarks (fsw/app pipeline.hpp), and a
+# landmark that cannot enter it loses its measurement from the marginalized pose in every mode.
+FIG17_SETTINGS = ['window: 3', 'max_tracks: 90', 'imu.enabled: false', 'hazard_every: 1',
+                  'hazard.downsample: 4', 'hazard.max_disparities: 16']
+NAV_STATUS = ('VALID', 'DEGRADED', 'INVALID')  # nav_state_t STATUS_*
+NUMERICAL_FAILURE = 7  # nav_state_t update_status: swf::core::Status kNumericalFailure
+
+
+def map_mse_by_frame(log):
+    """{frame: mean squared error of the map's landmarks against the renderer's truth}."""
+    est = maps_by_frame(log['SWF_LANDMARKS'])
+    truth = maps_by_frame(log['SIM_TRUTH_LANDMARKS'])
+    out = {}
+    for f in sorted(est):
+        ids = [i for i in est[f] if i in truth.get(f, {})]
+        if ids:
+            out[f] = mean([sum((est[f][i][0][k] - truth[f][i][0][k]) ** 2 for k in range(3))
+                           for i in ids])
+    return out
+
+
+def integrity_of(log):
+    """Frames per integrity status, the frames whose update failed numerically (the filter
+    restarted from its last trusted state) and the first frame that was not VALID."""
+    nav = log['SWF_NAV']
+    counts = {name: sum(1 for n in nav if n.status == k) for k, name in enumerate(NAV_STATUS)}
+    failed = [n.frame_seq for n in nav if n.update_status == NUMERICAL_FAILURE]
+    first_bad = next((n.frame_seq for n in nav if n.status != 0), None)
+    return {'status_frames': counts, 'numerical_failures': len(failed),
+            'first_numerical_failure': failed[0] if failed else None,
+            'first_not_valid': first_bad}
+
+
+def fig17(fly, sil, out, cfg_path, frames, settings):
+    runs = []
+    for title, name, mode in FIG17_RUNS:
+        run_name = 'fig17_' + name
+        s = fly(run_name, cfg_path, frames, FIG17_SETTINGS + mode + settings,
+                record=True)
+        log = read_channels(sil, os.path.join(out, 'image_%s.lcmlog' % run_name),
+                            ['SWF_LANDMARKS', 'SIM_TRUTH_LANDMARKS', 'SWF_NAV'])
+        mse = map_mse_by_frame(log)
+        last = max(mse) if mse else None
+        runs.append({'name': title, 'key': name, 'mse_by_frame': mse,
+                     'final_frame': last, 'final_mse': mse[last] if mse else None,
+                     'first_mse': mse[min(mse)] if mse else None,
+                     'pose_rms_error_m': s['pose_rms_error_m'], 'frames': s['frames'],
+                     'result': s['result'], 'result_reasons': s['result_reasons'],
+                     'integrity': integrity_of(log)})
+    xs = sorted({f for r in runs for f in r['mse_by_frame']})
+    write_chart(os.path.join(out, 'fig17_image_vsdf.dat'),
+                'Fig. 17, image level: landmark error of VSDF and SWF, 3 active frames, '
+                'rendered descent from 100 m', 'frame number', 'landmark mean squared error (m^2)',
+                True, [r['name'] for r in runs], xs,
+                [[r['mse_by_frame'].get(f) for f in xs] for r in runs])
+    for r in runs:  # JSON keys are strings
+        r['mse_by_frame'] = {str(f): v for f, v in r['mse_by_frame'].items()}
+    return {'runs': runs}
+
+
+def fig17_ratio(r, key):
+    """Final MSE of one run over SWF(3)'s (None when either has no map)."""
+    by_key = {x['key']: x for x in r['runs']}
+    a, b = by_key[key]['final_mse'], by_key['swf3']['final_mse']
+    return a / b if a is not None and b else None
+
+
+def fig17_markdown(r, cfg, frames):
+    runs = r['runs']
+    lines = ['### Fig. 17: VSDF against SWF, 3 active frames', '',
+             '![fig17](eval/fig17_vsdf.png) ![fig17 image](eval/fig17_image_vsdf.png)', '',
+             'Left the measurement-level figure (Fig. 17 above), right the rendered descent '
+             '(`fsw/app/config/demo.cfg` from 100 m, %s frames at %s Hz, %s px) as the '
+             'measurement level flies it: window 3, at most 90 tracks (the flight prior holds '
+             '96 landmarks), the relative-motion input instead of the IMU (`imu.enabled: '
+             'false`), a map every frame; SWF(3), and mode vsdf with `vsdf.schur: block` and '
+             '`vsdf.schur: diagonal`. Each map\'s landmarks are scored against the renderer\'s '
+             'truth; the integrity columns count the frames by the status the estimator '
+             'published (SWF_NAV), the numerical failures the updates whose system was not '
+             'positive definite (`tools/eval/image_level.py --figures 17`).' % (
+                 frames if frames > 0 else 'all', cfg['rate_hz'],
+                 cfg['sim.width_px'] + 'x' + cfg['sim.height_px']), '',
+             '| run | first map MSE (m^2) | final map MSE (m^2) | final / SWF(3) | pose RMS (m) | '
+             'VALID / DEGRADED / INVALID frames | numerical failures (first at frame) | '
+             'swf-sil verdict |', '|---|---|---|---|---|---|---|---|']
+
+    def g(v, fmt='%.3g'):
+        return fmt % v if v is not None else 'none'
+    for x in runs:
+        i = x['integrity']
+        c = i['status_frames']
+        lines.append('| %s | %s | %s (frame %s) | %s | %s | %d / %d / %d | %d (%s) | %s |' % (
+            x['name'], g(x['first_mse']), g(x['final_mse']), x['final_frame'],
+            g(fig17_ratio(r, x['key']), '%.2fx'), g(x['pose_rms_error_m'], '%.4f'),
+            c['VALID'], c['DEGRADED'], c['INVALID'], i['numerical_failures'],
+            i['first_numerical_failure'] if i['first_numerical_failure'] is not None else '-',
+            x['result'] + (': ' + x['result_reasons'] if x['result_reasons'] else '')))
+    block = fig17_ratio(r, 'vsdf3_block')
+    close = block is not None and block < 1.2
+    diagonal = {x['key']: x for x in runs}['vsdf3_diagonal']
+    i = diagonal['integrity']
+    if i['numerical_failures']:
+        diagonal_text = (
+            'fails: its first update after a marginalization (frame %s, window 3) finds the '
+            'system not positive definite, and %d of its %d updates fail so (the prior that '
+            'lost positive definiteness stays in the filter until the integrity monitor '
+            'restarts it); its estimate is INVALID in %d frames, verdict %s. The paper\'s '
+            'ordering, more sharply than at measurement level, where the same reading ran away '
+            'in some runs and not in others. Why every rendered run fails at the first '
+            'marginalization is not isolated here; the scenes differ in the spread of the '
+            'landmarks (the whole 44 m footprint against a 2 m disc), the focal length (half) '
+            'and the tracks that start every frame.' % (
+                i['first_numerical_failure'], i['numerical_failures'], diagonal['frames'],
+                i['status_frames']['INVALID'], diagonal['result']))
+    else:
+        diagonal_text = 'ends at %s SWF(3)\'s final MSE with no failed update.' % g(
+            fig17_ratio(r, 'vsdf3_diagonal'), '%.2fx')
+    lines += ['', 'The block-diagonal VSDF ends %s SWF(3) (%s its final MSE)%s. The VSDF with '
+              'only the diagonal elements of the Schur term %s' % (
+                  'within 20% of' if close else 'above', g(block, '%.2fx'),
+                  ': as at measurement level, this reading of eq. 12 does not reproduce the '
+                  'paper\'s clear difference' if close else ', the paper\'s ordering',
+                  diagonal_text), '',
+              'Where it differs from the measurement level and why: there the same 100 landmarks '
+              'are seen in every frame (the paper: "all features are measured over all '
+              'frames"), each measurement carries fresh Gaussian noise of exactly the stated '
+              '0.5 px, and a failed update is counted while the run goes on with its own '
+              'estimate; here the front end keeps the tracks it can follow (they end and start '
+              'as the footprint shrinks), its errors are those of Fig. 2a above, and the flight '
+              'estimator publishes a failed update as INVALID and publishes no map for it, so '
+              'the diagonal reading shows as a curve that stops rather than one that grows. '
+              'The block-diagonal VSDF keeps whole blocks within each variable, so its prior '
+              'stays positive definite, and with about 90 tracks per frame the fill-in between '
+              'variables it drops is small: it stays close to SWF(3) at both levels.', '']
+    return '\n'.join(lines)
+
+
+def fig17_failures(r):
+    """--check for Fig. 17: SWF(3) flies ok, and the VSDF with the Schur term's diagonal
+    elements (eq. 12 as the paper words it) ends above SWF(3), or fails numerically (the
+    paper's ordering: VSDF converges worse)."""
+    by_key = {x['key']: x for x in r['runs']}
+    swf = by_key['swf3']
+    failures = []
+    if swf['result'] != 'ok' or swf['final_mse'] is None:
+        failures.append('Fig. 17 SWF(3): verdict %s %s, final MSE %s' %
+                        (swf['result'], swf['result_reasons'], swf['final_mse']))
+    diagonal = by_key['vsdf3_diagonal']
+    ratio = fig17_ratio(r, 'vsdf3_diagonal')
+    worse = (ratio is not None and ratio > 1.2) or diagonal['integrity']['numerical_failures'] > 0
+    if not worse:
+        failures.append('Fig. 17: the diagonal VSDF(3) ends at %s SWF(3)\'s final MSE with no '
+                        'failed update: not worse' % ratio)
+    if by_key['vsdf3_block']['final_mse'] is None:
+        failures.append('Fig. 17: the block-diagonal VSDF(3) published no map')
+    return failures
 
 
 def write_chart(path, title, x_label, y_label, log_y, names, xs, columns):

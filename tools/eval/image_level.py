@@ -1,18 +1,21 @@
 #!/usr/bin/python3
-"""The paper's Figs. 2a, 12, 13 and 16 at image level: the simulator renders the scene, the
+"""The paper's Figs. 2a, 12, 13, 16 and 17 at image level: the simulator renders the scene, the
 flight front end measures it and the flight filter fuses it (swf-sil, lockstep), and every
 measurement and landmark is scored against the renderer's truth.
 
-  image_level.py SWF-SIL CONFIG OUT [--figures 2a,12,13,16] [--frames N] [--windows 3,4,5]
+  image_level.py SWF-SIL CONFIG OUT [--figures 2a,12,13,16,17] [--frames N] [--windows 3,4,5]
                  [--lab-config CFG] [--lab-frames N] [--fig16-rates 10,5,2]
                  [--fig16-windows 2,3,5] [--fig16-seconds S] [--fig16-set "KEY: VALUE"]...
-                 [--check] [--report-only]
+                 [--fig17-frames N] [--fig17-set "KEY: VALUE"]... [--check] [--report-only]
 
 CONFIG is the demo's configuration (fsw/app/config/demo.cfg: 100 m -> 10 m, 512x384, 1 m
 baseline, stereo-inertial). Figs. 2a and 13: one swf-sil run per window size, and one VO run
 (mode vo, the same window) for the smallest window. Fig. 12: the static lab rig
 (tools/eval/lab_static.cfg), recorded. Fig. 16: the descent at every rate and window, recorded
-(image_figures.py reads the recordings). Writes, for `swf-plot curves` and docs/results.md:
+(image_figures.py reads the recordings). Fig. 17: the first frames of the descent as the
+measurement level flies them (window 3, 90 tracks, the relative-motion input) with SWF and
+both readings of the VSDF (vsdf.schur: block, diagonal), recorded. Writes, for `swf-plot
+curves` and docs/results.md:
 
   OUT/fig02a_image_errors.dat     histogram of the signed front-end errors (u and v, left image)
                                   against the Gaussian of the same standard deviation
@@ -22,6 +25,8 @@ baseline, stereo-inertial). Figs. 2a and 13: one swf-sil run per window size, an
                                   map's common offset, 1/m, and what the filter states
   OUT/fig16_image_track_length.dat  final MSE over the landmarks in view against the mean track
                                   length, one series per window
+  OUT/fig17_image_vsdf.dat        landmark MSE of every map by frame: SWF(3), VSDF(3) with the
+                                  Schur term's blocks and with its diagonal elements
   OUT/image_level.json            the numbers the text quotes
   OUT/image_level.md              the section of docs/results.md
 
@@ -29,7 +34,8 @@ baseline, stereo-inertial). Figs. 2a and 13: one swf-sil run per window size, an
 (standard deviation below the stated 0.5 px, at least 90% within two standard deviations),
 every SWF run's verdict is ok and its landmark error falls from its first map to its last, and
 the first SWF run ends below VO (section 4.2.4: VO, deleting instead of marginalizing, drifts);
-for Fig. 12 and Fig. 16 as image_figures.fig12_failures and fig16_failures say. A run that ends
+for Figs. 12, 16 and 17 as image_figures.fig12_failures, fig16_failures and fig17_failures
+say. A run that ends
 without a summary, or with an exit code other than its verdict's, exits 1 with swf-sil's
 message; a failed or degraded verdict is reported in the table."""
 import argparse
@@ -265,9 +271,9 @@ def main():
     p.add_argument('--frames', type=int, default=0, help='frames to fly (0: all of the descent)')
     p.add_argument('--windows', default='3,4,5',
                    help='window sizes (150 tracks per frame fit the compiled capacity up to 5)')
-    p.add_argument('--figures', default='2a,12,13,16',
+    p.add_argument('--figures', default='2a,12,13,16,17',
                    help='which: 2a and 13 (the descents), 12 (the static lab rig), 16 (frame '
-                        'rates x windows)')
+                        'rates x windows), 17 (SWF against both VSDFs)')
     p.add_argument('--lab-config', default=os.path.join(HERE, 'lab_static.cfg'),
                    help='Fig. 12: the static lab scene')
     p.add_argument('--lab-frames', type=int, default=40, help='Fig. 12: frames (0: all 60)')
@@ -280,15 +286,21 @@ def main():
     p.add_argument('--fig16-set', action='append', default=[], metavar='"KEY: VALUE"',
                    help='Fig. 16: a further swf-sil setting (the reduced ctest: a smaller '
                         'terrain)')
+    p.add_argument('--fig17-frames', type=int, default=41,
+                   help='Fig. 17: frames of the descent (41: 100 m to 60 m, the measurement '
+                        'level\'s 40 steps)')
+    p.add_argument('--fig17-set', action='append', default=[], metavar='"KEY: VALUE"',
+                   help='Fig. 17: a further swf-sil setting (the reduced ctest: a smaller '
+                        'terrain)')
     p.add_argument('--check', action='store_true')
     p.add_argument('--report-only', action='store_true',
                    help='no flights: rewrite the charts and text from OUT/image_*.json')
     a = p.parse_args()
     os.makedirs(a.out, exist_ok=True)
     figures = set(a.figures.split(','))
-    unknown = figures - {'2a', '12', '13', '16'}
+    unknown = figures - {'2a', '12', '13', '16', '17'}
     if unknown:
-        p.error('--figures: unknown %s (2a, 12, 13, 16)' % ','.join(sorted(unknown)))
+        p.error('--figures: unknown %s (2a, 12, 13, 16, 17)' % ','.join(sorted(unknown)))
 
     def fly_in_out(name, cfg, frames, settings, record=False):
         return fly(a.sil, cfg, a.out, name, frames, settings, a.report_only, record)
@@ -324,6 +336,19 @@ def main():
             print('Fig. 16 image: %g Hz SWF(%d): track length %s frames, final MSE %s m^2, %s' %
                   (x['rate_hz'], x['window'], x['track_length'], x['final_mse'], x['result']))
         failures += image_figures.fig16_failures(r)
+    if '17' in figures:
+        r = image_figures.fig17(fly_in_out, a.sil, a.out, a.config, a.fig17_frames,
+                                 a.fig17_set)
+        numbers['fig17'] = r
+        sections.append(image_figures.fig17_markdown(r, image_figures.read_config(a.config),
+                                                     a.fig17_frames))
+        for x in r['runs']:
+            i = x['integrity']
+            print('Fig. 17 image: %s: final MSE %s m^2 (frame %s), %d INVALID frames, %d '
+                  'numerical failures, %s' % (x['name'], x['final_mse'], x['final_frame'],
+                                              i['status_frames']['INVALID'],
+                                              i['numerical_failures'], x['result']))
+        failures += image_figures.fig17_failures(r)
     with open(os.path.join(a.out, 'image_level.json'), 'w') as f:
         json.dump(numbers, f, indent=1)
     with open(os.path.join(a.out, 'image_level.md'), 'w') as f:
