@@ -225,11 +225,14 @@ def mean_track_length(log):
 
 def final_in_view(log):
     """The last map's mean squared error over the landmarks measured in its frame (those in
-    view at the end, whatever the window keeps besides), and where that frame was."""
+    view at the end, whatever the window keeps besides), split into the map's common offset
+    (the mean error vector, what the whole map shares with the pose) and what is left, the
+    position error of the newest pose then, and where that frame was."""
     est = maps_by_frame(log['SWF_LANDMARKS'])
     truth = maps_by_frame(log['SIM_TRUTH_LANDMARKS'])
     frames = [f for f in est if f in truth]
-    none = {'mse': None, 'landmarks': 0, 'frame': None, 'altitude_m': None}
+    none = {'mse': None, 'landmarks': 0, 'frame': None, 'altitude_m': None, 'offset_m': None,
+            'mse_relative': None, 'pose_error_m': None}
     if not frames:
         return none
     f = max(frames)
@@ -240,13 +243,59 @@ def final_in_view(log):
     ids = [i for i in est[f] if i in seen and i in truth[f]]
     if not ids:
         return none
-    altitude = next((t.altitude_m for t in log['SIM_TRUTH'] if t.frame_seq == f), None)
-    return {'mse': mean([sum((est[f][i][0][k] - truth[f][i][0][k]) ** 2 for k in range(3))
-                         for i in ids]), 'landmarks': len(ids), 'frame': f,
-            'altitude_m': altitude}
+    true_pose = next((t for t in log['SIM_TRUTH'] if t.frame_seq == f), None)
+    nav = next((n for n in log['SWF_NAV'] if n.frame_seq == f), None)
+    errors = [[est[f][i][0][k] - truth[f][i][0][k] for k in range(3)] for i in ids]
+    offset = [mean([e[k] for e in errors]) for k in range(3)]
+    return {'mse': mean([sum(x * x for x in e) for e in errors]), 'landmarks': len(ids),
+            'frame': f, 'altitude_m': true_pose.altitude_m if true_pose else None,
+            'offset_m': math.sqrt(sum(o * o for o in offset)),
+            'mse_relative': mean([sum((e[k] - offset[k]) ** 2 for k in range(3))
+                                  for e in errors]),
+            'pose_error_m': math.sqrt(sum((nav.position_world_m[k] -
+                                           true_pose.position_world_m[k]) ** 2
+                                          for k in range(3)))
+            if nav and true_pose else None}
+
+
+AGE_BINS = ((1, 3), (4, 15), (16, None))  # frames a track has been measured in, inclusive
+
+
+def final_errors_by_age(log, camera):
+    """The front end's left-image errors in the last frame against the true projection of each
+    landmark, RMS per age bin of its track (frames measured in, this one included): whether a
+    long track still measures the surface point it started on."""
+    truth_pose = {t.frame_seq: t for t in log['SIM_TRUTH']}
+    truth = {}
+    for m in log['SIM_TRUTH_LANDMARKS']:
+        for k in range(m.num_landmarks):
+            truth.setdefault(m.id[k], m.position_world_m[k])
+    sets = sorted(log['SWF_FEATURES'], key=lambda fs: fs.frame_seq)
+    if not sets:
+        return [None] * len(AGE_BINS)
+    age = {}
+    for fs in sets:
+        for k in range(fs.num_features):
+            if fs.status[k] in FUSED:
+                age[fs.id[k]] = age.get(fs.id[k], 0) + 1
+    last = sets[-1]
+    t = truth_pose.get(last.frame_seq)
+    errors = [[] for _ in AGE_BINS]
+    for k in range(last.num_features):
+        i = last.id[k]
+        if last.status[k] not in FUSED or i not in truth or t is None:
+            continue
+        z = project(camera, t, truth[i])
+        if z is None:
+            continue
+        for b, (lo, hi) in enumerate(AGE_BINS):
+            if age[i] >= lo and (hi is None or age[i] <= hi):
+                errors[b].append(math.hypot(last.u_px[k] - z[0], last.v_px[k] - z[1]))
+    return [rms(e) for e in errors]
 
 
 def fig16(fly, sil, out, cfg_path, rates, windows, seconds, settings):
+    camera = camera_of(read_config(cfg_path))
     runs = []
     for rate in rates:
         # The same stretch of descent at every rate: `seconds` of it (0: all), both ends.
@@ -259,10 +308,14 @@ def fig16(fly, sil, out, cfg_path, rates, windows, seconds, settings):
                     settings, record=True)
             log = read_channels(sil, os.path.join(out, 'image_%s.lcmlog' % name),
                                 ['SWF_FEATURES', 'SWF_LANDMARKS', 'SIM_TRUTH_LANDMARKS',
-                                 'SIM_TRUTH'])
+                                 'SIM_TRUTH', 'SWF_NAV'])
             final = final_in_view(log)
             runs.append({'rate_hz': rate, 'window': w, 'track_length': mean_track_length(log),
                          'final_mse': final['mse'], 'final_landmarks': final['landmarks'],
+                         'final_offset_m': final['offset_m'],
+                         'final_mse_relative': final['mse_relative'],
+                         'final_pose_error_m': final['pose_error_m'],
+                         'final_error_px_by_age': final_errors_by_age(log, camera),
                          'final_frame': final['frame'], 'final_altitude_m': final['altitude_m'],
                          'tracking_median_px': s['tracking_error_px']['median'],
                          'frames': s['frames'], 'result': s['result'],
@@ -301,11 +354,11 @@ def fig16_spreads(r, windows):
             [v for v in across_rates if v is not None])
 
 
-def monotone_sentence(runs, windows):
-    """Whether the final MSE rises at every window as the tracks shorten (the paper's
-    surface does)."""
+def broken_orders(runs, windows, key):
+    """Where `key` does not rise at a window as the tracks shorten (the paper's surface
+    does), one phrase each."""
     rates = sorted({x['rate_hz'] for x in runs}, reverse=True)
-    final = {(x['rate_hz'], x['window']): x['final_mse'] for x in runs}
+    final = {(x['rate_hz'], x['window']): x[key] for x in runs}
     broken = []
     for w in windows:
         for hi, lo in zip(rates, rates[1:]):
@@ -313,13 +366,27 @@ def monotone_sentence(runs, windows):
             if a is not None and b is not None and not a < b:
                 broken.append('SWF(%d) at %g Hz ends at %.3g m^2, not above %g Hz\'s %.3g' %
                               (w, lo, b, hi, a))
+    return broken
+
+
+def shorter_window_below(runs, windows, key):
+    """The rates at which the shortest window ends below the longest in `key`."""
+    lo, hi = min(windows), max(windows)
+    final = {(x['rate_hz'], x['window']): x[key] for x in runs}
+    return [r for r in sorted({x['rate_hz'] for x in runs})
+            if final.get((r, lo)) is not None and final.get((r, hi)) is not None and
+            final[(r, lo)] < final[(r, hi)]]
+
+
+def monotone_sentence(runs, windows):
+    """Whether the final MSE rises at every window as the tracks shorten."""
+    broken = broken_orders(runs, windows, 'final_mse')
     if not broken:
         return 'At every window the final MSE rises as the tracks shorten. '
     medians = [x['tracking_median_px'] for x in runs if x['tracking_median_px'] is not None]
     return ('The final MSE does not rise with every shortening of the tracks: %s. The front '
             'end\'s own error against the renderer\'s truth is about the same in every run '
-            '(median %.3f-%.3f px), so what else the longer frame interval changes is not '
-            'measured here. ' % ('; '.join(broken), min(medians), max(medians)))
+            '(median %.3f-%.3f px). ' % ('; '.join(broken), min(medians), max(medians)))
 
 
 def shortest_window_sentence(runs, windows):
@@ -327,16 +394,71 @@ def shortest_window_sentence(runs, windows):
     windows end within a few percent, the longest lowest)."""
     lo, hi = min(windows), max(windows)
     rates = sorted({x['rate_hz'] for x in runs})
-    final = {(x['rate_hz'], x['window']): x['final_mse'] for x in runs}
-    below = [r for r in rates if final.get((r, lo)) is not None and
-             final.get((r, hi)) is not None and final[(r, lo)] < final[(r, hi)]]
+    below = shorter_window_below(runs, windows, 'final_mse')
     if len(below) != len(rates):
         return ('SWF(%d) ends below SWF(%d) at %d of the %d rates.' %
                 (lo, hi, len(below), len(rates)))
     return ('Unlike the measurement level, where the longer windows end a little lower, '
-            'SWF(%d) ends below SWF(%d) at every rate here. Why is not measured: through swf-sil '
-            'the window also sets how the front end follows the estimate (its predictions, the '
-            'warps\' reference poses, refinement in the loop), not the filter alone.' % (lo, hi))
+            'SWF(%d) ends below SWF(%d) at every rate here.' % (lo, hi))
+
+
+def offset_sentences(runs, windows):
+    """The final MSE split into the final map's common offset and the rest, and the front
+    end's last-frame error by track age: what sets the orderings that differ from the
+    paper's."""
+    split = [x for x in runs if x['final_mse'] and x['final_offset_m'] is not None]
+    if not split:
+        return ''
+    shares = [x['final_offset_m'] ** 2 / x['final_mse'] for x in split]
+    offsets = [x['final_offset_m'] for x in split]
+    poses = [x['final_pose_error_m'] for x in split if x['final_pose_error_m'] is not None]
+    broken = broken_orders(runs, windows, 'final_mse_relative')
+    text = ('Split (the final map\'s common offset, the mean error vector of its landmarks, '
+            'which the pose shares, and the rest): the offset is %.3f-%.3f m (the newest pose '
+            'is off by %.3f-%.3f m then) and makes up %.0f-%.0f%% of the final MSE' % (
+                min(offsets), max(offsets), min(poses) if poses else float('nan'),
+                max(poses) if poses else float('nan'), 100 * min(shares), 100 * max(shares)))
+    pairs = [(x, y) for n, x in enumerate(split) for y in split[n + 1:]]
+    agree = sum(1 for x, y in pairs if (x['final_mse'] - y['final_mse']) *
+                (x['final_offset_m'] - y['final_offset_m']) > 0)
+    text += ('; of the %d pairs of runs, the one with the larger final MSE has the larger '
+             'offset in %d' % (len(pairs), agree))
+    if min(shares) > 0.5 and agree == len(pairs):
+        lo = min(windows)
+        by_rate = sorted(((x['rate_hz'], x['final_pose_error_m']) for x in split
+                          if x['window'] == lo and x['final_pose_error_m'] is not None),
+                         reverse=True)
+        text += (': the final MSE orders the runs as the offset does, and the offset is the '
+                 'pose error at the end (SWF(%d): %s), which does not follow the track length; '
+                 'what sets it across rates and windows is not isolated here. ' % (
+                     lo, ', '.join('%.4f m at %g Hz' % (e, rate) for rate, e in by_rate)))
+    else:
+        text += '. '
+    text += 'Without the offset the MSE %s. ' % (
+        'rises at every window as the tracks shorten' if not broken else
+        'does not rise with every shortening either (%s)' % '; '.join(broken))
+    ages = [x['final_error_px_by_age'] for x in split if x.get('final_error_px_by_age')]
+
+    def span(b):
+        v = [a[b] for a in ages if a[b] is not None]
+        return ('%.2f-%.2f px' % (min(v), max(v))) if v else 'none'
+    names = ['%d-%d' % (lo, hi) if hi else '%d or more' % lo for lo, hi in AGE_BINS]
+    grows = all(a[0] is not None and a[-1] is not None and a[-1] > a[0] for a in ages)
+    if ages:
+        text += ('The front end\'s error in the last frame against the true projection of '
+                 'each landmark (the surface point its track started on) by the age of the '
+                 'track, RMS (lowest-highest over the runs): %s. ' % '; '.join(
+                     '%s frames %s' % (n, span(b)) for b, n in enumerate(names)))
+        if grows:
+            text += ('In every run the tracks of %s frames are measured worse than those of '
+                     '%s frames: a long track through the descent\'s tenfold change of scale '
+                     'drifts off the point it started on, so the longer tracks of the higher rates '
+                     'add views but also an error common to their later measurements, which '
+                     'the filter cannot average away (as with the static cameras of Fig. '
+                     '12)%s.' % (names[-1], names[0],
+                                 ', as the MSE without the offset not rising with every '
+                                 'shortening of the tracks (above) suggests' if broken else ''))
+    return text
 
 
 def fig16_markdown(r, windows):
@@ -356,15 +478,18 @@ def fig16_markdown(r, windows):
              'window is scored on the landmarks in view at the end and not on what else it '
              'keeps.' % '/'.join('%g' % x for x in rates), '',
              '| rate (Hz) | window | frames | mean track length | last frame (altitude) | '
-             'landmarks in view | final MSE (m^2) | verdict |',
-             '|---|---|---|---|---|---|---|---|']
+             'landmarks in view | final MSE (m^2) | its common offset (m) | MSE without it '
+             '(m^2) | pose error then (m) | verdict |',
+             '|---|---|---|---|---|---|---|---|---|---|---|']
+
+    def g(v, fmt='%.3g'):
+        return fmt % v if v is not None else 'none'
     for x in sorted(runs, key=lambda x: (-x['rate_hz'], x['window'])):
-        lines.append('| %g | %d | %d | %s | %s (%s m) | %d | %s | %s |' % (
-            x['rate_hz'], x['window'], x['frames'],
-            '%.2f' % x['track_length'] if x['track_length'] is not None else 'none',
-            x['final_frame'], '%.1f' % x['final_altitude_m']
-            if x['final_altitude_m'] is not None else 'unknown', x['final_landmarks'],
-            '%.3g' % x['final_mse'] if x['final_mse'] is not None else 'none',
+        lines.append('| %g | %d | %d | %s | %s (%s m) | %d | %s | %s | %s | %s | %s |' % (
+            x['rate_hz'], x['window'], x['frames'], g(x['track_length'], '%.2f'),
+            x['final_frame'], g(x['final_altitude_m'], '%.1f'), x['final_landmarks'],
+            g(x['final_mse']), g(x.get('final_offset_m'), '%.4f'),
+            g(x.get('final_mse_relative')), g(x.get('final_pose_error_m'), '%.4f'),
             x['result'] + (': ' + x['result_reasons'] if x['result_reasons'] else '')))
     lines += ['', 'At a fixed rate the window moves the final MSE by at most %.2fx; at a fixed '
               'window the rate (the track length) moves it by up to %.2fx. %s' % (
@@ -373,11 +498,12 @@ def fig16_markdown(r, windows):
                   'As in the paper, the track length matters more than the window.'
                   if w_spread and r_spread and max(r_spread) > max(w_spread) else
                   'Unlike the paper, the window matters as much as the track length here.'),
-              '', monotone_sentence(runs, windows), shortest_window_sentence(runs, windows),
-              '', 'Where it differs from the measurement level: there the track length is set '
-              'alone (the frame step on a sideways flight at 50 m, the same 40 frames); here a '
-              'lower rate also means fewer frames and fewer maps over the same descent, larger '
-              'motion between frames for the front end to track, and the final map holds the '
+              '', monotone_sentence(runs, windows) + shortest_window_sentence(runs, windows),
+              '', offset_sentences(runs, windows), '',
+              'Where it differs from the measurement level: there the track length is set alone '
+              '(the frame step on a sideways flight at 50 m, the same 40 frames); here a lower '
+              'rate also means fewer frames and fewer maps over the same descent, larger motion '
+              'between frames for the front end to track, and the final map holds the '
               'landmarks of the last frames near 10 m, whose error is set by their few, close '
               'views more than by the descent before.', '']
     return '\n'.join(lines)
@@ -428,6 +554,17 @@ def integrity_of(log):
             'first_not_valid': first_bad}
 
 
+def map_stretches(frames):
+    """[first, last] of every run of consecutive frames with a map."""
+    stretches = []
+    for f in frames:
+        if stretches and f == stretches[-1][1] + 1:
+            stretches[-1][1] = f
+        else:
+            stretches.append([f, f])
+    return stretches
+
+
 def fig17(fly, sil, out, cfg_path, frames, settings):
     runs = []
     for title, name, mode in FIG17_RUNS:
@@ -443,11 +580,12 @@ def fig17(fly, sil, out, cfg_path, frames, settings):
                      'first_mse': mse[min(mse)] if mse else None,
                      'pose_rms_error_m': s['pose_rms_error_m'], 'frames': s['frames'],
                      'result': s['result'], 'result_reasons': s['result_reasons'],
-                     'integrity': integrity_of(log)})
+                     'restarts': s['integrity']['restarts'],
+                     'map_stretches': map_stretches(sorted(mse)), 'integrity': integrity_of(log)})
     xs = sorted({f for r in runs for f in r['mse_by_frame']})
     write_chart(os.path.join(out, 'fig17_image_vsdf.dat'),
-                'Fig. 17, image level: landmark error of VSDF and SWF, 3 active frames, '
-                'rendered descent from 100 m', 'frame number', 'landmark mean squared error (m^2)',
+                'Fig. 17, image level: VSDF and SWF, 3 active frames, rendered descent',
+                'frame number', 'landmark mean squared error (m^2)',
                 True, [r['name'] for r in runs], xs,
                 [[r['mse_by_frame'].get(f) for f in xs] for r in runs])
     for r in runs:  # JSON keys are strings
@@ -497,18 +635,28 @@ def fig17_markdown(r, cfg, frames):
     diagonal = {x['key']: x for x in runs}['vsdf3_diagonal']
     i = diagonal['integrity']
     if i['numerical_failures']:
+        stretches = diagonal['map_stretches']
+        later = stretches[1:]
         diagonal_text = (
             'fails: its first update after a marginalization (frame %s, window 3) finds the '
             'system not positive definite, and %d of its %d updates fail so (the prior that '
             'lost positive definiteness stays in the filter until the integrity monitor '
-            'restarts it); its estimate is INVALID in %d frames, verdict %s. The paper\'s '
+            'restarts it); its estimate is INVALID in %d frames, verdict %s. %s The paper\'s '
             'ordering, more sharply than at measurement level, where the same reading ran away '
-            'in some runs and not in others. Why every rendered run fails at the first '
+            'in some runs and not in others. Why every rendered start fails at its first '
             'marginalization is not isolated here; the scenes differ in the spread of the '
             'landmarks (the whole 44 m footprint against a 2 m disc), the focal length (half) '
             'and the tracks that start every frame.' % (
                 i['first_numerical_failure'], i['numerical_failures'], diagonal['frames'],
-                i['status_frames']['INVALID'], diagonal['result']))
+                i['status_frames']['INVALID'], diagonal['result'],
+                ('After each of its %d restarts (from the last VALID pose carried forward by the '
+                 'motion input) it publishes maps again for frames %s and fails again at the '
+                 'next marginalization; those maps start from a pose that has drifted, so '
+                 'their MSE climbs (%s m^2).' % (
+                     diagonal['restarts'],
+                     ', '.join('%d-%d' % (a, b) if b > a else '%d' % a for a, b in later),
+                     ', '.join(g(diagonal['mse_by_frame'][str(a)]) for a, _ in later)))
+                if later else 'It publishes no map after the failure.'))
     else:
         diagonal_text = 'ends at %s SWF(3)\'s final MSE with no failed update.' % g(
             fig17_ratio(r, 'vsdf3_diagonal'), '%.2fx')
@@ -524,8 +672,8 @@ def fig17_markdown(r, cfg, frames):
               '0.5 px, and a failed update is counted while the run goes on with its own '
               'estimate; here the front end keeps the tracks it can follow (they end and start '
               'as the footprint shrinks), its errors are those of Fig. 2a above, and the flight '
-              'estimator publishes a failed update as INVALID and publishes no map for it, so '
-              'the diagonal reading shows as a curve that stops rather than one that grows. '
+              'estimator publishes a failed update as INVALID with no map and restarts the '
+              'filter, so the diagonal reading shows as gaps and short stretches of maps. '
               'The block-diagonal VSDF keeps whole blocks within each variable, so its prior '
               'stays positive definite, and with about 90 tracks per frame the fill-in between '
               'variables it drops is small: it stays close to SWF(3) at both levels.', '']

@@ -352,7 +352,7 @@ def main():
     with open(os.path.join(a.out, 'image_level.json'), 'w') as f:
         json.dump(numbers, f, indent=1)
     with open(os.path.join(a.out, 'image_level.md'), 'w') as f:
-        f.write('\n'.join(sections))
+        f.write('\n'.join(sections) + '\n')
     if not a.check:
         return
     for f in failures:
