@@ -176,13 +176,11 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   const std::size_t cells = static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_);
   info_.assign(cells, 0.0);
   info_z_.assign(cells, 0.0);
-  info_rel_.assign(cells, 0.0);
   min_var_.assign(cells, 0.0);
-  min_var_rel_.assign(cells, 0.0);
   count_.assign(cells, 0);
   f_w_.assign(cells, 0.0);
   f_wz_.assign(cells, 0.0);
-  f_pc_.assign(3 * cells, 0.0);
+  f_min_var_.assign(cells, 0.0);
   f_n_.assign(cells, 0);
   const std::size_t nl = static_cast<std::size_t>(std::max(o.max_landmarks, 1));
   calib_abs_.assign(nl, 0.0);
@@ -216,9 +214,7 @@ void HazardMapper::Reset() {
   started_ = false;
   std::fill(info_.begin(), info_.end(), 0.0);
   std::fill(info_z_.begin(), info_z_.end(), 0.0);
-  std::fill(info_rel_.begin(), info_rel_.end(), 0.0);
   std::fill(min_var_.begin(), min_var_.end(), 0.0);
-  std::fill(min_var_rel_.begin(), min_var_rel_.end(), 0.0);
   std::fill(count_.begin(), count_.end(), 0);
   std::fill(elevation_.begin(), elevation_.end(), kNaN);
   std::fill(sigma_.begin(), sigma_.end(), kNaN);
@@ -340,10 +336,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
   const std::size_t cells = info_.size();
   std::copy(info_.begin(), info_.end(), f_w_.begin());
   std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
-  std::copy(info_rel_.begin(), info_rel_.end(), f_pc_.begin());
-  std::copy(min_var_.begin(), min_var_.end(), f_pc_.begin() + static_cast<std::ptrdiff_t>(cells));
-  std::copy(min_var_rel_.begin(), min_var_rel_.end(),
-            f_pc_.begin() + static_cast<std::ptrdiff_t>(2 * cells));
+  std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
   for (std::size_t c = 0; c < cells; ++c) f_n_[c] = count_[c];
   const double old_cell = cell_m_;
   const double old_cx = corner_x_;
@@ -361,16 +354,14 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       const double x = corner_x_ + (i + 0.5) * cell_m_;
       const int oi = static_cast<int>(std::floor((x - old_cx) / old_cell));
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
-        info_[c] = info_z_[c] = info_rel_[c] = min_var_[c] = min_var_rel_[c] = 0.0;
+        info_[c] = info_z_[c] = min_var_[c] = 0.0;
         count_[c] = 0;
         continue;
       }
       const std::size_t o = static_cast<std::size_t>(oj) * n_ + oi;
       info_[c] = f_w_[o] * scale;
       info_z_[c] = f_wz_[o] * scale;
-      info_rel_[c] = f_pc_[o] * scale;
-      min_var_[c] = f_pc_[cells + o] / scale;
-      min_var_rel_[c] = f_pc_[2 * cells + o] / scale;
+      min_var_[c] = f_min_var_[o] / scale;
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
     }
   }
@@ -431,7 +422,6 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
   const std::size_t cells = info_.size();
   std::fill(f_w_.begin(), f_w_.end(), 0.0);
   std::fill(f_wz_.begin(), f_wz_.end(), 0.0);
-  std::fill(f_pc_.begin(), f_pc_.begin() + static_cast<std::ptrdiff_t>(3 * cells), 0.0);
   std::fill(f_n_.begin(), f_n_.end(), 0);
   const double ds = options_.downsample;
   const double fxw = options_.camera.fx / ds;
@@ -464,33 +454,47 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
       const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
       f_w_[c] += wgt;
       f_wz_[c] += wgt * pw.z();
-      f_pc_[3 * c] += pc.x();
-      f_pc_[3 * c + 1] += pc.y();
-      f_pc_[3 * c + 2] += pc.z();
       ++f_n_[c];
       ++valid;
     }
   }
   stats_.valid_pixels = valid;
-  const Eigen::Matrix<double, 6, 6>& cov = frame.pose_covariance;
-  int fused = 0;
+  // The frame's cells: elevation and stereo variance (pose-free: the pose error is common to the
+  // whole frame and is taken out below).
   for (std::size_t c = 0; c < cells; ++c) {
     const int n = f_n_[c];
     if (n == 0) continue;
-    const double zf = f_wz_[c] / f_w_[c];
     const double n_ind = std::clamp(n / options_.pixels_per_independent, 1.0,
                                     static_cast<double>(options_.max_independent_pixels));
-    const double var_st = (1.0 / f_w_[c]) * static_cast<double>(n) / std::min<double>(n, n_ind);
-    const Eigen::Vector3d p(f_pc_[3 * c] / n, f_pc_[3 * c + 1] / n, f_pc_[3 * c + 2] / n);
-    Eigen::Matrix<double, 1, 6> jac;
-    jac << 0.0, 0.0, 1.0, -(world_R_camera.row(2) * estimator::Skew<double>(p));
-    const double var_pose = std::max(0.0, (jac * cov * jac.transpose())(0, 0));
-    const double var = var_st + var_pose;
+    f_wz_[c] /= f_w_[c];
+    f_w_[c] = (1.0 / f_w_[c]) * static_cast<double>(n) / std::min<double>(n, n_ind);
+  }
+  // The frame's pose error is one error shared by all its cells (mostly vertical: the position's
+  // vertical error; the attitude's tilt over a map is millimetres). Frames fused with different
+  // weights per cell would turn their different pose errors into relief that no stereo sigma
+  // accounts for, so the map is moved onto this frame's datum before fusing: the offset is the
+  // inverse-variance mean of (frame - map) over the cells both hold. The map then carries the
+  // newest pose's vertical error (Analyze adds it to the elevation sigma), and its relief only
+  // the stereo's.
+  double sum_w = 0.0;
+  double sum_wd = 0.0;
+  for (std::size_t c = 0; c < cells; ++c) {
+    if (f_n_[c] == 0 || !(info_[c] > 0.0)) continue;
+    const double w = 1.0 / (f_w_[c] + 1.0 / info_[c]);
+    sum_w += w;
+    sum_wd += w * (f_wz_[c] - info_z_[c] / info_[c]);
+  }
+  const double offset = sum_w > 0.0 ? sum_wd / sum_w : 0.0;
+  stats_.datum_shift_m = offset;
+  int fused = 0;
+  for (std::size_t c = 0; c < cells; ++c) {
+    info_z_[c] += offset * info_[c];
+    const int n = f_n_[c];
+    if (n == 0) continue;
+    const double var = f_w_[c];
     info_[c] += 1.0 / var;
-    info_z_[c] += zf / var;
-    info_rel_[c] += 1.0 / var_st;
+    info_z_[c] += f_wz_[c] / var;
     min_var_[c] = min_var_[c] > 0.0 ? std::min(min_var_[c], var) : var;
-    min_var_rel_[c] = min_var_rel_[c] > 0.0 ? std::min(min_var_rel_[c], var_st) : var_st;
     if (count_[c] < kMaxCount) ++count_[c];
     ++fused;
   }
@@ -516,7 +520,6 @@ void HazardMapper::FuseLandmarks(const HazardFrame& frame) {
     const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
     info_[c] += 1.0 / var;
     info_z_[c] += l.position_world_m.z() / var;
-    info_rel_[c] += 1.0 / var;
     if (count_[c] < kMaxCount) ++count_[c];
     ++used;
   }
@@ -527,15 +530,29 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   const std::size_t cells = info_.size();
   double sum = 0.0;
   int known = 0;
+  const Eigen::Matrix3d& world_R_camera = frame.world_T_camera.R;
+  const Eigen::Vector3d& t = frame.world_T_camera.t;
+  const Eigen::Vector3d up_in_camera = world_R_camera.row(2).transpose();
+  const Eigen::Matrix<double, 6, 6>& pose_cov = frame.pose_covariance;
   for (std::size_t c = 0; c < cells; ++c) {
     if (info_[c] > 0.0) {
       elevation_[c] = static_cast<float>(info_z_[c] / info_[c]);
       // Frames share part of their error (frame_error_correlation); landmarks only add
       // information. Never below the single-frame variance times rho.
       const double rho = min_var_[c] > 0.0 ? options_.frame_error_correlation : 0.0;
-      sigma_[c] = static_cast<float>(std::sqrt((1.0 - rho) / info_[c] + rho * min_var_[c]));
-      sigma_rel_[c] =
-          static_cast<float>(std::sqrt((1.0 - rho) / info_rel_[c] + rho * min_var_rel_[c]));
+      const double var_rel = (1.0 - rho) / info_[c] + rho * min_var_[c];
+      sigma_rel_[c] = static_cast<float>(std::sqrt(var_rel));
+      // The datum: the newest pose's vertical error at this cell (pose update [rho, phi], p_w = R
+      // Exp(phi) p_c + t + rho: dz = rho_z + (p_c x R^T e_z) . phi).
+      const int ci = static_cast<int>(c % static_cast<std::size_t>(n_));
+      const int cj = static_cast<int>(c / static_cast<std::size_t>(n_));
+      const Eigen::Vector3d p_w(corner_x_ + (ci + 0.5) * cell_m_, corner_y_ + (cj + 0.5) * cell_m_,
+                                elevation_[c]);
+      const Eigen::Vector3d a = (world_R_camera.transpose() * (p_w - t)).cross(up_in_camera);
+      const double var_datum =
+          std::max(0.0, pose_cov(2, 2) + 2.0 * a.dot(pose_cov.block<3, 1>(3, 2)) +
+                            a.dot(pose_cov.block<3, 3>(3, 3) * a));
+      sigma_[c] = static_cast<float>(std::sqrt(var_rel + var_datum));
       sum += elevation_[c];
       ++known;
     } else {

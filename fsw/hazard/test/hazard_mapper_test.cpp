@@ -354,6 +354,43 @@ TEST(HazardMapperTest, PoseCovarianceEntersSigma) {
   EXPECT_EQ(m.Classes()[j * m.GridCells() + i], HazardClass::kRock);
 }
 
+// GIVEN two frames of a flat plane whose poses err by 0.2 m vertically against each other, the
+// second shifted 1.5 m sideways so that the cells hold different mixes of the two WHEN fused
+// THEN the map follows the second frame's datum (the shift is measured), the relief stays within
+// its sigma-scaled noise (no step where the frames' coverages meet, no rock, nothing kUncertain
+// from relief), and the elevation sigma carries the newest pose's vertical sigma.
+TEST(HazardMapperTest, FramesWithDifferentPoseErrorsShareOneDatum) {
+  SceneRun run;
+  Prepare(Scene{}, 8.0, &run);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  SceneRun second;
+  Prepare(Scene{}, 8.0, &second);
+  estimator::Pose<double> seen = second.frame.world_T_camera;
+  seen.t = {1.5, 0.0, 8.0};
+  testing::Render(Scene{}, Options().camera, kW, kH, seen, &second.pair);
+  HazardFrame f = second.frame;
+  f.left = frontend::GrayView{second.pair.left.data(), kW, kH, kW};
+  f.right = frontend::GrayView{second.pair.right.data(), kW, kH, kW};
+  f.world_T_camera = seen;
+  f.world_T_camera.t.z() += 0.2;  // the navigation's error at the second frame
+  f.pose_covariance(2, 2) = 0.04;
+  ASSERT_EQ(run.mapper->Update(f), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  EXPECT_NEAR(m.Stats().datum_shift_m, 0.2, 0.02);
+  int known = 0;
+  int beyond = 0;
+  for (int c = 0; c < m.GridCells() * m.GridCells(); ++c) {
+    if (std::isnan(m.RockHeight()[c])) continue;
+    ++known;
+    beyond += std::fabs(m.RockHeight()[c]) > 4.0 * m.ReliefSigma()[c];
+    EXPECT_NEAR(m.Elevation()[c], 0.2, 0.1) << c;
+    EXPECT_GE(m.Sigma()[c], 0.2) << c;
+  }
+  ASSERT_GT(known, 500);
+  EXPECT_LE(beyond, known / 500);
+  EXPECT_EQ(m.Stats().rock_cells, 0);
+}
+
 // GIVEN landmarks only (no texture) THEN their cells become known with the landmark's sigma.
 TEST(HazardMapperTest, LandmarksEnterTheMap) {
   HazardMapper m;

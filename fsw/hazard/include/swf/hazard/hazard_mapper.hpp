@@ -14,11 +14,16 @@
 //     the landmarks' own disparity variance): SGM's error grows where the model does not see it
 //     (gross mismatches at 7-20 px of disparity at high altitude). Pixels are averaged per cell
 //     into one measurement per frame (neighbouring SGM disparities are correlated, so n counts at
-//     most max_independent_pixels); the pose covariance (SWF update vector [rho, phi], p_w = R
-//     Exp(phi) p_c + t + rho) adds J Sigma J^T, J = [e_z^T, -e_z^T R [p_c]x], at the cell's mean
-//     camera-frame point.
-//  3. Frames and landmarks (sigma^2 = their covariance's zz) are fused per cell by inverse
-//     variance. Unknown cells stay unknown (NaN). The cell size is chosen from altitude
+//     most max_independent_pixels).
+//  3. The pose error is one error shared by every cell of a frame, not a per-cell noise: before
+//     fusing, the map is moved onto the new frame's vertical datum (the inverse-variance mean of
+//     frame - map over the cells both hold; Stats().datum_shift_m). Frames fused with different
+//     weights per cell would otherwise turn their different pose errors into relief. Frames and
+//     landmarks (sigma^2 = their covariance's zz) are then fused per cell by inverse variance of
+//     the stereo alone; the elevation sigma adds the newest pose's vertical error at the cell
+//     (SWF update vector [rho, phi], p_w = R Exp(phi) p_c + t + rho: J Sigma J^T, J = [e_z^T,
+//     -e_z^T R [p_c]x]), the relief sigma does not (the datum is common to its plane window).
+//     Unknown cells stay unknown (NaN). The cell size is chosen from altitude
 //     (pixels_per_cell working pixels per cell, a power of 2 times min_cell_m) and only ever
 //     refined: on refinement the grid is resampled (information per child = parent / 4).
 //  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
@@ -213,6 +218,7 @@ struct HazardStats {
   std::uint32_t landmarks_rejected = 0;  // non-finite, off-grid or over max_landmarks
   int calibration_landmarks = 0;         // landmarks with a valid SGM disparity this update
   double disparity_scale = 1.0;  // measured / model disparity sigma applied this update (>= 1)
+  double datum_shift_m = 0.0;    // the map moved onto this frame's vertical datum (FuseStereo)
 };
 
 class HazardMapper {
@@ -289,16 +295,14 @@ class HazardMapper {
   std::vector<double> calib_var_;    // the landmark's own disparity variance
   std::vector<double> calib_model_;  // the model sigma at the landmark's pixel
   // Fused state per cell.
-  std::vector<double> info_;         // sum 1/sigma^2 (stereo + pose + landmarks)
-  std::vector<double> info_z_;       // sum z/sigma^2
-  std::vector<double> info_rel_;     // sum 1/sigma_stereo^2 (relative, pose-free)
-  std::vector<double> min_var_;      // smallest single-frame variance fused (0 = none)
-  std::vector<double> min_var_rel_;  // ... of the stereo part alone
+  std::vector<double> info_;     // sum 1/sigma^2 (stereo, pose-free, + landmarks)
+  std::vector<double> info_z_;   // sum z/sigma^2
+  std::vector<double> min_var_;  // smallest single-frame variance fused (0 = none)
   std::vector<std::uint16_t> count_;
   // Per-frame scratch (also used for resampling).
   std::vector<double> f_w_;
   std::vector<double> f_wz_;
-  std::vector<double> f_pc_;  // 3 per cell: sum of camera-frame points
+  std::vector<double> f_min_var_;  // resampling scratch
   std::vector<std::int32_t> f_n_;
   // Outputs.
   std::vector<float> elevation_;
