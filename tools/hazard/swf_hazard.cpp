@@ -562,8 +562,98 @@ bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* o
   return ok && trace.configured == swf::core::Status::kOk;
 }
 
+// Calibration of the published relief sigma on rock-free ground: the relief error of a cell is
+// its elevation error less the plane the mapper fits over the same window (the plane is linear in
+// the heights, so this is relief_map - relief_truth on the map's own known cells). Counted where
+// the rock criterion resolves the threshold (relief sigma <= sigma_max), the cells it decides.
+struct ReliefCalibration {
+  int cells = 0;
+  double within1 = NAN, over309 = NAN, robust_scale = NAN;
+};
+
+ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardMapper& mapper) {
+  ReliefCalibration r;
+  swf::hazard_eval::MetricOptions mo;
+  mo.cell_errors = false;
+  const swf_msgs::hazard_truth_t truth =
+      swf::hazard_eval::HazardTruthOf(swf::hazard_eval::ViewOf(world.Published()), world.Terrain(),
+                                      world.Terrain().Rocks(), world.Truth(), mo);
+  const int n = mapper.GridCells();
+  const double cell = mapper.CellM();
+  const swf::hazard::RockCriterion criterion(swf::hazard::RockCriterionOf(mapper.Options()), cell);
+  const int rr =
+      std::max(1, static_cast<int>(std::lround(mapper.Options().rock_window_radius_m / cell)));
+  std::vector<double> err(static_cast<std::size_t>(n) * n, NAN);
+  for (std::size_t c = 0; c < err.size(); ++c) {
+    if (!std::isnan(mapper.Elevation()[c]) && std::isfinite(truth.elevation_m[c])) {
+      err[c] = mapper.Elevation()[c] - truth.elevation_m[c];
+    }
+  }
+  // Summed-area tables of 1, x, y, e, xx, xy, yy, xe, ye over the known cells.
+  constexpr int kCh = 9;
+  const int n1 = n + 1;
+  std::vector<double> sat(static_cast<std::size_t>(n1) * n1 * kCh, 0.0);
+  for (int j = 0; j < n; ++j) {
+    double row[kCh] = {};
+    for (int i = 0; i < n; ++i) {
+      const double e = err[static_cast<std::size_t>(j) * n + i];
+      if (!std::isnan(e)) {
+        const double v[kCh] = {1.0,           double(i),     double(j), e,    double(i) * i,
+                               double(i) * j, double(j) * j, i * e,     j * e};
+        for (int k = 0; k < kCh; ++k) row[k] += v[k];
+      }
+      for (int k = 0; k < kCh; ++k) {
+        sat[(static_cast<std::size_t>(j + 1) * n1 + i + 1) * kCh + k] =
+            sat[(static_cast<std::size_t>(j) * n1 + i + 1) * kCh + k] + row[k];
+      }
+    }
+  }
+  std::vector<double> z;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n + i;
+      const double sigma = mapper.ReliefSigma()[c];
+      if (std::isnan(err[c]) || !(sigma <= criterion.ResolvedSigma()) || !truth.rock_free[c]) {
+        continue;
+      }
+      const int i0 = std::max(0, i - rr), j0 = std::max(0, j - rr);
+      const int i1 = std::min(n, i + rr + 1), j1 = std::min(n, j + rr + 1);
+      double s[kCh];
+      for (int k = 0; k < kCh; ++k) {
+        const auto at = [&](int a, int b) {
+          return sat[(static_cast<std::size_t>(b) * n1 + a) * kCh + k];
+        };
+        s[k] = at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
+      }
+      const double m = s[0];
+      const double mx = s[1] / m, my = s[2] / m, me = s[3] / m;
+      const double cxx = s[4] / m - mx * mx, cxy = s[5] / m - mx * my, cyy = s[6] / m - my * my;
+      const double cxe = s[7] / m - mx * me, cye = s[8] / m - my * me;
+      const double det = cxx * cyy - cxy * cxy;
+      if (!(det > 1e-6)) continue;
+      const double b = (cyy * cxe - cxy * cye) / det;
+      const double cc = (cxx * cye - cxy * cxe) / det;
+      z.push_back((err[c] - (me + b * (i - mx) + cc * (j - my))) / sigma);
+    }
+  }
+  r.cells = static_cast<int>(z.size());
+  if (z.empty()) return r;
+  int in1 = 0, over = 0;
+  std::vector<double> a;
+  for (double v : z) {
+    in1 += std::fabs(v) <= 1.0;
+    over += v > 3.09;
+    a.push_back(std::fabs(v));
+  }
+  r.within1 = double(in1) / z.size();
+  r.over309 = double(over) / z.size();
+  r.robust_scale = 1.4826 * Quantile(a, 0.5);
+  return r;
+}
+
 int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPreset preset,
-           std::uint64_t seed, double x0, double y0, double step, bool swf) {
+           std::uint64_t seed, double x0, double y0, double step, bool swf,
+           bool relief_calibration) {
   SwfPoses poses;
   const int frames = static_cast<int>(std::floor(90.0 / step + 1e-9)) + 1;
   if (swf && !RunSwfAlongDescent(frames, step, seed, &poses)) {
@@ -571,8 +661,10 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
   }
   World world;
   auto mapper = std::make_unique<swf::hazard::HazardMapper>();
+  auto single = std::make_unique<swf::hazard::HazardMapper>();
   std::string why;
   if (!Prepare(&world, mapper.get(), preset, seed, eo, &why)) return Fail(why);
+  if (single->Configure(mapper->Options()) != swf::core::Status::kOk) return Fail("single mapper");
   swf::cli::OutputFile dat_file;
   if (!dat_file.Open(out + "/flight.dat", &why)) return Fail(why);
   FILE* dat = dat_file.Stream();
@@ -595,6 +687,24 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
                        swf ? &poses.covariance[f] : nullptr);
         st != swf::core::Status::kOk) {
       return Fail(StepFailure(f, alt, st));
+    }
+    // The relief sigma's calibration, fused and single-frame (a fresh mapper on the same pair).
+    if (relief_calibration) {
+      const ReliefCalibration fused = [&] {
+        (void)world.Publish(*mapper);
+        return CalibrateRelief(world, *mapper);
+      }();
+      single->Reset();
+      double ms1 = 0.0;
+      (void)world.Step(pose, f, seed * 1000 + f, single.get(), &ms1,
+                       swf ? &poses.error[f] : nullptr, swf ? &poses.covariance[f] : nullptr);
+      (void)world.Publish(*single);
+      const ReliefCalibration one = CalibrateRelief(world, *single);
+      std::printf(
+          "# relief calibration at %.1f m, cell %.3f m: fused %d cells, %.3f within 1 sigma, "
+          "%.4f above 3.09 sigma, robust scale %.2f | single frame %d cells, %.3f, %.4f, %.2f\n",
+          alt, mapper->CellM(), fused.cells, fused.within1, fused.over309, fused.robust_scale,
+          one.cells, one.within1, one.over309, one.robust_scale);
     }
     if (swf) {
       std::printf(
@@ -749,6 +859,7 @@ int main(int argc, char** argv) {
   double y = 0.0;
   double step = 5.0;
   int swf = 0;
+  int relief_calibration = 0;
   CLI::App* flight =
       app.add_subcommand("flight", "one descent flown with the mapper -> OUTDIR/flight.dat, PNG");
   flight->add_option("OUTDIR", out, "output directory (created)")->required();
@@ -760,6 +871,15 @@ int main(int argc, char** argv) {
   flight->add_option("--y", y, "landing point y, m")->capture_default_str();
   flight->add_option("--step", step, "descent step, m")->capture_default_str();
   flight->add_option("--swf", swf, "1: poses from swf-eval's filter")->capture_default_str();
+  flight
+      ->add_option("--relief-calibration", relief_calibration,
+                   "1: print the relief sigma's calibration on rock-free cells per update "
+                   "(fused and single-frame; renders each pair twice)")
+      ->capture_default_str();
+  flight
+      ->add_option("--pose-sigma-per-altitude", eo.pose_sigma_per_altitude,
+                   "position sigma per axis given to the mapper, fraction of altitude")
+      ->capture_default_str();
   add_common(flight);
   if (const int code = swf::ground_cli::Parse(&app, argc, argv); code != swf::cli::kContinue) {
     return code;
@@ -778,5 +898,5 @@ int main(int argc, char** argv) {
     return Fail("unknown --preset " + preset_name.substr(0, 40) + " (plains, craters or rocks)");
   }
   if (map->parsed()) return Map(out, eo, preset, seed);
-  return Flight(out, eo, preset, seed, x, y, step, swf != 0);
+  return Flight(out, eo, preset, seed, x, y, step, swf != 0, relief_calibration != 0);
 }
