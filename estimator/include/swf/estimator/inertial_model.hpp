@@ -40,7 +40,8 @@
 // to the current estimate when it integrates each interval. When the gyroscope bias estimate of
 // the interval's first state moves further, by more than reintegrate_above_rad of rotation over
 // the interval (|dbg| dT; the correction leaves out terms of its square), the filter has the
-// interval integrated again at the new estimate (RefreshMotion, before each solve).
+// interval integrated again at the new estimate, and its process covariance with it
+// (RefreshMotion, before each solve).
 #pragma once
 
 #include "swf/estimator/geometry.hpp"
@@ -163,13 +164,21 @@ struct InertialStereoModel {
   }
 
   // The interval u integrated again at prev's biases when their gyroscope part has moved from
-  // u's linearization biases by more than reintegrate_above_rad over the interval; true when it
-  // was (an interval longer than its kept steps stays as it is).
-  bool RefreshMotion(const PoseType& prev, MotionType* u) const {
+  // u's linearization biases by more than reintegrate_above_rad over the interval, and the
+  // process factor's square-root information recomputed from the new integration's covariance
+  // (the noise propagates through the bias-corrected rotation, so it moves with the biases);
+  // true when it was. An interval longer than its kept steps stays as it is; so does the
+  // information should the new covariance not be positive definite (it was at the first
+  // integration, and the same steps at other biases keep it so). Bounded by the kept steps and
+  // one 15x15 factorization; allocates nothing.
+  bool RefreshMotion(const PoseType& prev, MotionType* u, Mat15<S>* sqrt_information) const {
     const S turn =
         (prev.biases.gyro_radps - u->LinearizationBiases().gyro_radps).norm() * u->DurationS();
     if (!(turn > reintegrate_above_rad) || !u->Replayable()) return false;
-    return u->Reintegrate(prev.biases) == core::Status::kOk;
+    if (u->Reintegrate(prev.biases) != core::Status::kOk) return false;
+    Mat15<S> w;
+    if (ProcessSqrtInformation(*u, &w)) *sqrt_information = w;
+    return true;
   }
 
   Vec15<S> ProcessResidual(const PoseType& prev, const PoseType& next, const MotionType& u,

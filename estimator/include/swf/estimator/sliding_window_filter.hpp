@@ -275,12 +275,14 @@ concept RelativeMotionModel = requires(const Model& m, const typename Model::Pos
 };
 
 // A model whose process input is integrated at a linearization point of the state it starts
-// from (the IMU's biases) and can be integrated again at that state's current estimate
+// from (the IMU's biases) and can be integrated again at that state's current estimate, with
+// the process factor's square-root information recomputed for it
 // (InertialStereoModel::RefreshMotion; true when it did).
 template <typename Model>
-concept ReintegratingModel = requires(const Model& m, const typename Model::PoseType& p,
-                                      typename Model::MotionType* u) {
-  { m.RefreshMotion(p, u) } -> std::same_as<bool>;
+concept ReintegratingModel =
+    requires(const Model& m, const typename Model::PoseType& p, typename Model::MotionType* u,
+             Eigen::Matrix<typename Model::Scalar, Model::kStateDim, Model::kStateDim>* w) {
+  { m.RefreshMotion(p, u, w) } -> std::same_as<bool>;
 };
 
 // A landmark that left the estimator in the last Update (its final estimate).
@@ -337,7 +339,8 @@ class SlidingWindowFilter {
   core::Status AddFirstPose(const PoseType& estimate, const StateMat& covariance);
 
   // Adds a pose predicted by the process model from a relative-motion input u with
-  // information W^T W = Q^-1 (process_sqrt_information = W).
+  // information W^T W = Q^-1 (process_sqrt_information = W). For a ReintegratingModel W is the
+  // model's for u (InertialStereoModel::ProcessSqrtInformation): a re-integration recomputes it.
   core::Status AddPoseWithMotion(const MotionType& u, const StateMat& process_sqrt_information) {
     if (num_poses_ == 0) return core::Status::kInvalidArgument;
     return PushPose(model_.Propagate(Newest().pose, u), &u, &process_sqrt_information);

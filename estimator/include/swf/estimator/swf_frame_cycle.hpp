@@ -149,14 +149,16 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ReplaceNewestObservation(
 
 // Before the solve, each process input in the window is offered to the model with the current
 // estimate of the state it starts from (ReintegratingModel): an IMU interval whose biases have
-// moved far is integrated again rather than carried on by its first-order bias correction.
+// moved far is integrated again rather than carried on by its first-order bias correction, and
+// its process factor weighted by the new integration's covariance (the model recomputes the
+// square-root information the caller gave with AddPoseWithMotion).
 // Once per Update, not between iterations, so a solve minimizes one cost throughout.
 template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::RefreshMotions() {
   if constexpr (ReintegratingModel<Model>) {
     for (int j = 1; j < num_poses_; ++j) {
       PoseSlot& p = Slot(j);
-      if (p.has_process && model_.RefreshMotion(Slot(j - 1).pose, &p.motion))
+      if (p.has_process && model_.RefreshMotion(Slot(j - 1).pose, &p.motion, &p.process_sqrt_info))
         ++summary_.motions_reintegrated;
     }
   }
