@@ -160,7 +160,8 @@ core::Status ImuModel::Configure(const ImuModelOptions& options, const Trajector
       !TriadValid(options.accel) || !(options.gravity_mps2 >= 0.0) ||
       !std::isfinite(options.gravity_mps2) || trajectory.NumFrames() < 1 ||
       !options.camera_T_imu.R.allFinite() || !options.camera_T_imu.t.allFinite() ||
-      !(options.tail_s >= 0.0) || !(options.tail_s <= 10.0)) {
+      !(options.tail_s >= 0.0) || !(options.tail_s <= 10.0) ||
+      !(std::abs(options.clock_offset_s) <= 1.0)) {
     return core::Status::kInvalidArgument;
   }
   options_ = options;
@@ -188,8 +189,9 @@ core::Status ImuModel::Configure(const ImuModelOptions& options, const Trajector
   for (std::int64_t i = 0; i < count; ++i) {
     estimator::ImuSample<double> s;
     s.seq = i;
-    s.t_us = start_us + std::llround(i * 1e6 / options.rate_hz);
-    const double t_s = s.t_us * 1e-6;
+    const std::int64_t true_us = start_us + std::llround(i * 1e6 / options.rate_hz);
+    const double t_s = true_us * 1e-6;
+    s.t_us = true_us + std::llround(options.clock_offset_s * 1e6);
     estimator::ImuBiases<double> bias;
     bias.gyro_radps = gyro_bias.Value();
     bias.accel_mps2 = accel_bias.Value();

@@ -206,6 +206,13 @@ void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
                  JsonNumber((r.estimated.gyro_radps - r.truth.gyro_radps).norm()).c_str(),
                  JsonNumber((r.estimated.accel_mps2 - r.truth.accel_mps2).norm()).c_str());
   }
+  std::fprintf(f, ", \"time_offset_ms\": %s, \"time_offset_estimated\": %s",
+               JsonNumber(r.time_offset_s * 1e3).c_str(),
+               r.time_offset_estimated ? "true" : "false");
+  if (r.time_offset_estimated) {
+    std::fprintf(f, ", \"time_offset_sigma_ms\": %s, \"time_offset_readings\": %ld",
+                 JsonNumber(r.time_offset_sigma_s * 1e3).c_str(), r.time_offset_readings);
+  }
   if (r.has_truth) {
     std::fprintf(f, ", \"imu_only_pose_rms_error_m\": %s",
                  JsonNumber(r.imu_only_pose_rms_m).c_str());
@@ -917,6 +924,10 @@ ImuReport ReportImu(FlightProcess* fp) {
                  static_cast<long long>(loop.imu_waits),
                  static_cast<long long>(loop.imu_wait_timeouts));
   }
+  report.time_offset_s = pipeline.ImuTimeOffsetS();
+  report.time_offset_estimated = fp->config.imu.estimate_time_offset;
+  report.time_offset_sigma_s = pipeline.ImuTimeOffset().SigmaS();
+  report.time_offset_readings = pipeline.ImuTimeOffset().Readings();
   if (const estimator::NavState<double>* x = pipeline.NewestNavState()) {
     report.has_biases = true;
     report.estimated = x->biases;
@@ -1134,6 +1145,9 @@ ImuOptions ImuOptionsFor(const FswConfig& c) {
   o.first_accel_bias_sigma_mps2 = k.accel_bias_sigma_mps2;
   o.first_velocity_sigma_mps = k.velocity_sigma_mps;
   o.static_start = k.static_start;
+  o.time_offset_s = k.time_offset_ms * 1e-3;
+  o.estimate_time_offset = k.estimate_time_offset;
+  o.max_time_offset_s = k.max_time_offset_ms * 1e-3;
   o.stream.nominal_period_us = std::max<std::int64_t>(1, std::llround(1e6 / k.rate_hz));
   estimator::Pose<double> camera_T_imu;
   camera_T_imu.t =

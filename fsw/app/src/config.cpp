@@ -142,13 +142,13 @@ bool InInterval(double d, double lo, double hi, bool lo_open) {
 namespace {
 
 // A non-negative finite number into a member of ImuConfig, at most hi.
-ConfigSetter ImuNumber(double ImuConfig::*field, double hi) {
+ConfigSetter ImuNumber(double ImuConfig::*field, double hi, double lo = 0.0) {
   return [=](const std::string& v, FswConfig* c, std::string* why) {
     double d = 0.0;
     if (!ParseDouble(v, &d, why)) return false;
-    if (d < 0.0 || d > hi) {
+    if (d < lo || d > hi) {
       std::ostringstream o;
-      o << Excerpt(v) << " is outside [0, " << hi << "]";
+      o << Excerpt(v) << " is outside [" << lo << ", " << hi << "]";
       *why = o.str();
       return false;
     }
@@ -193,6 +193,9 @@ void AddImuFields(std::map<std::string, ConfigSetter>* fields) {
   f["imu.gyro_bias_sigma_radps"] = ImuNumber(&ImuConfig::gyro_bias_sigma_radps, 10.0);
   f["imu.accel_bias_sigma_mps2"] = ImuNumber(&ImuConfig::accel_bias_sigma_mps2, 100.0);
   f["imu.velocity_sigma_mps"] = ImuNumber(&ImuConfig::velocity_sigma_mps, 1000.0);
+  f["imu.time_offset_ms"] = ImuNumber(&ImuConfig::time_offset_ms, 1000.0, -1000.0);
+  f["imu.estimate_time_offset"] = Bool([](FswConfig* c) { return &c->imu.estimate_time_offset; });
+  f["imu.max_time_offset_ms"] = ImuNumber(&ImuConfig::max_time_offset_ms, 1000.0);
   f["imu.camera_t_imu_m"] = Vector3([](FswConfig* c) { return c->imu.camera_t_imu_m; });
   f["imu.camera_r_imu_rad"] = Vector3([](FswConfig* c) { return c->imu.camera_r_imu_rad; });
   f["imu.initial_velocity_mps"] = Vector3([](FswConfig* c) { return c->imu.initial_velocity_mps; });
@@ -720,6 +723,10 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
     return fail("imu.rate_hz", "must be at least 10 Hz for the stereo-inertial estimator");
   }
   // The first state's prior: a zero sigma would be infinite information.
+  if (c.imu.enabled && !(c.imu.max_time_offset_ms > 0.0 &&
+                         std::abs(c.imu.time_offset_ms) <= c.imu.max_time_offset_ms)) {
+    return fail("imu.time_offset_ms", "must be within +-imu.max_time_offset_ms (positive)");
+  }
   if (c.imu.enabled && !(c.imu.velocity_sigma_mps > 0.0)) {
     return fail("imu.velocity_sigma_mps", "must be positive (the prior of the first velocity)");
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <latch>
@@ -105,6 +106,12 @@ void FlightLoop::Inject(int stage) {
   Spin(static_cast<TimeNs>(options_.inject_ms * 1e6));
 }
 
+// An IMU whose clock runs ahead of the cameras' (a positive time offset) stamps an exposure's
+// samples later: the frame waits for them up to its exposure plus the offset.
+std::int64_t FlightLoop::ImuLeadUs() const {
+  return std::max<std::int64_t>(0, std::llround(pipeline_->ImuTimeOffsetS() * 1e6));
+}
+
 void FlightLoop::FeedImu(std::int64_t until_utime) {
   if (imu_ == nullptr) return;
   const bool lockstep = options_.pacing == Pacing::kLockstep;
@@ -187,7 +194,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   }
   expected_seq_ = frame.seq + 1;
   last_frame_utime_ = frame.utime;
-  FeedImu(frame.utime);
+  FeedImu(frame.utime + ImuLeadUs());
   drivers::MotionInput motion;
   frame.has_motion =
       motion_ != nullptr && motion_->Motion(static_cast<std::uint64_t>(frame.seq), &motion);
@@ -339,7 +346,7 @@ Status FlightLoop::MissCycle(Status source_status, bool synchronous) {
         motion.rotation_rad[0], motion.rotation_rad[1], motion.rotation_rad[2]));
   }
   ++expected_seq_;
-  FeedImu(pipeline_->CoastUtime());
+  FeedImu(pipeline_->CoastUtime() + ImuLeadUs());
   if (pipeline_->Coast(has_motion ? &camera_prev_T_camera : nullptr) == Status::kOk) {
     ++counters_.cycles_coasted;
     PublishNav();

@@ -14,7 +14,9 @@ bool ImuOptions::Valid() const {
          imu_T_camera.R.allFinite() && finite_non_negative(first_velocity_sigma_mps) &&
          finite_non_negative(first_gyro_bias_sigma_radps) &&
          finite_non_negative(first_accel_bias_sigma_mps2) &&
-         finite_non_negative(static_velocity_sigma_mps) && static_alignment.min_samples >= 2;
+         finite_non_negative(static_velocity_sigma_mps) && static_alignment.min_samples >= 2 &&
+         std::isfinite(time_offset_s) && max_time_offset_s > 0.0 &&
+         std::abs(time_offset_s) <= max_time_offset_s;
 }
 
 Status ImuInput::Configure(const ImuOptions& options) {
@@ -26,6 +28,7 @@ Status ImuInput::Configure(const ImuOptions& options) {
   count_ = 0;
   started_ = false;
   integrated_to_us_ = 0;
+  offset_us_ = std::llround(options.time_offset_s * 1e6);
   // A step longer than the checker's gap threshold is a hole the integrator bridges.
   max_step_s_ = static_cast<double>(options.stream.max_gap_periods) *
                 static_cast<double>(options.stream.nominal_period_us) * 1e-6;
@@ -40,7 +43,7 @@ Status ImuInput::Configure(const ImuOptions& options) {
 int ImuInput::Buffered(std::int64_t t_us, const estimator::ImuSample<double>** samples) const {
   *samples = samples_.get();
   int n = 0;
-  while (n < count_ && samples_[n].t_us <= t_us) ++n;
+  while (n < count_ && samples_[n].t_us <= t_us + offset_us_) ++n;
   return n;
 }
 
@@ -60,7 +63,7 @@ estimator::ImuSampleVerdict ImuInput::Add(const estimator::ImuSample<double>& sa
 
 Status ImuInput::Start(std::int64_t t_us, const estimator::ImuBiases<double>& biases) {
   if (!samples_) return Status::kNotConfigured;
-  integrated_to_us_ = t_us;
+  integrated_to_us_ = t_us + offset_us_;
   started_ = true;
   const Status s = since_estimate_.Reset(options_.noise, biases);
   if (s != Status::kOk) return s;
@@ -76,8 +79,9 @@ Status ImuInput::RestartSinceTrusted(const estimator::ImuBiases<double>& biases)
   return since_trusted_.Reset(options_.noise, biases);
 }
 
-Status ImuInput::IntegrateTo(std::int64_t t_us) {
+Status ImuInput::IntegrateTo(std::int64_t camera_t_us) {
   if (!started_) return Status::kNotConfigured;
+  const std::int64_t t_us = camera_t_us + offset_us_;
   if (t_us <= integrated_to_us_) return Status::kOk;
   last_interval_ = ImuIntervalReport{};
   if (count_ == 0) {

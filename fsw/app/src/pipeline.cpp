@@ -75,6 +75,7 @@ Status Pipeline::Configure(const PipelineOptions& options) {
     inertial_model_.first_accel_bias_sigma_mps2 = options_.imu.first_accel_bias_sigma_mps2;
     s = inertial_->Configure(inertial_model_, options_.swf);
     if (s == Status::kOk) s = imu_.Configure(options_.imu);
+    if (s == Status::kOk) s = time_offset_.Configure(TimeOffsetOptionsOf(options_.imu));
   } else {
     s = swf_->Configure(model, options_.swf);
   }
@@ -282,6 +283,9 @@ Status Pipeline::Estimate(const Pose<double>* motion_input) {
       dr_distance_m_ = 0.0;
       dr_reanchor_ = false;
     }
+    if (inertial_ && options_.imu.estimate_time_offset &&
+        (s == Status::kOk || s == Status::kNotConverged))
+      EstimateTimeOffset();
     // The next interval is integrated at the biases just estimated.
     if (inertial_) (void)imu_.RestartSinceEstimate(inertial_->NewestPose().biases);
     if (s == Status::kOk || s == Status::kNotConverged) RefineAfterUpdate();
@@ -392,6 +396,29 @@ Status Pipeline::AddInertialState() {
     return Status::kInvalidArgument;  // an empty interval: the frame time did not advance
   }
   return inertial_->AddPoseWithMotion(imu_.SinceEstimate(), sqrt_information);
+}
+
+// The estimator's options from the flight's IMU options (the prior: a tenth of the bound, and
+// a memory of 50 intervals, 5 s at 10 Hz).
+estimator::TimeOffsetOptions<double> Pipeline::TimeOffsetOptionsOf(const ImuOptions& imu) {
+  estimator::TimeOffsetOptions<double> o;
+  o.initial_offset_s = imu.time_offset_s;
+  o.max_offset_s = imu.max_time_offset_s;
+  o.prior_sigma_s = 0.1 * imu.max_time_offset_s;
+  return o;
+}
+
+// The newest interval's process factor, solved, read for the camera-IMU time offset; the next
+// interval ends at the exposure plus the new estimate.
+void Pipeline::EstimateTimeOffset() {
+  const int n = inertial_->NumPoses();
+  const estimator::ImuPreintegration<double>* u = nullptr;
+  const estimator::Mat15<double>* w = nullptr;
+  if (n < 2 || !inertial_->ProcessFactorInto(n - 1, &u, &w)) return;
+  if (!time_offset_.Observe(inertial_model_, inertial_->PoseAt(n - 2), inertial_->NewestPose(), *u,
+                            *w, ImuTimeOffsetS()))
+    return;
+  imu_.SetTimeOffsetUs(std::llround(time_offset_.OffsetS() * 1e6));
 }
 
 // The process factor of a new pose: the navigation system's relative motion when there is one

@@ -143,7 +143,9 @@ bool SimWorld::Build(const app::FswConfig& config, std::string* error) {
   has_imu_unit_ = SimImuUnit(config, &unit);
   // A jittered stamp may come up to 4 sigma after its frame: the unit samples that far past the
   // last one, so the last frame's interval is covered like every other.
-  unit.tail_s = 4.0 * config.sim.timestamp_jitter_ms * 1e-3;
+  // A unit stamping early (sim.imu_clock_offset_ms < 0) samples that much longer.
+  unit.tail_s = 4.0 * config.sim.timestamp_jitter_ms * 1e-3 +
+                std::max(0.0, -config.sim.imu_clock_offset_ms * 1e-3);
   if (has_imu_unit_ && imu_unit_.Configure(unit, trajectory_) != Status::kOk) {
     *error = "sim.imu_unit: the IMU model refused the unit or the trajectory";
     return false;
@@ -236,6 +238,7 @@ bool SimImuUnit(const app::FswConfig& config, sim::ImuModelOptions* unit) {
   *unit = config.sim.imu_unit == "tactical" ? sim::TacticalImu() : sim::MemsImu();
   // Its own stream of the seed: the unit's errors do not change when the scene does.
   unit->seed = config.sim.seed * 104729u + 3u;
+  unit->clock_offset_s = config.sim.imu_clock_offset_ms * 1e-3;
   const app::ImuConfig& c = config.imu;
   unit->camera_T_imu.t =
       Eigen::Vector3d(c.camera_t_imu_m[0], c.camera_t_imu_m[1], c.camera_t_imu_m[2]);

@@ -52,6 +52,15 @@
 // interval is integrated again at the new ones (Reintegrate) instead of being carried further by
 // the correction.
 //
+// Time shift. Should the IMU's clock be off the cameras' by tau (the samples of an instant t
+// stamped t + tau), the interval the states need is the integrated one moved by tau at both ends.
+// With w_a, a_a and w_b, a_b the bias-corrected rate and force at its start and end, the
+// increments move (to first order in tau; the rotation in the tangent of dR, right) by
+//     dphi: w_b - dR^T w_a     dv: dR a_b - a_a - w_a x dv     dp: dv - dT a_a - w_a x dp
+// (the end adds its own step, the start takes its step away and turns the frame the increments
+// are expressed in by w_a tau; dp also loses the start's force over the whole interval). Zero
+// for a constant rate and force: only a changing motion shows a time offset (TimeShiftJacobian).
+//
 // Flight code: fixed size, no allocation, no exceptions; every call bounded by its sample count.
 #pragma once
 
@@ -181,6 +190,8 @@ class ImuPreintegration {
         !accel_mps2.allFinite())
       return core::Status::kInvalidArgument;
     if (num_steps_ < kMaxKeptSteps) kept_[num_steps_] = KeptStep{gyro_radps, accel_mps2, dt_s};
+    if (num_steps_ == 0) first_ = KeptStep{gyro_radps, accel_mps2, dt_s};
+    last_ = KeptStep{gyro_radps, accel_mps2, dt_s};
     Advance(gyro_radps, accel_mps2, dt_s);
     ++num_steps_;
     return core::Status::kOk;
@@ -230,6 +241,22 @@ class ImuPreintegration {
     end.world_T_imu.t = start.world_T_imu.t + v_i * dt_s_ +
                         S(0.5) * dt_s_ * dt_s_ * gravity_world_mps2 + r_i * d.position_m;
     return end;
+  }
+
+  // d [dphi; dv; dp] / d tau for the interval moved later by tau at both ends, at the
+  // linearization biases (file comment, "Time shift"); zero for an empty interval.
+  Vec9<S> TimeShiftJacobian() const {
+    Vec9<S> j = Vec9<S>::Zero();
+    if (num_steps_ == 0) return j;
+    const Vec3<S> w_a = first_.gyro - biases_.gyro_radps;
+    const Vec3<S> a_a = first_.accel - biases_.accel_mps2;
+    const Vec3<S> w_b = last_.gyro - biases_.gyro_radps;
+    const Vec3<S> a_b = last_.accel - biases_.accel_mps2;
+    j.template segment<3>(kRotation) = w_b - delta_.rotation.transpose() * w_a;
+    j.template segment<3>(kVelocity) = delta_.rotation * a_b - a_a - w_a.cross(delta_.velocity_mps);
+    j.template segment<3>(kPosition) =
+        delta_.velocity_mps - dt_s_ * a_a - w_a.cross(delta_.position_m);
+    return j;
   }
 
   // Covariance of [dphi; dv; dp] from the white sensor noise (see the file comment).
@@ -351,6 +378,8 @@ class ImuPreintegration {
   Mat3<S> d_position_d_gyro_bias_ = Mat3<S>::Zero();
   Mat3<S> d_position_d_accel_bias_ = Mat3<S>::Zero();
   std::array<KeptStep, kMaxKeptSteps> kept_{};
+  KeptStep first_{};  // the interval's first and last steps, for TimeShiftJacobian
+  KeptStep last_{};
 };
 
 // How a sample stands for the signal between its time and the next sample's.

@@ -230,6 +230,25 @@ struct InertialStereoModel {
     return e;
   }
 
+  // d e / d tau: the process residual's change should u's interval move later by tau on the
+  // IMU's clock (ImuPreintegration::TimeShiftJacobian, the increments' change, enters e_p and
+  // e_v with a minus sign and e_R as the bias correction's rotation does; the biases' rows are
+  // zero). What a camera-IMU time offset does to the process factor (TimeOffsetEstimator).
+  Vec15<S> ProcessTimeShiftJacobian(const PoseType& prev, const PoseType& next,
+                                    const MotionType& u) const {
+    const typename MotionType::Deltas d = u.Corrected(prev.biases);
+    const Vec3<S> e_rot = LogSO3<S>(
+        Mat3<S>(d.rotation.transpose() * prev.world_T_imu.R.transpose() * next.world_T_imu.R));
+    const Vec9<S> shift = u.TimeShiftJacobian();
+    Vec15<S> j = Vec15<S>::Zero();
+    j.template segment<3>(kPosition) = -shift.template segment<3>(MotionType::kPosition);
+    j.template segment<3>(kRotation) = -RightJacobianInverseSO3<S>(e_rot) *
+                                       ExpSO3<S>(e_rot).transpose() *
+                                       shift.template segment<3>(MotionType::kRotation);
+    j.template segment<3>(kVelocity) = -shift.template segment<3>(MotionType::kVelocity);
+    return j;
+  }
+
   // Covariance of the process residual for the interval u (file comment).
   static Mat15<S> ProcessCovariance(const MotionType& u) {
     using Pim = ImuPreintegration<S>;

@@ -401,6 +401,14 @@ class SlidingWindowFilter {
   int WindowSize() const { return window_; }
   const PoseType& PoseAt(int j) const { return Slot(j).pose; }  // 0 = oldest
   const PoseType& NewestPose() const { return Slot(num_poses_ - 1).pose; }
+  // The process factor into window state j (its input and square-root information, as the last
+  // Update solved with them); false when state j has none (the oldest, a first pose).
+  bool ProcessFactorInto(int j, const MotionType** u, const StateMat** sqrt_information) const {
+    if (j < 1 || j >= num_poses_ || !Slot(j).has_process) return false;
+    *u = &Slot(j).motion;
+    *sqrt_information = &Slot(j).process_sqrt_info;
+    return true;
+  }
   // f(landmark id) for each measurement of the newest pose still in the window: after Update(),
   // the ones the prediction and residual gates let through (a display of what was fused).
   template <typename F>

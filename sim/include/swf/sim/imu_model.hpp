@@ -62,6 +62,10 @@ struct ImuModelOptions {
   // Sampling goes on this long past the last frame (seconds, at most 10): a consumer whose frame
   // stamps may come late (jittered exposure stamps) still finds samples up to them.
   double tail_s = 0.0;
+  // The unit's clock against the cameras': an instant t is stamped t + clock_offset_s (a
+  // camera-IMU desynchronization; at most 1 s either way). The samples still cover the
+  // trajectory's instants; only their stamps move.
+  double clock_offset_s = 0.0;
 };
 
 // Honeywell HG1700 (tactical grade, ring-laser gyros).

@@ -86,7 +86,13 @@ struct ImuReport {
   bool has_truth = false;
   estimator::ImuBiases<double> truth;
   double imu_only_pose_rms_m = 0.0;  // the unit alone from the same start (with truth)
-  bool has_lcm = false;              // the IMU came over LCM: what the subscription lost
+  // The camera-IMU time offset at the end (the configured one, or the online estimate with its
+  // 1-sigma and the intervals read).
+  double time_offset_s = 0.0;
+  bool time_offset_estimated = false;
+  double time_offset_sigma_s = 0.0;
+  long time_offset_readings = 0;
+  bool has_lcm = false;  // the IMU came over LCM: what the subscription lost
   LcmImuCounters lcm;
 };
 

@@ -48,6 +48,9 @@ struct SimConfig {
   // Devices ADIS16448), "tactical" (Honeywell HG1700) or "none". Its samples feed the
   // stereo-inertial estimator (imu.enabled), which then takes the unit's parameters.
   std::string imu_unit = "none";
+  // The simulated unit's clock against the cameras' (ms): it stamps an instant t as t + this
+  // (a desynchronization for imu.estimate_time_offset to find).
+  double imu_clock_offset_ms = 0.0;
 
   // Dispersions of the simulated flight (a Monte Carlo campaign sets them with --set). Every
   // default is the nominal flight, bit for bit.
@@ -119,6 +122,12 @@ struct ImuConfig {
   // (ImuOptions::static_start). An IMU cannot tell rest from constant velocity: set it only when
   // the vehicle is known to be at rest.
   bool static_start = false;
+  // Camera-IMU time offset (ms): the IMU stamps an instant t as t + offset. The known one, and
+  // whether to estimate it online from there (docs/imu.md, "Camera-IMU time offset"), held
+  // within +-max_time_offset_ms.
+  double time_offset_ms = 0.0;
+  bool estimate_time_offset = false;
+  double max_time_offset_ms = 50.0;
 };
 
 struct CameraConfig {

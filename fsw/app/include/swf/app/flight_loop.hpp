@@ -169,6 +169,7 @@ class FlightLoop {
   void PublishNav();
   // Hands the IMU samples due by until_utime to the pipeline and queues them for recording.
   void FeedImu(std::int64_t until_utime);
+  std::int64_t ImuLeadUs() const;
   // A cycle without a pair: count it, restart the source when due, coast and publish. kTimeout
   // to go on, kDeviceLost once the outage is longer than max_outage_ns.
   core::Status MissCycle(core::Status source_status, bool synchronous);

@@ -49,6 +49,13 @@ struct ImuOptions {
   bool static_start = false;
   estimator::StaticAlignmentOptions<double> static_alignment;
   double static_velocity_sigma_mps = 0.01;
+  // Camera-IMU time offset: the IMU stamps an instant t as t + offset (seconds), so a frame's
+  // interval ends at its exposure + offset on the IMU's clock. time_offset_s is the known one
+  // (a calibration's); with estimate_time_offset the pipeline estimates it online
+  // (estimator::TimeOffsetEstimator) from there, held within +-max_time_offset_s.
+  double time_offset_s = 0.0;
+  bool estimate_time_offset = false;
+  double max_time_offset_s = 0.05;
 
   bool Valid() const;
 };
@@ -79,6 +86,8 @@ class ImuInput {
   // One sample from the source (in stream order). Returns the checker's verdict.
   estimator::ImuSampleVerdict Add(const estimator::ImuSample<double>& sample);
 
+  // Times below are the cameras' (exposures): the samples are read at t + the time offset
+  // (ImuOptions::time_offset_s, then SetTimeOffsetUs).
   // Starts both intervals at t_us (the first estimated frame) with these biases.
   core::Status Start(std::int64_t t_us, const estimator::ImuBiases<double>& biases);
   bool Started() const { return started_; }
@@ -95,14 +104,17 @@ class ImuInput {
   const ImuIntervalReport& LastInterval() const { return last_interval_; }
   ImuCounts Counts() const;
   const ImuOptions& Options() const { return options_; }
-  // The accepted samples stamped at or before t_us that wait in the ring (before Start: all of
-  // them since Configure, up to kMaxImuSamples), for the static start.
+  // The accepted samples stamped at or before t_us (+ offset) that wait in the ring (before Start:
+  // all of them since Configure, up to kMaxImuSamples), for the static start.
   int Buffered(std::int64_t t_us, const estimator::ImuSample<double>** samples) const;
   void NoteStaticStart(std::int32_t outcome, double tilt_correction_rad) {
     static_start_ = outcome;
     static_tilt_correction_rad_ = tilt_correction_rad;
   }
-  std::int64_t IntegratedTo() const { return integrated_to_us_; }
+  // The offset applied from the next integration on (an estimate's change moves the end of the
+  // next interval, never the time already integrated).
+  void SetTimeOffsetUs(std::int64_t offset_us) { offset_us_ = offset_us; }
+  std::int64_t TimeOffsetUs() const { return offset_us_; }
 
  private:
   void DropConsumed();
@@ -112,7 +124,8 @@ class ImuInput {
   std::unique_ptr<estimator::ImuSample<double>[]> samples_;
   int count_ = 0;
   bool started_ = false;
-  std::int64_t integrated_to_us_ = 0;
+  std::int64_t integrated_to_us_ = 0;  // on the IMU's clock
+  std::int64_t offset_us_ = 0;
   double max_step_s_ = 0.0;
   Pim since_estimate_;
   Pim since_trusted_;

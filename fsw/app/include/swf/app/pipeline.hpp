@@ -29,6 +29,7 @@
 #include "swf/app/imu_input.hpp"
 #include "swf/core/status.hpp"
 #include "swf/estimator/geometry.hpp"
+#include "swf/estimator/imu_time_offset.hpp"
 #include "swf/estimator/inertial_model.hpp"
 #include "swf/estimator/integrity.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
@@ -269,6 +270,10 @@ class Pipeline {
   // The stereo-inertial filter's newest state (nullptr: stereo-only, or no state yet).
   const estimator::NavState<double>* NewestNavState() const;
   ImuCounts ImuStreamCounts() const { return imu_.Counts(); }
+  // The camera-IMU time offset applied to the next interval (seconds: the configured one, or
+  // the online estimate with imu.estimate_time_offset), and the estimator behind it.
+  double ImuTimeOffsetS() const { return static_cast<double>(imu_.TimeOffsetUs()) * 1e-6; }
+  const estimator::TimeOffsetEstimator<double>& ImuTimeOffset() const { return time_offset_; }
   core::Status LastStatus() const { return last_status_; }
   const estimator::IntegrityReport& LastIntegrity() const { return report_; }
   const IntegrityCounters& Integrity() const { return integrity_; }
@@ -296,6 +301,7 @@ class Pipeline {
   std::unique_ptr<InertialFlightSwf> inertial_;
   estimator::InertialStereoModel<double> inertial_model_;
   ImuInput imu_;
+  estimator::TimeOffsetEstimator<double> time_offset_;
   template <typename F>
   decltype(auto) Visit(F&& f) {
     return inertial_ ? f(*inertial_) : f(*swf_);
@@ -340,6 +346,8 @@ class Pipeline {
   core::Status AddInertialState();
   bool AlignStaticStart(estimator::NavState<double>* first, estimator::Vec15<double>* sigma);
   core::Status RestartInertial();
+  static estimator::TimeOffsetOptions<double> TimeOffsetOptionsOf(const ImuOptions& imu);
+  void EstimateTimeOffset();
   bool CoastInertial();
   double ImuDisagreement() const;
   estimator::NavState<double> trusted_state_;
