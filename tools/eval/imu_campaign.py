@@ -21,7 +21,9 @@ distribution's central 95 % (Wilson-Hilferty); a consistent estimator has about 
 frames inside it, an overconfident one lies above.
 
 usage: imu_campaign.py --fsw SWF-FSW [--config demo.cfg] [--seeds 20] [--first-seed 1]
-                       [--jobs 2] --out DIR
+                       [--jobs 2] [--inputs mems,tactical] [--set "KEY: VALUE" ...] --out DIR
+(--inputs: a subset of the inputs above; --set: a configuration override for every run, after
+the input's own.)
 Exit 0 when every run completed (whatever its numbers), 1 otherwise."""
 import argparse
 import concurrent.futures
@@ -48,12 +50,12 @@ LABELS = {
 }
 
 
-def run(fsw, config, out, seed, name):
+def run(fsw, config, out, seed, name, overrides=()):
     summary = os.path.join(out, 'seed%03d_%s.json' % (seed, name))
     cmd = [fsw, '--config', config, '--set', 'pacing: lockstep', '--set', 'lcm.publish: false',
            '--set', 'rt.mlockall: false', '--set', 'rt.priority: 0',
            '--set', 'sim.seed: %d' % seed, '--set', 'summary.path: %s' % summary]
-    for s in INPUTS[name]:
+    for s in list(INPUTS[name]) + list(overrides):
         cmd += ['--set', s]
     proc = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                           check=False)
@@ -81,6 +83,34 @@ def chi2_quantile(p, k):
     return k * (1.0 - c + z * math.sqrt(c)) ** 3
 
 
+def huber_effective_sigma(component, k=3.5):
+    """The standard deviation a measurement with this error distribution has under Huber weights
+    with threshold k times it: the M-estimator's asymptotic variance E[psi(e)^2] / E[psi'(e)]^2
+    (psi(e) = clamp(e, -c, c)), with c = k x the result, solved by fixed-point iteration. Taken
+    over swf-sil's histogram of the signed error (bin centres; errors outside it at its edge).
+    The sigma the filter should state for this front end: the information a Huber-weighted
+    measurement really carries, tails included."""
+    counts = component.get('counts') or []
+    if not counts:
+        return None
+    width = 0.05
+    first = -1.5
+    centers = [first + width * (i + 0.5) for i in range(len(counts))]
+    outside = component.get('outside_histogram', 0)
+    edge = abs(first)
+    sigma = component.get('robust_sigma') or 0.05
+    for _ in range(100):
+        c = k * sigma
+        n = sum(counts) + outside
+        psi2 = (sum(w * min(abs(x), c) ** 2 for x, w in zip(centers, counts)) +
+                outside * min(edge, c) ** 2) / n
+        inside = sum(w for x, w in zip(centers, counts) if abs(x) < c) / n
+        if inside <= 0:
+            return None
+        sigma = 0.5 * sigma + 0.5 * math.sqrt(psi2) / inside
+    return sigma
+
+
 def describe(values):
     values = [v for v in values if v is not None and math.isfinite(v)]
     if not values:
@@ -89,8 +119,8 @@ def describe(values):
                                                   statistics.fmean(values), max(values))
 
 
-def summarize(records, seeds):
-    by_input = {name: [r for r in records if r['input'] == name] for name in INPUTS}
+def summarize(records, seeds, names=tuple(INPUTS)):
+    by_input = {name: [r for r in records if r['input'] == name] for name in names}
     lines = ['| input | runs ok | pose RMS (m) | landmark RMS (m) | mean position NEES | '
              'NEES band: frames inside | VALID / DEGRADED / INVALID frames | protection '
              'violations |', '|---|---|---|---|---|---|---|---|']
@@ -129,7 +159,7 @@ def summarize(records, seeds):
             '10 m at 10 m/s, lockstep), each flown by swf-sil with the process inputs below. NEES band '
             '(95 %%, mean over %d seeds at a frame): [%.2f, %.2f].' % (
                 seeds[0], seeds[-1], len(seeds), lo, hi), ''] + lines + ['']
-    for unit in ('mems', 'tactical', 'mems_loose'):
+    for unit in [u for u in ('mems', 'tactical', 'mems_loose') if u in by_input]:
         good = [r['summary'] for r in by_input[unit] if 'summary' in r]
         dr = [s.get('imu', {}).get('imu_only_pose_rms_error_m') for s in good]
         gyro = [s.get('imu', {}).get('gyro_bias_error_radps') for s in good]
@@ -138,8 +168,24 @@ def summarize(records, seeds):
                     'unknown) pose RMS %s m; biases at the end against the truth: gyroscope '
                     'error %s rad/s, accelerometer error %s m/s^2.' % (
                         LABELS[unit], describe(dr), describe(gyro), describe(accel)))
-    ideal = table['ideal']['pose_rms_m']
-    mems = table['mems']['pose_rms_m']
+    # The front end's error against the renderer's truth (swf-sil's tracking_error_px: every
+    # fused measurement of a known landmark against the true projection of the point its first
+    # sighting defines), per run: the robust sigma (1.4826 x the median absolute deviation) and
+    # the standard deviation of the signed u and v errors. What measurement_sigma_px states.
+    for name, runs in by_input.items():
+        signed = [r['summary'].get('tracking_error_px', {}).get('signed', {})
+                  for r in runs if 'summary' in r]
+        robust = [c.get('robust_sigma') for sg in signed for c in (sg.get('u', {}), sg.get('v', {}))]
+        std = [c.get('std') for sg in signed for c in (sg.get('u', {}), sg.get('v', {}))]
+        huber = [huber_effective_sigma(c) for sg in signed
+                 for c in (sg.get('u', {}), sg.get('v', {}))]
+        if any(v is not None for v in robust):
+            text.append('- %s: front-end error against the truth (signed u and v, per run): robust '
+                        'sigma %s px; standard deviation %s px; under Huber weights (3.5 sigma) '
+                        'worth a Gaussian of %s px.' % (
+                            LABELS[name], describe(robust), describe(std), describe(huber)))
+    ideal = table['ideal']['pose_rms_m'] if 'ideal' in table else []
+    mems = table['mems']['pose_rms_m'] if 'mems' in table else []
     pairs = [(m, i) for m, i in zip(mems, ideal) if m is not None and i is not None]
     if pairs:
         better = sum(1 for m, i in pairs if m <= i)
@@ -156,18 +202,28 @@ def main():
     ap.add_argument('--seeds', type=int, default=20)
     ap.add_argument('--first-seed', type=int, default=1)
     ap.add_argument('--jobs', type=int, default=2)
+    ap.add_argument('--inputs', default=','.join(INPUTS),
+                    help='comma-separated subset of: ' + ', '.join(INPUTS))
+    ap.add_argument('--set', action='append', default=[], metavar='"KEY: VALUE"',
+                    help='a configuration override for every run (repeatable)')
     ap.add_argument('--out', required=True)
     a = ap.parse_args()
     if a.seeds < 1 or a.jobs < 1:
         ap.error('--seeds and --jobs must be at least 1')
+    names = [n for n in a.inputs.split(',') if n]
+    unknown = [n for n in names if n not in INPUTS]
+    if unknown or not names:
+        ap.error('--inputs: unknown input(s) %s (known: %s)' % (', '.join(unknown) or '(none)',
+                                                                ', '.join(INPUTS)))
     os.makedirs(a.out, exist_ok=True)
     seeds = list(range(a.first_seed, a.first_seed + a.seeds))
     with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        futures = [pool.submit(run, a.fsw, a.config, a.out, s, n) for s in seeds for n in INPUTS]
+        futures = [pool.submit(run, a.fsw, a.config, a.out, s, n, a.set)
+                   for s in seeds for n in names]
         records = [f.result() for f in futures]
     with open(os.path.join(a.out, 'runs.json'), 'w') as f:
         json.dump(records, f, indent=1, allow_nan=False, default=str)
-    text = summarize(records, seeds)
+    text = summarize(records, seeds, names)
     with open(os.path.join(a.out, 'summary.md'), 'w') as f:
         f.write(text)
     sys.stdout.write(text)
