@@ -264,12 +264,56 @@ TEST(DenseCholesky, ColumnGroupsMatchSingleColumnsBitForBit) {
   }
 }
 
+// LeadingInverseBlock's workspace: 64-byte aligned, as the product kernels need.
+struct LeadingWorkspace {
+  alignas(64) double data[DenseCholesky<double, 300>::LeadingInverseWorkspace(300)];
+};
+
+// The leading block of the inverse from the Gram of L^-1's columns (ComputeCovariances' older
+// states) against the inverse and against InverseColumns, with both product kernels, for block
+// sizes inside, on and across the 8-row panels; exactly symmetric, entries outside untouched.
+TEST(DenseCholesky, LeadingInverseBlockIsTheInversesBlock) {
+  using Chol = DenseCholesky<double, 300>;
+  auto chol = std::make_unique<Chol>();
+  auto workspace = std::make_unique<LeadingWorkspace>();
+  for (const Chol::Kernel kernel : {Chol::Kernel::kPortable, Chol::Kernel::kAvx}) {
+    if (!chol->SetKernel(kernel)) continue;
+    for (int n : {3, 9, 61, 137, 300}) {
+      const Eigen::MatrixXd a = RandomSpd(n, static_cast<std::uint64_t>(n) + 113);
+      chol->Reset(n);
+      chol->AddSymmetric(0, a.data(), n, n);
+      ASSERT_EQ(chol->Factorize(), core::Status::kOk) << n;
+      const Eigen::MatrixXd inverse = a.inverse();
+      for (int m : {0, 1, 7, 8, 9, n / 2, n - 1, n}) {
+        if (m > n) continue;
+        const int ld = m + 3;
+        Eigen::MatrixXd out = Eigen::MatrixXd::Constant(ld, m + 1, -7.0);
+        chol->LeadingInverseBlock(m, out.data(), ld, workspace->data);
+        if (m == 0) continue;
+        const Eigen::MatrixXd block = out.topLeftCorner(m, m);
+        EXPECT_EQ((block - block.transpose()).cwiseAbs().maxCoeff(), 0.0) << n << " " << m;
+        EXPECT_LT((block - inverse.topLeftCorner(m, m)).cwiseAbs().maxCoeff(),
+                  1e-12 * inverse.cwiseAbs().maxCoeff())
+            << n << " " << m;
+        Eigen::MatrixXd columns(n, 1);
+        chol->InverseColumns(m - 1, 1, columns.data(), n);
+        EXPECT_LT((block.col(m - 1) - columns.topRows(m)).cwiseAbs().maxCoeff(),
+                  1e-12 * inverse.cwiseAbs().maxCoeff());
+        EXPECT_EQ(out.bottomRows(3).cwiseAbs().minCoeff(), 7.0);  // rows past m untouched
+        EXPECT_EQ(out.col(m).cwiseAbs().minCoeff(), 7.0);         // and columns
+      }
+    }
+  }
+}
+
 TEST(DenseCholesky, FactorAndSolveNeverAllocate) {
   auto chol = std::make_unique<DenseCholesky<double, 300>>();
   const Eigen::MatrixXd a = RandomSpd(290, 7);
   Eigen::VectorXd b = Eigen::VectorXd::Ones(290);
   Eigen::VectorXd column(290);
   Eigen::VectorXd factor_column(290);
+  Eigen::MatrixXd leading(20, 20);
+  auto workspace = std::make_unique<LeadingWorkspace>();
   swf::testing::AllocationScope scope;
   chol->Reset(290);
   chol->AddSymmetric(0, a.data(), 290, 290);
@@ -279,6 +323,7 @@ TEST(DenseCholesky, FactorAndSolveNeverAllocate) {
   chol->FactorInverseColumn(3, factor_column.data());
   chol->InverseColumns(3, 1, column.data(), 290);
   chol->FactorInverseColumns(3, 1, factor_column.data(), 290);
+  chol->LeadingInverseBlock(20, leading.data(), 20, workspace->data);
   EXPECT_EQ(scope.Count(), 0u);
   EXPECT_LT((a * column - Eigen::VectorXd::Unit(290, 3)).norm(), 1e-12);
 }

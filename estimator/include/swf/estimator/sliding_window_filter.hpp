@@ -631,6 +631,9 @@ class SlidingWindowFilter {
   // landmark for kCovarianceWidth landmarks per round.
   static constexpr int kCovarianceWidth = DenseCholesky<S, kMaxDense>::kBlock;
   S covariance_columns_[3 * kCovarianceWidth * kMaxDense] = {};
+  // X = the first columns of L^-1 for the older states' covariance block (LeadingInverseBlock).
+  alignas(64) S leading_inverse_workspace_[DenseCholesky<S, kMaxDense>::LeadingInverseWorkspace(
+      kStateDim * K)] = {};
   StateMat newest_state_cov_ = StateMat::Zero();
   Mat6<S> newest_pose_cov_ = Mat6<S>::Zero();  // its pose part
 

@@ -66,14 +66,14 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
   const int newest0 = npd - kStateDim;
   const int nq = static_cast<int>(prior_landmarks_.size());
   S* const columns = covariance_columns_;
-  // The rest of the pose block of S^-1 (free landmarks need every pair of their poses).
-  for (int c0 = 0; c0 < newest0; c0 += kCovarianceWidth) {
-    const int count = std::min(kCovarianceWidth, newest0 - c0);
-    dense_.InverseColumns(c0, count, columns, kMaxDense);
-    for (int k = 0; k < count; ++k)
-      for (int r = 0; r < npd; ++r)
-        pose_cov_[(c0 + k) * kMaxPosesDim + r] = columns[k * kMaxDense + r];
-  }
+  // The rest of the pose block of S^-1 (free landmarks need every pair of their poses): the
+  // older states' block as X^T X from forward solves only (a third of the flops of full
+  // columns; the held window's covariance was mostly these), its rows with the newest state
+  // mirrored from the newest columns above, so the block is exactly symmetric.
+  dense_.LeadingInverseBlock(newest0, pose_cov_, kMaxPosesDim, leading_inverse_workspace_);
+  for (int c = 0; c < newest0; ++c)
+    for (int r = newest0; r < npd; ++r)
+      pose_cov_[c * kMaxPosesDim + r] = pose_cov_[r * kMaxPosesDim + c];
   ZeroFixedPoseCovariance();
   // A prior landmark's marginal is the diagonal block of L^-T L^-1 over its three columns c:
   // sums over rows >= c of the forward columns of L^-1 (a sixth of the InverseColumn flops),
@@ -107,19 +107,26 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
     // dl = h^-1 (b - sum_a W_a^T dp_a): Cov(newest, l) = -sum_a Sigma(newest, ja) W_a h^-1
     // (W_a couples the landmark to the pose part of state ja only: its first 6 columns).
     l.cross_newest.setZero();
+    const auto sigma = [&](int ja, int jb) {  // Sigma(ja, jb), pose parts
+      return Eigen::Map<const Mat6<S>, Eigen::Unaligned, Eigen::OuterStride<>>(
+          pose_cov_ + (kStateDim * jb) * kMaxPosesDim + kStateDim * ja,
+          Eigen::OuterStride<>(kMaxPosesDim));
+    };
     for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
       const Observation& oa = ObsAt(adj_[a]);
       const Eigen::Map<const Eigen::Matrix<S, kStateDim, 6>, Eigen::Unaligned, Eigen::OuterStride<>>
           newest_a(pose_cov_ + (kStateDim * adj_[a].pose) * kMaxPosesDim + npd - kStateDim,
                    Eigen::OuterStride<>(kMaxPosesDim));
       l.cross_newest -= newest_a * oa.w_pl * l.h_inv;
-      for (int b = lm_begin_[i]; b < lm_begin_[i + 1]; ++b) {
-        const Observation& ob = ObsAt(adj_[b]);
-        const Eigen::Map<const Mat6<S>, Eigen::Unaligned, Eigen::OuterStride<>> sigma(
-            pose_cov_ + (kStateDim * adj_[b].pose) * kMaxPosesDim + kStateDim * adj_[a].pose,
-            Eigen::OuterStride<>(kMaxPosesDim));
-        cross += oa.w_pl.transpose() * sigma * ob.w_pl;
+      // The pose block is symmetric between different states: the pair (b, a) is the
+      // transpose of (a, b), so each pair is formed once (a landmark has one measurement per
+      // state, so a != b means different states).
+      const Eigen::Matrix<S, 3, 6> wa_t = oa.w_pl.transpose();
+      for (int b = lm_begin_[i]; b < a; ++b) {
+        const Mat3<S> t = wa_t * sigma(adj_[a].pose, adj_[b].pose) * ObsAt(adj_[b]).w_pl;
+        cross += t + t.transpose();
       }
+      cross += wa_t * sigma(adj_[a].pose, adj_[a].pose) * oa.w_pl;
     }
     l.covariance = l.h_inv + l.h_inv * cross * l.h_inv;
     l.covariance_valid = l.covariance.allFinite();
