@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "swf/testing/encode.hpp"
+#include "swf/testing/sample_messages.hpp"
 
 namespace swf::guidance {
 namespace {
@@ -62,18 +63,9 @@ TEST_F(GuidanceMonitorTest, CountsLostAndMalformedAndKeepsGoing) {
 // and one carries an unknown class THEN only the first is accepted, the others are counted as
 // malformed, and the sequence check sees no gap.
 TEST_F(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
-  swf_msgs::hazard_map_t good{};
+  swf_msgs::hazard_map_t good = swf::testing::SafeAndRockCells();
   good.seq = 0;
   good.frame_seq = 4;
-  good.rows = 1;
-  good.cols = 2;
-  good.num_cells = 2;
-  good.elevation_m = {0.5f, 0.25f};
-  good.sigma_m = {0.1f, 0.1f};
-  good.relief_sigma_m = {0.05f, 0.05f};
-  good.slope_deg = {1.0f, 2.0f};
-  good.roughness_m = {0.0f, 0.3f};
-  good.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_UNCERTAIN};
   ASSERT_EQ(lcm_.publish("SWF_HAZARD", &good), 0);
   swf_msgs::hazard_map_t wrong_size = good;
   wrong_size.seq = 1;
