@@ -39,6 +39,13 @@ estimator::Pose<double> NadirAt(double x, double y, double z) {
   return pose;
 }
 
+// Configures `renderer` with `options` and renders the scene's frame 0 from `pose` into `im`.
+void ConfigureAndRender(Renderer* renderer, const RenderOptions& options, const Scene& scene,
+                        const estimator::Pose<double>& pose, StereoImages* im) {
+  ASSERT_EQ(renderer->Configure(options), core::Status::kOk);
+  ASSERT_EQ(renderer->Render(scene.terrain, scene.appearance, pose, 0, im), core::Status::kOk);
+}
+
 // The disparity in [lo, hi] (0.05 px steps, linear interpolation) whose 9x9 right patch has the
 // smallest SSD against the left patch at (u, v).
 double MatchedDisparity(const StereoImages& im, int u, int v, double lo, double hi) {
@@ -76,12 +83,10 @@ TEST(RendererTest, TrueDisparityOfATiltedPlaneIsAnalytic) {
   ASSERT_NO_FATAL_FAILURE(MakeScene(t, AppearanceOptions{}, &scene));
   RenderOptions r;
   r.rig = SmallRig();
-  Renderer renderer;
-  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
-  StereoImages images;
   const double height = 20.0;
-  ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(0, 0, height), 0, &images),
-            core::Status::kOk);
+  Renderer renderer;
+  StereoImages images;
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndRender(&renderer, r, scene, NadirAt(0, 0, height), &images));
   const auto& cam = renderer.Camera();
   for (const auto& [u, v] : {std::pair{10, 10}, {96, 72}, {180, 130}, {40, 120}}) {
     // Camera ray in the world: (xn, -yn, -1); solve H - s = a xn s - b yn s.
@@ -105,10 +110,8 @@ TEST(RendererTest, RenderedImagesAgreeWithTheTrueDisparity) {
   r.rig = SmallRig();
   r.add_noise = false;
   Renderer renderer;
-  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
   StereoImages im;
-  ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(1, 2, 15), 0, &im),
-            core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndRender(&renderer, r, scene, NadirAt(1, 2, 15), &im));
   // WHEN a 9x9 patch of the left image is matched along the right image row THEN the best
   // disparity is the true one at the patch centre.
   int checked = 0;
@@ -144,10 +147,9 @@ TEST(RendererTest, TheTrueRightCameraCarriesTheCalibrationError) {
   const RenderOptions* options[3] = {&nominal, &wide, &turned};
   for (int i = 0; i < 3; ++i) {
     Renderer renderer;
-    ASSERT_EQ(renderer.Configure(*options[i]), core::Status::kOk);
+    ASSERT_NO_FATAL_FAILURE(
+        ConfigureAndRender(&renderer, *options[i], scene, NadirAt(1, 2, 15), &images[i]));
     EXPECT_EQ(renderer.Camera().baseline_m, 1.0);
-    ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(1, 2, 15), 0, &images[i]),
-              core::Status::kOk);
   }
   EXPECT_EQ(images[1].left, images[0].left);
   EXPECT_EQ(images[2].left, images[0].left);
@@ -239,12 +241,11 @@ TEST(RendererTest, TileStartHeightsNeverSkipAHit) {
   RenderOptions r;
   r.rig = SmallRig();
   r.add_noise = false;
-  Renderer renderer;
-  ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
   estimator::Pose<double> pose = NadirAt(2.0, -3.0, 6.0);
   pose.R = Eigen::AngleAxisd(0.52, Eigen::Vector3d::UnitX()).toRotationMatrix() * pose.R;
+  Renderer renderer;
   StereoImages im;
-  ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, pose, 0, &im), core::Status::kOk);
+  ASSERT_NO_FATAL_FAILURE(ConfigureAndRender(&renderer, r, scene, pose, &im));
   // THEN every pixel's depth is the first hit of a ray cast from the global maximum.
   const auto& cam = renderer.Camera();
   int finite = 0;
@@ -310,10 +311,8 @@ TEST(RendererTest, PhotometricNoiseHasTheModelledSigma) {
   for (RenderOptions r : {RenderOptions{}, dispersed}) {
     r.rig = SmallRig();
     Renderer renderer;
-    ASSERT_EQ(renderer.Configure(r), core::Status::kOk);
     StereoImages im;
-    ASSERT_EQ(renderer.Render(scene.terrain, scene.appearance, NadirAt(0, 0, 10), 0, &im),
-              core::Status::kOk);
+    ASSERT_NO_FATAL_FAILURE(ConfigureAndRender(&renderer, r, scene, NadirAt(0, 0, 10), &im));
     double sum = 0.0;
     double sum2 = 0.0;
     for (std::uint8_t p : im.left) {
