@@ -3,21 +3,18 @@
 // on one malformed file per refusal.
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
 #include "swf/calibration/calibration_import.hpp"
 #include "swf/image_io/image_io.hpp"
+#include "swf/testing/shared_dir.hpp"
 
 namespace swf::calibration {
 namespace {
 
 std::string DataDir() { return std::string(SWF_CALIBRATION_TEST_DATA) + "/"; }
-std::string SharedDir() {
-  const char* env = std::getenv("SWF_SHARED_DIR");
-  return std::string(env != nullptr ? env : "../shared") + "/data/";
-}
+std::string SharedData() { return swf::testing::SharedDir() + "/data/"; }
 
 std::string ReadAll(const std::string& path) {
   std::ifstream in(path);
@@ -53,7 +50,7 @@ void ExpectSamePair(const RectifiedPair& a, const RectifiedPair& b, const std::s
 }
 
 TEST(CalibrationImport, ReadsTheRealEurocSensorYamlAsTheFlightReaderDoes) {
-  const std::string cam = SharedDir() + "euroc-v101/mav0/cam";
+  const std::string cam = SharedData() + "euroc-v101/mav0/cam";
   StereoCalibration c;
   std::string error;
   ASSERT_TRUE(
@@ -76,7 +73,7 @@ TEST(CalibrationImport, ReadsTheRealKittiCalibTxt) {
   ImportOptions o;
   o.width = 1226;
   o.height = 370;
-  const RectifiedPair pair = Rectified({SharedDir() + "kitti-odometry-excerpt/calib.txt"}, o);
+  const RectifiedPair pair = Rectified({SharedData() + "kitti-odometry-excerpt/calib.txt"}, o);
   EXPECT_NEAR(pair.camera.fx, 707.0912, 1e-3);
   EXPECT_NEAR(pair.camera.baseline_m, 0.537, 0.001);
 }
@@ -146,7 +143,7 @@ TEST(CalibrationImport, CahvorWithTheAxisOffIsLinearizedWithinItsReportedError) 
 // The real EuRoC rig written as a ROS camera_info pair (rectification rotations and projections
 // from the rectifier) imports to the same rectified pair, seen from the left camera.
 TEST(CalibrationImport, RealEurocRigAsRosCameraInfoGivesTheSameRectifiedPair) {
-  const std::string cam = SharedDir() + "euroc-v101/mav0/cam";
+  const std::string cam = SharedData() + "euroc-v101/mav0/cam";
   StereoCalibration euroc;
   std::string error;
   ASSERT_TRUE(
@@ -180,7 +177,7 @@ TEST(CalibrationImport, RealEurocRigAsRosCameraInfoGivesTheSameRectifiedPair) {
 }
 
 TEST(CalibrationImport, WrittenEurocYamlReadsBackToTheSameCameras) {
-  const std::string cam = SharedDir() + "euroc-v101/mav0/cam";
+  const std::string cam = SharedData() + "euroc-v101/mav0/cam";
   StereoCalibration c;
   std::string error;
   ASSERT_TRUE(

@@ -2,13 +2,13 @@
 // inputs: each refusal names the file and record, and leaves no file behind.
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
 #include "swf/calibration/calibration_import.hpp"
 #include "swf/convert/convert.hpp"
 #include "swf/drivers/log_stereo_source.hpp"
+#include "swf/testing/shared_dir.hpp"
 #include "swf_msgs/stereo_frame_t.hpp"
 
 namespace swf::convert {
@@ -16,10 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Shared(const std::string& rel) {
-  const char* env = std::getenv("SWF_SHARED_DIR");
-  return std::string(env != nullptr ? env : "../shared") + "/data/" + rel;
-}
+std::string Shared(const std::string& rel) { return swf::testing::SharedDir() + "/data/" + rel; }
 
 std::string Temp(const std::string& name) {
   const std::string dir = ::testing::TempDir() + "/convert_test/" + name;
@@ -40,6 +37,15 @@ std::vector<swf_msgs::stereo_frame_t> Frames(const std::string& log) {
     EXPECT_GT(frames.back().decode(e.data.data(), 0, static_cast<int>(e.data.size())), 0);
   }
   return frames;
+}
+
+// The first `frames` EuRoC V1_01 pairs with their IMU samples, converted into the log at `path`.
+void ConvertEuroc(const std::string& path, int frames, InputSummary* summary) {
+  LogInputOptions o;
+  o.log_path = path;
+  o.max_frames = frames;
+  std::string error;
+  ASSERT_TRUE(EurocToLog(Shared("euroc-v101"), o, summary, &error)) << error;
 }
 
 TEST(Convert, KittiExcerptBecomesARawLogWithItsRectifiedCalibration) {
@@ -71,21 +77,19 @@ TEST(Convert, KittiExcerptBecomesARawLogWithItsRectifiedCalibration) {
 // EuRoC -> log -> PNG pairs (swf-grab's names) -> log: the same pixels, the IMU before its frame.
 TEST(Convert, PngPairsOfALogConvertBackToTheSameFrames) {
   const std::string dir = Temp("pngs");
-  LogInputOptions o;
-  o.log_path = dir + "/euroc.lcmlog";
-  o.max_frames = 3;
+  const std::string euroc = dir + "/euroc.lcmlog";
   InputSummary s;
-  std::string error;
-  ASSERT_TRUE(EurocToLog(Shared("euroc-v101"), o, &s, &error)) << error;
+  ASSERT_NO_FATAL_FAILURE(ConvertEuroc(euroc, 3, &s));
   EXPECT_EQ(s.frames, 3);
   EXPECT_GT(s.imu_samples, 0);
+  std::string error;
   std::int64_t pairs = 0;
-  ASSERT_TRUE(LogToPngs(o.log_path, "SWF_STEREO", dir + "/pngs", &pairs, &error)) << error;
+  ASSERT_TRUE(LogToPngs(euroc, "SWF_STEREO", dir + "/pngs", &pairs, &error)) << error;
   EXPECT_EQ(pairs, 3);
   LogInputOptions g;
   g.log_path = dir + "/grab.lcmlog";
   ASSERT_TRUE(GrabToLog(dir + "/pngs", g, &s, &error)) << error;
-  const auto a = Frames(o.log_path);
+  const auto a = Frames(euroc);
   const auto b = Frames(g.log_path);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
@@ -96,7 +100,7 @@ TEST(Convert, PngPairsOfALogConvertBackToTheSameFrames) {
   // The log reader the replay uses serves every frame with the samples up to it.
   drivers::LogStereoSource source;
   source.SetImuChannel("SWF_IMU");
-  ASSERT_TRUE(source.Load(o.log_path, "SWF_STEREO", &error)) << error;
+  ASSERT_TRUE(source.Load(euroc, "SWF_STEREO", &error)) << error;
   EXPECT_TRUE(source.LoadError().empty()) << source.LoadError();
   EXPECT_EQ(source.NumFrames(), 3u);
 }
@@ -118,20 +122,18 @@ TEST(Convert, GrabFolderWithAMissingRightImageIsRefusedNamingIt) {
 
 TEST(Convert, CutLogAndLogWithoutOutputsAreRefusedNamingTheRecord) {
   const std::string dir = Temp("cut");
-  LogInputOptions o;
-  o.log_path = dir + "/euroc.lcmlog";
-  o.max_frames = 2;
+  const std::string euroc = dir + "/euroc.lcmlog";
   InputSummary s;
+  ASSERT_NO_FATAL_FAILURE(ConvertEuroc(euroc, 2, &s));
   std::string error;
-  ASSERT_TRUE(EurocToLog(Shared("euroc-v101"), o, &s, &error)) << error;
   std::int64_t n = 0;
-  EXPECT_FALSE(LogToTrajectory(o.log_path, "SWF_NAV", dir + "/t.txt", "", false, &n, &error));
+  EXPECT_FALSE(LogToTrajectory(euroc, "SWF_NAV", dir + "/t.txt", "", false, &n, &error));
   EXPECT_NE(error.find("no SWF_NAV records"), std::string::npos) << error;
   EXPECT_FALSE(fs::exists(dir + "/t.txt"));
-  fs::resize_file(o.log_path, fs::file_size(o.log_path) - 1000);
-  EXPECT_FALSE(LogToPngs(o.log_path, "SWF_STEREO", dir + "/pngs", &n, &error));
+  fs::resize_file(euroc, fs::file_size(euroc) - 1000);
+  EXPECT_FALSE(LogToPngs(euroc, "SWF_STEREO", dir + "/pngs", &n, &error));
   EXPECT_NE(error.find("record"), std::string::npos) << error;
-  EXPECT_NE(error.find(o.log_path), std::string::npos) << error;
+  EXPECT_NE(error.find(euroc), std::string::npos) << error;
 }
 
 TEST(Convert, MissingDatasetIsRefusedNamingIt) {
