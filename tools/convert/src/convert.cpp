@@ -312,22 +312,19 @@ namespace {
 template <typename Message, typename Each>
 bool ForEachMessage(const std::string& log_path, const std::string& channel, Each each,
                     std::string* error) {
-  drivers::LogReader reader;
-  if (!reader.Open(log_path, error)) return false;
-  drivers::LogEvent event;
-  for (;;) {
-    const int r = reader.Next(&event, error);
-    if (r == 0) return true;
-    if (r < 0) return false;
-    if (event.channel != channel) continue;
-    Message msg;
-    if (msg.decode(event.data.data(), 0, static_cast<int>(event.data.size())) < 0) {
-      *error = log_path + ": record " + std::to_string(event.index) + " (" + channel +
-               "): does not decode as " + Message::getTypeName();
-      return false;
-    }
-    if (!each(msg, event.index, error)) return false;
-  }
+  return drivers::ForEachLogEvent(
+      log_path,
+      [&](const drivers::LogEvent& event) {
+        if (event.channel != channel) return true;
+        Message msg;
+        if (msg.decode(event.data.data(), 0, static_cast<int>(event.data.size())) < 0) {
+          *error = log_path + ": record " + std::to_string(event.index) + " (" + channel +
+                   "): does not decode as " + Message::getTypeName();
+          return false;
+        }
+        return each(msg, event.index, error);
+      },
+      error);
 }
 
 bool WriteGrayPng(const std::string& path, const std::vector<std::uint8_t>& pixels, int width,

@@ -27,15 +27,14 @@ std::string Temp(const std::string& name) {
 
 std::vector<swf_msgs::stereo_frame_t> Frames(const std::string& log) {
   std::vector<swf_msgs::stereo_frame_t> frames;
-  drivers::LogReader reader;
   std::string error;
-  EXPECT_TRUE(reader.Open(log, &error)) << error;
-  drivers::LogEvent e;
-  while (reader.Next(&e, &error) == 1) {
-    if (e.channel != "SWF_STEREO") continue;
+  const auto decode = [&](const drivers::LogEvent& e) {
+    if (e.channel != "SWF_STEREO") return true;
     frames.emplace_back();
     EXPECT_GT(frames.back().decode(e.data.data(), 0, static_cast<int>(e.data.size())), 0);
-  }
+    return true;
+  };
+  EXPECT_TRUE(drivers::ForEachLogEvent(log, decode, &error)) << error;
   return frames;
 }
 

@@ -4,14 +4,9 @@
 
 namespace swf::evaluation {
 
-bool JudgeLog(const std::string& path, RunJudge* judge, LogTally* tally, std::string* error) {
-  drivers::LogReader reader;
-  if (!reader.Open(path, error)) return false;
-  drivers::LogEvent event;
-  for (;;) {
-    const int r = reader.Next(&event, error);
-    if (r == 0) return true;
-    if (r < 0) return false;
+bool JudgeLogs(const std::vector<std::string>& paths, RunJudge* judge, LogTally* tally,
+               std::string* error) {
+  const auto add = [&](const drivers::LogEvent& event) {
     ++tally->events;
     judge->Add(event.channel, event.data.data(), event.data.size());
     if (event.channel == judge->Channels().hazard &&
@@ -19,7 +14,12 @@ bool JudgeLog(const std::string& path, RunJudge* judge, LogTally* tally, std::st
             .Ok()) {
       tally->has_hazard_map = true;
     }
+    return true;
+  };
+  for (const std::string& path : paths) {
+    if (!drivers::ForEachLogEvent(path, add, error)) return false;
   }
+  return true;
 }
 
 }  // namespace swf::evaluation

@@ -130,12 +130,9 @@ int main(int argc, char** argv) {
 
   swf::evaluation::RunJudge judge(channels);
   swf::evaluation::LogTally tally;
-  for (const std::string& path : logs) {
-    std::string error;
-    if (!swf::evaluation::JudgeLog(path, &judge, &tally, &error)) {
-      std::fprintf(stderr, "swf-judge: %s\n", error.c_str());
-      return swf::cli::kExitFailed;
-    }
+  if (std::string error; !swf::evaluation::JudgeLogs(logs, &judge, &tally, &error)) {
+    std::fprintf(stderr, "swf-judge: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
   }
   const RunScore score = judge.Score();
   json report = Report(score, with_outputs);

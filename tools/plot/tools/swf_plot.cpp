@@ -94,12 +94,9 @@ int main(int argc, char** argv) {
 
   swf::evaluation::RunJudge judge;
   swf::evaluation::LogTally tally;
-  for (const std::string& path : logs) {
-    std::string error;
-    if (!swf::evaluation::JudgeLog(path, &judge, &tally, &error)) {
-      std::fprintf(stderr, "swf-plot: %s\n", error.c_str());
-      return swf::cli::kExitFailed;
-    }
+  if (std::string error; !swf::evaluation::JudgeLogs(logs, &judge, &tally, &error)) {
+    std::fprintf(stderr, "swf-plot: %s\n", error.c_str());
+    return swf::cli::kExitFailed;
   }
   const swf::evaluation::RunScore score = judge.Score();
   if (score.outputs.empty()) {

@@ -45,6 +45,20 @@ class LogReader {
   std::int64_t index_ = 0;
 };
 
+// Calls each(event) with every event of the log at `path`, in order. False with *error naming
+// the file or the damaged record, or when each returns false (having set *error itself).
+template <typename Each>
+bool ForEachLogEvent(const std::string& path, Each each, std::string* error) {
+  LogReader reader;
+  if (!reader.Open(path, error)) return false;
+  LogEvent event;
+  for (;;) {
+    const int r = reader.Next(&event, error);
+    if (r <= 0) return r == 0;
+    if (!each(event)) return false;
+  }
+}
+
 // The stereo stream of a log, as the sequence and time checks found it. Frames must come with
 // consecutive sequence numbers and advancing exposure times: a gap is frames missing from the log
 // (served as pair.dropped_before) unless the frame after it recorded them as dropped by the camera

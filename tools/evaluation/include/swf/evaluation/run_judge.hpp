@@ -174,7 +174,7 @@ class RunJudge {
   std::string first_decode_error_;
 };
 
-// What JudgeLog read besides what it gave the judge.
+// What JudgeLogs read besides what it gave the judge.
 struct LogTally {
   std::int64_t events = 0;
   swf_msgs::hazard_map_t
@@ -182,8 +182,9 @@ struct LogTally {
   bool has_hazard_map = false;
 };
 
-// Every event of one LCM log to the judge (a recorded run judged like a live one); false with the
-// error naming the file and record.
-bool JudgeLog(const std::string& path, RunJudge* judge, LogTally* tally, std::string* error);
+// Every event of the LCM logs, log after log, to the judge (a recorded run judged like a live
+// one); false at the first unreadable log or damaged record, with the error naming it.
+bool JudgeLogs(const std::vector<std::string>& paths, RunJudge* judge, LogTally* tally,
+               std::string* error);
 
 }  // namespace swf::evaluation
