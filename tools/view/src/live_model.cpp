@@ -229,6 +229,16 @@ struct LiveModel::State {
     return true;
   }
 
+  // Swaps the decoded message in as the latest of its channel when its sequence number says to
+  // use it. False when it was not taken.
+  template <typename Msg>
+  bool TakeInSequence(ChannelCounters* c, Msg* scratch, Msg* latest, bool* has) {
+    if (!Sequence(c, scratch->seq)) return false;
+    std::swap(*latest, *scratch);
+    *has = true;
+    return true;
+  }
+
   void Bump(Part part) { ++versions[part]; }
 };
 
@@ -297,13 +307,11 @@ void LiveModel::Ingest(const std::string& channel, const void* data, std::size_t
   switch (kind) {
     case Kind::kNav: {
       const bool restart = c.next_seq > 0 && s.scratch_nav.seq == 0;
-      if (!s.Sequence(&c, s.scratch_nav.seq)) break;
+      if (!s.TakeInSequence(&c, &s.scratch_nav, &s.nav, &s.has_nav)) break;
       if (restart) {
         s.track.clear();
         s.truth_by_frame.clear();
       }
-      std::swap(s.nav, s.scratch_nav);
-      s.has_nav = true;
       TrackPoint point;
       point.frame_seq = s.nav.frame_seq;
       std::copy(s.nav.position_world_m, s.nav.position_world_m + 3, point.estimate_m);
@@ -343,10 +351,7 @@ void LiveModel::Ingest(const std::string& channel, const void* data, std::size_t
       break;
     }
     case Kind::kLandmarks:
-      if (!s.Sequence(&c, s.scratch_map.seq)) break;
-      std::swap(s.map, s.scratch_map);
-      s.has_map = true;
-      s.Bump(kLandmarks);
+      if (s.TakeInSequence(&c, &s.scratch_map, &s.map, &s.has_map)) s.Bump(kLandmarks);
       break;
     case Kind::kTruthLandmarks:
       ++c.received;
@@ -355,23 +360,17 @@ void LiveModel::Ingest(const std::string& channel, const void* data, std::size_t
       s.Bump(kLandmarks);
       break;
     case Kind::kHazard:
-      if (!s.Sequence(&c, s.scratch_hazard.seq)) break;
-      std::swap(s.hazard, s.scratch_hazard);
-      s.has_hazard = true;
+      if (!s.TakeInSequence(&c, &s.scratch_hazard, &s.hazard, &s.has_hazard)) break;
       s.Bump(kHazard);
       s.Bump(kStatus);
       break;
     case Kind::kHealth:
-      if (!s.Sequence(&c, s.scratch_health.seq)) break;
-      std::swap(s.health, s.scratch_health);
-      s.has_health = true;
-      s.Bump(kStatus);
+      if (s.TakeInSequence(&c, &s.scratch_health, &s.health, &s.has_health)) s.Bump(kStatus);
       break;
     case Kind::kFeatures:
-      if (!s.Sequence(&c, s.scratch_features.seq)) break;
-      std::swap(s.features, s.scratch_features);
-      s.has_features = true;
-      s.Bump(kFeatures);
+      if (s.TakeInSequence(&c, &s.scratch_features, &s.features, &s.has_features)) {
+        s.Bump(kFeatures);
+      }
       break;
     case Kind::kStereo:
       if (!s.Sequence(&c, s.scratch_frame.seq)) break;
