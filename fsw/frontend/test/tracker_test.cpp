@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <vector>
 
 #include "swf/frontend/harris.hpp"
 #include "swf/testing/allocation_counter.hpp"
@@ -124,33 +125,54 @@ TestImage RenderWarped(const testing::Texture& texture, const Eigen::Matrix3d& h
   });
 }
 
-// GIVEN a view rotated by 15 deg and scaled by 1.2 (paper 4.1.2: descent imagery) WHEN tracking
-// the reference patches warped by the true homography THEN the error is subpixel-accurate, and
-// better than square-patch tracking of the same features.
-TEST(PatchTrackerTest, WarpedTrackingBeatsSquarePatches) {
-  const testing::Texture texture(33);
-  const TestImage a = texture.RenderShifted<TestImage>(400, 300, 0.0, 0.0);
-  const Eigen::Matrix3d h = RotatedAndScaled();
-  const TestImage b = RenderWarped(texture, h);
+// A corner of the reference view and its true position in the warped view.
+struct WarpedCorner {
+  Corner corner;
+  double x = 0.0;
+  double y = 0.0;
+};
+
+// The corners of `a` that the homography h takes at least `margin` px inside the 400 x 300 view.
+std::vector<WarpedCorner> CornersInside(const TestImage& a, const Eigen::Matrix3d& h,
+                                        double margin) {
+  std::vector<WarpedCorner> inside;
+  for (const Corner& corner : testing::DetectCorners(a)) {
+    const Eigen::Vector3d t = h * Eigen::Vector3d(corner.x, corner.y, 1.0);
+    const double x = t.x() / t.z();
+    const double y = t.y() / t.z();
+    if (x < margin || y < margin || x > 400 - margin || y > 300 - margin) continue;
+    inside.push_back({corner, x, y});
+  }
+  return inside;
+}
+
+// A textured view and the same texture rotated by 15 deg and scaled by 1.2 (paper 4.1.2: descent
+// imagery), h taking the first to the second.
+class WarpedViewTest : public ::testing::Test {
+ protected:
+  const testing::Texture texture_{33};
+  const TestImage a_ = texture_.RenderShifted<TestImage>(400, 300, 0.0, 0.0);
+  const Eigen::Matrix3d h_ = RotatedAndScaled();
+  const TestImage b_ = RenderWarped(texture_, h_);
+};
+
+// GIVEN the rotated and scaled view WHEN tracking the reference patches warped by the true
+// homography THEN the error is subpixel-accurate, and better than square-patch tracking of the
+// same features.
+TEST_F(WarpedViewTest, WarpedTrackingBeatsSquarePatches) {
   PatchTracker tracker;
   ASSERT_EQ(tracker.Configure(TrackerOptions{}), core::Status::kOk);
-  const CornerList corners = testing::DetectCorners(a);
+  const std::vector<WarpedCorner> candidates = CornersInside(a_, h_, 20);
   std::vector<double> warped_errors;
   std::vector<double> square_errors;
-  std::size_t candidates = 0;
-  for (const Corner& corner : corners) {
-    const Eigen::Vector3d t = h * Eigen::Vector3d(corner.x, corner.y, 1.0);
-    const double tx = t.x() / t.z();
-    const double ty = t.y() / t.z();
-    if (tx < 20 || ty < 20 || tx > 380 || ty > 280) continue;
-    ++candidates;
+  for (const auto& [corner, tx, ty] : candidates) {
     PatchTemplate tmpl;
-    ASSERT_TRUE(tracker.ExtractTemplate(a.View(), corner.x, corner.y, &tmpl));
+    ASSERT_TRUE(tracker.ExtractTemplate(a_.View(), corner.x, corner.y, &tmpl));
     // Prediction off by (0.8, -0.6) px, as from a noisy pose.
     float x = static_cast<float>(tx + 0.8);
     float y = static_cast<float>(ty - 0.6);
     float q = 0.0f;
-    if (tracker.TrackWarped(b.View(), tmpl, h, &x, &y, &q)) {
+    if (tracker.TrackWarped(b_.View(), tmpl, h_, &x, &y, &q)) {
       warped_errors.push_back(std::hypot(x - tx, y - ty));
     }
     // Square patch: the same template with a pure translation as the warp.
@@ -159,12 +181,12 @@ TEST(PatchTrackerTest, WarpedTrackingBeatsSquarePatches) {
     translation(1, 2) = ty - corner.y;
     x = static_cast<float>(tx + 0.8);
     y = static_cast<float>(ty - 0.6);
-    if (tracker.TrackWarped(b.View(), tmpl, translation, &x, &y, &q)) {
+    if (tracker.TrackWarped(b_.View(), tmpl, translation, &x, &y, &q)) {
       square_errors.push_back(std::hypot(x - tx, y - ty));
     }
   }
-  ASSERT_GE(candidates, 50u);
-  EXPECT_GE(warped_errors.size(), candidates * 9 / 10);
+  ASSERT_GE(candidates.size(), 50u);
+  EXPECT_GE(warped_errors.size(), candidates.size() * 9 / 10);
   EXPECT_LE(Median(warped_errors), 0.1);
   std::printf("warped: %zu tracked, median %.3f px; square: %zu tracked, median %.3f px\n",
               warped_errors.size(), Median(warped_errors), square_errors.size(),
@@ -175,50 +197,40 @@ TEST(PatchTrackerTest, WarpedTrackingBeatsSquarePatches) {
 // GIVEN the rotated and scaled view and a prediction 9 px off (beyond warped LK's reach for some
 // features; a 10 px search radius) WHEN LK is started there THEN the search around the
 // prediction (SearchWarped) finds those too, with subpixel error, without allocating.
-TEST(PatchTrackerTest, SearchRecoversWhatWarpedLkLoses) {
-  const testing::Texture texture(33);
-  const TestImage a = texture.RenderShifted<TestImage>(400, 300, 0.0, 0.0);
-  const Eigen::Matrix3d h = RotatedAndScaled();
-  const TestImage b = RenderWarped(texture, h);
+TEST_F(WarpedViewTest, SearchRecoversWhatWarpedLkLoses) {
   PatchTracker tracker;
   TrackerOptions options;
   options.search_radius_px = 10;
   ASSERT_EQ(tracker.Configure(options), core::Status::kOk);
-  const CornerList corners = testing::DetectCorners(a);
-  std::size_t candidates = 0;
+  const std::vector<WarpedCorner> candidates = CornersInside(a_, h_, 30);
   std::size_t lk_right = 0;  // LK alone ends within 0.5 px of the truth
   std::vector<double> search_errors;
   std::uint64_t allocations = 0;
-  for (const Corner& corner : corners) {
-    const Eigen::Vector3d t = h * Eigen::Vector3d(corner.x, corner.y, 1.0);
-    const double tx = t.x() / t.z();
-    const double ty = t.y() / t.z();
-    if (tx < 30 || ty < 30 || tx > 370 || ty > 270) continue;
-    ++candidates;
+  for (const auto& [corner, tx, ty] : candidates) {
     PatchTemplate tmpl;
-    ASSERT_TRUE(tracker.ExtractTemplate(a.View(), corner.x, corner.y, &tmpl));
+    ASSERT_TRUE(tracker.ExtractTemplate(a_.View(), corner.x, corner.y, &tmpl));
     const float px = static_cast<float>(tx + 7.2);
     const float py = static_cast<float>(ty - 5.4);
     float x = px;
     float y = py;
     float q = 0.0f;
-    if (tracker.TrackWarped(b.View(), tmpl, h, &x, &y, &q) && std::hypot(x - tx, y - ty) < 0.5) {
+    if (tracker.TrackWarped(b_.View(), tmpl, h_, &x, &y, &q) && std::hypot(x - tx, y - ty) < 0.5) {
       ++lk_right;
     }
     x = px;
     y = py;
     swf::testing::AllocationScope scope;
-    const bool found = tracker.SearchWarped(b.View(), tmpl, h, &x, &y, &q);
+    const bool found = tracker.SearchWarped(b_.View(), tmpl, h_, &x, &y, &q);
     allocations += scope.Count();
     if (found) search_errors.push_back(std::hypot(x - tx, y - ty));
   }
   std::printf(
       "prediction 9 px off: LK alone right for %zu of %zu, the search found %zu, "
       "median %.3f px\n",
-      lk_right, candidates, search_errors.size(), Median(search_errors));
-  ASSERT_GE(candidates, 50u);
+      lk_right, candidates.size(), search_errors.size(), Median(search_errors));
+  ASSERT_GE(candidates.size(), 50u);
   EXPECT_EQ(allocations, 0u);
-  EXPECT_GE(search_errors.size(), candidates * 9 / 10);
+  EXPECT_GE(search_errors.size(), candidates.size() * 9 / 10);
   EXPECT_GE(search_errors.size(), lk_right + 5);  // measured: 186 against 177
   EXPECT_LE(Median(search_errors), 0.1);
 }
