@@ -21,6 +21,7 @@
 
 namespace {
 
+using swf::testing::OneStageHealth;
 using swf::testing::SafeAndRockCells;
 using swf::testing::TwoLandmarks;
 
@@ -81,13 +82,7 @@ TEST(Messages, NavStateLandmarksHazardHealthRoundTrip) {
   EXPECT_EQ(RoundTrip(hazard, &buffer).hazard_class[1], swf_msgs::hazard_map_t::CLASS_UNCERTAIN);
   EXPECT_NE(swf_msgs::hazard_map_t::CLASS_UNCERTAIN, swf_msgs::hazard_map_t::CLASS_SAFE);
 
-  swf_msgs::health_t health{};
-  health.num_stages = 1;
-  health.stage_name = {"track"};
-  health.stage_p50_ms = {1.5f};
-  health.stage_p99_ms = {2.5f};
-  health.stage_max_ms = {3.5f};
-  EXPECT_EQ(RoundTrip(health, &buffer).stage_name[0], "track");
+  EXPECT_EQ(RoundTrip(OneStageHealth(), &buffer).stage_name[0], "track");
 }
 
 // ---- checked decoding ------------------------------------------------------------------------

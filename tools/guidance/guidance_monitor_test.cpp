@@ -110,13 +110,7 @@ TEST_F(GuidanceMonitorTest, HostileLengthFieldsAreCountedNotFatal) {
     PutInt32(&bytes, kNumLandmarks, bad);
     ASSERT_EQ(lcm_.publish("SWF_LANDMARKS", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
   }
-  swf_msgs::health_t health{};
-  health.num_stages = 1;
-  health.stage_name = {"track"};
-  health.stage_p50_ms = {1.0f};
-  health.stage_p99_ms = {1.0f};
-  health.stage_max_ms = {1.0f};
-  std::vector<std::uint8_t> bytes = Encode(health);
+  std::vector<std::uint8_t> bytes = Encode(swf::testing::OneStageHealth());
   PutInt32(&bytes, 8 + 153 + 4 + 4, 0);  // the stage name's length: 0 (with its NUL it is >= 1)
   ASSERT_EQ(lcm_.publish("SWF_HEALTH", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
   map.seq = 1;

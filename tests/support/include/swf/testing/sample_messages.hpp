@@ -2,6 +2,7 @@
 #pragma once
 
 #include "swf_msgs/hazard_map_t.hpp"
+#include "swf_msgs/health_t.hpp"
 #include "swf_msgs/landmark_map_t.hpp"
 
 namespace swf::testing {
@@ -30,6 +31,17 @@ inline swf_msgs::hazard_map_t SafeAndRockCells() {
   hazard.roughness_m = {0.0f, 0.3f};
   hazard.hazard_class = {swf_msgs::hazard_map_t::CLASS_SAFE, swf_msgs::hazard_map_t::CLASS_ROCK};
   return hazard;
+}
+
+// Health with one timed stage, "track".
+inline swf_msgs::health_t OneStageHealth() {
+  swf_msgs::health_t health{};
+  health.num_stages = 1;
+  health.stage_name = {"track"};
+  health.stage_p50_ms = {1.5f};
+  health.stage_p99_ms = {2.5f};
+  health.stage_max_ms = {3.5f};
+  return health;
 }
 
 }  // namespace swf::testing
