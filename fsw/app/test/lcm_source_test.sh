@@ -17,8 +17,7 @@ here=$(dirname "$0")
 export private_network_sh="$(cd "$here/../../../tests/support/sh" && pwd)/private_network.sh"
 . "$private_network_sh"
 choose_private_network || fail "cannot create a network namespace (root or unprivileged userns)"
-dir=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
+make_scratch_dir
 cat > "$dir/lcm.cfg" <<CFG
 source: lcm
 lcm_source.channel: CAM_STEREO

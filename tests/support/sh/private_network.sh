@@ -5,6 +5,13 @@
 
 fail() { echo "FAIL: $*" >&2; exit 1; }
 
+# Sets $dir to a new scratch directory, removed at exit unless KEEP is set (to look into after a
+# failure).
+make_scratch_dir() {
+  dir=$(mktemp -d)
+  trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
+}
+
 # Sets $ns to the command that runs its arguments in a new network namespace: `unshare -n` as
 # root, an unprivileged user namespace otherwise. Fails (status 1) where neither can be made.
 choose_private_network() {

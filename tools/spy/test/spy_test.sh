@@ -17,8 +17,7 @@ if ! choose_private_network; then
   exit 77
 fi
 command -v xvfb-run >/dev/null || fail "xvfb-run is not installed (tools/run installs xvfb)"
-dir=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
+make_scratch_dir
 frames=10
 $ns sh -c '
   set -e

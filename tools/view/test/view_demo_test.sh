@@ -15,8 +15,7 @@ export private_network_sh="$(cd "$(dirname "$0")/../../../tests/support/sh" && p
 . "$private_network_sh"
 choose_private_network || fail "cannot create a network namespace (root or unprivileged user namespaces)"
 command -v chromium >/dev/null || fail "chromium is not installed (tools/run installs it)"
-dir=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
+make_scratch_dir
 frames=20
 $ns sh -c '
   set -e

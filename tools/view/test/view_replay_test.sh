@@ -10,8 +10,7 @@ sil=$1 replay=$2 view=$3 cfg=$4 check=$5
 export private_network_sh="$(cd "$(dirname "$0")/../../../tests/support/sh" && pwd)/private_network.sh"
 . "$private_network_sh"
 choose_private_network || fail "cannot create a network namespace (root or unprivileged user namespaces)"
-dir=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
+make_scratch_dir
 frames=10
 "$sil" --config "$cfg" --set "pacing: lockstep" --set "rt.mlockall: false" --set "rt.priority: 0" \
   --set "sim.frames: $frames" --set "lcm.publish: false" --set "record.path: $dir/flown.lcmlog" \

@@ -12,8 +12,7 @@ view=$1 publisher=$2 clients=$3
 export private_network_sh="$(cd "$(dirname "$0")/../../../tests/support/sh" && pwd)/private_network.sh"
 . "$private_network_sh"
 choose_private_network || fail "cannot create a network namespace (root or unprivileged user namespaces)"
-dir=$(mktemp -d)
-trap '[ -n "${KEEP:-}" ] || rm -rf "$dir"' EXIT
+make_scratch_dir
 $ns sh -c '
   set -e
   . "$private_network_sh"
