@@ -217,18 +217,51 @@ Served LoadAndServe(const std::string& path, drivers::LogStereoSource* source) {
   return out;
 }
 
-// GIVEN a log whose frame 2 is missing WHEN replayed THEN the gap reaches the flight loop as
-// dropped_before on the next frame and is counted as missing (it replayed as 0 dropped frames).
-TEST(LcmIoTest, AGapInTheSequenceIsCountedAsDroppedFrames) {
+// A replayed stream: the sequence numbers (and exposure times) of the frames a log holds, and
+// what the log source must serve of them. Frames are never fused out of order: a refused frame
+// (a duplicate or one behind in number or time) is one the source rejected.
+struct StreamCase {
+  const char* name;
+  std::vector<std::int64_t> seqs;
+  std::vector<std::int64_t> utimes;  // empty: 100 ms apart by sequence number
+  std::vector<std::uint64_t> served;
+  std::vector<std::uint32_t> dropped_before;
+  std::int64_t frames_missing = 0;
+  std::int64_t duplicates = 0;
+  std::int64_t out_of_order = 0;
+};
+
+class ReplayedStreamTest : public ::testing::TestWithParam<StreamCase> {};
+
+TEST_P(ReplayedStreamTest, IsServedInOrderWithWhatIsMissingOrRefusedCounted) {
+  const StreamCase& c = GetParam();
   drivers::LogStereoSource source;
-  const Served s = LoadAndServe(WriteSequence("gap.lcmlog", {0, 1, 3, 4}), &source);
+  const std::string name = std::string(c.name) + ".lcmlog";
+  const Served s = LoadAndServe(WriteSequence(name.c_str(), c.seqs, c.utimes), &source);
   EXPECT_TRUE(source.LoadError().empty()) << source.LoadError();
-  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3, 4}));
-  EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 0, 1, 0}));
-  EXPECT_EQ(source.StreamStats().frames_missing, 1);
-  EXPECT_EQ(source.StreamStats().Refused(), 0);
-  EXPECT_EQ(s.stats.frames_rejected, 0u);
+  EXPECT_EQ(s.seqs, c.served);
+  EXPECT_EQ(s.dropped_before, c.dropped_before);
+  EXPECT_EQ(source.StreamStats().frames_missing, c.frames_missing);
+  EXPECT_EQ(source.StreamStats().duplicates, c.duplicates);
+  EXPECT_EQ(source.StreamStats().out_of_order, c.out_of_order);
+  EXPECT_EQ(s.stats.frames_rejected, static_cast<std::uint64_t>(c.duplicates + c.out_of_order));
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    Logs, ReplayedStreamTest,
+    ::testing::Values(
+        // Frame 2 missing: the gap reaches the flight loop as dropped_before on the next frame
+        // and is counted as missing (it replayed as 0 dropped frames).
+        StreamCase{"gap", {0, 1, 3, 4}, {}, {0, 1, 3, 4}, {0, 0, 1, 0}, 1, 0, 0},
+        // A frame recorded twice: the second copy is refused as a duplicate.
+        StreamCase{"duplicate", {0, 1, 1, 2}, {}, {0, 1, 2}, {0, 0, 0}, 0, 1, 0},
+        // Frames 1 and 2 swapped: frame 2 is served with one frame missing before it and frame
+        // 1, now behind, is refused.
+        StreamCase{"swap", {0, 2, 1, 3}, {}, {0, 2, 3}, {0, 1, 0}, 1, 0, 1},
+        // Consecutive numbers whose exposure times go back (frames renumbered after a swap): the
+        // frame behind in time is refused, and its number is then missing from what was served.
+        StreamCase{"time", {0, 1, 2, 3}, {100, 300, 200, 400}, {0, 1, 3}, {0, 0, 1}, 1, 0, 1}),
+    [](const ::testing::TestParamInfo<StreamCase>& info) { return std::string(info.param.name); });
 
 // GIVEN a log of a source that numbers its frames across the camera's losses (the simulator): frame
 // 3 recorded with dropped_before 1 after frame 1, and frame 9 with dropped_before 2 after frame 4
@@ -254,41 +287,6 @@ TEST(LcmIoTest, AGapTheCameraRecordedAsDroppedIsNotMissingFromTheLog) {
   EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3, 4, 9}));
   EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 0, 1, 0, 4}));
   EXPECT_EQ(source.StreamStats().frames_missing, 2);
-}
-
-// GIVEN a frame recorded twice WHEN replayed THEN the second copy is refused, counted as a
-// duplicate and as a frame the source rejected.
-TEST(LcmIoTest, ADuplicatedFrameIsRefused) {
-  drivers::LogStereoSource source;
-  const Served s = LoadAndServe(WriteSequence("dup.lcmlog", {0, 1, 1, 2}), &source);
-  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 2}));
-  EXPECT_EQ(source.StreamStats().duplicates, 1);
-  EXPECT_EQ(source.StreamStats().frames_missing, 0);
-  EXPECT_EQ(s.stats.frames_rejected, 1u);
-}
-
-// GIVEN frames 1 and 2 swapped WHEN replayed THEN frame 2 is served with one frame missing before
-// it and frame 1, now behind, is refused, never fused out of order.
-TEST(LcmIoTest, ASwappedPairIsAGapAndARefusal) {
-  drivers::LogStereoSource source;
-  const Served s = LoadAndServe(WriteSequence("swap.lcmlog", {0, 2, 1, 3}), &source);
-  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 2, 3}));
-  EXPECT_EQ(s.dropped_before, (std::vector<std::uint32_t>{0, 1, 0}));
-  EXPECT_EQ(source.StreamStats().out_of_order, 1);
-  EXPECT_EQ(source.StreamStats().frames_missing, 1);
-  EXPECT_EQ(s.stats.frames_rejected, 1u);
-}
-
-// GIVEN consecutive sequence numbers whose exposure times go back (frames renumbered after a
-// swap) WHEN replayed THEN the frame behind in time is refused as out of order.
-TEST(LcmIoTest, AnExposureTimeGoingBackIsRefused) {
-  drivers::LogStereoSource source;
-  const Served s =
-      LoadAndServe(WriteSequence("time.lcmlog", {0, 1, 2, 3}, {100, 300, 200, 400}), &source);
-  EXPECT_EQ(s.seqs, (std::vector<std::uint64_t>{0, 1, 3}));
-  EXPECT_EQ(source.StreamStats().out_of_order, 1);
-  // The refused frame's number is then missing from the stream that was served.
-  EXPECT_EQ(source.StreamStats().frames_missing, 1);
 }
 
 // GIVEN a frame on a misspelled channel WHEN replayed THEN it is not silently skipped: the hole
