@@ -389,6 +389,18 @@ std::vector<std::uint8_t> EncodeImu(std::int64_t seq, std::int64_t utime) {
   return swf::testing::Encode(m);
 }
 
+// Writes the records into the log `name` and loads its frames (SWF_STEREO) and IMU samples
+// (SWF_IMU) into *source; the log opens, so what went wrong in it is source->LoadError().
+void LoadWithImu(const char* name, const std::vector<FrameSpec>& specs,
+                 const std::vector<std::vector<std::uint8_t>>& payloads,
+                 drivers::LogStereoSource* source) {
+  const std::string path = TempPath(name);
+  WriteRecords(path, specs, payloads);
+  source->SetImuChannel("SWF_IMU");
+  std::string error;
+  ASSERT_TRUE(source->Load(path, "SWF_STEREO", &error)) << error;
+}
+
 // GIVEN a log with IMU samples recorded between the frames WHEN replayed THEN each frame serves
 // exactly the samples recorded before it (after the previous one), in their order, whatever
 // their stamps; samples after the last frame are never served.
@@ -412,12 +424,8 @@ TEST(LcmIoTest, ReplayServesTheImuSamplesRecordedBeforeEachFrame) {
   frame(1);
   frame(2);
   imu(1);
-  const std::string path = TempPath("imu.lcmlog");
-  WriteRecords(path, specs, payloads);
   drivers::LogStereoSource source;
-  source.SetImuChannel("SWF_IMU");
-  std::string error;
-  ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error)) << error;
+  ASSERT_NO_FATAL_FAILURE(LoadWithImu("imu.lcmlog", specs, payloads, &source));
   EXPECT_EQ(source.LoadError(), "");
   EXPECT_EQ(source.NumImuSamples(), 6u);
   ASSERT_EQ(source.Start(), core::Status::kOk);
@@ -442,12 +450,8 @@ TEST(LcmIoTest, AnUndecodableImuRecordStopsTheLoadNamingIt) {
   std::vector<std::vector<std::uint8_t>> payloads{EncodeFrame(specs[0]), EncodeImu(0, 150000),
                                                   EncodeFrame(specs[2])};
   payloads[1].resize(payloads[1].size() / 2);  // truncated message
-  const std::string path = TempPath("bad_imu.lcmlog");
-  WriteRecords(path, specs, payloads);
   drivers::LogStereoSource source;
-  source.SetImuChannel("SWF_IMU");
-  std::string error;
-  ASSERT_TRUE(source.Load(path, "SWF_STEREO", &error)) << error;
+  ASSERT_NO_FATAL_FAILURE(LoadWithImu("bad_imu.lcmlog", specs, payloads, &source));
   EXPECT_NE(source.LoadError().find("record 1 (SWF_IMU"), std::string::npos) << source.LoadError();
   EXPECT_NE(source.LoadError().find("imu_t does not decode"), std::string::npos);
   EXPECT_EQ(source.NumFrames(), 1u);
