@@ -34,11 +34,13 @@ struct Rig : FlightParts {
   std::unique_ptr<sim::PrerenderedStereoSource> source;
   LoopOptions loop_options;
 
-  explicit Rig(const std::string& text) {
+  // hold_depth_precision: SwfOptions::hold_depth_precision (0 = the fixed window).
+  explicit Rig(const std::string& text, double hold_depth_precision = 0.0) {
     std::string error;
     EXPECT_TRUE(testing::BuildSimWorld(text, &config, world.get(), &error)) << error;
     source = std::make_unique<sim::PrerenderedStereoSource>(&world->Frames());
     PipelineOptions po = testing::SmallRigOptions(*world);
+    po.swf.hold_depth_precision = hold_depth_precision;
     po.process_sigma_m = 0.05;
     po.process_sigma_rad = 0.001;
     po.initial_world_T_camera = world->Trajectory().WorldTCamera(0);
@@ -56,6 +58,7 @@ struct Rig : FlightParts {
 struct SteppedRun {
   std::uint64_t allocations = 0;  // heap allocations inside Step()
   int frames = 0;                 // cycles that returned kOk
+  int max_poses = 0;              // the most poses the filter's window held after a cycle
   // The first status other than kOk, kEmpty and (when timeouts are expected) kTimeout.
   core::Status unexpected = core::Status::kOk;
 };
@@ -71,6 +74,7 @@ SteppedRun StepUntilEmpty(FlightLoop* loop, Rig* rig, bool timeouts_expected,
       run.allocations += scope.Count();
     }
     rig->output.DrainOnce();
+    run.max_poses = std::max(run.max_poses, rig->pipeline->NumPoses());
     if (s == core::Status::kEmpty) break;
     run.frames += s == core::Status::kOk;
     if (s != core::Status::kOk && !(timeouts_expected && s == core::Status::kTimeout)) {
@@ -126,14 +130,23 @@ TEST(FlightLoopTest, HazardClassesMapToTheSchema) {
 // refinement in the loop and lost-track search included, THEN not one
 // allocation happens, every snapshot frame gives a hazard map, and the estimate stays within a
 // metre of the truth. Stereo-only with the motion input, and stereo-inertial with the simulated
-// MEMS IMU (its samples handed over and queued for recording every cycle).
-class FlightLoopAllocations : public ::testing::TestWithParam<bool> {};
+// MEMS IMU (its samples handed over and queued for recording every cycle), the latter also with
+// the held window (hold_depth_precision 0.5 %: at this resolution no landmark reaches it before
+// it leaves the view, so the window grows to the compiled capacity and stays there).
+struct AllocationCase {
+  bool inertial = false;
+  bool held = false;
+};
+
+class FlightLoopAllocations : public ::testing::TestWithParam<AllocationCase> {};
 
 TEST_P(FlightLoopAllocations, NoAllocationOnTheRealTimePathOverAWholeDescent) {
-  const bool inertial = GetParam();
+  const bool inertial = GetParam().inertial;
+  const bool held = GetParam().held;
   Rig rig(std::string("source: sim\nsim.width_px: 256\nsim.height_px: 192\n"
                       "sim.terrain_size: 1024\nrate_hz: 10\n") +
-          (inertial ? "sim.imu_unit: mems\nimu.enabled: true\n" : ""));
+              (inertial ? "sim.imu_unit: mems\nimu.enabled: true\n" : ""),
+          held ? 0.005 : 0.0);
   ASSERT_EQ(rig.world->NumFrames(), 91);
   ASSERT_EQ(rig.pipeline->Inertial(), inertial);
   HazardCollector hazards;
@@ -150,6 +163,11 @@ TEST_P(FlightLoopAllocations, NoAllocationOnTheRealTimePathOverAWholeDescent) {
   ASSERT_EQ(run.unexpected, core::Status::kOk) << core::ToString(run.unexpected);
   EXPECT_EQ(run.frames, 91);
   EXPECT_EQ(run.allocations, 0u);
+  if (held) {
+    EXPECT_EQ(run.max_poses, kMaxWindow);  // the counted path includes the longest window
+  } else {
+    EXPECT_LE(run.max_poses, 5);  // SmallRigOptions: window_size 5
+  }
   // The counted path includes refinement in the loop and the search for lost tracks.
   EXPECT_GT(rig.pipeline->Frontend().refined, 1000);
   EXPECT_GT(rig.pipeline->Frontend().searched, 0);
@@ -173,7 +191,13 @@ TEST_P(FlightLoopAllocations, NoAllocationOnTheRealTimePathOverAWholeDescent) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(StereoAndInertial, FlightLoopAllocations, ::testing::Bool());
+INSTANTIATE_TEST_SUITE_P(StereoInertialAndHeld, FlightLoopAllocations,
+                         ::testing::Values(AllocationCase{false, false},
+                                           AllocationCase{true, false}, AllocationCase{true, true}),
+                         [](const ::testing::TestParamInfo<AllocationCase>& info) {
+                           return std::string(info.param.inertial ? "Inertial" : "Stereo") +
+                                  (info.param.held ? "Held" : "Fixed");
+                         });
 
 // GIVEN a short descent WHEN it runs once with the hazard group on its own thread (lockstep
 // pacing) and once synchronously (Step) THEN every snapshot frame is mapped in both runs and the
