@@ -237,10 +237,10 @@ TEST(ImuPreintegration, TimeShiftJacobianMatchesMovingTheInterval) {
     Pim pim;
     EXPECT_EQ(pim.Reset(ImuNoise<double>{}, bias), Status::kOk);
     IntervalSummary summary;
-    EXPECT_EQ(PreintegrateInterval(samples.data(), static_cast<int>(samples.size()),
-                                   1000000 + shift_us, 1200000 + shift_us, SampleHold::kMidpoint,
-                                   1.0, &pim, &summary),
-              Status::kOk);
+    EXPECT_EQ(
+        PreintegrateInterval(samples.data(), static_cast<int>(samples.size()), 1000000 + shift_us,
+                             1200000 + shift_us, SampleHold::kMidpoint, 1.0, &pim, &summary),
+        Status::kOk);
     return pim;
   };
   const std::int64_t h_us = 2000;
@@ -249,10 +249,10 @@ TEST(ImuPreintegration, TimeShiftJacobianMatchesMovingTheInterval) {
   const Pim plus = integrate(h_us);
   const Pim minus = integrate(-h_us);
   Vec9<double> numeric;
-  numeric.segment<3>(Pim::kRotation) = LogSO3<double>(Mat3<double>(
-                                           minus.Increments().rotation.transpose() *
-                                           plus.Increments().rotation)) /
-                                       h;
+  numeric.segment<3>(Pim::kRotation) =
+      LogSO3<double>(
+          Mat3<double>(minus.Increments().rotation.transpose() * plus.Increments().rotation)) /
+      h;
   numeric.segment<3>(Pim::kVelocity) =
       (plus.Increments().velocity_mps - minus.Increments().velocity_mps) / h;
   numeric.segment<3>(Pim::kPosition) =
