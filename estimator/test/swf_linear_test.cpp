@@ -212,12 +212,12 @@ Batch<D> SolveBatch(const Problem<D>& pr, int last_frame) {
 // One capacity serves every window size (the window is a run-time option), which keeps this
 // file to one filter instantiation per D.
 constexpr int kCapacity = 16;
-template <int D>
-using LinearSwf = SlidingWindowFilter<LinearModel<D>, kCapacity, 64, 64, 64>;
+template <int D, int P = 64>
+using LinearSwf = SlidingWindowFilter<LinearModel<D>, kCapacity, 64, 64, P>;
 
-template <int D>
+template <int D, int P = 64>
 void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_frame) {
-  using Filter = LinearSwf<D>;
+  using Filter = LinearSwf<D, P>;
   using StateMat = Eigen::Matrix<double, D, D>;
   auto swf = std::make_unique<Filter>();
   SwfOptions options = pr.options;
@@ -279,6 +279,7 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_
     ++compared;
   });
   compared_prior = swf->NumPriorLandmarks();
+  EXPECT_EQ(swf->FaultBits(), 0u);  // no prior overflow, nothing dropped
   EXPECT_GT(compared, 5);
   if (mode != SwfMode::kBatch && last_frame + 1 > window) {
     // The interesting case: information reached these landmarks only through the prior.
@@ -327,6 +328,27 @@ TEST(SwfLinear, LongTracksFillThePriorAndStillMatch) { LongTracksFillThePriorAnd
 TEST(SwfLinear, LongTracksFillThePriorAndStillMatchExtendedState) {
   LongTracksFillThePriorAndStillMatch<15>();
 }
+
+// Landmarks seen once (a track lost at once) carry no information beyond themselves; those of
+// the marginalized pose must not take prior slots. 12 of them per frame beside the tracks
+// would overflow a prior of 10 landmarks if they entered it.
+template <int D>
+void OneShotLandmarksTakeNoPriorSlot() {
+  Problem<D> pr = MakeProblem<D>(6, 8, 12, 3, 8);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g(0.0, 3.0);
+  std::vector<Obs> merged;
+  std::size_t next = 0;
+  for (int j = 0; j < pr.frames; ++j) {
+    for (; next < pr.obs.size() && pr.obs[next].frame == j; ++next) merged.push_back(pr.obs[next]);
+    for (int k = 0; k < 12; ++k)
+      merged.push_back({j, pr.landmarks++, Vec3<double>(g(rng), g(rng), g(rng))});
+  }
+  pr.obs = merged;
+  ExpectEqualsBatch<D, 10>(pr, SwfMode::kSlidingWindow, 2, 7);
+  ExpectEqualsBatch<D, 10>(pr, SwfMode::kSlidingWindow, 1, 7);
+}
+TEST(SwfLinear, OneShotLandmarksTakeNoPriorSlot) { OneShotLandmarksTakeNoPriorSlot<6>(); }
 
 // A window of one pose against a Kalman filter over [pose ; landmarks], written here in covariance
 // form.

@@ -611,6 +611,17 @@ bool CapacitiesHold(const FswConfig& c, const std::string& origin, std::string* 
              " tracks at " + held_to + ")";
     return false;
   }
+  // Marginalizing a pose moves every landmark it shares with the rest of the window into the
+  // prior (eqs. 8-10); a frame's tracks are all such landmarks once the next frame tracks them.
+  // A prior without room for them drops their measurements (kFaultPriorCapacity) on every frame.
+  if (c.mode != "vo" && c.max_tracks > kMaxPriorLandmarks) {
+    *error = ConfigWhere(c, "max_tracks", origin) +
+             ": max_tracks: " + std::to_string(c.max_tracks) +
+             " tracks can all enter the prior when their pose is "
+             "marginalized, above the compiled prior capacity kMaxPriorLandmarks = " +
+             std::to_string(kMaxPriorLandmarks) + " (mode vo keeps no prior)";
+    return false;
+  }
   return true;
 }
 

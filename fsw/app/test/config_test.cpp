@@ -808,17 +808,37 @@ TEST(ConfigTest, RefusesWindowsAndTracksTheCompiledCapacitiesCannotHold) {
               " landmarks active, above the compiled capacity kMaxLandmarks = " +
               std::to_string(kMaxLandmarks) + " (at most " + std::to_string(fit) +
               " tracks at window " + k + ")");
-  // The defaults (window 5, 150 tracks) hold; at window 10 the limit is kMaxLandmarks / 11.
+  // The defaults (window 5, 150 tracks) hold; at window 10 the limit is kMaxLandmarks / 11
+  // (shown in mode vo, which keeps no prior to bound the tracks further).
   Accepted("source: sim\n");
   const int fit10 = kMaxLandmarks / 11;
   static_assert(kMaxLandmarks / 11 < static_cast<int>(frontend::kMaxTracks));
-  Accepted("source: sim\nwindow: 10\nmax_tracks: " + std::to_string(fit10) + "\n");
-  Refused("source: sim\nwindow: 10\nmax_tracks: " + std::to_string(fit10 + 1) + "\n",
-          "t.cfg:3: max_tracks: " + std::to_string(fit10 + 1) + " with window 10");
-  // The EKF's window of one holds every track count the front end allows.
+  Accepted("source: sim\nmode: vo\nwindow: 10\nmax_tracks: " + std::to_string(fit10) + "\n");
+  Refused("source: sim\nmode: vo\nwindow: 10\nmax_tracks: " + std::to_string(fit10 + 1) + "\n",
+          "t.cfg:4: max_tracks: " + std::to_string(fit10 + 1) + " with window 10");
+  // VO's window of one holds every track count the front end allows.
   static_assert(2 * frontend::kMaxTracks <= static_cast<std::size_t>(kMaxLandmarks));
-  Accepted("source: sim\nmode: ekf\nwindow: 1\nmax_tracks: " +
-           std::to_string(frontend::kMaxTracks) + "\n");
+  Accepted("source: sim\nmode: vo\nwindow: 1\nmax_tracks: " + std::to_string(frontend::kMaxTracks) +
+           "\n");
+}
+
+// Every track a marginalized pose shares with the window enters the prior (eqs. 8-10): a mode
+// that marginalizes refuses more tracks than the prior holds, at any window.
+TEST(ConfigTest, RefusesMoreTracksThanThePriorHolds) {
+  const std::string p = std::to_string(kMaxPriorLandmarks);
+  const std::string above = std::to_string(kMaxPriorLandmarks + 1);
+  static_assert(kMaxPriorLandmarks >= 150, "the demo's and flight_gige's 150 tracks");
+  static_assert(kMaxPriorLandmarks < static_cast<int>(frontend::kMaxTracks));
+  for (const std::string mode : {"swf", "vsdf", "ekf"}) {
+    const std::string head = "source: sim\nmode: " + mode + "\nwindow: 1\nmax_tracks: ";
+    Accepted(head + p + "\n");
+    Refused(head + above + "\n",
+            "t.cfg:4: max_tracks: " + above +
+                " tracks can all enter the prior when their pose is marginalized, above the "
+                "compiled prior capacity kMaxPriorLandmarks = " +
+                p + " (mode vo keeps no prior)");
+  }
+  Accepted("source: sim\nmode: vo\nwindow: 1\nmax_tracks: " + above + "\n");
 }
 
 // The held window (hold_depth_precision) grows to the compiled capacity whatever `window` says:
@@ -839,7 +859,7 @@ TEST(ConfigTest, HeldWindowIsCheckedAtTheCompiledCapacity) {
   // The same track count at the same window without the hold is the window's business only.
   const int fit10 = kMaxLandmarks / 11;
   static_assert(kMaxLandmarks / 11 > kMaxLandmarks / (kMaxWindow + 1));
-  Accepted("source: sim\nwindow: 10\nmax_tracks: " + std::to_string(fit10) + "\n");
+  Accepted("source: sim\nmode: vo\nwindow: 10\nmax_tracks: " + std::to_string(fit10) + "\n");
   Refused("source: sim\nwindow: 10\nhold_depth_precision: 0.005\nmax_tracks: " +
               std::to_string(fit10) + "\n",
           "t.cfg:4: max_tracks: " + std::to_string(fit10) + " with kMaxWindow " + k);

@@ -99,6 +99,14 @@ void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
     if (!o.valid) continue;
     LandmarkSlot& l = landmarks_[o.landmark];
     if (l.prior_index >= 0) continue;
+    if (l.obs_in_window == 1) {
+      // Seen from p0 alone: a stereo measurement (3 rows) of a landmark (3 parameters) tells
+      // nothing about the other states once the landmark is eliminated (its Schur complement,
+      // eq. 9, is zero), so it is left out instead of occupying a prior slot it would leave
+      // right after (Fig. 7c).
+      o.valid = false;
+      continue;
+    }
     if (prior_landmarks_.full()) {
       o.valid = false;  // its information is dropped, and reported
       fault_bits_ |= kFaultPriorCapacity;

@@ -42,11 +42,14 @@ namespace swf::app {
 // Compile-time capacities of the flight estimator (STYLE.md, memory). K is what the held window
 // (hold_depth_precision, docs/integrity.md) needs on the descent from 100 m: its first landmarks
 // reach 0.5 % depth precision after 25 frames. N lets each of those K + 1 poses bring the demo's
-// 150 tracks (26 x 150 = 3900); the configuration check refuses what does not fit.
+// 150 tracks (26 x 150 = 3900). P holds a frame's tracks: marginalizing a pose moves every
+// landmark it shares with the window into the prior (the demo's and flight_gige's 150, with room
+// for tracks the front end recovers after a gap). The configuration check refuses what does not
+// fit.
 inline constexpr int kMaxWindow = 25;                                 // K
 inline constexpr int kMaxLandmarks = 4096;                            // N (active in the window)
 inline constexpr int kMaxMeasurementsPerPose = frontend::kMaxTracks;  // M
-inline constexpr int kMaxPriorLandmarks = 96;                         // P
+inline constexpr int kMaxPriorLandmarks = 160;                        // P
 inline constexpr int kMaxMapLandmarks = kMaxLandmarks;  // landmarks in one published map
 
 using FlightSwf =
