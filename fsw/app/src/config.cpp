@@ -92,38 +92,16 @@ bool ParseInt(const std::string& v, std::int64_t* out, std::string* why) {
 
 namespace {
 
+// A finite number into the member `field`, inside [lo, hi].
 ConfigSetter Double(double FswConfig::*field, double lo, double hi) {
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0.0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (d < lo || d > hi) {
-      std::ostringstream o;
-      o << Excerpt(v) << " is outside [" << lo << ", " << hi << "]";
-      *why = o.str();
-      return false;
-    }
-    c->*field = d;
-    return true;
-  };
+  return Number([field](FswConfig* c) { return &(c->*field); }, lo, hi);
 }
 
 // Three finite numbers ("x y z" or "x, y, z") into field[3].
 template <typename Get>
 ConfigSetter Vector3(Get get) {
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    std::string spaced = v;
-    for (char& ch : spaced) ch = ch == ',' ? ' ' : ch;
-    std::istringstream in(spaced);
-    double p[3];
-    std::string rest;
-    if (!(in >> p[0] >> p[1] >> p[2]) || (in >> rest) || !std::isfinite(p[0]) ||
-        !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-      *why = Quoted(v) + " is not three finite numbers (x y z)";
-      return false;
-    }
-    for (int i = 0; i < 3; ++i) get(c)[i] = p[i];
-    return true;
-  };
+  return Numbers<3>(get, std::numeric_limits<double>::lowest(), std::numeric_limits<double>::max(),
+                    "x y z");
 }
 
 }  // namespace
@@ -143,18 +121,7 @@ namespace {
 
 // A non-negative finite number into a member of ImuConfig, at most hi.
 ConfigSetter ImuNumber(double ImuConfig::*field, double hi, double lo = 0.0) {
-  return [=](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0.0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (d < lo || d > hi) {
-      std::ostringstream o;
-      o << Excerpt(v) << " is outside [" << lo << ", " << hi << "]";
-      *why = o.str();
-      return false;
-    }
-    c->imu.*field = d;
-    return true;
-  };
+  return Number([field](FswConfig* c) { return &(c->imu.*field); }, lo, hi);
 }
 
 // Where the stereo pairs come from: the source and its log or LCM input.
@@ -213,16 +180,8 @@ void AddCameraFields(std::map<std::string, ConfigSetter>* fields) {
       OneOf([](FswConfig* c) { return &c->camera.format; }, {"grey", "y16", "yuyv"});
   // The V4L2 source holds up to 2 pairs and the kernel needs 2 more buffers to keep streaming.
   f["camera.buffers"] = Int<std::int32_t>([](FswConfig* c) { return &c->camera.buffers; }, 4, 16);
-  f["camera.pair_tolerance_ms"] = [](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (!(d >= 0.0 && d <= 1000.0)) {
-      *why = Excerpt(v) + " is outside [0, 1000]";
-      return false;
-    }
-    c->camera.pair_tolerance_ms = d;
-    return true;
-  };
+  f["camera.pair_tolerance_ms"] =
+      Number([](FswConfig* c) { return &c->camera.pair_tolerance_ms; }, 0.0, 1000.0);
   f["camera.exposure_us"] =
       Number([](FswConfig* c) { return &c->camera.exposure_us; }, 0.0, 1e8, true);
   f["camera.gain"] = Number([](FswConfig* c) { return &c->camera.gain; }, 0.0, 1e4);
@@ -315,16 +274,8 @@ void AddRunFields(std::map<std::string, ConfigSetter>* fields) {
   f["inject.frames"] =
       Int<std::int64_t>([](FswConfig* c) { return &c->inject_frames; }, 1, std::int64_t{1} << 40);
   f["inject.ms"] = Double(&FswConfig::inject_ms, 0.0, 60000.0);
-  f["envelope.min_range_m"] = [](const std::string& v, FswConfig* c, std::string* why) {
-    double d = 0.0;
-    if (!ParseDouble(v, &d, why)) return false;
-    if (!(d > 0.0 && d <= 1e6)) {
-      *why = Excerpt(v) + " is outside (0, 1e6]";
-      return false;
-    }
-    c->envelope_min_range_m = d;
-    return true;
-  };
+  f["envelope.min_range_m"] =
+      Number([](FswConfig* c) { return &c->envelope_min_range_m; }, 0.0, 1e6, true);
 }
 
 const std::map<std::string, ConfigSetter>& Fields() {

@@ -214,7 +214,7 @@ TEST(ConfigTest, ImuKeysParseAndBadOnesAreRefusedNamingTheField) {
   Refused("source: sim\nsim.imu_unit: consumer\n",
           "t.cfg:2: sim.imu_unit: 'consumer' is not one of");
   Refused("source: sim\nimu.camera_t_imu_m: 1 2\n",
-          "t.cfg:2: imu.camera_t_imu_m: '1 2' is not three");
+          "t.cfg:2: imu.camera_t_imu_m: '1 2' is not 3 finite numbers (x y z)");
   Refused("source: sim\nimu.gyro_noise_density: -1\n",
           "t.cfg:2: imu.gyro_noise_density: -1 is outside");
   Refused("source: sim\nimu.initial_velocity_mps: 0 nan 0\n", "t.cfg:2: imu.initial_velocity_mps:");
