@@ -10,23 +10,8 @@
 namespace swf::evaluation {
 
 HazardMapView ViewOf(const swf_msgs::hazard_map_t& m) {
-  HazardMapView v;
-  v.frame_seq = m.frame_seq;
-  v.origin_world_m[0] = m.origin_world_m[0];
-  v.origin_world_m[1] = m.origin_world_m[1];
-  v.cell_m = m.cell_size_m;
   const bool square = m.rows == m.cols && std::int64_t{m.rows} * m.cols == m.num_cells;
-  v.cells_per_side = square ? m.rows : 0;
-  v.elevation_m = m.elevation_m.data();
-  v.sigma_m = m.sigma_m.data();
-  v.relief_sigma_m = m.relief_sigma_m.data();
-  v.slope_deg = m.slope_deg.data();
-  v.hazard_class = m.hazard_class.data();
-  v.site_valid = m.safe_site_valid;
-  v.site_world_m[0] = m.safe_site_world_m[0];
-  v.site_world_m[1] = m.safe_site_world_m[1];
-  v.site_score = m.safe_site_score;
-  return v;
+  return ViewOfFields(m, square ? m.rows : 0, [](const auto& field) { return field.data(); });
 }
 
 bool SameGrid(const HazardMapView& m, const swf_msgs::hazard_truth_t& t) {

@@ -8,22 +8,8 @@
 namespace swf::hazard_eval {
 
 HazardMapView ViewOf(const app::HazardRecord& r) {
-  HazardMapView v;
-  v.frame_seq = r.frame_seq;
-  v.origin_world_m[0] = r.origin_world_m[0];
-  v.origin_world_m[1] = r.origin_world_m[1];
-  v.cell_m = r.cell_size_m;
-  v.cells_per_side = r.cells_per_side;
-  v.elevation_m = r.elevation_m.get();
-  v.sigma_m = r.sigma_m.get();
-  v.relief_sigma_m = r.relief_sigma_m.get();
-  v.slope_deg = r.slope_deg.get();
-  v.hazard_class = r.hazard_class.get();
-  v.site_valid = r.safe_site_valid;
-  v.site_world_m[0] = r.safe_site_world_m[0];
-  v.site_world_m[1] = r.safe_site_world_m[1];
-  v.site_score = r.safe_site_score;
-  return v;
+  return evaluation::ViewOfFields(r, r.cells_per_side,
+                                  [](const auto& field) { return field.get(); });
 }
 
 namespace {

@@ -52,6 +52,29 @@ struct HazardMapView {
 // cells in the view (cells_per_side 0): the flight process publishes square maps only.
 HazardMapView ViewOf(const swf_msgs::hazard_map_t& map);
 
+// The view of a map whose fields are named as hazard_map_t's: the decoded message, or the flight
+// process's record of it (swf/hazard_eval/map_metrics.hpp). What differs is said by the caller:
+// the side of the square grid (0: no cells) and how an array field yields its first element.
+template <typename Map, typename Data>
+HazardMapView ViewOfFields(const Map& m, int cells_per_side, Data data) {
+  HazardMapView v;
+  v.frame_seq = m.frame_seq;
+  v.origin_world_m[0] = m.origin_world_m[0];
+  v.origin_world_m[1] = m.origin_world_m[1];
+  v.cell_m = m.cell_size_m;
+  v.cells_per_side = cells_per_side;
+  v.elevation_m = data(m.elevation_m);
+  v.sigma_m = data(m.sigma_m);
+  v.relief_sigma_m = data(m.relief_sigma_m);
+  v.slope_deg = data(m.slope_deg);
+  v.hazard_class = data(m.hazard_class);
+  v.site_valid = m.safe_site_valid;
+  v.site_world_m[0] = m.safe_site_world_m[0];
+  v.site_world_m[1] = m.safe_site_world_m[1];
+  v.site_score = m.safe_site_score;
+  return v;
+}
+
 inline constexpr int kRockHeightClasses = 3;
 
 struct HazardMapMetrics {
