@@ -82,6 +82,21 @@ def range_prior(frames, landmark_rows):
     return None
 
 
+def accumulate(cam, poses, z, x, w, h, g):
+    """Adds each measurement's w J^T J to h and w J^T (z - p) to g at the landmark x; the
+    residuals z - p, or None when x is behind a camera."""
+    res = []
+    for (r, t), zk in zip(poses, z):
+        p, c = project(cam, r, t, x)
+        if not c[2] > 0.0:
+            return None
+        jk = jacobian(cam, r, c)
+        h += w * jk.T @ jk
+        g += w * jk.T @ (zk - p)
+        res.append(zk - p)
+    return res
+
+
 def track_residuals(cam, frames, observations, prior):
     """Gauss-Newton on the landmark with the true poses held (measurements weighted by the
     stated sigma, the prior in the same units); the scaled residuals, or None."""
@@ -93,26 +108,16 @@ def track_residuals(cam, frames, observations, prior):
     for _ in range(10):
         h = info.copy()
         g = -info @ (x - x0)
-        for (r, t), zk in zip(poses, z):
-            p, c = project(cam, r, t, x)
-            if not c[2] > 0.0:
-                return None
-            jk = jacobian(cam, r, c)
-            h += w * jk.T @ jk
-            g += w * jk.T @ (zk - p)
+        if accumulate(cam, poses, z, x, w, h, g) is None:
+            return None
         step = np.linalg.solve(h, g)
         x = x + step
         if np.linalg.norm(step) < 1e-9 * max(1.0, np.linalg.norm(x)):
             break
-    res = []
     h_obs = np.zeros((3, 3))
-    for (r, t), zk in zip(poses, z):
-        p, c = project(cam, r, t, x)
-        if not c[2] > 0.0:
-            return None
-        jk = jacobian(cam, r, c)
-        h_obs += w * jk.T @ jk
-        res.append(zk - p)
+    res = accumulate(cam, poses, z, x, w, h_obs, np.zeros(3))
+    if res is None:
+        return None
     p_eff = float(np.trace(h_obs @ np.linalg.inv(h_obs + info)))
     n = 2 * len(observations)
     if n - p_eff < 1.0:
