@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "euroc_imu.hpp"
+#include "input_file.hpp"
 #include "report.hpp"
 #include "swf/evaluation/statistics.hpp"
 #include "swf/frontend/rectify.hpp"
@@ -61,11 +62,8 @@ bool ParseCsvLine(const std::string& line, const std::string& where, ListedImage
 }
 
 bool ReadCsv(const std::string& path, std::vector<ListedImage>* frames, std::string* error) {
-  std::ifstream csv(path);
-  if (!csv) {
-    *error = path + ": cannot open";
-    return false;
-  }
+  std::ifstream csv;
+  if (!OpenInput(path, &csv, error)) return false;
   return ParseImageList(csv, path, frames, error);
 }
 
@@ -370,11 +368,8 @@ bool CheckCalibration(const frontend::CameraCalibration& c, const std::string& p
 }
 
 bool ReadTum(const std::string& path, std::vector<TumPose>* poses, std::string* error) {
-  std::ifstream file(path);
-  if (!file) {
-    *error = path + ": cannot open";
-    return false;
-  }
+  std::ifstream file;
+  if (!OpenInput(path, &file, error)) return false;
   std::string line;
   int number = 0;
   while (std::getline(file, line)) {

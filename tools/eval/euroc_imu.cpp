@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "input_file.hpp"
+
 namespace swf::eval {
 namespace {
 
@@ -69,11 +71,8 @@ struct ScalarKey {
 
 bool ReadEurocImuCalibration(const std::string& path, EurocImuCalibration* calibration,
                              std::string* error) {
-  std::ifstream file(path);
-  if (!file) {
-    *error = path + ": cannot open";
-    return false;
-  }
+  std::ifstream file;
+  if (!OpenInput(path, &file, error)) return false;
   EurocImuCalibration c;
   ScalarKey keys[] = {
       {"gyroscope_noise_density", &c.noise.gyro_noise_density, true},
@@ -161,11 +160,8 @@ bool ReadEurocImuCalibration(const std::string& path, EurocImuCalibration* calib
 
 bool ReadEurocImuSamples(const std::string& path,
                          std::vector<estimator::ImuSample<double>>* samples, std::string* error) {
-  std::ifstream file(path);
-  if (!file) {
-    *error = path + ": cannot open";
-    return false;
-  }
+  std::ifstream file;
+  if (!OpenInput(path, &file, error)) return false;
   samples->clear();
   std::string line;
   int number = 0;

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "euroc.hpp"  // CheckCalibration: the same bounds
+#include "input_file.hpp"
 #include "report.hpp"
 #include "swf/image_io/image_io.hpp"
 
@@ -74,11 +75,8 @@ bool ImageSize(const std::string& dir, int* width, int* height, std::string* err
 
 bool ReadKittiCalibration(const std::string& path, estimator::StereoCamera<double>* camera,
                           std::string* error) {
-  std::ifstream file(path);
-  if (!file) {
-    *error = path + ": cannot open";
-    return false;
-  }
+  std::ifstream file;
+  if (!OpenInput(path, &file, error)) return false;
   return ParseKittiCalibration(file, path, camera, error);
 }
 
@@ -119,11 +117,8 @@ bool ParseKittiCalibration(std::istream& file, const std::string& path,
 }
 
 bool ReadKittiPoses(const std::string& path, std::vector<PoseD>* poses, std::string* error) {
-  std::ifstream file(path);
-  if (!file) {
-    *error = path + ": cannot open";
-    return false;
-  }
+  std::ifstream file;
+  if (!OpenInput(path, &file, error)) return false;
   return ParseKittiPoses(file, path, poses, error);
 }
 
