@@ -387,7 +387,7 @@ core::Status AravisStereoSource::Start() {
       return s;
     }
     sequence_[side].Reset();
-    lost_since_pair_[side] = 0;
+    numbering_.Restart(side);
     last_frame_ns_[side] = now;
     held_[side] = Held{};
   }
@@ -419,7 +419,7 @@ core::Status AravisStereoSource::Fill(int side, std::int64_t wait_us) {
   // Block ids count every frame the camera sent, good or bad: gaps are frames lost entirely.
   const std::uint32_t lost = sequence_[side].Observe(arv_buffer_get_frame_id(buffer));
   stats_.frames_dropped += lost;
-  lost_since_pair_[side] += lost;
+  numbering_.Lose(side, lost);
   const ArvBufferStatus status = arv_buffer_get_status(buffer);
   std::size_t size = 0;
   const void* data = arv_buffer_get_data(buffer, &size);
@@ -433,7 +433,7 @@ core::Status AravisStereoSource::Fill(int side, std::int64_t wait_us) {
       ++extra_.other_bad;
     }
     ++stats_.frames_rejected;
-    ++lost_since_pair_[side];
+    numbering_.Lose(side);
     Recycle(side, buffer);
     trigger_pending_ = false;  // a triggered frame was lost: trigger again
     return core::Status::kOk;
@@ -444,7 +444,7 @@ core::Status AravisStereoSource::Fill(int side, std::int64_t wait_us) {
   if (options_.trigger == TriggerMode::kSoftware && arrival_ns < trigger_time_ns_) {
     // Answers an earlier trigger whose partner was lost: it can never pair with this trigger's.
     ++stats_.pairing_failures;
-    ++lost_since_pair_[side];
+    numbering_.Lose(side);
     Recycle(side, buffer);
     return core::Status::kOk;
   }
@@ -538,11 +538,8 @@ core::Status AravisStereoSource::Emit(std::int32_t slot_index, StereoPair* pair)
   if (!core::IsOk(result)) return result;
   pair->left_exposure_ns = times[0];
   pair->right_exposure_ns = times[1];
-  pair->seq = next_seq_++;
-  pair->dropped_before =
-      lost_since_pair_[0] > lost_since_pair_[1] ? lost_since_pair_[0] : lost_since_pair_[1];
+  numbering_.Number(pair);
   pair->handle = slot_index;
-  lost_since_pair_[0] = lost_since_pair_[1] = 0;
   slot.in_use = true;
   trigger_pending_ = false;
   ++stats_.pairs_served;
@@ -552,10 +549,7 @@ core::Status AravisStereoSource::Emit(std::int32_t slot_index, StereoPair* pair)
 core::Status AravisStereoSource::Next(core::TimeNs timeout_ns, StereoPair* pair) {
   if (!started_) return core::Status::kNotConfigured;
   if (pair == nullptr) return core::Status::kInvalidArgument;
-  std::int32_t slot_index = -1;
-  for (std::int32_t i = 0; i < options_.max_pairs_held && slot_index < 0; ++i) {
-    if (!slots_[i].in_use) slot_index = i;
-  }
+  const std::int32_t slot_index = FreeSlot(slots_, options_.max_pairs_held);
   if (slot_index < 0) return Fail(core::Status::kFull, "aravis: all pair slots are held");
   const core::TimeNs deadline_ns = core::MonotonicNs() + (timeout_ns > 0 ? timeout_ns : 0);
   for (int round = 0; round < kMaxRoundsPerNext; ++round) {
@@ -593,7 +587,7 @@ core::Status AravisStereoSource::Next(core::TimeNs timeout_ns, StereoPair* pair)
         case PairDecision::kDiscardRight: {
           const int side = decision == PairDecision::kDiscardLeft ? 0 : 1;
           ++stats_.pairing_failures;
-          ++lost_since_pair_[side];
+          numbering_.Lose(side);
           Recycle(side, held_[side].buffer);
           held_[side] = Held{};
           continue;

@@ -28,4 +28,11 @@ std::uint32_t SequenceTracker::Observe(std::uint64_t sequence) {
   return lost > 0xFFFFFFFFull ? 0xFFFFFFFFu : static_cast<std::uint32_t>(lost);
 }
 
+void PairNumbering::Number(StereoPair* pair) {
+  pair->seq = next_seq_++;
+  pair->dropped_before =
+      lost_since_pair_[0] > lost_since_pair_[1] ? lost_since_pair_[0] : lost_since_pair_[1];
+  lost_since_pair_[0] = lost_since_pair_[1] = 0;
+}
+
 }  // namespace swf::drivers

@@ -93,7 +93,7 @@ core::Status V4l2StereoSource::Start() {
     }
     sequence_[side].Reset();
     held_[side] = Held{};
-    lost_since_pair_[side] = 0;
+    numbering_.Restart(side);
   }
   consecutive_io_errors_[kLeft] = consecutive_io_errors_[kRight] = 0;
   last_frame_ns_[kLeft] = last_frame_ns_[kRight] = core::MonotonicNs();
@@ -117,7 +117,7 @@ core::Status V4l2StereoSource::Fill(int side) {
   if (s == core::Status::kCorruptData) {
     // EIO from DQBUF or a nonsense index: no frame, the stream goes on unless it persists.
     ++stats_.frames_rejected;
-    ++lost_since_pair_[side];
+    numbering_.Lose(side);
     if (++consecutive_io_errors_[side] >= options_.max_consecutive_io_errors) {
       return Error(core::Status::kIoError, "VIDIOC_DQBUF keeps failing", camera);
     }
@@ -127,11 +127,11 @@ core::Status V4l2StereoSource::Fill(int side) {
   consecutive_io_errors_[side] = 0;
   const std::uint32_t lost = sequence_[side].Observe(frame.sequence);
   stats_.frames_dropped += lost;
-  lost_since_pair_[side] += lost;
+  numbering_.Lose(side, lost);
   const SourceImageDesc& d = camera.Desc();
   if (frame.device_flagged_error || frame.bytes_used < RequiredBytes(d)) {
     ++stats_.frames_rejected;
-    ++lost_since_pair_[side];
+    numbering_.Lose(side);
     const core::Status q = camera.Requeue(frame.index);
     if (!core::IsOk(q)) return Error(q, "VIDIOC_QBUF", camera);
     return core::Status::kOk;
@@ -225,12 +225,8 @@ core::Status V4l2StereoSource::Emit(Slot& slot, std::int32_t slot_index, StereoP
   }
   pair->left_exposure_ns = lf.timestamp_ns;
   pair->right_exposure_ns = rf.timestamp_ns;
-  pair->seq = next_seq_++;
-  pair->dropped_before = lost_since_pair_[kLeft] > lost_since_pair_[kRight]
-                             ? lost_since_pair_[kLeft]
-                             : lost_since_pair_[kRight];
+  numbering_.Number(pair);
   pair->handle = slot_index;
-  lost_since_pair_[kLeft] = lost_since_pair_[kRight] = 0;
   slot.in_use = true;
   ++stats_.pairs_served;
   return core::Status::kOk;
@@ -239,13 +235,7 @@ core::Status V4l2StereoSource::Emit(Slot& slot, std::int32_t slot_index, StereoP
 core::Status V4l2StereoSource::Next(core::TimeNs timeout_ns, StereoPair* pair) {
   if (!started_) return core::Status::kNotConfigured;
   if (pair == nullptr) return core::Status::kInvalidArgument;
-  std::int32_t slot_index = -1;
-  for (std::int32_t i = 0; i < options_.max_pairs_held; ++i) {
-    if (!slots_[i].in_use) {
-      slot_index = i;
-      break;
-    }
-  }
+  const std::int32_t slot_index = FreeSlot(slots_, options_.max_pairs_held);
   if (slot_index < 0) {
     std::snprintf(last_error_, sizeof(last_error_), "v4l2: all %d pair slots are held",
                   options_.max_pairs_held);
@@ -272,12 +262,12 @@ core::Status V4l2StereoSource::Next(core::TimeNs timeout_ns, StereoPair* pair) {
         }
         case PairDecision::kDiscardLeft:
           ++stats_.pairing_failures;
-          ++lost_since_pair_[kLeft];
+          numbering_.Lose(kLeft);
           Discard(kLeft);
           continue;
         case PairDecision::kDiscardRight:
           ++stats_.pairing_failures;
-          ++lost_since_pair_[kRight];
+          numbering_.Lose(kRight);
           Discard(kRight);
           continue;
       }

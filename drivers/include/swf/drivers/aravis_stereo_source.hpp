@@ -148,7 +148,7 @@ class AravisStereoSource final : public StereoSource {
   bool started_ = false;
   Held held_[2];
   SequenceTracker sequence_[2];
-  std::uint32_t lost_since_pair_[2] = {0, 0};
+  PairNumbering numbering_;
   core::TimeNs last_frame_ns_[2] = {0, 0};
   // One trigger worker per camera: a GVCP write to a dead camera blocks its worker for seconds of
   // retries and must not hold back the other camera's trigger (whose silence would then be
@@ -157,7 +157,6 @@ class AravisStereoSource final : public StereoSource {
   bool trigger_pending_ = false;
   core::TimeNs trigger_time_ns_ = 0;
   Slot slots_[kMaxPairsHeld];
-  std::uint64_t next_seq_ = 0;
   core::TimeNs realtime_to_monotonic_ns_ = 0;
   SourceStats stats_;
   AravisStats extra_;

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "swf/core/time.hpp"
+#include "swf/drivers/stereo_source.hpp"
 
 namespace swf::drivers {
 
@@ -36,5 +37,33 @@ class SequenceTracker {
   bool has_last_ = false;
   std::uint64_t last_ = 0;
 };
+
+// The numbering of the pairs a camera driver serves and the frames lost between them (device
+// sequence gaps, frames rejected or left without a partner), kept alike by every driver: what a
+// side lost since the previous pair becomes the next pair's dropped_before.
+class PairNumbering {
+ public:
+  // `frames` more of `side` (0 left, 1 right) that will be in no pair.
+  void Lose(int side, std::uint32_t frames = 1) { lost_since_pair_[side] += frames; }
+  // The side's stream restarts (Start()): nothing lost on it yet.
+  void Restart(int side) { lost_since_pair_[side] = 0; }
+  // Numbers a pair that is served: seq +1 per pair from 0, dropped_before the larger of the two
+  // sides' losses since the previous pair; the losses start again from 0.
+  void Number(StereoPair* pair);
+
+ private:
+  std::uint32_t lost_since_pair_[2] = {0, 0};
+  std::uint64_t next_seq_ = 0;
+};
+
+// The first of `count` slots that is not in use (a pair slot of a driver: `in_use` set while the
+// caller holds its pair), or -1 when the caller holds them all.
+template <typename Slot>
+std::int32_t FreeSlot(const Slot* slots, std::int32_t count) {
+  for (std::int32_t i = 0; i < count; ++i) {
+    if (!slots[i].in_use) return i;
+  }
+  return -1;
+}
 
 }  // namespace swf::drivers

@@ -84,11 +84,10 @@ class V4l2StereoSource final : public StereoSource {
   bool started_ = false;
   Held held_[2];
   SequenceTracker sequence_[2];
-  std::uint32_t lost_since_pair_[2] = {0, 0};
+  PairNumbering numbering_;
   std::int32_t consecutive_io_errors_[2] = {0, 0};
   core::TimeNs last_frame_ns_[2] = {0, 0};  // when each side last dequeued anything
   Slot slots_[kMaxPairsHeld];
-  std::uint64_t next_seq_ = 0;
   SourceStats stats_;
   char last_error_[200] = "";
 };
