@@ -76,6 +76,33 @@ template <typename S>
 inline void Store(S* p, const PairT<S>& v) {
   std::memcpy(p, &v, sizeof(v));
 }
+
+// One column of a panel or tile (kBlock = 8 scalars) as four pairs: what the 2-wide kernels load,
+// update and store at once. Passed by value and inlined, it stays in registers.
+template <typename S>
+struct Column8 {
+  PairT<S> q0, q1, q2, q3;
+};
+template <typename S>
+inline Column8<S> LoadColumn(const S* p) {
+  return {Load(p), Load(p + 2), Load(p + 4), Load(p + 6)};
+}
+template <typename S>
+inline void StoreColumn(S* p, const Column8<S>& c) {
+  Store(p, c.q0);
+  Store(p + 2, c.q1);
+  Store(p + 4, c.q2);
+  Store(p + 6, c.q3);
+}
+// c -= a s: the column at a times the scalar s, lane by lane.
+template <typename S>
+inline void SubtractScaled(Column8<S>* c, const S* a, S s) {
+  const PairT<S> sv = {s, s};
+  c->q0 -= Load(a) * sv;
+  c->q1 -= Load(a + 2) * sv;
+  c->q2 -= Load(a + 4) * sv;
+  c->q3 -= Load(a + 6) * sv;
+}
 }  // namespace dense_detail
 
 template <typename S, int MaxDim>
@@ -388,23 +415,10 @@ class DenseCholesky {
 #endif
     for (int k = 0; k < kBlock; ++k) {
       S* t = tile + k * kBlock;
-      V c0 = dense_detail::Load(t);
-      V c1 = dense_detail::Load(t + 2);
-      V c2 = dense_detail::Load(t + 4);
-      V c3 = dense_detail::Load(t + 6);
-      for (int p = 0; p < len; ++p) {
-        const S* ap = a + p * kBlock;
-        const S bk = b[p * kBlock + k];
-        const V bv = {bk, bk};
-        c0 -= dense_detail::Load(ap) * bv;
-        c1 -= dense_detail::Load(ap + 2) * bv;
-        c2 -= dense_detail::Load(ap + 4) * bv;
-        c3 -= dense_detail::Load(ap + 6) * bv;
-      }
-      dense_detail::Store(t, c0);
-      dense_detail::Store(t + 2, c1);
-      dense_detail::Store(t + 4, c2);
-      dense_detail::Store(t + 6, c3);
+      dense_detail::Column8<S> c = dense_detail::LoadColumn(t);
+      for (int p = 0; p < len; ++p)
+        dense_detail::SubtractScaled(&c, a + p * kBlock, b[p * kBlock + k]);
+      dense_detail::StoreColumn(t, c);
     }
   }
 
@@ -630,25 +644,12 @@ class DenseCholesky {
   void SolveTile(const S* d, int r0, S* x) const {
     for (int c = 0; c < kBlock; ++c) {
       S* xc = x + c * kBlock;
-      V v0 = dense_detail::Load(xc);
-      V v1 = dense_detail::Load(xc + 2);
-      V v2 = dense_detail::Load(xc + 4);
-      V v3 = dense_detail::Load(xc + 6);
-      for (int p = 0; p < c; ++p) {
-        const S* xp = x + p * kBlock;
-        const S l = d[p * kBlock + c];
-        const V lv = {l, l};
-        v0 -= dense_detail::Load(xp) * lv;
-        v1 -= dense_detail::Load(xp + 2) * lv;
-        v2 -= dense_detail::Load(xp + 4) * lv;
-        v3 -= dense_detail::Load(xp + 6) * lv;
-      }
+      dense_detail::Column8<S> v = dense_detail::LoadColumn(xc);
+      for (int p = 0; p < c; ++p)
+        dense_detail::SubtractScaled(&v, x + p * kBlock, d[p * kBlock + c]);
       const S inv = inv_diag_[r0 + c];
       const V iv = {inv, inv};
-      dense_detail::Store(xc, v0 * iv);
-      dense_detail::Store(xc + 2, v1 * iv);
-      dense_detail::Store(xc + 4, v2 * iv);
-      dense_detail::Store(xc + 6, v3 * iv);
+      dense_detail::StoreColumn(xc, {v.q0 * iv, v.q1 * iv, v.q2 * iv, v.q3 * iv});
     }
   }
 
