@@ -58,30 +58,33 @@ double CraterProfile(const Crater& c, double r) {
   return c.rim_height_m * (1.0 / (s * s * s) - kTail) / (1.0 - kTail);
 }
 
+// Each preset: its name, relief, crater population and rock abundance.
+struct PresetRow {
+  TerrainPreset preset;
+  const char* name;
+  double relief_rms_m;
+  double crater_density_at_1m;
+  double crater_max_diameter_m;
+  double rock_k;
+};
+constexpr PresetRow kPresets[] = {
+    {TerrainPreset::kSmoothPlains, "plains", 0.3, 0.004, 10.0, 0.005},
+    {TerrainPreset::kCraterField, "craters", 0.5, 0.08, 40.0, 0.03},
+    // Rock-rich, between Viking Lander 1 (k ~0.07) and 2 (~0.18).
+    {TerrainPreset::kRockField, "rocks", 0.3, 0.01, 15.0, 0.15},
+};
+
 }  // namespace
 
 TerrainOptions TerrainPresetOptions(TerrainPreset preset, std::uint64_t seed) {
   TerrainOptions o;
   o.seed = seed;
-  switch (preset) {
-    case TerrainPreset::kSmoothPlains:
-      o.relief_rms_m = 0.3;
-      o.craters.density_at_1m = 0.004;
-      o.craters.max_diameter_m = 10.0;
-      o.rocks.k = 0.005;
-      break;
-    case TerrainPreset::kCraterField:
-      o.relief_rms_m = 0.5;
-      o.craters.density_at_1m = 0.08;
-      o.craters.max_diameter_m = 40.0;
-      o.rocks.k = 0.03;
-      break;
-    case TerrainPreset::kRockField:
-      o.relief_rms_m = 0.3;
-      o.craters.density_at_1m = 0.01;
-      o.craters.max_diameter_m = 15.0;
-      o.rocks.k = 0.15;  // rock-rich, between Viking Lander 1 (~0.07) and 2 (~0.18)
-      break;
+  for (const PresetRow& row : kPresets) {
+    if (row.preset != preset) continue;
+    o.relief_rms_m = row.relief_rms_m;
+    o.craters.density_at_1m = row.crater_density_at_1m;
+    o.craters.max_diameter_m = row.crater_max_diameter_m;
+    o.rocks.k = row.rock_k;
   }
   return o;
 }
@@ -100,16 +103,12 @@ TerrainOptions ScaleTerrain(const TerrainOptions& options, double factor) {
 }
 
 bool ParseTerrainPreset(const char* name, TerrainPreset* preset) {
-  if (std::strcmp(name, "plains") == 0) {
-    *preset = TerrainPreset::kSmoothPlains;
-  } else if (std::strcmp(name, "craters") == 0) {
-    *preset = TerrainPreset::kCraterField;
-  } else if (std::strcmp(name, "rocks") == 0) {
-    *preset = TerrainPreset::kRockField;
-  } else {
-    return false;
+  for (const PresetRow& row : kPresets) {
+    if (std::strcmp(name, row.name) != 0) continue;
+    *preset = row.preset;
+    return true;
   }
-  return true;
+  return false;
 }
 
 core::Status Terrain::Configure(const TerrainOptions& o) {
