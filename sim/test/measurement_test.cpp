@@ -7,6 +7,7 @@
 #include <map>
 
 #include "swf/sim/rng.hpp"
+#include "swf/testing/refusals.hpp"
 
 namespace swf::sim {
 namespace {
@@ -115,22 +116,14 @@ TEST(TrajectoryTest, DescentGeometryOffsetAndBodyRate) {
 }
 
 TEST(TrajectoryTest, RejectsBadOptions) {
-  Trajectory t;
-  TrajectoryOptions o;
-  o.rate_hz = 0.0;
-  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
-  o = TrajectoryOptions{};
-  o.num_frames = 0;
-  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
-  o = TrajectoryOptions{};
-  o.jitter_correlation = 1.0;
-  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
-  o = TrajectoryOptions{};
-  o.body_rate_radps.x() = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
-  // A descent that never gets to its end altitude has no frame count.
-  EXPECT_EQ(t.Configure(DescentTrajectory(10.0, 10.0, 100.0, 10.0)),
-            core::Status::kInvalidArgument);
+  testing::ExpectEachRefused<Trajectory, TrajectoryOptions>({
+      [](TrajectoryOptions& o) { o.rate_hz = 0.0; },
+      [](TrajectoryOptions& o) { o.num_frames = 0; },
+      [](TrajectoryOptions& o) { o.jitter_correlation = 1.0; },
+      [](TrajectoryOptions& o) { o.body_rate_radps.x() = std::numeric_limits<double>::infinity(); },
+      // A descent that never gets to its end altitude has no frame count.
+      [](TrajectoryOptions& o) { o = DescentTrajectory(10.0, 10.0, 100.0, 10.0); },
+  });
 }
 
 MeasurementOptions PaperFig14Options() {
@@ -250,19 +243,12 @@ TEST(MeasurementTest, SidewaysLandmarksEnterAndLeaveTheView) {
 }
 
 TEST(MeasurementTest, RejectsBadOptions) {
-  MeasurementScenario s;
-  MeasurementOptions o;
-  o.outlier_fraction = 1.5;
-  EXPECT_EQ(s.Configure(o), core::Status::kInvalidArgument);
-  o = MeasurementOptions{};
-  o.pixel_sigma_px = -1.0;
-  EXPECT_EQ(s.Configure(o), core::Status::kInvalidArgument);
-  o = MeasurementOptions{};
-  o.rig.baseline_m = 0.0;
-  EXPECT_EQ(s.Configure(o), core::Status::kInvalidArgument);
-  o = MeasurementOptions{};
-  o.trajectory.rate_hz = -1.0;
-  EXPECT_EQ(s.Configure(o), core::Status::kInvalidArgument);
+  testing::ExpectEachRefused<MeasurementScenario, MeasurementOptions>({
+      [](MeasurementOptions& o) { o.outlier_fraction = 1.5; },
+      [](MeasurementOptions& o) { o.pixel_sigma_px = -1.0; },
+      [](MeasurementOptions& o) { o.rig.baseline_m = 0.0; },
+      [](MeasurementOptions& o) { o.trajectory.rate_hz = -1.0; },
+  });
 }
 
 }  // namespace

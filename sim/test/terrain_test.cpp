@@ -11,6 +11,7 @@
 #include "swf/sim/appearance.hpp"
 #include "swf/sim/hazard.hpp"
 #include "swf/sim/rng.hpp"
+#include "swf/testing/refusals.hpp"
 
 namespace swf::sim {
 namespace {
@@ -307,16 +308,11 @@ TEST(AppearanceTest, CraterRimCastsAShadowIntoTheBowl) {
 }
 
 TEST(TerrainTest, RejectsBadOptions) {
-  Terrain t;
-  TerrainOptions o;
-  o.size = 4;
-  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
-  o = TerrainOptions{};
-  o.rocks.k = 1.5;
-  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
-  o = TerrainOptions{};
-  o.craters.min_diameter_m = 50.0;
-  EXPECT_EQ(t.Configure(o), core::Status::kInvalidArgument);
+  testing::ExpectEachRefused<Terrain, TerrainOptions>({
+      [](TerrainOptions& o) { o.size = 4; },
+      [](TerrainOptions& o) { o.rocks.k = 1.5; },
+      [](TerrainOptions& o) { o.craters.min_diameter_m = 50.0; },
+  });
 }
 
 }  // namespace
