@@ -25,6 +25,12 @@ void ExpectSameBytes(const Msg& msg, const std::uint8_t* data, std::size_t size)
   Expect(std::memcmp(again.data(), data, size) == 0);
 }
 
+// Every value within [lo, hi] (an enumeration's range).
+template <typename T>
+void ExpectEachWithin(const std::vector<T>& values, T lo, T hi) {
+  for (const T v : values) Expect(v >= lo && v <= hi);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -54,20 +60,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (CheckedDecode(data, size, &features).Ok()) {
     Expect(features.num_features <= swf::messages::kMaxFeatures);
     Expect(features.status.size() == static_cast<std::size_t>(features.num_features));
-    for (const std::int8_t s : features.status) {
-      Expect(s >= swf_msgs::feature_set_t::STATUS_TRACKED &&
-             s <= swf_msgs::feature_set_t::STATUS_GATED);
-    }
+    ExpectEachWithin(features.status, swf_msgs::feature_set_t::STATUS_TRACKED,
+                     swf_msgs::feature_set_t::STATUS_GATED);
     ExpectSameBytes(features, data, size);
   }
   swf_msgs::hazard_map_t hazard;
   if (CheckedDecode(data, size, &hazard).Ok()) {
     Expect(hazard.num_cells == hazard.rows * hazard.cols);
     Expect(hazard.hazard_class.size() == static_cast<std::size_t>(hazard.num_cells));
-    for (const std::int8_t c : hazard.hazard_class) {
-      Expect(c >= swf_msgs::hazard_map_t::CLASS_UNKNOWN &&
-             c <= swf_msgs::hazard_map_t::CLASS_UNCERTAIN);
-    }
+    ExpectEachWithin(hazard.hazard_class, swf_msgs::hazard_map_t::CLASS_UNKNOWN,
+                     swf_msgs::hazard_map_t::CLASS_UNCERTAIN);
     ExpectSameBytes(hazard, data, size);
   }
   swf_msgs::hazard_truth_t hazard_truth;
@@ -76,7 +78,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     Expect(hazard_truth.rock_free.size() == static_cast<std::size_t>(hazard_truth.num_cells));
     Expect(hazard_truth.num_rocks <= swf::messages::kMaxTruthRocks);
     Expect(hazard_truth.rock_height_m.size() == static_cast<std::size_t>(hazard_truth.num_rocks));
-    for (const std::int8_t f : hazard_truth.rock_free) Expect(f == 0 || f == 1);
+    ExpectEachWithin<std::int8_t>(hazard_truth.rock_free, 0, 1);
     ExpectSameBytes(hazard_truth, data, size);
   }
   swf_msgs::health_t health;
