@@ -24,6 +24,15 @@ Eigen::MatrixXd RandomSpd(int n, std::uint64_t seed) {
   return a * a.transpose() + n * Eigen::MatrixXd::Identity(n, n);
 }
 
+// The symmetric matrix a into chol (its lower triangle), factorized.
+template <typename Chol>
+core::Status LoadAndFactorize(Chol* chol, const Eigen::MatrixXd& a) {
+  const int n = static_cast<int>(a.rows());
+  chol->Reset(n);
+  chol->AddSymmetric(0, a.data(), n, n);
+  return chol->Factorize();
+}
+
 // Against Eigen's own dense LDLT, for sizes on and off the block boundary.
 TEST(DenseCholesky, SolvesLikeEigenForManySizes) {
   auto chol = std::make_unique<DenseCholesky<double, 100>>();
@@ -200,9 +209,7 @@ TEST(DenseCholesky, DiagonalBlocksOfTheInverseFromFactorInverseColumns) {
   auto chol = std::make_unique<DenseCholesky<double, 300>>();
   for (int n : {3, 9, 61, 137, 300}) {
     const Eigen::MatrixXd a = RandomSpd(n, static_cast<std::uint64_t>(n) + 29);
-    chol->Reset(n);
-    chol->AddSymmetric(0, a.data(), n, n);
-    ASSERT_EQ(chol->Factorize(), core::Status::kOk) << n;
+    ASSERT_EQ(LoadAndFactorize(chol.get(), a), core::Status::kOk) << n;
     const Eigen::MatrixXd inverse = a.inverse();
     const Eigen::MatrixXd l_inverse = Eigen::MatrixXd(a.llt().matrixL())
                                           .triangularView<Eigen::Lower>()
@@ -233,9 +240,7 @@ TEST(DenseCholesky, ColumnGroupsMatchSingleColumnsBitForBit) {
     if (!chol->SetKernel(kernel)) continue;  // no AVX on this CPU
     for (int n : {3, 9, 61, 137, 300}) {
       const Eigen::MatrixXd a = RandomSpd(n, static_cast<std::uint64_t>(n) + 71);
-      chol->Reset(n);
-      chol->AddSymmetric(0, a.data(), n, n);
-      ASSERT_EQ(chol->Factorize(), core::Status::kOk) << n;
+      ASSERT_EQ(LoadAndFactorize(chol.get(), a), core::Status::kOk) << n;
       const Eigen::MatrixXd inverse = a.inverse();
       for (int c0 : {0, 5, 8, n / 2 - 1, n - 8, n - 3}) {
         for (int count : {1, 3, 8}) {
@@ -280,9 +285,7 @@ TEST(DenseCholesky, LeadingInverseBlockIsTheInversesBlock) {
     if (!chol->SetKernel(kernel)) continue;
     for (int n : {3, 9, 61, 137, 300}) {
       const Eigen::MatrixXd a = RandomSpd(n, static_cast<std::uint64_t>(n) + 113);
-      chol->Reset(n);
-      chol->AddSymmetric(0, a.data(), n, n);
-      ASSERT_EQ(chol->Factorize(), core::Status::kOk) << n;
+      ASSERT_EQ(LoadAndFactorize(chol.get(), a), core::Status::kOk) << n;
       const Eigen::MatrixXd inverse = a.inverse();
       for (int m : {0, 1, 7, 8, 9, n / 2, n - 1, n}) {
         if (m > n) continue;
