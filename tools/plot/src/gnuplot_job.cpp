@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -55,6 +56,38 @@ std::string Quoted(const std::string& text) {
   std::string out = "'";
   for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
   return out + "'";
+}
+
+std::string TitleQuoted(const std::string& text, int width_px, int font_pt) {
+  // Sans at the title's size averages 0.69 of the font size per character (a 90-character title
+  // at 12 spans 744 px); 0.75 leaves room for wide letters, 0.9 of the width for the margins.
+  const std::size_t per_line =
+      std::max<std::size_t>(8, static_cast<std::size_t>(0.9 * width_px / (0.75 * font_pt)));
+  std::vector<std::string> lines(1);
+  std::string word;
+  for (std::istringstream words(text); words >> word;) {
+    while (word.size() > per_line) {  // a word longer than a line is cut where a line ends
+      if (!lines.back().empty()) lines.emplace_back();
+      std::size_t cut = per_line;
+      while (cut > 1 && (static_cast<unsigned char>(word[cut]) & 0xC0) == 0x80) --cut;  // UTF-8
+      lines.back() = word.substr(0, cut);
+      word.erase(0, cut);
+      lines.emplace_back();
+    }
+    if (!lines.back().empty() && lines.back().size() + 1 + word.size() > per_line)
+      lines.emplace_back();
+    lines.back() += (lines.back().empty() ? "" : " ") + word;
+  }
+  if (lines.size() > 1 && lines.back().empty()) lines.pop_back();
+  std::string out = "\"";
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    if (k > 0) out += "\\n";
+    for (char c : lines[k]) {
+      if (c == '"' || c == '\\') out += '\\';
+      out += c;
+    }
+  }
+  return out + "\"";
 }
 
 std::string Number(double v) {

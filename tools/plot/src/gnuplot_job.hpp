@@ -37,6 +37,10 @@ class GnuplotJob {
 
 // A string as a gnuplot single-quoted literal (a quote inside is doubled).
 std::string Quoted(const std::string& text);
+// A title as a gnuplot double-quoted literal, broken into lines at spaces so that each fits a
+// canvas width_px wide at font_pt: gnuplot neither wraps nor shrinks a title, it cuts a line
+// wider than the canvas at both edges.
+std::string TitleQuoted(const std::string& text, int width_px, int font_pt);
 // A number for a data file: %.9g, or NaN (gnuplot leaves a gap there).
 std::string Number(double v);
 

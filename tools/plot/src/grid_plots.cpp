@@ -87,7 +87,8 @@ bool DrawGridPanels(const GridPanels& g, const std::string& title, const std::st
   const std::string height_key = HeightKey(g.height_m);
   const double x_lo = g.x0_m - 0.5 * g.cell_m, x_hi = x_lo + g.size * g.cell_m;
   const double y_lo = g.y0_m - 0.5 * g.cell_m, y_hi = y_lo + g.size * g.cell_m;
-  GnuplotJob job(1240, 680);
+  constexpr int kWidth = 1240;
+  GnuplotJob job(kWidth, 680);
   const std::string h = job.Data("height.dat", height.str());
   const std::string k = job.Data("classes.dat", classes.str());
   const std::string site = job.Data("site.dat", Number(g.site_m[0]) + ' ' + Number(g.site_m[1]) +
@@ -104,7 +105,8 @@ bool DrawGridPanels(const GridPanels& g, const std::string& title, const std::st
                  Quoted(g.site_title);
   }
   std::ostringstream s;
-  s << Preamble() << "set multiplot layout 1,2 title " << Quoted(title) << " font ',13'\n"
+  s << Preamble() << "set multiplot layout 1,2 title " << TitleQuoted(title, kWidth, 13)
+    << " font ',13'\n"
     << "set size ratio -1\nset xlabel 'world x (m)'\nset ylabel 'world y (m)'\n"
     << "set xrange [" << Number(x_lo) << ":" << Number(x_hi) << "]\n"
     << "set yrange [" << Number(y_lo) << ":" << Number(y_hi) << "]\n"
@@ -244,7 +246,8 @@ bool DrawContactSheet(const std::vector<ContactFrame>& frames, const std::string
   const int tile_h = first.width > 0 ? tile_w * first.height / first.width + 40 : tile_w;
   GnuplotJob job(cols * tile_w, rows * tile_h + 50);
   std::ostringstream s;
-  s << "set multiplot layout " << rows << "," << cols << " title " << Quoted(title)
+  s << "set multiplot layout " << rows << "," << cols << " title "
+    << TitleQuoted(title, cols * tile_w, 13)
     << " font ',13'\nunset key\nunset colorbox\nunset tics\nunset border\n"
     << "set palette gray\nset cbrange [0:255]\nset size ratio -1\n"
     << "set lmargin 1\nset rmargin 1\nset tmargin 2\nset bmargin 1\n";
@@ -286,9 +289,10 @@ bool DrawLineChart(const LineChart& chart, const std::string& png, std::string* 
     *error = png + ": no series to plot";
     return false;
   }
-  GnuplotJob job(1000, 600);
+  constexpr int kWidth = 1000;
+  GnuplotJob job(kWidth, 600);
   std::ostringstream s;
-  s << Preamble() << "set key outside right top\nset title " << Quoted(chart.title)
+  s << Preamble() << "set key outside right top\nset title " << TitleQuoted(chart.title, kWidth, 12)
     << " font ',12'\nset xlabel " << Quoted(chart.x_label) << "\nset ylabel "
     << Quoted(chart.y_label) << "\n"
     << (chart.log_y ? "set logscale y\nset format y '%g'\n" : "") << "plot ";

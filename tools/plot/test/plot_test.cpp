@@ -159,6 +159,42 @@ TEST_F(PlotTest, DrawsAContactSheetAndALineChart) {
   ExpectPlot(Png("chart.png"), 1000, 600);
 }
 
+// Whether any pixel of the outermost `columns` columns on either side is dark (text or lines):
+// a title wider than the canvas is cut there, while a plot keeps its margins clear.
+bool DarkAtTheSideEdges(const std::string& path, int columns) {
+  image_io::GrayImage image;
+  std::string error;
+  EXPECT_TRUE(image_io::LoadGray(path, &image, &error)) << error;
+  for (int y = 0; y < image.height; ++y) {
+    for (int k = 0; k < columns; ++k) {
+      const std::size_t row = static_cast<std::size_t>(y) * image.width;
+      if (image.pixels[row + k] < 128 || image.pixels[row + image.width - 1 - k] < 128) return true;
+    }
+  }
+  return false;
+}
+
+// GIVEN titles far wider than their canvas (a line chart's, and a one-frame contact sheet's,
+// 320 px wide): each is broken into lines that fit, so nothing is cut at the image's edges, and
+// quotes and backslashes in it reach gnuplot as text.
+TEST_F(PlotTest, LongTitlesAreBrokenIntoLinesNotCutAtTheEdges) {
+  std::string title = "Fig. 99, \"image level\": a\\b";
+  while (title.size() < 220) title += " landmark error of the maps against the renderer's truth";
+  LineChart chart{title, "frame", "error (m)", false, {{"a", {1, 2, 3}, {0.3, 0.2, 0.1}}}};
+  std::string error;
+  ASSERT_TRUE(DrawLineChart(chart, Png("chart.png"), &error)) << error;
+  ExpectPlot(Png("chart.png"), 1000, 600);
+  EXPECT_FALSE(DarkAtTheSideEdges(Png("chart.png"), 3));
+
+  ContactFrame frame{0, 100.0, 64, 48, std::vector<std::uint8_t>(64 * 48, 200)};  // light
+  ASSERT_TRUE(DrawContactSheet({frame},
+                               "Left camera, scenario 'descent' over terrain 'rocks', "
+                               "a_single_word_longer_than_the_whole_line_of_the_title",
+                               Png("sheet.png"), &error))
+      << error;
+  EXPECT_FALSE(DarkAtTheSideEdges(Png("sheet.png"), 3));
+}
+
 // GIVEN a chart of two series over one x, with a gap: written as text, read back the same and
 // drawn; what the file cannot hold is refused when writing.
 TEST_F(PlotTest, LineChartFileRoundTripsAndIsDrawn) {
