@@ -93,5 +93,7 @@ template SquareMat<double, 6> PlainInverse(const SquareMat<double, 6>&);
 template SquareMat<double, 15> PlainInverse(const SquareMat<double, 15>&);
 template ColumnVec<double, 2> SymmetricEigenvalues(const SquareMat<double, 2>&);
 template ColumnVec<double, 3> SymmetricEigenvalues(const SquareMat<double, 3>&);
+template ColumnVec<double, 6> SymmetricEigenvalues(const SquareMat<double, 6>&);
+template ColumnVec<double, 15> SymmetricEigenvalues(const SquareMat<double, 15>&);
 
 }  // namespace swf::estimator

@@ -7,8 +7,11 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
+
+#include "swf/estimator/stereo_model.hpp"
 
 namespace swf::estimator {
 namespace {
@@ -161,6 +164,136 @@ TEST(Schur, VsdfScalarDiagonalKeepsOnlyTheDiagonalElements) {
     }
   }
   EXPECT_LT((m.g - exact.g).norm(), 1e-10 * exact.g.norm());  // the vector is exact
+}
+
+// The local system of the first marginalization on the rendered descent (docs/results.md,
+// Fig. 17 image level), built from the flight model's own Jacobians: p0 at 100 m looking down
+// with the first-pose prior (1 mm, 0.1 mrad), the relative-motion factor to p1 (2 cm, 0.5 mrad)
+// and p0's stereo measurements (0.12 px, f = 1155 px, 1 m baseline) of a grid of ground points
+// spanning the field of view. Variables [p0 | p1 | landmarks], landmarks in world XYZ.
+struct DescentSystem {
+  Matrix lambda;
+  Vector g;
+  std::vector<Eigen::Vector3d> rays;  // unit line of sight from p0 to each landmark
+  Eigen::Vector3d axis;               // p0's optical axis
+};
+
+DescentSystem FirstMarginalizationOfTheDescent() {
+  StereoModel<double> model;
+  const double f = 256.0 / std::tan(12.5 * M_PI / 180.0);
+  model.camera = StereoCamera<double>{f, f, 256.0, 192.0, 1.0};
+  Pose<double> p0;
+  p0.R = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();  // camera z along world -z
+  p0.t = Eigen::Vector3d(0.0, 0.0, 100.0);
+  Pose<double> p1 = p0;
+  p1.t.z() -= 1.0;
+  std::vector<Eigen::Vector3d> points;
+  for (int i = -4; i <= 4; ++i)
+    for (int j = -3; j <= 3; ++j) points.emplace_back(5.0 * i, 5.0 * j, 0.0);
+  const int n = static_cast<int>(points.size());
+  DescentSystem d{Matrix::Zero(12 + 3 * n, 12 + 3 * n), Vector::Zero(12 + 3 * n), {}, p0.R.col(2)};
+  for (int i = 0; i < 3; ++i) {
+    d.lambda(i, i) = 1.0 / (1e-3 * 1e-3);
+    d.lambda(i + 3, i + 3) = 1.0 / (1e-4 * 1e-4);
+  }
+  Mat6<double> j_prev;
+  Mat6<double> j_next;
+  (void)model.ProcessResidual(p0, p1, model.RelativeMotion(p0, p1), &j_prev, &j_next);
+  const Vec6<double> w(50.0, 50.0, 50.0, 2000.0, 2000.0, 2000.0);
+  Eigen::Matrix<double, 6, 12> process;
+  process << w.asDiagonal() * j_prev, w.asDiagonal() * j_next;
+  d.lambda.topLeftCorner(12, 12) += process.transpose() * process;
+  for (int q = 0; q < n; ++q) {
+    Vec3<double> z;
+    Mat36<double> jp;
+    Mat3<double> jl;
+    EXPECT_TRUE(model.Predict(p0, points[q], &z, &jp, &jl)) << q;
+    Eigen::Matrix<double, 3, 9> h;
+    h << jp, jl;
+    h /= 0.12;
+    const std::vector<int> at = {0, 1, 2, 3, 4, 5, 12 + 3 * q, 13 + 3 * q, 14 + 3 * q};
+    d.lambda(at, at) += h.transpose() * h;
+    d.rays.push_back((points[q] - p0.t).normalized());
+  }
+  return d;
+}
+
+double SmallestEigenvalue(const Matrix& m) {
+  return Eigen::SelfAdjointEigenSolver<Matrix>(m).eigenvalues().minCoeff();
+}
+
+TEST(Schur, VsdfScalarDiagonalLeavesAnOffAxisStereoLandmarkIndefiniteAlongItsRay) {
+  // Why eq. 12 read literally fails at the rendered descent's first marginalization. A stereo
+  // landmark at 100 m is known ~1e4 times better across its line of sight than along it, and
+  // the Schur term T (what p0's uncertainty explains of it) has the ray in its null space. Its
+  // diagonal alone, taken in world XYZ, is not: along the ray v it removes sum_k T_kk v_k^2
+  // (~2 theta^2 of T's lateral size, theta the ray's angle to the axis) from an information of
+  // under one. Off the nadir the prior's block goes indefinite along the ray; the exact
+  // complement and the block-diagonal VSDF stay positive definite.
+  const DescentSystem d = FirstMarginalizationOfTheDescent();
+  const int n = static_cast<int>(d.rays.size());
+  bool ok = false;
+  const Marginal exact = Eliminate<6>(d.lambda, d.g, 0, kAll, &ok);
+  ASSERT_TRUE(ok);
+  const Marginal block = Eliminate<6>(
+      d.lambda, d.g, 0,
+      [](int r, int c) {
+        return (r < 4 ? 0 : r) == (c < 4 ? 0 : c) ? SchurFill::kBlock : SchurFill::kNone;
+      },
+      &ok);
+  ASSERT_TRUE(ok);
+  const Marginal scalar = Eliminate<6>(
+      d.lambda, d.g, 0,
+      [](int r, int c) { return r == c ? SchurFill::kDiagonal : SchurFill::kNone; }, &ok);
+  ASSERT_TRUE(ok);
+  EXPECT_GT(SmallestEigenvalue(exact.lambda), 0.0);
+  EXPECT_GT(SmallestEigenvalue(block.lambda), 0.0);
+  // The next pose's block keeps its positive definiteness: the process factor is not the cause.
+  EXPECT_GT(SmallestEigenvalue(scalar.lambda.topLeftCorner(6, 6)), 0.0);
+  int indefinite = 0;
+  for (int q = 0; q < n; ++q) {
+    const int o = 6 + 3 * q;
+    const Eigen::Matrix3d e = exact.lambda.block(o, o, 3, 3);
+    const Eigen::Matrix3d s = scalar.lambda.block(o, o, 3, 3);
+    const Eigen::Vector3d& v = d.rays[q];
+    const double theta = std::acos(v.dot(d.axis));
+    EXPECT_GT(v.dot(e * v), 0.0) << q;
+    EXPECT_LT(v.dot(e * v), 1.0) << q;  // depth known to worse than 1 m at 100 m
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(s);
+    if (theta < 0.5 * M_PI / 180.0) {  // the nadir point: its ray is a coordinate axis
+      EXPECT_GT(es.eigenvalues()(0), 0.0) << q;
+      continue;
+    }
+    if (es.eigenvalues()(0) >= 0.0) continue;
+    ++indefinite;
+    // The negative direction is the line of sight.
+    EXPECT_GT(std::abs(es.eigenvectors().col(0).dot(v)), std::cos(1.0 * M_PI / 180.0)) << q;
+  }
+  // Every landmark more than a couple of degrees off the axis goes indefinite (here all but the
+  // nadir point: the next ones are 2.9 deg off).
+  EXPECT_GE(indefinite, n - 5);
+  EXPECT_LT(SmallestEigenvalue(scalar.lambda), 0.0);
+  // The corner of the grid, farthest off the axis.
+  const int corner = 0;
+  const Eigen::Vector3d& v = d.rays[corner];
+  const Eigen::Matrix3d e = exact.lambda.block(6, 6, 3, 3);
+  const Eigen::Matrix3d kept = e.diagonal().asDiagonal();
+  EXPECT_LT(v.dot(scalar.lambda.block(6, 6, 3, 3) * v), -10.0 * v.dot(e * v));
+  std::printf(
+      "corner landmark %.1f deg off the axis: information along its ray exact %.3g, with the "
+      "Schur term's diagonal only %.3g (smallest eigenvalue of its block %.3g); %d of %d "
+      "landmark blocks indefinite, smallest eigenvalue of the prior %.3g (exact %.3g); the "
+      "diagonal of the exact prior claims a depth sigma %.3g m for %.3g m\n",
+      std::acos(v.dot(d.axis)) * 180.0 / M_PI, v.dot(e * v),
+      v.dot(scalar.lambda.block(6, 6, 3, 3) * v),
+      SmallestEigenvalue(scalar.lambda.block(6, 6, 3, 3)), indefinite, n,
+      SmallestEigenvalue(scalar.lambda), SmallestEigenvalue(exact.lambda),
+      1.0 / std::sqrt(v.dot(kept * v)), std::sqrt(v.dot(e.inverse() * v)));
+  // The other reading, the diagonal of the resulting information instead of the Schur term's,
+  // is positive definite but no marginal: it keeps each coordinate's information conditional on
+  // the other two, and along an off-axis ray that claims the depth over ten times better than
+  // the landmark's own 3x3 block of the exact prior gives it.
+  EXPECT_GT(std::sqrt(v.dot(e.inverse() * v)) * std::sqrt(v.dot(kept * v)), 10.0);
 }
 
 TEST(Schur, RefusesABlockThatIsNotPositiveDefiniteAndChangesNothing) {

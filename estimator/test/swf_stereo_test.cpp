@@ -416,6 +416,39 @@ TEST(SwfStereo, ZeroAllocationsOverAThousandFramesInEveryMode) {
             0u);
 }
 
+// Fig. 17's VSDF with only the diagonal elements of the Schur term (eq. 12 read literally) on a
+// descent whose landmarks spread over the field of view, as the rendered descent's do: its first
+// marginalization leaves the prior indefinite along the landmarks' lines of sight
+// (Schur.VsdfScalarDiagonalLeavesAnOffAxisStereoLandmarkIndefiniteAlongItsRay) and the filter
+// reports kFaultNotPositiveDefinite at that update, the fourth frame with a window of 3; the
+// block-diagonal VSDF on the same scene, and the same reading on a 2 m disc (the measurement
+// level's Fig. 17 landmarks, within 1.2 deg of the axis at 100 m), pass that marginalization.
+TEST(SwfStereo, VsdfScalarDiagonalReportsTheIndefinitePriorAtItsFirstMarginalization) {
+  const auto first_fault = [](double radius_m, bool scalar) {
+    SceneOptions so;
+    so.frames = 6;
+    so.num_landmarks = 90;
+    so.landmark_radius_m = radius_m;
+    const SyntheticScene scene(so);
+    auto swf = std::make_unique<StereoSwf<3>>();
+    SwfOptions o = ModeOptions(SwfMode::kVsdf);
+    o.vsdf_scalar_diagonal = scalar;
+    int first = -1;
+    (void)scene::RunScene(
+        swf.get(), scene, o,
+        scene::MotionInput(scene::MotionInput::kSigmaM, scene::MotionInput::kSigmaRad, 7),
+        [&first](StereoSwf<3>* f, std::size_t j) {
+          if (first < 0 && (f->FaultBits() & kFaultNotPositiveDefinite) != 0)
+            first = static_cast<int>(j);
+        });
+    return first;
+  };
+  EXPECT_EQ(first_fault(15.0, true), 3);
+  EXPECT_EQ(first_fault(15.0, false), -1);
+  const int narrow = first_fault(2.0, true);
+  EXPECT_TRUE(narrow == -1 || narrow > 3) << narrow;
+}
+
 // Numerical trouble is a counted, reported recovery: a poisoned state resets the filter.
 TEST(SwfStereo, NonFiniteStateResetsAndReports) {
   auto swf = std::make_unique<StereoSwf<3>>();

@@ -581,6 +581,7 @@ class SlidingWindowFilter {
   void MarginalizeOldestPose();
   void GrowPrior();
   bool EliminateFirstPose(int dim);
+  bool NewPriorBlocksPositiveSemidefinite(int dim);
   void DeleteOldestPose();
   void RetireUnsupportedLandmarks();
   bool EliminatePriorLandmark(int q);

@@ -207,14 +207,15 @@ void SlidingWindowFilter<Model, K, N, M, P>::GrowPrior() {
 
 // Schur complement of the first kStateDim variables (p0) of the local system onto the rest
 // (eq. 9); in VSDF mode (eq. 12) only its blocks within p1 and within each landmark, or with
-// vsdf_scalar_diagonal only its scalar diagonal.
+// vsdf_scalar_diagonal only its scalar diagonal. False when p0's block is not positive definite
+// (nothing changed), or when the scalar diagonal left the new prior indefinite (see below).
 template <typename Model, int K, int N, int M, int P>
 bool SlidingWindowFilter<Model, K, N, M, P>::EliminateFirstPose(int dim) {
   // Chunks of p1 are one variable; every later chunk is a landmark of its own.
   const auto variable = [](int chunk) { return chunk < 2 * kStateDim / 3 ? 0 : chunk; };
   const bool vsdf = options_.mode == SwfMode::kVsdf;
-  const bool scalar = options_.vsdf_scalar_diagonal;
-  return EliminateVariable<kStateDim>(
+  const bool scalar = vsdf && options_.vsdf_scalar_diagonal;
+  const bool eliminated = EliminateVariable<kStateDim>(
       local_, kMaxLocalDim, local_b_, dim, 0, x_, kXRows, [&](int r, int c) {
         if (!vsdf) return SchurFill::kBlock;
         if (scalar) {
@@ -222,6 +223,36 @@ bool SlidingWindowFilter<Model, K, N, M, P>::EliminateFirstPose(int dim) {
         }
         return variable(r) == variable(c) ? SchurFill::kBlock : SchurFill::kNone;
       });
+  return eliminated && (!scalar || NewPriorBlocksPositiveSemidefinite(dim));
+}
+
+// Whether a symmetric block has no eigenvalue below zero beyond round-off (relative to its
+// largest). Semi-definite, not definite: a zero block is a prior that says nothing.
+template <typename S, int D>
+bool PositiveSemidefinite(const Eigen::Matrix<S, D, D>& a) {
+  const Eigen::Matrix<S, D, 1> e = SymmetricEigenvalues(a);
+  return e.minCoeff() >= -S(1e-9) * e.cwiseAbs().maxCoeff();
+}
+
+// Whether p1's block and every landmark's 3x3 block of the new prior (the local system after
+// p0's elimination) are positive semi-definite; each is a principal block, so a failure means
+// the prior is indefinite. Checked for the scalar diagonal of eq. 12 only: the exact complement
+// and its blocks within each variable are positive semi-definite by construction, the scalar
+// diagonal is not. A stereo landmark's Schur term has its line of sight in its null space, the
+// term's diagonal in world coordinates does not, and along an off-axis ray it removes more than
+// the landmark's weak depth information (docs/results.md, Fig. 17; the test
+// Schur.VsdfScalarDiagonalLeavesAnOffAxisStereoLandmarkIndefiniteAlongItsRay). Reported at the
+// marginalization that makes it, not left for a later solve to find (or, where the window's own
+// measurements mask it, to miss while the prior pulls the landmark along its ray).
+template <typename Model, int K, int N, int M, int P>
+bool SlidingWindowFilter<Model, K, N, M, P>::NewPriorBlocksPositiveSemidefinite(int dim) {
+  if (!PositiveSemidefinite<S, kStateDim>(
+          Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, kStateDim)))
+    return false;
+  for (int o = 2 * kStateDim; o < dim; o += 3) {
+    if (!PositiveSemidefinite<S, 3>(Blk<3, 3>(local_, kMaxLocalDim, o, o))) return false;
+  }
+  return true;
 }
 
 // VO mode: forget the oldest pose and everything attached to it; hold the next one fixed.
