@@ -710,8 +710,9 @@ def fig17_markdown(r, cfg, frames):
               'filter, so the diagonal reading shows as gaps and short stretches of maps. '
               'The block-diagonal VSDF keeps whole blocks within each variable, so its prior '
               'stays positive definite, and with about 90 tracks per frame the fill-in between '
-              'variables it drops is small: it stays close to SWF(3) at both levels.', '',
-              FIG17_DIAGONAL_CAUSE, '']
+              'variables it drops is small: it stays close to SWF(3) at both levels.', '']
+    if i['numerical_failures']:
+        lines += [FIG17_DIAGONAL_CAUSE, '']
     return '\n'.join(lines)
 
 
