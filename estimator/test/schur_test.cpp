@@ -290,9 +290,9 @@ TEST(Schur, VsdfScalarDiagonalLeavesAnOffAxisStereoLandmarkIndefiniteAlongItsRay
       SmallestEigenvalue(scalar.lambda), SmallestEigenvalue(exact.lambda),
       1.0 / std::sqrt(v.dot(kept * v)), std::sqrt(v.dot(e.inverse() * v)));
   // The other reading, the diagonal of the resulting information instead of the Schur term's,
-  // is positive definite but no marginal: it keeps each coordinate's information conditional on
-  // the other two, and along an off-axis ray that claims the depth over ten times better than
-  // the landmark's own 3x3 block of the exact prior gives it.
+  // is positive definite but drops the dependencies between a landmark's own coordinates too:
+  // along an off-axis ray it claims the depth over ten times better than the landmark's own
+  // 3x3 block of the exact prior gives it.
   EXPECT_GT(std::sqrt(v.dot(e.inverse() * v)) * std::sqrt(v.dot(kept * v)), 10.0);
 }
 
