@@ -474,6 +474,7 @@ void FlightLoop::TakeSnapshot(bool synchronous, std::int32_t hazard_slot) {
     for (std::int32_t i = 0; i < r.map.num_landmarks && i < kMaxMapLandmarks; ++i) {
       const MapLandmark& l = r.map.landmarks[i];
       hazard::HazardLandmark& d = h.landmarks[h.num_landmarks++];
+      d.id = l.id;  // the mapper enters each landmark once, as its newest estimate
       d.position_world_m =
           Eigen::Vector3d(l.position_world_m[0], l.position_world_m[1], l.position_world_m[2]);
       const double* c = l.covariance_m2;

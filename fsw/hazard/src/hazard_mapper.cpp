@@ -186,6 +186,10 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   calib_abs_.assign(nl, 0.0);
   calib_var_.assign(nl, 0.0);
   calib_model_.assign(nl, 0.0);
+  active_.assign(nl, ActiveLandmark{});
+  incoming_.assign(nl, ActiveLandmark{});
+  lm_info_.assign(cells, 0.0);
+  lm_info_z_.assign(cells, 0.0);
   elevation_.assign(cells, kNaN);
   sigma_.assign(cells, kNaN);
   sigma_rel_.assign(cells, kNaN);
@@ -216,6 +220,7 @@ void HazardMapper::Reset() {
   std::fill(info_z_.begin(), info_z_.end(), 0.0);
   std::fill(min_var_.begin(), min_var_.end(), 0.0);
   std::fill(count_.begin(), count_.end(), 0);
+  num_active_ = 0;
   std::fill(elevation_.begin(), elevation_.end(), kNaN);
   std::fill(sigma_.begin(), sigma_.end(), kNaN);
   std::fill(sigma_rel_.begin(), sigma_rel_.end(), kNaN);
@@ -332,7 +337,10 @@ void HazardMapper::MaybeRefine(double altitude_m) {
     corner_y_ = target_.y() - 0.5 * n_ * cell_m_;
     return;
   }
-  // Resample the fused state onto the finer grid (same centre).
+  // Resample the fused state onto the finer grid (same centre: the target's, or the lander's
+  // nadir when the grid follows it).
+  const double centre_x = corner_x_ + 0.5 * n_ * cell_m_;
+  const double centre_y = corner_y_ + 0.5 * n_ * cell_m_;
   const std::size_t cells = info_.size();
   std::copy(info_.begin(), info_.end(), f_w_.begin());
   std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
@@ -344,8 +352,8 @@ void HazardMapper::MaybeRefine(double altitude_m) {
   const double ratio = old_cell / cell;
   const double scale = 1.0 / (ratio * ratio);
   cell_m_ = cell;
-  corner_x_ = target_.x() - 0.5 * n_ * cell_m_;
-  corner_y_ = target_.y() - 0.5 * n_ * cell_m_;
+  corner_x_ = centre_x - 0.5 * n_ * cell_m_;
+  corner_y_ = centre_y - 0.5 * n_ * cell_m_;
   for (int j = 0; j < n_; ++j) {
     const double y = corner_y_ + (j + 0.5) * cell_m_;
     const int oj = static_cast<int>(std::floor((y - old_cy) / old_cell));
@@ -367,6 +375,52 @@ void HazardMapper::MaybeRefine(double altitude_m) {
   }
   site_.valid = site_.valid && CellOf(site_.position_world_m.x(), site_.position_world_m.y(),
                                       &dt_v_[0], &dt_v_[0]);
+}
+
+// Recentres the grid on the nadir by whole cells (the lattice, and so every kept cell's state,
+// is unchanged): cell (i, j) takes the state of old cell (i + di, j + dj); cells from outside the
+// old grid start empty.
+void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
+  const double half = 0.5 * n_ * cell_m_;
+  const double shift_x = std::round((nadir_world_m.x() - (corner_x_ + half)) / cell_m_);
+  const double shift_y = std::round((nadir_world_m.y() - (corner_y_ + half)) / cell_m_);
+  // A shift of a whole grid or more empties it (clamped before the integer conversion).
+  const long di = static_cast<long>(std::clamp(shift_x, -1.0 * n_, 1.0 * n_));
+  const long dj = static_cast<long>(std::clamp(shift_y, -1.0 * n_, 1.0 * n_));
+  stats_.grid_shift_cells[0] = static_cast<int>(di);
+  stats_.grid_shift_cells[1] = static_cast<int>(dj);
+  if (di == 0 && dj == 0) return;
+  const std::size_t cells = info_.size();
+  std::copy(info_.begin(), info_.end(), f_w_.begin());
+  std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
+  std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
+  std::uint64_t known_before = 0;
+  for (std::size_t c = 0; c < cells; ++c) {
+    f_n_[c] = count_[c];
+    known_before += info_[c] > 0.0 ? 1 : 0;
+  }
+  std::uint64_t kept = 0;
+  for (int j = 0; j < n_; ++j) {
+    const long oj = j + dj;
+    for (int i = 0; i < n_; ++i) {
+      const long oi = i + di;
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
+        info_[c] = info_z_[c] = min_var_[c] = 0.0;
+        count_[c] = 0;
+        continue;
+      }
+      const std::size_t o = static_cast<std::size_t>(oj) * n_ + static_cast<std::size_t>(oi);
+      info_[c] = f_w_[o];
+      info_z_[c] = f_wz_[o];
+      min_var_[c] = f_min_var_[o];
+      count_[c] = static_cast<std::uint16_t>(f_n_[o]);
+      kept += f_w_[o] > 0.0 ? 1 : 0;
+    }
+  }
+  stats_.cells_dropped += known_before - kept;
+  corner_x_ += shift_x * cell_m_;
+  corner_y_ += shift_y * cell_m_;
 }
 
 void HazardMapper::CalibrateDisparitySigma(const HazardFrame& frame) {
@@ -501,8 +555,22 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
   stats_.fused_cells = fused;
 }
 
-void HazardMapper::FuseLandmarks(const HazardFrame& frame) {
+void HazardMapper::CommitLandmark(double x_m, double y_m, double z_m, double var_m2) {
+  int i = 0;
+  int j = 0;
+  if (!CellOf(x_m, y_m, &i, &j)) return;  // left the grid with its cell
+  const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+  info_[c] += 1.0 / var_m2;
+  info_z_[c] += z_m / var_m2;
+  if (count_[c] < kMaxCount) ++count_[c];
+}
+
+// Each landmark enters once (hazard_mapper.hpp, step 3): anonymous ones now; identified ones are
+// held at their newest estimate, and the held ones this frame no longer publishes are fused with
+// their last estimate, moved onto this frame's datum (datum_shift_m, as the map was).
+void HazardMapper::FuseLandmarks(const HazardFrame& frame, double datum_shift_m) {
   int used = 0;
+  int incoming = 0;
   for (int k = 0; k < frame.num_landmarks; ++k) {
     if (k >= options_.max_landmarks) {
       stats_.landmarks_rejected += static_cast<std::uint32_t>(frame.num_landmarks - k);
@@ -517,13 +585,65 @@ void HazardMapper::FuseLandmarks(const HazardFrame& frame) {
       ++stats_.landmarks_rejected;
       continue;
     }
-    const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
-    info_[c] += 1.0 / var;
-    info_z_[c] += l.position_world_m.z() / var;
-    if (count_[c] < kMaxCount) ++count_[c];
-    ++used;
+    const Eigen::Vector3d& p = l.position_world_m;
+    if (l.id < 0) {
+      CommitLandmark(p.x(), p.y(), p.z(), var);
+      ++used;
+      continue;
+    }
+    incoming_[incoming++] = ActiveLandmark{l.id, k, p.x(), p.y(), p.z(), var};
   }
-  stats_.landmarks_used = used;
+  const auto by_id = [](const ActiveLandmark& a, const ActiveLandmark& b) {
+    return a.id < b.id || (a.id == b.id && a.order < b.order);
+  };
+  std::sort(incoming_.begin(), incoming_.begin() + incoming, by_id);
+  // A repeated id keeps its last entry (the frame's newest).
+  int unique = 0;
+  for (int k = 0; k < incoming; ++k) {
+    if (k + 1 < incoming && incoming_[k + 1].id == incoming_[k].id) {
+      ++stats_.landmarks_rejected;
+      continue;
+    }
+    incoming_[unique++] = incoming_[k];
+  }
+  // A frame without an identified landmark carries no landmark map (the SWF could not publish
+  // one): the held landmarks are kept, moved with the map onto this frame's datum. A landmark
+  // the SWF published again would otherwise enter twice.
+  if (unique == 0) {
+    for (int k = 0; k < num_active_; ++k) active_[k].z += datum_shift_m;
+    stats_.landmarks_active = num_active_;
+    stats_.landmarks_used = used + num_active_;
+    return;
+  }
+  // Held landmarks missing from this frame's map: fused for good.
+  int a = 0;
+  for (int b = 0; a < num_active_; ++a) {
+    const ActiveLandmark& held = active_[a];
+    while (b < unique && incoming_[b].id < held.id) ++b;
+    if (b < unique && incoming_[b].id == held.id) continue;
+    CommitLandmark(held.x, held.y, held.z + datum_shift_m, held.var);
+    ++stats_.landmarks_committed;
+  }
+  std::swap(active_, incoming_);
+  num_active_ = unique;
+  stats_.landmarks_active = unique;
+  stats_.landmarks_used = used + unique;
+}
+
+// The held landmarks' information per cell, for Analyze (rebuilt from world positions: the grid
+// may have scrolled or been refined since they were published).
+void HazardMapper::OverlayActiveLandmarks() {
+  std::fill(lm_info_.begin(), lm_info_.end(), 0.0);
+  std::fill(lm_info_z_.begin(), lm_info_z_.end(), 0.0);
+  for (int k = 0; k < num_active_; ++k) {
+    const ActiveLandmark& l = active_[k];
+    int i = 0;
+    int j = 0;
+    if (!CellOf(l.x, l.y, &i, &j)) continue;
+    const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+    lm_info_[c] += 1.0 / l.var;
+    lm_info_z_[c] += l.z / l.var;
+  }
 }
 
 void HazardMapper::Analyze(const HazardFrame& frame) {
@@ -534,13 +654,15 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   const Eigen::Vector3d& t = frame.world_T_camera.t;
   const Eigen::Vector3d up_in_camera = world_R_camera.row(2).transpose();
   const Eigen::Matrix<double, 6, 6>& pose_cov = frame.pose_covariance;
+  OverlayActiveLandmarks();
   for (std::size_t c = 0; c < cells; ++c) {
-    if (info_[c] > 0.0) {
-      elevation_[c] = static_cast<float>(info_z_[c] / info_[c]);
+    const double info = info_[c] + lm_info_[c];
+    if (info > 0.0) {
+      elevation_[c] = static_cast<float>((info_z_[c] + lm_info_z_[c]) / info);
       // Frames share part of their error (frame_error_correlation); landmarks only add
       // information. Never below the single-frame variance times rho.
       const double rho = min_var_[c] > 0.0 ? options_.frame_error_correlation : 0.0;
-      const double var_rel = (1.0 - rho) / info_[c] + rho * min_var_[c];
+      const double var_rel = (1.0 - rho) / info + rho * min_var_[c];
       sigma_rel_[c] = static_cast<float>(std::sqrt(var_rel));
       // The datum: the newest pose's vertical error at this cell (pose update [rho, phi], p_w = R
       // Exp(phi) p_c + t + rho: dz = rho_z + (p_c x R^T e_z) . phi).
@@ -875,9 +997,13 @@ core::Status HazardMapper::Update(const HazardFrame& frame) {
   }
   MaybeRefine(range_m);
   started_ = true;
+  if (options_.grid_follows_lander) {
+    const Eigen::Vector3d nadir = frame.world_T_camera.t + range_m * frame.world_T_camera.R.col(2);
+    FollowLander(nadir.head<2>());
+  }
   CalibrateDisparitySigma(frame);
   FuseStereo(frame);
-  FuseLandmarks(frame);
+  FuseLandmarks(frame, stats_.datum_shift_m);
   Analyze(frame);
   site_margin_m_ = options_.site_margin_sigmas * HorizontalSigma(frame.pose_covariance);
   SelectSite();

@@ -23,7 +23,16 @@
 //     the stereo alone; the elevation sigma adds the newest pose's vertical error at the cell
 //     (SWF update vector [rho, phi], p_w = R Exp(phi) p_c + t + rho: J Sigma J^T, J = [e_z^T,
 //     -e_z^T R [p_c]x]), the relief sigma does not (the datum is common to its plane window).
-//     Unknown cells stay unknown (NaN). The cell size is chosen from altitude
+//     Landmarks: the SWF publishes its map at every update, and a landmark it keeps is the same
+//     point re-estimated, each estimate holding the information of the earlier ones: fusing every
+//     publication would count it once per update. An identified landmark (HazardLandmark::id) is
+//     held at its newest estimate (replaced, not added, when published again) and enters the
+//     cells as an overlay; when the SWF no longer publishes it (marginalized: its estimate is
+//     final), that last estimate, moved with the map's datum, is fused for good. At most
+//     max_landmarks are held (the size of one published map).
+//     Unknown cells stay unknown (NaN). Before fusing, the grid is recentred by whole cells on
+//     the frame's nadir (grid_follows_lander): cells that leave are dropped with their state,
+//     cells that enter start unknown. The cell size is chosen from altitude
 //     (pixels_per_cell working pixels per cell, a power of 2 times min_cell_m) and only ever
 //     refined: on refinement the grid is resampled (information per child = parent / 4).
 //  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
@@ -148,7 +157,11 @@ struct HazardMapperOptions {
   double min_cell_m = 0.05;
   double max_cell_m = 0.8;
   double pixels_per_cell = 2.0;
-  bool target_from_first_pose = true;  // grid centre / target = nadir of the first frame
+  bool target_from_first_pose = true;  // target = nadir of the first frame
+  // The grid follows the lander: before each frame is fused it is recentred, by whole cells, on
+  // that frame's nadir (the optical axis on the ground). Cells that leave are dropped with their
+  // state, cells that enter start unknown. Off, the grid stays centred on the target.
+  bool grid_follows_lander = true;
   Eigen::Vector2d target_world_m{0.0, 0.0};
   int max_landmarks = 1024;
   // Hazards (defaults: rocks above 0.3 m, slopes above 10 deg).
@@ -175,8 +188,12 @@ struct HazardMapperOptions {
 // The rock criterion of a mapper's configuration (its threshold and plane window).
 RockCriterionOptions RockCriterionOf(const HazardMapperOptions& options);
 
-// A landmark of the SWF (world frame) with its marginal covariance.
+// A landmark of the SWF (world frame) with its marginal covariance. With an id (>= 0, the SWF's
+// landmark id) the landmark is one point of the ground that the SWF keeps re-estimating: it enters
+// the map once, as its newest estimate (see HazardMapper, "Landmarks"). Without one (id < 0) it
+// is a measurement of its own and is fused at once.
 struct HazardLandmark {
+  std::int64_t id = -1;
   Eigen::Vector3d position_world_m = Eigen::Vector3d::Zero();
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
 };
@@ -214,9 +231,13 @@ struct HazardStats {
   int uncertain_cells = 0;
   int min_disparity = 0;
   int num_disparities = 0;
-  std::uint32_t range_clamped = 0;       // updates whose predicted range exceeded max_disparities
-  std::uint32_t landmarks_rejected = 0;  // non-finite, off-grid or over max_landmarks
-  int calibration_landmarks = 0;         // landmarks with a valid SGM disparity this update
+  std::uint32_t range_clamped = 0;        // updates whose predicted range exceeded max_disparities
+  std::uint32_t landmarks_rejected = 0;   // non-finite, off-grid, repeated id or over max_landmarks
+  int landmarks_active = 0;               // identified landmarks held at their newest estimate
+  std::uint64_t landmarks_committed = 0;  // identified landmarks fused for good (left the SWF)
+  int grid_shift_cells[2] = {0, 0};       // this update's scroll of the grid (FollowLander)
+  std::uint64_t cells_dropped = 0;        // known cells that left the grid by scrolling
+  int calibration_landmarks = 0;          // landmarks with a valid SGM disparity this update
   double disparity_scale = 1.0;  // measured / model disparity sigma applied this update (>= 1)
   double datum_shift_m = 0.0;    // the map moved onto this frame's vertical datum (FuseStereo)
 };
@@ -245,7 +266,8 @@ class HazardMapper {
   // criterion decides with it (the pose error common to the plane window cancels); NaN where no
   // plane was fitted.
   const float* ReliefSigma() const { return relief_sigma_.data(); }
-  const std::uint16_t* Count() const { return count_.data(); }  // frames + landmarks fused
+  // Frames and committed landmarks fused (a landmark still in the SWF counts when it leaves).
+  const std::uint16_t* Count() const { return count_.data(); }
   const HazardClass* Classes() const { return class_.data(); }
   const float* SlopeDeg() const { return slope_deg_.data(); }  // footprint plane, NaN unknown
   // Slope of the plane over local_slope_baseline_m (1 m) and its sigma, degrees; NaN unknown.
@@ -269,7 +291,10 @@ class HazardMapper {
   void MaybeRefine(double altitude_m);
   void CalibrateDisparitySigma(const HazardFrame& frame);
   void FuseStereo(const HazardFrame& frame);
-  void FuseLandmarks(const HazardFrame& frame);
+  void FollowLander(const Eigen::Vector2d& nadir_world_m);
+  void FuseLandmarks(const HazardFrame& frame, double datum_shift_m);
+  void CommitLandmark(double x_m, double y_m, double z_m, double var_m2);
+  void OverlayActiveLandmarks();
   void Analyze(const HazardFrame& frame);
   void SelectSite();
   void DistanceTransform();
@@ -294,8 +319,21 @@ class HazardMapper {
   std::vector<double> calib_abs_;    // |SGM - landmark disparity| per matched landmark
   std::vector<double> calib_var_;    // the landmark's own disparity variance
   std::vector<double> calib_model_;  // the model sigma at the landmark's pixel
+  // Identified landmarks at their newest estimate (sorted by id; the map's datum), and the
+  // incoming set of this update (scratch of the same capacity). They enter Analyze through the
+  // overlay (lm_info_, lm_info_z_) and info_ only when they leave the SWF's map.
+  struct ActiveLandmark {
+    std::int64_t id = 0;
+    int order = 0;  // index in the frame's array: the last of repeated ids wins
+    double x = 0.0, y = 0.0, z = 0.0, var = 0.0;
+  };
+  std::vector<ActiveLandmark> active_;
+  std::vector<ActiveLandmark> incoming_;
+  int num_active_ = 0;
+  std::vector<double> lm_info_;
+  std::vector<double> lm_info_z_;
   // Fused state per cell.
-  std::vector<double> info_;     // sum 1/sigma^2 (stereo, pose-free, + landmarks)
+  std::vector<double> info_;     // sum 1/sigma^2 (stereo, pose-free, + committed landmarks)
   std::vector<double> info_z_;   // sum z/sigma^2
   std::vector<double> min_var_;  // smallest single-frame variance fused (0 = none)
   std::vector<std::uint16_t> count_;
