@@ -816,14 +816,17 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       const bool local = rocks_within(i, j, rl) == 0;
       const double local_deg = local ? local_slope_deg_[c] : 0.0;
       const double local_sigma_deg = local ? local_slope_sigma_deg_[c] : 0.0;
-      const double h = rock_m_[c];
+      // Where the map resolves the threshold rock, the rock criterion has decided the cell (kRock
+      // or not, at its false-alarm and detection rates); a rock is undecided only where it does
+      // not, and possible there when relief + k sigma exceeds the threshold height.
       const double sigma_h = relief_sigma_[c];
+      const bool rock_possible =
+          sigma_h > rocks.ResolvedSigma() && rock_m_[c] + k * sigma_h > options_.max_rock_height_m;
       if (slope_declared(slope_deg, slope_sigma_deg) ||
           slope_declared(local_deg, local_sigma_deg)) {
         class_[c] = HazardClass::kSlope;
         ++slope;
-      } else if (h + k * sigma_h > options_.max_rock_height_m ||
-                 slope_possible(slope_deg, slope_sigma_deg) ||
+      } else if (rock_possible || slope_possible(slope_deg, slope_sigma_deg) ||
                  slope_possible(local_deg, local_sigma_deg)) {
         class_[c] = HazardClass::kUncertain;
         ++uncertain;

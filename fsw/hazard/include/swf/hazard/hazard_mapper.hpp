@@ -44,7 +44,8 @@
 //     threshold by confidence_k sigma and its sigma resolves it (sigma <= a third of the
 //     threshold; the 1 m slope only where its window holds no kRock cell, since a plane over a
 //     rock tilts with it and the rock is the hazard there); kUncertain when value + k sigma
-//     exceeds a threshold otherwise, kSafe otherwise, kUnknown without data.
+//     exceeds a threshold otherwise (for rocks only where the criterion does not resolve the
+//     threshold rock: where it does, it has decided), kSafe otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
 //     is not kSafe or to the grid border; candidates need clearance >= footprint radius + margin
 //     (site_margin_sigmas x the horizontal position sigma). Score in
