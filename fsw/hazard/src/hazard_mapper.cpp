@@ -325,6 +325,14 @@ void HazardMapper::ChooseRange(const HazardFrame& frame, int* min_d, int* num_d)
   *num_d = num;
 }
 
+// The fused state into the per-frame scratch, from which MaybeRefine and FollowLander rewrite it.
+void HazardMapper::CopyStateToScratch() {
+  std::copy(info_.begin(), info_.end(), f_w_.begin());
+  std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
+  std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
+  std::copy(count_.begin(), count_.end(), f_n_.begin());
+}
+
 void HazardMapper::MaybeRefine(double altitude_m) {
   const double fxw = options_.camera.fx / options_.downsample;
   const double desired = options_.pixels_per_cell * altitude_m / fxw;
@@ -341,11 +349,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
   // nadir when the grid follows it).
   const double centre_x = corner_x_ + 0.5 * n_ * cell_m_;
   const double centre_y = corner_y_ + 0.5 * n_ * cell_m_;
-  const std::size_t cells = info_.size();
-  std::copy(info_.begin(), info_.end(), f_w_.begin());
-  std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
-  std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
-  for (std::size_t c = 0; c < cells; ++c) f_n_[c] = count_[c];
+  CopyStateToScratch();
   const double old_cell = cell_m_;
   const double old_cx = corner_x_;
   const double old_cy = corner_y_;
@@ -390,15 +394,9 @@ void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
   stats_.grid_shift_cells[0] = static_cast<int>(di);
   stats_.grid_shift_cells[1] = static_cast<int>(dj);
   if (di == 0 && dj == 0) return;
-  const std::size_t cells = info_.size();
-  std::copy(info_.begin(), info_.end(), f_w_.begin());
-  std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
-  std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
-  std::uint64_t known_before = 0;
-  for (std::size_t c = 0; c < cells; ++c) {
-    f_n_[c] = count_[c];
-    known_before += info_[c] > 0.0 ? 1 : 0;
-  }
+  CopyStateToScratch();
+  const std::uint64_t known_before = static_cast<std::uint64_t>(
+      std::count_if(info_.begin(), info_.end(), [](double w) { return w > 0.0; }));
   std::uint64_t kept = 0;
   for (int j = 0; j < n_; ++j) {
     const long oj = j + dj;

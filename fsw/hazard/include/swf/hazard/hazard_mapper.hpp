@@ -289,6 +289,7 @@ class HazardMapper {
  private:
   void Reduce(const frontend::GrayView& src, std::vector<std::uint8_t>* dst) const;
   void ChooseRange(const HazardFrame& frame, int* min_d, int* num_d);
+  void CopyStateToScratch();
   void MaybeRefine(double altitude_m);
   void CalibrateDisparitySigma(const HazardFrame& frame);
   void FuseStereo(const HazardFrame& frame);
