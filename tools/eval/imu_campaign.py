@@ -143,6 +143,12 @@ def summarize(records, seeds, names=tuple(INPUTS)):
                 continue
             counted += 1
             inside += lo <= statistics.fmean(vals) <= hi
+        # The same mean by tenths of the descent (frames 1.. split in ten): where it drifts.
+        tenths = []
+        for t in range(10):
+            ks = range(1 + t * (frames - 1) // 10, 1 + (t + 1) * (frames - 1) // 10)
+            vals = [p[k] for p in per_frame for k in ks if p[k] is not None]
+            tenths.append(statistics.fmean(vals) if vals else None)
         integrity = [s.get('integrity', {}) for s in good]
         valid = sum(i.get('frames_valid', 0) for i in integrity)
         degraded = sum(i.get('frames_degraded', 0) for i in integrity)
@@ -150,7 +156,7 @@ def summarize(records, seeds, names=tuple(INPUTS)):
         violations = sum(i.get('protection_violations', 0) for i in integrity)
         ok = sum(1 for r in runs if r.get('exit_code') == 0)
         table[name] = {'pose_rms_m': pose, 'landmark_rms_m': landmark, 'mean_nees': nees,
-                       'frames_in_band': inside, 'frames_counted': counted}
+                       'frames_in_band': inside, 'frames_counted': counted, 'tenths': tenths}
         lines.append('| %s | %d of %d (exit 0) | %s | %s | %s | %d of %d | %d / %d / %d | %d |' % (
             LABELS[name], ok, len(runs), describe(pose), describe(landmark), describe(nees),
             inside, counted, valid, degraded, invalid, violations))
@@ -159,6 +165,32 @@ def summarize(records, seeds, names=tuple(INPUTS)):
             '10 m at 10 m/s, lockstep), each flown by swf-sil with the process inputs below. NEES band '
             '(95 %%, mean over %d seeds at a frame): [%.2f, %.2f].' % (
                 seeds[0], seeds[-1], len(seeds), lo, hi), ''] + lines + ['']
+    for name in by_input:
+        text.append('- %s: mean position NEES over the seeds by tenths of the descent (first to '
+                    'last): %s.' % (LABELS[name], ' '.join(
+                        '%.2f' % v if v is not None else '-' for v in table[name]['tenths'])))
+    # The front end's error by magnification of the template's warp, track age and altitude
+    # (swf-sil's tracking_error_bins): Huber-effective sigma in pixels, and of the errors divided
+    # by the sigma the filter stated (1 where the measurement model fits), median over the runs.
+    for name, runs in by_input.items():
+        bins = [r['summary'].get('tracking_error_bins') for r in runs if 'summary' in r]
+        bins = [b for b in bins if b]
+        if not bins:
+            continue
+        for key in ('by_magnification', 'by_age', 'by_altitude_m'):
+            cells = []
+            for i, cell in enumerate(bins[0][key]):
+                px = [b[key][i]['huber_sigma_px'] for b in bins
+                      if b[key][i]['huber_sigma_px'] is not None]
+                nz = [b[key][i]['normalized_huber_sigma'] for b in bins
+                      if b[key][i]['normalized_huber_sigma'] is not None]
+                if not px:
+                    continue
+                cells.append('[%g, %g): %.3f px, %.2f' % (
+                    cell['from'], cell['to'], statistics.median(px),
+                    statistics.median(nz) if nz else float('nan')))
+            text.append('- %s, tracking error %s (Huber sigma, normalized): %s.' % (
+                LABELS[name], key.replace('by_', 'by '), '; '.join(cells)))
     for unit in [u for u in ('mems', 'tactical', 'mems_loose') if u in by_input]:
         good = [r['summary'] for r in by_input[unit] if 'summary' in r]
         dr = [s.get('imu', {}).get('imu_only_pose_rms_error_m') for s in good]

@@ -11,10 +11,19 @@ using core::Status;
 using estimator::Pose;
 using estimator::Vec3;
 
+double MeasurementSigmaPx(const PipelineOptions& options, double magnification) {
+  if (!(magnification > 0.0)) return options.measurement_sigma_px;
+  const double warp = std::max(magnification, 1.0 / magnification) - 1.0;
+  return options.measurement_sigma_px + options.measurement_sigma_per_magnification_px * warp;
+}
+
 Status Pipeline::Configure(const PipelineOptions& options) {
-  if (!(options.measurement_sigma_px > 0.0) || !(options.process_sigma_m > 0.0) ||
-      !(options.process_sigma_rad > 0.0) || !options.camera.Valid() || options.width_px <= 0 ||
-      options.height_px <= 0 || options.width_px > frontend::kMaxImageWidth ||
+  if (!(options.measurement_sigma_px > 0.0) ||
+      !(options.measurement_sigma_per_magnification_px >= 0.0) ||
+      !std::isfinite(options.measurement_sigma_per_magnification_px) ||
+      !(options.process_sigma_m > 0.0) || !(options.process_sigma_rad > 0.0) ||
+      !options.camera.Valid() || options.width_px <= 0 || options.height_px <= 0 ||
+      options.width_px > frontend::kMaxImageWidth ||
       options.height_px > frontend::kMaxImageHeight) {
     return Status::kInvalidArgument;
   }
@@ -80,7 +89,6 @@ Status Pipeline::Configure(const PipelineOptions& options) {
     s = swf_->Configure(model, options_.swf);
   }
   if (s != Status::kOk) return s;
-  r_sqrt_ = estimator::Mat3<double>::Identity() / options_.measurement_sigma_px;
   q_sqrt_.setZero();
   q_sqrt_.diagonal() << Vec3<double>::Constant(1.0 / options_.process_sigma_m),
       Vec3<double>::Constant(1.0 / options_.process_sigma_rad);
@@ -661,27 +669,30 @@ void Pipeline::AddMeasurements() {
     disparities_[num_disparities_++] = static_cast<float>(u_left - u_right);
   };
   for (const frontend::StereoMeasurement& m : output_->measurements) {
+    const double sigma_px = MeasurementSigmaPx(options_, m.magnification);
     if (m.quality < options_.min_quality) {
-      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected);
+      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected, sigma_px);
       continue;
     }
-    if (AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v))) {
+    if (AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v), sigma_px)) {
       note(m.u_left, m.u_right, m.v);
-      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kTracked);
+      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kTracked, sigma_px);
     } else {
-      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected);
+      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected, sigma_px);
     }
   }
+  // A first sighting is its template's own frame (magnification 1).
+  const double new_sigma_px = MeasurementSigmaPx(options_, 1.0);
   for (const frontend::NewLandmark& n : output_->new_landmarks) {
-    if (AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v))) {
+    if (AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v), new_sigma_px)) {
       note(n.u_left, n.u_right, n.v);
-      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kNew);
+      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kNew, new_sigma_px);
       if (num_new_sightings_ < kMaxNewSightings) {
         new_sightings_[num_new_sightings_++] =
             NewSighting{n.landmark_id, seq_, static_cast<float>(n.u_left), static_cast<float>(n.v)};
       }
     } else {
-      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kRejected);
+      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kRejected, new_sigma_px);
     }
   }
   image_spread_px_ = 0.0;
@@ -697,10 +708,10 @@ void Pipeline::AddMeasurements() {
   }
 }
 
-void Pipeline::Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate) {
+void Pipeline::Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate, double sigma_px) {
   if (num_feature_marks_ >= kMaxFeatureMarks) return;
-  feature_marks_[num_feature_marks_++] =
-      FeatureMark{id, static_cast<float>(u_px), static_cast<float>(v_px), fate};
+  feature_marks_[num_feature_marks_++] = FeatureMark{
+      id, static_cast<float>(u_px), static_cast<float>(v_px), fate, static_cast<float>(sigma_px)};
 }
 
 // After the update: a measurement added this frame that is no longer among the newest pose's
@@ -960,8 +971,9 @@ int Pipeline::NumPoses() const {
   return Visit([](const auto& filter) { return filter.NumPoses(); });
 }
 
-bool Pipeline::AddObservation(std::int64_t id, const Vec3<double>& z) {
-  return Visit([&](auto& filter) { return filter.AddObservation(id, z, r_sqrt_); }) == Status::kOk;
+bool Pipeline::AddObservation(std::int64_t id, const Vec3<double>& z, double sigma_px) {
+  const estimator::Mat3<double> r_sqrt = estimator::Mat3<double>::Identity() / sigma_px;
+  return Visit([&](auto& filter) { return filter.AddObservation(id, z, r_sqrt); }) == Status::kOk;
 }
 
 Pose<double> Pipeline::NewestCameraPose() const {

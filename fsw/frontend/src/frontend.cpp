@@ -80,6 +80,14 @@ Eigen::Vector3d Frontend::Triangulate(float x, float y, float disparity) const {
   return p;
 }
 
+float Frontend::Magnification(const Track& track, const estimator::Pose<double>& world_T_camera) {
+  if (!track.has_estimate || !track.has_ref_pose) return 1.0f;
+  const double depth_ref = track.world_T_ref.ApplyInverse(track.p_world).z();
+  const double depth_now = world_T_camera.ApplyInverse(track.p_world).z();
+  if (!(depth_ref > 1e-3 && depth_now > 1e-3)) return 1.0f;
+  return static_cast<float>(depth_ref / depth_now);
+}
+
 bool Frontend::TrackOne(const Track& track, const FramePrediction& prediction, bool may_search,
                         float* x, float* y, float* disparity_guess, float* quality, bool* warped,
                         bool* searched, bool* recovered) const {
@@ -253,6 +261,7 @@ std::size_t Frontend::TrackAndTriangulate(const GrayView& left, const GrayView& 
     t.y = y;
     t.disparity = d;
     t.quality = std::fmin(q_track, q_stereo);
+    t.magnification = prediction.has_pose ? Magnification(t, prediction.world_T_camera) : 1.0f;
     ++n;
   }
   return n;
@@ -290,8 +299,8 @@ void Frontend::EmitMeasurements(FrameOutput* output) {
       continue;
     }
     ++t.length;
-    (void)output->measurements.push_back(
-        StereoMeasurement{t.id, t.x, static_cast<double>(t.x) - t.disparity, t.y, t.quality});
+    (void)output->measurements.push_back(StereoMeasurement{
+        t.id, t.x, static_cast<double>(t.x) - t.disparity, t.y, t.quality, t.magnification});
     if (write != i) tracks_[write] = t;
     ++write;
   }
@@ -390,7 +399,8 @@ Status Frontend::Refine(const FramePrediction& updated, FrameOutput* output,
     t.disparity = d;
     t.quality = std::fmin(q_track, q_stereo);
     t.p_camera = Triangulate(x, y, d);
-    m = StereoMeasurement{t.id, x, static_cast<double>(x) - d, y, t.quality};
+    t.magnification = Magnification(t, updated.world_T_camera);
+    m = StereoMeasurement{t.id, x, static_cast<double>(x) - d, y, t.quality, t.magnification};
     ++*num_refined;
   }
   return Status::kOk;

@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <vector>
 
 #include "swf/frontend/frontend.hpp"
 #include "swf/testing/allocation_counter.hpp"
@@ -84,6 +86,10 @@ struct RunResult {
   std::size_t recovered = 0;
   std::size_t lost_tracking = 0;
   std::uint64_t allocations = 0;
+  // Per measurement of frames 1..: StereoMeasurement::magnification and the true one (the
+  // landmark's true depth in its first frame over its true depth now).
+  std::vector<double> magnification;
+  std::vector<double> true_magnification;
 };
 
 // error_scale: the prediction's pose error in units of Perturb's; recover: the search for tracks
@@ -108,6 +114,7 @@ RunResult RunDescent(const Scene& scene, bool with_prediction, double error_scal
   true_landmarks.reserve(kMaxTracks);
   RunResult result;
   std::vector<std::uint32_t> first_ids;
+  std::map<std::uint32_t, int> first_frame;  // landmark id -> the frame it was first seen in
   for (int k = 0; k < kFrames; ++k) {
     const Pose<double> pose = Scene::TruePose(k);
     const testing::TestImage& left = scene.left[k];
@@ -138,7 +145,14 @@ RunResult RunDescent(const Scene& scene, bool with_prediction, double error_scal
       const Vec3<double> z = scene.camera.Project(pose.ApplyInverse(truth.at(m.landmark_id)));
       return std::hypot(m.u_left - z.x(), m.v - z.z());
     };
-    for (const StereoMeasurement& m : out->measurements) result.errors_px.push_back(error_of(m));
+    for (const StereoMeasurement& m : out->measurements) {
+      result.errors_px.push_back(error_of(m));
+      const Vec3<double>& p = truth.at(m.landmark_id);
+      result.magnification.push_back(m.magnification);
+      result.true_magnification.push_back(
+          Scene::TruePose(first_frame.at(m.landmark_id)).ApplyInverse(p).z() /
+          pose.ApplyInverse(p).z());
+    }
     if (with_prediction && k > 0) {
       // The estimator's update: here the true pose and landmarks (a converged filter).
       FramePrediction updated;
@@ -159,6 +173,7 @@ RunResult RunDescent(const Scene& scene, bool with_prediction, double error_scal
     for (const NewLandmark& n : out->new_landmarks) {
       truth[n.landmark_id] = scene.Intersect(pose, 0.0, n.u_left, n.v);
       estimate[n.landmark_id] = predicted.Apply(n.p_camera);
+      first_frame[n.landmark_id] = k;
       if (k == 0) first_ids.push_back(n.landmark_id);
     }
   }
@@ -242,6 +257,33 @@ TEST(FrontendSceneTest, RefinementAtTheUpdatedEstimateLowersTheError) {
               100.0 * (b - a) / b);
   EXPECT_EQ(r.allocations, 0u);
   EXPECT_LT(a, 0.95 * b);
+}
+
+// GIVEN the descent towards the plane (up to 1.6x) WHEN tracking with the predicted pose and
+// landmark estimates THEN each measurement reports the magnification of its template's warp
+// within 3 % of the true one (its landmark's depth in the template's frame over its depth now),
+// which is what the pipeline's measurement sigma grows with (app::MeasurementSigmaPx); without an
+// estimate (square patches from the previous frame) it reports 1.
+TEST(FrontendSceneTest, MeasurementsReportTheirTemplatesMagnification) {
+  const Scene scene;
+  const RunResult warped = RunDescent(scene, true);
+  const RunResult square = RunDescent(scene, false);
+  ASSERT_FALSE(warped.magnification.empty());
+  std::vector<double> relative;
+  double largest = 0.0;
+  for (std::size_t i = 0; i < warped.magnification.size(); ++i) {
+    relative.push_back(std::abs(warped.magnification[i] / warped.true_magnification[i] - 1.0));
+    largest = std::max(largest, warped.true_magnification[i]);
+  }
+  std::sort(relative.begin(), relative.end());
+  const double p90 = relative[relative.size() * 9 / 10];
+  std::printf(
+      "magnification: %zu measurements, true up to %.3f; relative error median %.4f, "
+      "p90 %.4f\n",
+      relative.size(), largest, Median(relative), p90);
+  EXPECT_GT(largest, 1.4);
+  EXPECT_LT(p90, 0.03);
+  for (const double m : square.magnification) EXPECT_EQ(m, 1.0);
 }
 
 }  // namespace

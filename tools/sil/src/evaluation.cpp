@@ -96,9 +96,21 @@ void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<do
     tracking_.du_px.push_back(du);
     tracking_.dv_px.push_back(dv);
     app::NewSighting s;
-    if (FirstSeen(m.id, &s) && s.frame_seq == first_frame_) {
+    const bool seen = FirstSeen(m.id, &s);
+    const int age = seen ? static_cast<int>(r.nav.frame_seq - s.frame_seq) : -1;
+    double magnification = NAN;
+    if (seen && s.frame_seq >= 0 && s.frame_seq < trajectory_->NumFrames()) {
+      const double depth_then =
+          trajectory_->WorldTCamera(static_cast<std::int32_t>(s.frame_seq)).ApplyInverse(p).z();
+      magnification = depth_then / c.z();
+    }
+    tracking_.age.push_back(age);
+    tracking_.magnification.push_back(magnification);
+    tracking_.altitude_m.push_back(truth_.altitude_m);
+    tracking_.stated_sigma_px.push_back(m.sigma_px);
+    if (seen && s.frame_seq == first_frame_) {
       tracking_.first_frame_px.push_back(e);
-      tracking_.first_frame_age.push_back(static_cast<int>(r.nav.frame_seq - s.frame_seq));
+      tracking_.first_frame_age.push_back(age);
     }
   }
 }

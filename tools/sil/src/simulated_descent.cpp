@@ -90,6 +90,72 @@ std::string SignedErrorJson(const std::vector<double>& e) {
          "]}";
 }
 
+// The standard deviation a measurement with these errors has under the filter's Huber weights
+// (threshold k times it): the M-estimator's asymptotic variance E[psi(e)^2] / E[psi'(e)]^2,
+// psi(e) = clamp(e, -c, c), c = k x the result (fixed point; docs/imu.md, "The measurement
+// sigma"). NaN for an empty list.
+double HuberEffectiveSigma(const std::vector<double>& e, double k = 3.5) {
+  if (e.empty()) return NAN;
+  double sigma = std::max(1e-3, evaluation::Rms(e));
+  for (int it = 0; it < 100; ++it) {
+    const double c = k * sigma;
+    double psi2 = 0.0;
+    double inside = 0.0;
+    for (double x : e) {
+      psi2 += std::min(std::abs(x), c) * std::min(std::abs(x), c);
+      inside += std::abs(x) < c ? 1.0 : 0.0;
+    }
+    if (inside <= 0.0) return NAN;
+    sigma = 0.5 * sigma + 0.5 * std::sqrt(psi2 / static_cast<double>(e.size())) /
+                              (inside / static_cast<double>(e.size()));
+  }
+  return sigma;
+}
+
+// The signed u and v errors grouped by one property of the measurement (bins [edges[i],
+// edges[i+1])): per bin the count, the errors' Huber-effective sigma in pixels and that of the
+// errors divided by the sigma the filter was told (1 for a measurement model that fits).
+std::string BinnedErrorsJson(const Evaluation::TrackingErrors& t,
+                             const std::vector<double>& property,
+                             const std::vector<double>& edges) {
+  std::string text = "[";
+  for (std::size_t b = 0; b + 1 < edges.size(); ++b) {
+    std::vector<double> px;
+    std::vector<double> normalized;
+    for (std::size_t i = 0; i < property.size(); ++i) {
+      if (!(property[i] >= edges[b] && property[i] < edges[b + 1])) continue;
+      px.push_back(t.du_px[i]);
+      px.push_back(t.dv_px[i]);
+      if (t.stated_sigma_px[i] > 0.0) {
+        normalized.push_back(t.du_px[i] / t.stated_sigma_px[i]);
+        normalized.push_back(t.dv_px[i] / t.stated_sigma_px[i]);
+      }
+    }
+    if (b > 0) text += ", ";
+    text +=
+        "{\"from\": " + app::JsonNumber(edges[b]) + ", \"to\": " + app::JsonNumber(edges[b + 1]) +
+        ", \"measurements\": " + std::to_string(px.size() / 2) +
+        ", \"huber_sigma_px\": " + app::JsonNumber(HuberEffectiveSigma(px)) +
+        ", \"normalized_huber_sigma\": " + app::JsonNumber(HuberEffectiveSigma(normalized)) + "}";
+  }
+  return text + "]";
+}
+
+// The tracking errors by track age (frames since the first sighting), by the true magnification
+// since then, and by the true altitude: where the front end's error grows.
+void WriteTrackingErrorBins(std::FILE* f, const Evaluation::TrackingErrors& t) {
+  const std::vector<double> age(t.age.begin(), t.age.end());
+  std::fprintf(
+      f,
+      "  \"tracking_error_bins\": {\"by_age\": %s,\n    \"by_magnification\": %s,\n    "
+      "\"by_altitude_m\": %s},\n",
+      BinnedErrorsJson(t, age, {1, 2, 3, 4, 6, 9, 13, 17, 25, 1e9}).c_str(),
+      BinnedErrorsJson(t, t.magnification,
+                       {0.0, 1.02, 1.05, 1.1, 1.2, 1.35, 1.5, 1.75, 2.0, 2.5, 1e9})
+          .c_str(),
+      BinnedErrorsJson(t, t.altitude_m, {0, 15, 20, 30, 40, 50, 60, 70, 80, 90, 1e9}).c_str());
+}
+
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
 // The front end's measurements against the renderer's truth (Evaluation::Tracking): every fused
 // measurement of a known landmark, and the landmarks of the first frame, overall and once they
@@ -354,6 +420,7 @@ void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
       score.final_pose_error_m, static_cast<long long>(score.outputs.size()),
       static_cast<long long>(score.maps.size()));
   WriteTrackingErrors(f, evaluation_.Tracking());
+  WriteTrackingErrorBins(f, evaluation_.Tracking());
   WriteLandmarkMaps(f, score.maps);
   const app::FrontendCounters& fc = frontend_;
   std::fprintf(f,

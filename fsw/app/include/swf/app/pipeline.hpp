@@ -89,8 +89,12 @@ struct PipelineOptions {
   // still holds this pose) uses them. One warped LK and one stereo LK per measurement.
   bool refine_in_loop = true;
   estimator::SwfOptions swf;
-  double measurement_sigma_px = 0.5;  // per stereo coordinate (uL, uR, v)
-  float min_quality = 0.7f;           // measurements below this ZNCC are not used
+  // The 1-sigma of a measurement per stereo coordinate (uL, uR, v) grows with the magnification
+  // of its template's warp (StereoMeasurement::magnification, m): measurement_sigma_px +
+  // measurement_sigma_per_magnification_px * (max(m, 1 / m) - 1) (MeasurementSigmaPx).
+  double measurement_sigma_px = 0.5;
+  double measurement_sigma_per_magnification_px = 0.0;
+  float min_quality = 0.7f;  // measurements below this ZNCC are not used
   // Constant-velocity process model: 1-sigma of the per-frame deviation from the previous
   // relative motion, camera frame of the previous pose.
   double process_sigma_m = 0.5;
@@ -119,6 +123,13 @@ struct PipelineOptions {
   estimator::IntegrityOptions integrity;
   ImuOptions imu;  // enabled: the stereo-inertial estimator (see the file comment)
 };
+
+// The sigma the filter states for a measurement whose template is warped with this magnification
+// (PipelineOptions). The warped tracker's error against the truth grows linearly with how far the
+// warp is from the identity, whichever way the scale goes: the plane and the estimates the warp
+// is made of are off by some fraction, which displaces the template's samples in proportion to
+// the scale change (docs/imu.md, "Consistency along the descent").
+double MeasurementSigmaPx(const PipelineOptions& options, double magnification);
 
 // Integrity since Configure: statuses, restarts and every gate (health_t carries them).
 struct IntegrityCounters {
@@ -208,6 +219,7 @@ struct FeatureMark {
   float u_px = 0.0f;
   float v_px = 0.0f;
   FeatureFate fate = FeatureFate::kTracked;
+  float sigma_px = 0.0f;  // the 1-sigma the filter was told per stereo coordinate
 };
 inline constexpr int kMaxFeatureMarks =
     static_cast<int>(frontend::kMaxTracks + frontend::kMaxNewLandmarks);
@@ -313,7 +325,7 @@ class Pipeline {
   decltype(auto) Visit(F&& f) const {
     return inertial_ ? f(*inertial_) : f(*swf_);
   }
-  bool AddObservation(std::int64_t landmark_id, const estimator::Vec3<double>& z);
+  bool AddObservation(std::int64_t landmark_id, const estimator::Vec3<double>& z, double sigma_px);
   estimator::Pose<double> NewestCameraPose() const;
   // The filter's covariances, and the newest camera pose's 6x6 from them (camera_covariance_).
   core::Status ComputeCovariances();
@@ -321,7 +333,7 @@ class Pipeline {
   std::unique_ptr<frontend::LandmarkEstimate[]> estimates_;
   std::unique_ptr<NewSighting[]> new_sightings_;
   int num_new_sightings_ = 0;
-  void Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate);
+  void Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate, double sigma_px);
   void MarkUnfused();
   std::unique_ptr<FeatureMark[]> feature_marks_;
   int num_feature_marks_ = 0;
@@ -334,7 +346,6 @@ class Pipeline {
   estimator::Pose<double> before_previous_pose_;
   bool has_before_previous_ = false;
   core::Status last_status_ = core::Status::kOk;
-  estimator::Mat3<double> r_sqrt_ = estimator::Mat3<double>::Identity();
   estimator::Mat6<double> q_sqrt_ = estimator::Mat6<double>::Identity();
   std::int64_t frames_estimated_ = 0;
   bool covariance_valid_ = false;

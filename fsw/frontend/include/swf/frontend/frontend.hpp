@@ -59,6 +59,11 @@ struct StereoMeasurement {
   double u_right = 0.0;
   double v = 0.0;
   float quality = 0.0f;  // min of tracking and stereo ZNCC, in [-1, 1]
+  // How much larger the landmark's neighbourhood appears here than in the frame its template was
+  // taken in: the landmark's depth there over its depth here, from the estimator's landmark and
+  // poses (the scale of the template's warp; 1 without an estimate). The tracking error grows
+  // with it (docs/imu.md, "Consistency along the descent").
+  float magnification = 1.0f;
 };
 
 struct NewLandmark {
@@ -167,6 +172,7 @@ class Frontend {
     float quality = 0.0f;
     int length = 0;
     int template_slot = -1;
+    float magnification = 1.0f;  // of this frame's measurement (StereoMeasurement)
     bool has_ref_pose = false;
     estimator::Pose<double> world_T_ref;
     std::int64_t ref_frame = 0;  // the frame the template was taken in (frame_count_)
@@ -195,6 +201,8 @@ class Frontend {
   bool StereoOne(const GrayView& left, const GrayView& right, float x, float y, float* disparity,
                  float* quality) const;
   Eigen::Vector3d Triangulate(float x, float y, float disparity) const;
+  // StereoMeasurement::magnification of a track seen from world_T_camera.
+  static float Magnification(const Track& track, const estimator::Pose<double>& world_T_camera);
   void ReleaseTemplate(int slot);
   std::size_t FindTrack(std::uint32_t id) const;  // tracks_.size() when absent
 

@@ -69,6 +69,13 @@ class Evaluation : public app::OutputObserver {
     std::vector<double> dv_px;  // v - true v
     std::vector<double> first_frame_px;
     std::vector<int> first_frame_age;
+    // Per entry of du_px / dv_px: frames since the landmark's first sighting, the true
+    // magnification of its neighbourhood since then (depth then / depth now), the true altitude,
+    // and the sigma the filter was told for the measurement (FeatureMark::sigma_px).
+    std::vector<int> age;
+    std::vector<double> magnification;
+    std::vector<double> altitude_m;
+    std::vector<double> stated_sigma_px;
   };
   const TrackingErrors& Tracking() const { return tracking_; }
   // The terrain with the hazard truth maps are judged against (the mapper's thresholds), for
