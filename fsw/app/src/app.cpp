@@ -1164,7 +1164,7 @@ void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int
   po->frontend = FrontendFor(config, po->width_px, po->height_px);
   po->swf = SwfFor(config, nav_mode);
   po->measurement_sigma_px = config.measurement_sigma_px;
-  po->measurement_sigma_per_magnification_px = config.measurement_sigma_per_magnification_px;
+  po->measurement_sigma_per_magnification_rad = config.measurement_sigma_per_magnification_rad;
   po->min_quality = static_cast<float>(config.min_quality);
   po->refine_in_loop = config.frontend_refine_in_loop;
   po->process_sigma_m = config.process_sigma_m;

@@ -213,8 +213,8 @@ void AddEstimatorFields(std::map<std::string, ConfigSetter>* fields) {
                                   " (kMaxWindow, the filter's compiled window capacity)");
   f["max_iterations"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_iterations; }, 1, 100);
   f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
-  f["measurement_sigma_per_magnification_px"] =
-      Double(&FswConfig::measurement_sigma_per_magnification_px, 0.0, 100.0);
+  f["measurement_sigma_per_magnification_rad"] =
+      Double(&FswConfig::measurement_sigma_per_magnification_rad, 0.0, 0.1);
   f["min_quality"] = Double(&FswConfig::min_quality, -1.0, 1.0);
   f["process_sigma_m"] = Double(&FswConfig::process_sigma_m, 1e-6, 1e3);
   f["process_sigma_rad"] = Double(&FswConfig::process_sigma_rad, 1e-8, 3.0);

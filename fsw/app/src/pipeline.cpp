@@ -14,13 +14,14 @@ using estimator::Vec3;
 double MeasurementSigmaPx(const PipelineOptions& options, double magnification) {
   if (!(magnification > 0.0)) return options.measurement_sigma_px;
   const double warp = std::max(magnification, 1.0 / magnification) - 1.0;
-  return options.measurement_sigma_px + options.measurement_sigma_per_magnification_px * warp;
+  return options.measurement_sigma_px +
+         options.camera.fx * options.measurement_sigma_per_magnification_rad * warp;
 }
 
 Status Pipeline::Configure(const PipelineOptions& options) {
   if (!(options.measurement_sigma_px > 0.0) ||
-      !(options.measurement_sigma_per_magnification_px >= 0.0) ||
-      !std::isfinite(options.measurement_sigma_per_magnification_px) ||
+      !(options.measurement_sigma_per_magnification_rad >= 0.0) ||
+      !std::isfinite(options.measurement_sigma_per_magnification_rad) ||
       !(options.process_sigma_m > 0.0) || !(options.process_sigma_rad > 0.0) ||
       !options.camera.Valid() || options.width_px <= 0 || options.height_px <= 0 ||
       options.width_px > frontend::kMaxImageWidth ||

@@ -88,31 +88,35 @@ struct Descent {
 
 bool Valid(std::int8_t status) { return status == static_cast<std::int8_t>(NavIntegrity::kValid); }
 
-// GIVEN a base sigma and a growth per unit of magnification WHEN measurements come with their
-// template's magnification THEN the stated sigma is the base for an unwarped template (a first
-// sighting), grows linearly with the scale change, alike for a view twice as near or twice as
-// far, and is the base when no scale is known; a negative or non-finite growth is refused.
+// GIVEN a base sigma and a growth per unit of magnification (an angle) WHEN measurements come
+// with their template's magnification THEN the stated sigma is the base for an unwarped template
+// (a first sighting), grows linearly with the scale change, alike for a view twice as near or
+// twice as far, twice as fast in pixels for twice the focal length, and is the base when no scale
+// is known; a negative or non-finite growth is refused.
 TEST(PipelineTest, MeasurementSigmaGrowsWithTheWarpsMagnification) {
   PipelineOptions po;
+  po.camera.fx = 1000.0;
   po.measurement_sigma_px = 0.04;
-  po.measurement_sigma_per_magnification_px = 0.2;
+  po.measurement_sigma_per_magnification_rad = 2e-4;  // 0.2 px per unit of m - 1 at this fx
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 1.0), 0.04);
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 1.5), 0.04 + 0.2 * 0.5);
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 2.0), 0.24);
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 0.5), 0.24);
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 0.0), 0.04);
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, -1.0), 0.04);
-  po.measurement_sigma_per_magnification_px = 0.0;
+  po.camera.fx = 2000.0;
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 2.0), 0.44);
+  po.measurement_sigma_per_magnification_rad = 0.0;
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 3.0), 0.04);  // the constant sigma of before
 
   const Descent descent;  // a valid configuration ...
   PipelineOptions bad = testing::SmallRigOptions(*descent.world);
   auto pipeline = std::make_unique<Pipeline>();
-  bad.measurement_sigma_per_magnification_px = -0.1;  // ... made invalid
+  bad.measurement_sigma_per_magnification_rad = -1e-4;  // ... made invalid
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_sigma_per_magnification_px = std::nan("");
+  bad.measurement_sigma_per_magnification_rad = std::nan("");
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_sigma_per_magnification_px = 0.2;
+  bad.measurement_sigma_per_magnification_rad = 2e-4;
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kOk);
 }
 

@@ -202,7 +202,7 @@ struct FswConfig {
   std::int32_t window = 5;
   std::int32_t max_iterations = 10;
   double measurement_sigma_px = 0.5;
-  double measurement_sigma_per_magnification_px = 0.0;  // PipelineOptions, MeasurementSigmaPx
+  double measurement_sigma_per_magnification_rad = 0.0;  // PipelineOptions, MeasurementSigmaPx
   double min_quality = 0.7;
   double process_sigma_m = 0.5;
   double process_sigma_rad = 0.01;

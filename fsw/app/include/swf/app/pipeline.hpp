@@ -89,11 +89,13 @@ struct PipelineOptions {
   // still holds this pose) uses them. One warped LK and one stereo LK per measurement.
   bool refine_in_loop = true;
   estimator::SwfOptions swf;
-  // The 1-sigma of a measurement per stereo coordinate (uL, uR, v) grows with the magnification
-  // of its template's warp (StereoMeasurement::magnification, m): measurement_sigma_px +
-  // measurement_sigma_per_magnification_px * (max(m, 1 / m) - 1) (MeasurementSigmaPx).
+  // The 1-sigma of a measurement per stereo coordinate (uL, uR, v): the tracker's sub-pixel
+  // precision, plus a misregistration that grows with the magnification m of its template's
+  // warp (StereoMeasurement::magnification), an angle on the scene and so camera.fx times it in
+  // pixels: measurement_sigma_px + fx * measurement_sigma_per_magnification_rad *
+  // (max(m, 1 / m) - 1) (MeasurementSigmaPx).
   double measurement_sigma_px = 0.5;
-  double measurement_sigma_per_magnification_px = 0.0;
+  double measurement_sigma_per_magnification_rad = 0.0;
   float min_quality = 0.7f;  // measurements below this ZNCC are not used
   // Constant-velocity process model: 1-sigma of the per-frame deviation from the previous
   // relative motion, camera frame of the previous pose.
@@ -125,10 +127,9 @@ struct PipelineOptions {
 };
 
 // The sigma the filter states for a measurement whose template is warped with this magnification
-// (PipelineOptions). The warped tracker's error against the truth grows linearly with how far the
-// warp is from the identity, whichever way the scale goes: the plane and the estimates the warp
-// is made of are off by some fraction, which displaces the template's samples in proportion to
-// the scale change (docs/imu.md, "Consistency along the descent").
+// (PipelineOptions). The warped tracker's error against the renderer's truth grows linearly with
+// how far the warp is from the identity, whichever way the scale goes, and its growth in pixels
+// doubles with the image's focal length (docs/imu.md, "Consistency along the descent").
 double MeasurementSigmaPx(const PipelineOptions& options, double magnification);
 
 // Integrity since Configure: statuses, restarts and every gate (health_t carries them).
