@@ -18,7 +18,10 @@ same start (IMU-only dead reckoning). Writes OUT/runs.json (every run) and OUT/s
 Position NEES: for a consistent estimator e^T P^-1 e is chi-square with 3 degrees of freedom; its
 mean over S independent seeds at one frame is chi-square(3 S) / S. The band is that
 distribution's central 95 % (Wilson-Hilferty); a consistent estimator has about 95 % of the
-frames inside it, an overconfident one lies above.
+frames inside it, an overconfident one lies above. The summary also gives that mean by tenths of
+the descent, and the front end's error against the truth binned by the magnification of each
+landmark since its template was taken, by track age and by altitude (swf-sil's
+tracking_error_bins), in pixels and over the sigma the filter stated.
 
 usage: imu_campaign.py --fsw SWF-FSW [--config demo.cfg] [--seeds 20] [--first-seed 1]
                        [--jobs 2] [--inputs mems,tactical] [--set "KEY: VALUE" ...] --out DIR
