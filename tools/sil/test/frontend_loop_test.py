@@ -9,29 +9,10 @@ first-frame tracks, which have no predicted pose, follow frame-to-frame LK and d
 every step on. Fails when warping every track stops lowering the first-frame tracks' error
 against the truth (summary `tracking_error_px.first_frame`), when refinement in the loop stops
 replacing the filter's measurements, or when either run's verdict is not ok."""
-import json
-import os
-import subprocess
 import sys
 import tempfile
 
-
-def fly(sil, cfg, workdir, name, *settings):
-    summary = os.path.join(workdir, name + '.json')
-    cmd = [sil, '--config', cfg, '--set', 'sim.frames: 20', '--set', 'pacing: lockstep',
-           '--set', 'lcm.publish: false', '--set', 'rt.mlockall: false',
-           '--set', 'rt.priority: 0', '--set', 'summary.path: ' + summary]
-    for s in settings:
-        cmd += ['--set', s]
-    run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if run.returncode != 0:
-        sys.stderr.write(run.stderr)
-        raise SystemExit('%s: swf-sil exited %d: %s' % (name, run.returncode, ' '.join(cmd)))
-    with open(summary) as f:
-        s = json.load(f)
-    if s['result'] != 'ok':
-        raise SystemExit('%s: verdict %s, not ok' % (name, s['result']))
-    return s
+from sil_run import fly
 
 
 def main():
@@ -39,8 +20,9 @@ def main():
         raise SystemExit(__doc__)
     sil, cfg = sys.argv[1], sys.argv[2]
     with tempfile.TemporaryDirectory() as workdir:
-        on = fly(sil, cfg, workdir, 'on')
-        before = fly(sil, cfg, workdir, 'reference_off', 'frontend.reference_from_estimate: false')
+        on = fly(sil, cfg, workdir, 'on', 'sim.frames: 20')
+        before = fly(sil, cfg, workdir, 'reference_off', 'sim.frames: 20',
+                     'frontend.reference_from_estimate: false')
     failures = []
     for name, s in (('on', on), ('reference_off', before)):
         t = s['tracking_error_px']

@@ -6,37 +6,19 @@ measured on the renderer's truth, over the demo's whole descent (100 m -> 10 m, 
 
 swf-sil's summary bins the signed u and v errors by the true magnification of each landmark since
 its template was taken (`tracking_error_bins.by_magnification`) with their Huber-effective sigma
-divided by the sigma the filter was told. With the demo's sigma, which grows with the magnification
-of the template's warp (app::MeasurementSigmaPx), that ratio must be near 1 in every bin; with one
-constant sigma (the state before) it spreads from conservative at m ~ 1 to overconfident at m > 2,
+divided by the sigma the filter was told. With the per-track sigma, which grows with the
+magnification of the template's warp (app::MeasurementSigmaPx; 0.03 px + fx 1.645e-4 rad (m - 1),
+docs/imu.md), that ratio must be near 1 in every bin; with one constant sigma (the demo's 0.12 px)
+it spreads from conservative at m ~ 1 to overconfident at m > 2,
 which the test also checks, so that it sees what it guards. Fails when the front end's reported
 magnification, the pipeline's sigma or the front end's error change so that they no longer agree,
 or when either run's verdict is not ok."""
-import json
-import os
-import subprocess
 import sys
 import tempfile
 
+from sil_run import fly
+
 MIN_MEASUREMENTS = 200  # per bin, for its ratio to count
-
-
-def fly(sil, cfg, workdir, name, *settings):
-    summary = os.path.join(workdir, name + '.json')
-    cmd = [sil, '--config', cfg, '--set', 'pacing: lockstep', '--set', 'lcm.publish: false',
-           '--set', 'rt.mlockall: false', '--set', 'rt.priority: 0',
-           '--set', 'summary.path: ' + summary]
-    for s in settings:
-        cmd += ['--set', s]
-    run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    if run.returncode != 0:
-        sys.stderr.write(run.stderr)
-        raise SystemExit('%s: swf-sil exited %d: %s' % (name, run.returncode, ' '.join(cmd)))
-    with open(summary) as f:
-        s = json.load(f)
-    if s['result'] != 'ok':
-        raise SystemExit('%s: verdict %s, not ok' % (name, s['result']))
-    return s
 
 
 def ratios(summary):
@@ -51,7 +33,8 @@ def main():
         raise SystemExit(__doc__)
     sil, cfg = sys.argv[1], sys.argv[2]
     with tempfile.TemporaryDirectory() as workdir:
-        per_track = fly(sil, cfg, workdir, 'per_track')
+        per_track = fly(sil, cfg, workdir, 'per_track', 'measurement_sigma_px: 0.03',
+                        'measurement_sigma_per_magnification_rad: 1.645e-4')
         constant = fly(sil, cfg, workdir, 'constant', 'measurement_sigma_px: 0.12',
                        'measurement_sigma_per_magnification_rad: 0')
     failures = []
