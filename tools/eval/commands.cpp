@@ -242,6 +242,17 @@ std::string Markdown(const Evaluation& e) {
   return md;
 }
 
+// More tracks than the flight prior holds (kMaxPriorLandmarks) drop a marginalized pose's
+// sightings of the tracks that did not fit (kFaultPriorCapacity): a run that lost data says so.
+std::string PriorOverflowNote(const RunRecord& r) {
+  const auto full = std::count_if(r.frames.begin(), r.frames.end(), [](const FrameRecord& f) {
+    return (f.fault_bits & estimator::kFaultPriorCapacity) != 0;
+  });
+  if (full == 0) return "";
+  return "; the prior was full at " + std::to_string(full) + " of " +
+         std::to_string(r.frames.size()) + " frames: sightings dropped (kFaultPriorCapacity)";
+}
+
 // Writes every file of the evaluation and returns the exit status.
 int WriteEvaluation(const std::string& out, const Evaluation& e) {
   std::string error;
@@ -263,9 +274,9 @@ int WriteEvaluation(const std::string& out, const Evaluation& e) {
   for (const RunRecord& r : *e.runs) {
     if (r.Ok()) {
       std::printf(
-          "swf-eval: %s ok: ATE %.4g m, last frame %.4g m without fit, %.0f tracked/frame\n",
+          "swf-eval: %s ok: ATE %.4g m, last frame %.4g m without fit, %.0f tracked/frame%s\n",
           r.options.name.c_str(), r.errors.ate_rmse_m, r.errors.final_anchored_error_m,
-          r.mean_tracked);
+          r.mean_tracked, PriorOverflowNote(r).c_str());
     } else {
       std::fprintf(stderr, "swf-eval: %s %s: %s\n", r.options.name.c_str(), ToString(r.verdict),
                    r.reason.c_str());
