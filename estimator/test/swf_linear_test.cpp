@@ -215,8 +215,12 @@ constexpr int kCapacity = 16;
 template <int D, int P = 64>
 using LinearSwf = SlidingWindowFilter<LinearModel<D>, kCapacity, 64, 64, P>;
 
+// `batch_problem`: the measurements the filter is expected to have used, where it drops some
+// (a full prior) and says so in `expected_faults`.
 template <int D, int P = 64>
-void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_frame) {
+void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_frame,
+                       const Problem<D>* batch_problem = nullptr,
+                       std::uint32_t expected_faults = 0u) {
   using Filter = LinearSwf<D, P>;
   using StateMat = Eigen::Matrix<double, D, D>;
   auto swf = std::make_unique<Filter>();
@@ -238,7 +242,7 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_
                 core::Status::kOk);
     ASSERT_EQ(swf->Update(), core::Status::kOk) << "frame " << j;
   }
-  const Batch<D> batch = SolveBatch(pr, last_frame);
+  const Batch<D> batch = SolveBatch(batch_problem ? *batch_problem : pr, last_frame);
   // The newest state's covariance alone (the factorization and the newest state's columns of
   // its inverse, nothing else): the block of the batch information matrix's dense inverse
   // within 1e-9, the tolerance of every block here (these covariances are 1e-4..1; two exact
@@ -279,7 +283,7 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_
     ++compared;
   });
   compared_prior = swf->NumPriorLandmarks();
-  EXPECT_EQ(swf->FaultBits(), 0u);  // no prior overflow, nothing dropped
+  EXPECT_EQ(swf->FaultBits(), expected_faults);  // no prior overflow unless one was built
   EXPECT_GT(compared, 5);
   if (mode != SwfMode::kBatch && last_frame + 1 > window) {
     // The interesting case: information reached these landmarks only through the prior.
@@ -349,6 +353,46 @@ void OneShotLandmarksTakeNoPriorSlot() {
   ExpectEqualsBatch<D, 10>(pr, SwfMode::kSlidingWindow, 1, 7);
 }
 TEST(SwfLinear, OneShotLandmarksTakeNoPriorSlot) { OneShotLandmarksTakeNoPriorSlot<6>(); }
+
+// A full prior takes the landmarks the window measures most. Each frame brings three
+// two-frame tracks, listed before six tracks that span the run; the prior has room for six.
+// Taken first come, the short tracks would fill it and every marginalized pose's sightings of
+// the long tracks would be dropped. Taken by use, only the short tracks' first sightings from
+// marginalized poses are dropped, and the filter equals the batch without exactly those.
+template <int D>
+void AFullPriorKeepsTheLandmarksTheWindowMeasuresMost() {
+  constexpr int kLong = 6;
+  constexpr int kShortPerFrame = 3;
+  constexpr int kFrames = 9;
+  constexpr int kWindow = 3;
+  constexpr int kLastFrame = kFrames - 1;
+  Problem<D> used = MakeProblem<D>(8, kFrames, 0, 1, 1);
+  used.options.gate_probability = 0.0;  // random numbers, not sightings of one scene
+  Problem<D> all = used;
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> g(0.0, 3.0);
+  const auto add = [&](int frame, int landmark, bool kept) {
+    const Obs o{frame, landmark, Vec3<double>(g(rng), g(rng), g(rng))};
+    all.obs.push_back(o);
+    if (kept) used.obs.push_back(o);
+  };
+  const auto short_track = [](int start, int k) { return kLong + kShortPerFrame * start + k; };
+  for (int j = 0; j < kFrames; ++j) {
+    for (int k = 0; k < kShortPerFrame; ++k) {
+      if (j > 0) add(j, short_track(j - 1, k), true);
+      // A first sighting is dropped once its pose leaves the window.
+      const bool marginalized = j < kLastFrame + 1 - kWindow;
+      add(j, short_track(j, k), !marginalized);
+    }
+    for (int i = 0; i < kLong; ++i) add(j, i, true);
+  }
+  all.landmarks = used.landmarks = short_track(kFrames, 0);
+  ExpectEqualsBatch<D, kLong>(all, SwfMode::kSlidingWindow, kWindow, kLastFrame, &used,
+                              kFaultPriorCapacity);
+}
+TEST(SwfLinear, AFullPriorKeepsTheLandmarksTheWindowMeasuresMost) {
+  AFullPriorKeepsTheLandmarksTheWindowMeasuresMost<6>();
+}
 
 // A window of one pose against a Kalman filter over [pose ; landmarks], written here in covariance
 // form.

@@ -579,6 +579,7 @@ class SlidingWindowFilter {
   void PriorDelta();
   void AddPrior(int lm0);
   void MarginalizeOldestPose();
+  void SelectPriorEntrants();
   void GrowPrior();
   bool EliminateFirstPose(int dim);
   bool NewPriorBlocksPositiveSemidefinite(int dim);
@@ -613,6 +614,7 @@ class SlidingWindowFilter {
   StateMat prior_pose_jacobian_ = StateMat::Identity();
   mutable StateMat scratch_jacobian_ = StateMat::Identity();
   core::StaticVector<int, P> prior_landmarks_;
+  core::StaticVector<int, M> prior_entrants_;  // MarginalizeOldestPose's workspace
   Vec3<S> prior_landmark_lin_[P];
   Vec3<S> first_estimate_[P];  // where each prior landmark's Jacobians are evaluated
 

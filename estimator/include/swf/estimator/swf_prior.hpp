@@ -4,6 +4,8 @@
 // Included by sliding_window_filter.hpp; not a header to include alone.
 #pragma once
 
+#include <algorithm>
+
 #include "swf/estimator/schur.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 
@@ -92,28 +94,13 @@ template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
   PoseSlot& p0 = Slot(0);
   PoseSlot& p1 = Slot(1);
-  // Variables of the new prior: the old prior landmarks (same order), then landmarks seen
-  // from p0 that are not yet in the prior, as long as the prior has room.
-  for (Observation& o : p0.obs) {
-    EvaluateObservation(p0.pose, &o, true);
-    if (!o.valid) continue;
-    LandmarkSlot& l = landmarks_[o.landmark];
-    if (l.prior_index >= 0) continue;
-    if (l.obs_in_window == 1) {
-      // Seen from p0 alone: a stereo measurement (3 rows) of a landmark (3 parameters) tells
-      // nothing about the other states once the landmark is eliminated (its Schur complement,
-      // eq. 9, is zero), so it is left out instead of occupying a prior slot it would leave
-      // right after (Fig. 7c).
-      o.valid = false;
-      continue;
-    }
-    if (prior_landmarks_.full()) {
-      o.valid = false;  // its information is dropped, and reported
-      fault_bits_ |= kFaultPriorCapacity;
-      continue;
-    }
+  // Variables of the new prior: the old prior landmarks (same order), then the landmarks seen
+  // from p0 that the window still measures and that the prior has room for.
+  SelectPriorEntrants();
+  for (const int k : prior_entrants_) {
+    LandmarkSlot& l = landmarks_[p0.obs[k].landmark];
     l.prior_index = static_cast<int>(prior_landmarks_.size());
-    (void)prior_landmarks_.push_back(o.landmark);
+    (void)prior_landmarks_.push_back(p0.obs[k].landmark);
     prior_landmark_lin_[l.prior_index] = l.params;
     first_estimate_[l.prior_index] = l.params;
     // A new prior variable enters with zero information about itself until the Schur below.
@@ -190,6 +177,49 @@ void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
   head_ = (head_ + 1) % kMaxPoses;
   --num_poses_;
   Slot(0).has_process = false;  // consumed into the prior
+}
+
+// Chooses which of p0's landmarks enter the prior (indices into p0.obs, in their order) and
+// drops the measurements of those that do not. A landmark seen from p0 alone stays out: a
+// stereo measurement (3 rows) of a landmark (3 parameters) tells nothing about the other states
+// once the landmark is eliminated (its Schur complement, eq. 9, is zero), so it would occupy a
+// prior slot only to leave right after (Fig. 7c). When more landmarks qualify than the prior
+// has room for, the ones the window measures most (then the longest tracks) enter: they tie p0's
+// information to the most remaining poses. The others' p0 measurements are dropped and
+// reported (kFaultPriorCapacity).
+template <typename Model, int K, int N, int M, int P>
+void SlidingWindowFilter<Model, K, N, M, P>::SelectPriorEntrants() {
+  PoseSlot& p0 = Slot(0);
+  prior_entrants_.clear();
+  for (int k = 0; k < static_cast<int>(p0.obs.size()); ++k) {
+    Observation& o = p0.obs[k];
+    EvaluateObservation(p0.pose, &o, true);
+    if (!o.valid) continue;
+    const LandmarkSlot& l = landmarks_[o.landmark];
+    if (l.prior_index >= 0) continue;
+    if (l.obs_in_window == 1) {
+      o.valid = false;
+      continue;
+    }
+    (void)prior_entrants_.push_back(k);
+  }
+  const int room = P - static_cast<int>(prior_landmarks_.size());
+  if (static_cast<int>(prior_entrants_.size()) <= room) return;
+  fault_bits_ |= kFaultPriorCapacity;
+  // A strict order (ties broken by position), so the chosen set is deterministic.
+  const auto more_useful = [&](int a, int b) {
+    const LandmarkSlot& la = landmarks_[p0.obs[a].landmark];
+    const LandmarkSlot& lb = landmarks_[p0.obs[b].landmark];
+    if (la.obs_in_window != lb.obs_in_window) return la.obs_in_window > lb.obs_in_window;
+    if (la.total_obs != lb.total_obs) return la.total_obs > lb.total_obs;
+    return a < b;
+  };
+  int* first = prior_entrants_.data();
+  int* last = first + prior_entrants_.size();
+  std::nth_element(first, first + room, last, more_useful);
+  for (int* k = first + room; k != last; ++k) p0.obs[*k].valid = false;
+  while (static_cast<int>(prior_entrants_.size()) > room) prior_entrants_.pop_back();
+  std::sort(first, first + room);  // enter in p0's order, as when the prior has room
 }
 
 // Adds three zero rows/columns to the prior for a landmark entering it.
