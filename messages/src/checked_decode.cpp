@@ -138,20 +138,25 @@ DecodeError CheckStereoShape(WireReader* r, std::int32_t max_width, std::int32_t
   return ExpectRemaining(*r, "left/right", 2 * std::int64_t{num_bytes});
 }
 
-DecodeError CheckFeatureShape(WireReader* r) {
-  if (!r->Skip(kFeaturePrefixBytes)) return Error(DecodeResult::kTruncated, "num_features", 0);
+// A message of fixed fields, one count and an array of fixed-size records after it.
+DecodeError CheckCountedArrayShape(WireReader* r, std::size_t prefix_bytes, const char* count_field,
+                                   std::int32_t limit, const char* array_field,
+                                   std::int64_t bytes_per_record) {
+  if (!r->Skip(prefix_bytes)) return Error(DecodeResult::kTruncated, count_field, 0);
   std::int32_t n = 0;
-  const DecodeError e = ReadCount(r, "num_features", kMaxFeatures, &n);
+  const DecodeError e = ReadCount(r, count_field, limit, &n);
   if (!e.Ok()) return e;
-  return ExpectRemaining(*r, "features", kBytesPerFeature * n);
+  return ExpectRemaining(*r, array_field, bytes_per_record * n);
+}
+
+DecodeError CheckFeatureShape(WireReader* r) {
+  return CheckCountedArrayShape(r, kFeaturePrefixBytes, "num_features", kMaxFeatures, "features",
+                                kBytesPerFeature);
 }
 
 DecodeError CheckLandmarkShape(WireReader* r) {
-  if (!r->Skip(kLandmarkPrefixBytes)) return Error(DecodeResult::kTruncated, "num_landmarks", 0);
-  std::int32_t n = 0;
-  const DecodeError e = ReadCount(r, "num_landmarks", kMaxMapLandmarks, &n);
-  if (!e.Ok()) return e;
-  return ExpectRemaining(*r, "landmarks", kBytesPerLandmark * n);
+  return CheckCountedArrayShape(r, kLandmarkPrefixBytes, "num_landmarks", kMaxMapLandmarks,
+                                "landmarks", kBytesPerLandmark);
 }
 
 // rows, cols and num_cells of a grid: each within its limit, num_cells = rows * cols.
