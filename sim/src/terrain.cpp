@@ -179,24 +179,10 @@ core::Status Terrain::Configure(const TerrainOptions& o) {
     }
     for (const Crater& c : craters_) {
       const double reach = 1.5 * c.diameter_m;
-      const auto i0 = std::max<std::int32_t>(
-          0,
-          static_cast<std::int32_t>(std::floor((c.center_m.x() - reach - origin_m_) / o.cell_m)));
-      const auto i1 = std::min<std::int32_t>(
-          size_ - 1,
-          static_cast<std::int32_t>(std::ceil((c.center_m.x() + reach - origin_m_) / o.cell_m)));
-      const auto j0 = std::max<std::int32_t>(
-          0,
-          static_cast<std::int32_t>(std::floor((c.center_m.y() - reach - origin_m_) / o.cell_m)));
-      const auto j1 = std::min<std::int32_t>(
-          size_ - 1,
-          static_cast<std::int32_t>(std::ceil((c.center_m.y() + reach - origin_m_) / o.cell_m)));
-      for (std::int32_t j = j0; j <= j1; ++j) {
-        for (std::int32_t i = i0; i <= i1; ++i) {
-          const double r = std::hypot(NodeX(i) - c.center_m.x(), NodeY(j) - c.center_m.y());
-          h[static_cast<size_t>(j) * size_ + i] += CraterProfile(c, r);
-        }
-      }
+      ForEachNodeNear(c.center_m, reach, [&](std::int32_t i, std::int32_t j) {
+        const double r = std::hypot(NodeX(i) - c.center_m.x(), NodeY(j) - c.center_m.y());
+        h[static_cast<size_t>(j) * size_ + i] += CraterProfile(c, r);
+      });
     }
   }
   base_heights_.assign(h.begin(), h.end());
@@ -236,29 +222,15 @@ core::Status Terrain::Configure(const TerrainOptions& o) {
     }
     for (const Rock& rock : rocks_) {
       const double radius = 0.5 * rock.diameter_m;
-      const auto i0 = std::max<std::int32_t>(
-          0, static_cast<std::int32_t>(
-                 std::floor((rock.center_m.x() - radius - origin_m_) / o.cell_m)));
-      const auto i1 = std::min<std::int32_t>(
-          size_ - 1, static_cast<std::int32_t>(
-                         std::ceil((rock.center_m.x() + radius - origin_m_) / o.cell_m)));
-      const auto j0 = std::max<std::int32_t>(
-          0, static_cast<std::int32_t>(
-                 std::floor((rock.center_m.y() - radius - origin_m_) / o.cell_m)));
-      const auto j1 = std::min<std::int32_t>(
-          size_ - 1, static_cast<std::int32_t>(
-                         std::ceil((rock.center_m.y() + radius - origin_m_) / o.cell_m)));
-      for (std::int32_t j = j0; j <= j1; ++j) {
-        for (std::int32_t i = i0; i <= i1; ++i) {
-          const double dx = NodeX(i) - rock.center_m.x();
-          const double dy = NodeY(j) - rock.center_m.y();
-          const double s2 = (dx * dx + dy * dy) / (radius * radius);
-          if (s2 >= 1.0) continue;
-          const auto top = static_cast<float>(rock.base_z_m + rock.height_m * std::sqrt(1.0 - s2));
-          float& cell = heights_[static_cast<size_t>(j) * size_ + i];
-          cell = std::max(cell, top);
-        }
-      }
+      ForEachNodeNear(rock.center_m, radius, [&](std::int32_t i, std::int32_t j) {
+        const double dx = NodeX(i) - rock.center_m.x();
+        const double dy = NodeY(j) - rock.center_m.y();
+        const double s2 = (dx * dx + dy * dy) / (radius * radius);
+        if (s2 >= 1.0) return;
+        const auto top = static_cast<float>(rock.base_z_m + rock.height_m * std::sqrt(1.0 - s2));
+        float& cell = heights_[static_cast<size_t>(j) * size_ + i];
+        cell = std::max(cell, top);
+      });
     }
   }
 
@@ -298,6 +270,17 @@ core::Status Terrain::Configure(const TerrainOptions& o) {
     }
   }
   return core::Status::kOk;
+}
+
+std::int32_t Terrain::FirstNodeFrom(double coordinate_m) const {
+  return std::max<std::int32_t>(
+      0, static_cast<std::int32_t>(std::floor((coordinate_m - origin_m_) / options_.cell_m)));
+}
+
+std::int32_t Terrain::LastNodeTo(double coordinate_m) const {
+  return std::min<std::int32_t>(
+      size_ - 1,
+      static_cast<std::int32_t>(std::ceil((coordinate_m - origin_m_) / options_.cell_m)));
 }
 
 double Terrain::GridHeight(double gx, double gy) const {

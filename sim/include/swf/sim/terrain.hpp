@@ -162,6 +162,23 @@ class Terrain final : public Surface {
 
  private:
   double NodeHeight(std::int32_t i, std::int32_t j) const { return heights_[j * size_ + i]; }
+  // visit(i, j) for every node of the square within reach_m of center_m on either axis,
+  // clamped to the grid (rows j ascending, then i): the nodes a crater or a rock of that reach
+  // can raise or lower.
+  template <typename Visit>
+  void ForEachNodeNear(const Eigen::Vector2d& center_m, double reach_m, Visit visit) const {
+    const std::int32_t i0 = FirstNodeFrom(center_m.x() - reach_m);
+    const std::int32_t i1 = LastNodeTo(center_m.x() + reach_m);
+    const std::int32_t j0 = FirstNodeFrom(center_m.y() - reach_m);
+    const std::int32_t j1 = LastNodeTo(center_m.y() + reach_m);
+    for (std::int32_t j = j0; j <= j1; ++j) {
+      for (std::int32_t i = i0; i <= i1; ++i) visit(i, j);
+    }
+  }
+  // The node index at or below a coordinate / at or above it, clamped to the grid (either axis:
+  // the grid is square).
+  std::int32_t FirstNodeFrom(double coordinate_m) const;
+  std::int32_t LastNodeTo(double coordinate_m) const;
   // Bilinear height in grid coordinates (gx, gy), clamped to the grid.
   double GridHeight(double gx, double gy) const;
   // First root of the ray against the bilinear patch of cell (i, j) for t in [t0, t1].
