@@ -8,6 +8,8 @@
 #include <Eigen/Dense>
 #include <memory>
 #include <random>
+#include <string>
+#include <type_traits>
 #include <vector>
 
 #include "swf/estimator/sliding_window_filter.hpp"
@@ -291,19 +293,27 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_
   }
 }
 
-// D = 6: poses; D = 15: states with velocity and IMU biases beyond the pose (same algebra).
-template <int D>
-void BatchModeEqualsIndependentBatch() {
+// Every test below runs for D = 6 (poses) and D = 15 (states with velocity and IMU biases
+// beyond the pose: the same algebra).
+template <typename Dim>
+class SwfLinear : public ::testing::Test {};
+using StateDims = ::testing::Types<std::integral_constant<int, 6>, std::integral_constant<int, 15>>;
+struct StateDimName {
+  template <typename Dim>
+  static std::string GetName(int) {
+    return Dim::value == 6 ? "Pose" : "ExtendedState";
+  }
+};
+TYPED_TEST_SUITE(SwfLinear, StateDims, StateDimName);
+
+TYPED_TEST(SwfLinear, BatchModeEqualsIndependentBatch) {
+  constexpr int D = TypeParam::value;
   const Problem<D> pr = MakeProblem<D>(1, 12, 30, 2, 6);
   ExpectEqualsBatch(pr, SwfMode::kBatch, 0, 11);
 }
-TEST(SwfLinear, BatchModeEqualsIndependentBatch) { BatchModeEqualsIndependentBatch<6>(); }
-TEST(SwfLinear, BatchModeEqualsIndependentBatchExtendedState) {
-  BatchModeEqualsIndependentBatch<15>();
-}
 
-template <int D>
-void SlidingWindowEqualsBatchForEveryWindowSize() {
+TYPED_TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSize) {
+  constexpr int D = TypeParam::value;
   for (std::uint64_t seed : {2u, 3u, 4u}) {
     const Problem<D> pr = MakeProblem<D>(seed, 14, 40, 1, 8);
     ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 1, 13);
@@ -315,29 +325,19 @@ void SlidingWindowEqualsBatchForEveryWindowSize() {
     ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 4, 9);
   }
 }
-TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSize) {
-  SlidingWindowEqualsBatchForEveryWindowSize<6>();
-}
-TEST(SwfLinear, SlidingWindowEqualsBatchForEveryWindowSizeExtendedState) {
-  SlidingWindowEqualsBatchForEveryWindowSize<15>();
-}
 
-template <int D>
-void LongTracksFillThePriorAndStillMatch() {
+TYPED_TEST(SwfLinear, LongTracksFillThePriorAndStillMatch) {
+  constexpr int D = TypeParam::value;
   const Problem<D> pr = MakeProblem<D>(5, 10, 20, 8, 10);  // landmarks live across many windows
   ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 2, 9);
   ExpectEqualsBatch(pr, SwfMode::kSlidingWindow, 3, 9);
-}
-TEST(SwfLinear, LongTracksFillThePriorAndStillMatch) { LongTracksFillThePriorAndStillMatch<6>(); }
-TEST(SwfLinear, LongTracksFillThePriorAndStillMatchExtendedState) {
-  LongTracksFillThePriorAndStillMatch<15>();
 }
 
 // Landmarks seen once (a track lost at once) carry no information beyond themselves; those of
 // the marginalized pose must not take prior slots. 12 of them per frame beside the tracks
 // would overflow a prior of 10 landmarks if they entered it.
-template <int D>
-void OneShotLandmarksTakeNoPriorSlot() {
+TYPED_TEST(SwfLinear, OneShotLandmarksTakeNoPriorSlot) {
+  constexpr int D = TypeParam::value;
   Problem<D> pr = MakeProblem<D>(6, 8, 12, 3, 8);
   std::mt19937_64 rng(7);
   std::normal_distribution<double> g(0.0, 3.0);
@@ -352,7 +352,6 @@ void OneShotLandmarksTakeNoPriorSlot() {
   ExpectEqualsBatch<D, 10>(pr, SwfMode::kSlidingWindow, 2, 7);
   ExpectEqualsBatch<D, 10>(pr, SwfMode::kSlidingWindow, 1, 7);
 }
-TEST(SwfLinear, OneShotLandmarksTakeNoPriorSlot) { OneShotLandmarksTakeNoPriorSlot<6>(); }
 
 // A full prior takes the landmarks the window measures most. Each frame brings three
 // two-frame tracks, listed before six tracks that span the run; the prior has room for six.
@@ -396,8 +395,8 @@ TEST(SwfLinear, AFullPriorKeepsTheLandmarksTheWindowMeasuresMost) {
 
 // A window of one pose against a Kalman filter over [pose ; landmarks], written here in covariance
 // form.
-template <int D>
-void WindowOfOneEqualsKalmanFilter() {
+TYPED_TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) {
+  constexpr int D = TypeParam::value;
   using StateMat = Eigen::Matrix<double, D, D>;
   Problem<D> pr = MakeProblem<D>(7, 8, 10, 8, 8);
   // Every landmark observed in every frame so the filter state is fixed from frame 0.
@@ -490,8 +489,6 @@ void WindowOfOneEqualsKalmanFilter() {
     }
   }
 }
-TEST(SwfLinear, WindowOfOneEqualsKalmanFilter) { WindowOfOneEqualsKalmanFilter<6>(); }
-TEST(SwfLinear, WindowOfOneEqualsKalmanFilterExtendedState) { WindowOfOneEqualsKalmanFilter<15>(); }
 
 }  // namespace
 }  // namespace swf::estimator
