@@ -90,14 +90,7 @@ using swf::messages::CheckedDecode;
 using swf::messages::DecodeError;
 using swf::messages::DecodeResult;
 using swf::testing::Encode;
-
-// Overwrites the big-endian int32 at `offset` (counted from the start, fingerprint included).
-std::vector<std::uint8_t> WithInt32(std::vector<std::uint8_t> bytes, std::size_t offset,
-                                    std::int32_t value) {
-  const auto u = static_cast<std::uint32_t>(value);
-  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(u >> (24 - 8 * i));
-  return bytes;
-}
+using swf::testing::WithInt32;
 
 template <typename Msg>
 DecodeError Decode(const std::vector<std::uint8_t>& bytes) {

@@ -15,6 +15,7 @@ namespace swf::guidance {
 namespace {
 
 using swf::testing::Encode;
+using swf::testing::WithInt32;
 
 // Each test's in-process LCM (memq://: a publish is queued until handled) and the monitor
 // subscribed on it.
@@ -86,12 +87,6 @@ TEST_F(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
   EXPECT_EQ(monitor_.LastHazard().frame_seq, 9);
 }
 
-// Overwrites the big-endian int32 at byte `offset` of an encoded message.
-void PutInt32(std::vector<std::uint8_t>* bytes, std::size_t offset, std::int32_t value) {
-  const auto u = static_cast<std::uint32_t>(value);
-  for (int i = 0; i < 4; ++i) (*bytes)[offset + i] = static_cast<std::uint8_t>(u >> (24 - 8 * i));
-}
-
 // GIVEN landmark maps and health messages whose length fields are negative, huge or disagree with
 // the bytes (lcm-gen's decode() threw std::length_error on the first: swf-guidance aborted)
 // WHEN they arrive THEN each is counted as malformed and ignored, and the good ones around them
@@ -106,12 +101,12 @@ TEST_F(GuidanceMonitorTest, HostileLengthFieldsAreCountedNotFatal) {
   ASSERT_EQ(lcm_.publish("SWF_LANDMARKS", &map), 0);
   constexpr std::size_t kNumLandmarks = 8 + 24;  // fingerprint, utime, seq, frame_seq
   for (const std::int32_t bad : {-1, 2147483647, 2}) {
-    std::vector<std::uint8_t> bytes = Encode(map);
-    PutInt32(&bytes, kNumLandmarks, bad);
+    const std::vector<std::uint8_t> bytes = WithInt32(Encode(map), kNumLandmarks, bad);
     ASSERT_EQ(lcm_.publish("SWF_LANDMARKS", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
   }
-  std::vector<std::uint8_t> bytes = Encode(swf::testing::OneStageHealth());
-  PutInt32(&bytes, 8 + 153 + 4 + 4, 0);  // the stage name's length: 0 (with its NUL it is >= 1)
+  // The stage name's length: 0 (with its NUL it is >= 1).
+  const std::vector<std::uint8_t> bytes =
+      WithInt32(Encode(swf::testing::OneStageHealth()), 8 + 153 + 4 + 4, 0);
   ASSERT_EQ(lcm_.publish("SWF_HEALTH", bytes.data(), static_cast<unsigned>(bytes.size())), 0);
   map.seq = 1;
   map.position_world_m[0][2] = 4.0;

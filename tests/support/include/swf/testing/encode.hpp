@@ -19,4 +19,13 @@ std::vector<std::uint8_t> Encode(const Msg& msg) {
   return bytes;
 }
 
+// `bytes` with the big-endian int32 at `offset` (counted from the start, fingerprint included)
+// overwritten: a length or count field set to what a hostile or broken sender might write.
+inline std::vector<std::uint8_t> WithInt32(std::vector<std::uint8_t> bytes, std::size_t offset,
+                                           std::int32_t value) {
+  const auto u = static_cast<std::uint32_t>(value);
+  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(u >> (24 - 8 * i));
+  return bytes;
+}
+
 }  // namespace swf::testing
