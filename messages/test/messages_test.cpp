@@ -110,6 +110,21 @@ void ExpectEveryTruncationAndAnExtraByteRefused(const std::vector<std::uint8_t>&
   EXPECT_EQ(Decode<Msg>(longer).result, DecodeResult::kTrailingBytes);
 }
 
+// The count at `offset` of a message holding `count` records after it: negative, huge, one more
+// and one fewer than the records are each refused, naming the count or the bytes that disagree.
+template <typename Msg>
+void ExpectCountChecked(const std::vector<std::uint8_t>& bytes, std::size_t offset,
+                        const char* field, std::int32_t count) {
+  DecodeError e = Decode<Msg>(WithInt32(bytes, offset, -1));
+  EXPECT_EQ(e.result, DecodeResult::kBadLength);
+  EXPECT_STREQ(e.field, field);
+  e = Decode<Msg>(WithInt32(bytes, offset, 1 << 30));
+  EXPECT_EQ(e.result, DecodeResult::kOverLimit);
+  EXPECT_STREQ(e.field, field);
+  EXPECT_EQ(Decode<Msg>(WithInt32(bytes, offset, count + 1)).result, DecodeResult::kTruncated);
+  EXPECT_EQ(Decode<Msg>(WithInt32(bytes, offset, count - 1)).result, DecodeResult::kTrailingBytes);
+}
+
 swf_msgs::stereo_frame_t SmallFrame() {
   swf_msgs::stereo_frame_t frame{};
   frame.seq = 3;
@@ -194,14 +209,7 @@ TEST(CheckedDecode, LandmarkMapCountIsCheckedAgainstTheBytesAndTheLimit) {
   swf_msgs::landmark_map_t out;
   ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
   EXPECT_EQ(out.position_world_m[1][2], 6.0);
-  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, -1)).result,
-            DecodeResult::kBadLength);
-  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, 1 << 30)).result,
-            DecodeResult::kOverLimit);
-  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, 3)).result,
-            DecodeResult::kTruncated);
-  EXPECT_EQ(Decode<swf_msgs::landmark_map_t>(WithInt32(bytes, kNumLandmarks, 1)).result,
-            DecodeResult::kTrailingBytes);
+  ExpectCountChecked<swf_msgs::landmark_map_t>(bytes, kNumLandmarks, "num_landmarks", 2);
   ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::landmark_map_t>(bytes);
 }
 
@@ -217,12 +225,7 @@ TEST(CheckedDecode, FeatureSetCountAndStatusesAreChecked) {
   ASSERT_TRUE(CheckedDecode(bytes.data(), bytes.size(), &out).Ok());
   EXPECT_EQ(out.u_px[0], 10.5f);
   constexpr std::size_t kNumFeatures = 8 + 24;
-  EXPECT_EQ(Decode<swf_msgs::feature_set_t>(WithInt32(bytes, kNumFeatures, -1)).result,
-            DecodeResult::kBadLength);
-  EXPECT_EQ(Decode<swf_msgs::feature_set_t>(WithInt32(bytes, kNumFeatures, 1 << 30)).result,
-            DecodeResult::kOverLimit);
-  EXPECT_EQ(Decode<swf_msgs::feature_set_t>(WithInt32(bytes, kNumFeatures, 3)).result,
-            DecodeResult::kTruncated);
+  ExpectCountChecked<swf_msgs::feature_set_t>(bytes, kNumFeatures, "num_features", 2);
   ExpectEveryTruncationAndAnExtraByteRefused<swf_msgs::feature_set_t>(bytes);
   set.status[1] = 4;  // no such status
   const std::vector<std::uint8_t> unknown = Encode(set);
