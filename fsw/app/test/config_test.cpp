@@ -4,12 +4,10 @@
 #include "swf/app/config.hpp"
 
 #include <gtest/gtest.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -17,6 +15,7 @@
 #include "swf/app/pipeline.hpp"
 #include "swf/sil/sil.hpp"
 #include "swf/sim/rig.hpp"
+#include "swf/testing/files.hpp"
 
 namespace swf::app {
 namespace {
@@ -48,31 +47,8 @@ std::string AppDir() {
   return here.substr(0, here.rfind("/test/"));
 }
 
-// A scratch directory removed at the end of the test.
-class ScratchDir {
- public:
-  ScratchDir() {
-    char name[] = "/tmp/swf_config_test_XXXXXX";
-    const char* made = ::mkdtemp(name);
-    EXPECT_NE(made, nullptr);
-    path_ = made != nullptr ? made : "/tmp";
-  }
-  ~ScratchDir() { (void)std::system(("rm -rf '" + path_ + "'").c_str()); }
-  const std::string& Path() const { return path_; }
-  std::string Write(const std::string& name, const std::string& text) const {
-    const std::string file = path_ + "/" + name;
-    std::ofstream(file, std::ios::binary) << text;
-    return file;
-  }
-
- private:
-  std::string path_;
-};
-
-bool Exists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0;
-}
+using swf::testing::Exists;
+using swf::testing::ScratchDir;
 
 // The demo's descent (demo.cfg) at the paper's 1024 x 768: f = 512 / tan(12.5 deg) = 2309.5 px, 1 m
 // baseline, lowest altitude 10 m -> 230.9 px.

@@ -3,16 +3,15 @@
 #include "swf/cli/cli.hpp"
 
 #include <gtest/gtest.h>
-#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <csignal>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
+
+#include "swf/testing/files.hpp"
 
 namespace swf::cli {
 namespace {
@@ -67,30 +66,9 @@ TEST(VersionTest, NamesVersionAndCommit) {
   EXPECT_GT(std::string(Commit()).size(), 0u);
 }
 
-class ScratchDir {
- public:
-  ScratchDir() {
-    char name[] = "/tmp/cli_test.XXXXXX";
-    path_ = ::mkdtemp(name);
-  }
-  ~ScratchDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  const std::string& Path() const { return path_; }
-
- private:
-  std::string path_;
-};
-
-bool Exists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0;
-}
-
-std::string Read(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using swf::testing::Exists;
+using swf::testing::ReadText;
+using swf::testing::ScratchDir;
 
 TEST(OutputFileTest, AppearsOnlyWhenCommittedInDirectoriesItCreates) {
   ScratchDir dir;
@@ -106,7 +84,7 @@ TEST(OutputFileTest, AppearsOnlyWhenCommittedInDirectoriesItCreates) {
   EXPECT_FALSE(Exists(path));  // dropped without Commit: nothing left
   EXPECT_TRUE(Exists(dir.Path() + "/a/b"));
   ASSERT_TRUE(WriteFileAtomically(path, "{}\n", &error)) << error;
-  EXPECT_EQ(Read(path), "{}\n");
+  EXPECT_EQ(ReadText(path), "{}\n");
   // Nothing but the committed file in the directory.
   EXPECT_EQ(std::system(("test $(ls -A '" + dir.Path() + "/a/b' | wc -l) -eq 1").c_str()), 0);
 }

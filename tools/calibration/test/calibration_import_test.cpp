@@ -8,20 +8,16 @@
 
 #include "swf/calibration/calibration_import.hpp"
 #include "swf/image_io/image_io.hpp"
+#include "swf/testing/files.hpp"
 #include "swf/testing/shared_dir.hpp"
 
 namespace swf::calibration {
 namespace {
 
+using swf::testing::ReadText;
+
 std::string DataDir() { return std::string(SWF_CALIBRATION_TEST_DATA) + "/"; }
 std::string SharedData() { return swf::testing::SharedDir() + "/data/"; }
-
-std::string ReadAll(const std::string& path) {
-  std::ifstream in(path);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::string WriteTemp(const std::string& name, const std::string& text) {
   const std::string path = ::testing::TempDir() + "/" + name;
@@ -130,7 +126,7 @@ TEST(CalibrationImport, CahvorLinearizesExactlyWhenTheDistortionAxisIsTheOptical
 
 TEST(CalibrationImport, CahvorWithTheAxisOffIsLinearizedWithinItsReportedError) {
   const std::string d = DataDir();
-  std::string text = ReadAll(d + "left.cahvor");
+  std::string text = ReadText(d + "left.cahvor");
   text.replace(text.find("O = 0.0 0.0 1.0"), 15, "O = 0.001 0.0005 1.0");
   const std::string left = WriteTemp("tilted.cahvor", text);
   StereoCalibration c;
@@ -211,7 +207,7 @@ TEST_P(MalformedFile, IsRefusedNamingFileAndKey) {
   const std::map<std::string, std::string> partner = {{"euroc_left.yaml", "euroc_right.yaml"},
                                                       {"ros_left.yaml", "ros_right.yaml"},
                                                       {"left.cahvor", "right.cahvor"}};
-  std::string text = ReadAll(d + m.name);
+  std::string text = ReadText(d + m.name);
   const std::size_t at = text.find(m.from);
   ASSERT_NE(at, std::string::npos) << m.from;
   text.replace(at, std::string(m.from).size(), m.to);
