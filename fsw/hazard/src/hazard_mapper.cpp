@@ -72,17 +72,19 @@ int HalfWindowCells(double radius_m, double cell_m) {
   return std::max(1, static_cast<int>(std::lround(radius_m / cell_m)));
 }
 
-// Integral of the half-spheroid profile height sqrt(1 - (x^2 + y^2) / R^2) over [0, c]^2: in y
-// in closed form, in x by Simpson's rule (64 intervals; the integrand is smooth except for a
-// square-root edge at x = R, where the error stays below 1e-4 of the integral).
-double SpheroidQuadrantIntegral(double radius_m, double cell_m) {
+// Integral of the half-spheroid profile height sqrt(1 - (x^2 + y^2) / R^2) over [0, x_m] x [0, y_m]
+// (a quadrant's rectangle from the rock's centre): in y in closed form, in x by Simpson's rule (64
+// intervals; the integrand is smooth except for a square-root edge at x = R, where the error stays
+// below 1e-4 of the integral).
+double SpheroidQuadrantIntegral(double radius_m, double x_m, double y_m) {
   constexpr int kIntervals = 64;
-  const double x_max = std::min(cell_m, radius_m);
+  const double x_max = std::min(x_m, radius_m);
+  if (!(x_max > 0.0) || !(y_m > 0.0)) return 0.0;
   const auto column = [&](double x) {
     const double b2 = std::max(0.0, radius_m * radius_m - x * x);
     const double b = std::sqrt(b2);
     if (b <= 0.0) return 0.0;
-    const double y = std::min(cell_m, b);
+    const double y = std::min(y_m, b);
     // integral_0^y sqrt(b^2 - t^2) dt, over R (the profile's unit height).
     const double s = std::sqrt(std::max(0.0, b2 - y * y));
     return 0.5 * (y * s + b2 * std::asin(std::min(1.0, y / b))) / radius_m;
@@ -98,19 +100,44 @@ double SpheroidQuadrantIntegral(double radius_m, double cell_m) {
 RockCriterion::RockCriterion(const RockCriterionOptions& options, double cell_m)
     : options_(options), cell_m_(cell_m) {
   window_m_ = (2 * HalfWindowCells(options.window_radius_m, cell_m) + 1) * cell_m;
-  threshold_relief_m_ =
-      Relief(options.max_height_m, options.max_height_m / options.height_to_diameter);
+  const double h = options.max_height_m;
+  const double d = h / options.height_to_diameter;
+  threshold_relief_m_ = Relief(h, d);
   resolved_sigma_m_ = threshold_relief_m_ / (options.false_alarm_sigmas + options.detection_sigmas);
+  // The footprint box: the odd side m (up to the rock's diameter plus a cell) that maximizes the
+  // threshold rock's box relief over the box mean's sigma, r_m m / sqrt(1 + (m^2 - 1) rho).
+  const double rho = options.relief_error_correlation;
+  const int max_side = 2 * static_cast<int>(std::ceil(0.5 * d / cell_m)) + 1;
+  double best = -1.0;
+  for (int m = 1; m <= max_side; m += 2) {
+    const double r = BoxRelief(h, d, m);
+    const double snr = r * m / std::sqrt(1.0 + (m * m - 1.0) * rho);
+    if (snr > best) {
+      best = snr;
+      footprint_cells_ = m;
+      footprint_relief_m_ = r;
+    }
+  }
 }
 
 double RockCriterion::Relief(double height_m, double diameter_m) const {
+  return BoxRelief(height_m, diameter_m, 1);
+}
+
+double RockCriterion::BoxRelief(double height_m, double diameter_m, int side_cells) const {
   const double radius = 0.5 * diameter_m;
-  if (!(height_m > 0.0) || !(radius > 0.0)) return 0.0;
-  const double cell_mean =
-      height_m * SpheroidQuadrantIntegral(radius, cell_m_) / (cell_m_ * cell_m_);
+  if (!(height_m > 0.0) || !(radius > 0.0) || side_cells < 1) return 0.0;
+  // The box's centre cell has a corner at the rock's centre: the box spans [-a, b] on both axes.
+  const double a = 0.5 * (side_cells - 1) * cell_m_;
+  const double b = 0.5 * (side_cells + 1) * cell_m_;
+  const double integral =
+      SpheroidQuadrantIntegral(radius, b, b) + SpheroidQuadrantIntegral(radius, a, b) +
+      SpheroidQuadrantIntegral(radius, b, a) + SpheroidQuadrantIntegral(radius, a, a);
+  const double side_m = side_cells * cell_m_;
+  const double box_mean = height_m * integral / (side_m * side_m);
   constexpr double kTwoThirdsPi = 2.0943951023931953;
   const double plane_lift = kTwoThirdsPi * radius * radius * height_m / (window_m_ * window_m_);
-  return std::max(0.0, cell_mean - plane_lift);
+  return std::max(0.0, box_mean - plane_lift);
 }
 
 double RockCriterion::DecisionRelief(double sigma_m) const {
@@ -124,10 +151,20 @@ bool RockCriterion::Resolvable(double height_m, double diameter_m, double sigma_
          DecisionRelief(sigma_m);
 }
 
+double RockCriterion::FootprintSigma(double sum_sigma_m, double sum_sigma2_m2,
+                                     double sum_plane_sigma_m) const {
+  const double n = static_cast<double>(footprint_cells_) * footprint_cells_;
+  const double rho = options_.relief_error_correlation;
+  const double stereo = ((1.0 - rho) * sum_sigma2_m2 + rho * sum_sigma_m * sum_sigma_m) / (n * n);
+  const double plane = sum_plane_sigma_m / n;
+  return std::sqrt(std::max(0.0, stereo) + plane * plane);
+}
+
 RockCriterionOptions RockCriterionOf(const HazardMapperOptions& options) {
   RockCriterionOptions r;
   r.max_height_m = options.max_rock_height_m;
   r.window_radius_m = options.rock_window_radius_m;
+  r.relief_error_correlation = options.relief_error_correlation;
   return r;
 }
 
@@ -142,6 +179,7 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
       !positive(o.disparity_sigma_px) || o.max_independent_pixels < 1 ||
       !(o.pixels_per_independent >= 1.0) ||
       !(o.frame_error_correlation >= 0.0 && o.frame_error_correlation < 1.0) ||
+      !(o.relief_error_correlation >= 0.0 && o.relief_error_correlation <= 1.0) ||
       !positive(o.max_slope_deg) || !positive(o.max_rock_height_m) ||
       !positive(o.footprint_radius_m) || !positive(o.rock_window_radius_m) ||
       !positive(o.local_slope_baseline_m) || !(o.site_margin_sigmas >= 0.0) ||
@@ -784,6 +822,56 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       }
     }
   }
+  // The footprint evidence of the "rock possible" test (hazard_mapper.hpp, RockCriterion): the
+  // plane fits are done, so sat_ now holds per cell, over the cells with a relief: count, relief,
+  // stereo sigma, its square and the plane's sigma.
+  constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kPlane = 4;
+  std::fill(sat_.begin(), sat_.begin() + static_cast<std::ptrdiff_t>(n1) * kSatChannels, 0.0);
+  for (int j = 0; j < n_; ++j) {
+    double row[5] = {};
+    double* out = sat_.data() + (static_cast<std::size_t>(j + 1) * n1) * kSatChannels;
+    const double* above = sat_.data() + (static_cast<std::size_t>(j) * n1) * kSatChannels;
+    for (int q = 0; q < 5; ++q) out[q] = 0.0;
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
+      if (!std::isnan(rock_m_[c])) {
+        const double stereo = sigma_rel_[c];
+        const double total = relief_sigma_[c];
+        row[kCount] += 1.0;
+        row[kRelief] += rock_m_[c];
+        row[kStereo] += stereo;
+        row[kStereo2] += stereo * stereo;
+        row[kPlane] += std::sqrt(std::max(0.0, total * total - stereo * stereo));
+      }
+      double* o = out + static_cast<std::size_t>(i + 1) * kSatChannels;
+      const double* a = above + static_cast<std::size_t>(i + 1) * kSatChannels;
+      for (int q = 0; q < 5; ++q) o[q] = a[q] + row[q];
+    }
+  }
+  const int half_box = (rocks.FootprintCells() - 1) / 2;
+  const double box_cells = static_cast<double>(rocks.FootprintCells()) * rocks.FootprintCells();
+  // Can a rock of the threshold size stand with its centre in cell (i, j)? Where the whole box
+  // has a relief: its mean relief + k sigma against the threshold rock's box relief; else the
+  // cell alone against the threshold rock's cell relief (the test at one cell's scale).
+  const auto rock_possible = [&](int ci, int cj) {
+    const std::size_t c = static_cast<std::size_t>(cj) * n_ + ci;
+    if (ci - half_box >= 0 && cj - half_box >= 0 && ci + half_box < n_ && cj + half_box < n_) {
+      const int i0 = ci - half_box, j0 = cj - half_box;
+      const int i1 = ci + half_box + 1, j1 = cj + half_box + 1;
+      const auto sum = [&](int q) {
+        const auto at = [&](int a, int b) {
+          return sat_[(static_cast<std::size_t>(b) * n1 + a) * kSatChannels + q];
+        };
+        return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
+      };
+      if (sum(kCount) >= box_cells - 0.5) {
+        const double mean = sum(kRelief) / box_cells;
+        const double sigma = rocks.FootprintSigma(sum(kStereo), sum(kStereo2), sum(kPlane));
+        return mean + k * sigma > rocks.FootprintRelief();
+      }
+    }
+    return rock_m_[c] + k * relief_sigma_[c] > rocks.ThresholdRelief();
+  };
   // Declared rocks per window: a 1 m plane over a rock tilts with the rock, which is a hazard
   // already (and kept a footprint away from any site); the truth's slopes are the rock-free
   // surface's, so the local slope is judged only where its window holds no declared rock.
@@ -816,15 +904,13 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       const double local_sigma_deg = local ? local_slope_sigma_deg_[c] : 0.0;
       // Where the map resolves the threshold rock, the rock criterion has decided the cell (kRock
       // or not, at its false-alarm and detection rates); a rock is undecided only where it does
-      // not, and possible there when relief + k sigma exceeds the threshold height.
-      const double sigma_h = relief_sigma_[c];
-      const bool rock_possible =
-          sigma_h > rocks.ResolvedSigma() && rock_m_[c] + k * sigma_h > options_.max_rock_height_m;
+      // not, and possible there when the footprint's evidence leaves a threshold rock possible.
+      const bool undecided_rock = relief_sigma_[c] > rocks.ResolvedSigma() && rock_possible(i, j);
       if (slope_declared(slope_deg, slope_sigma_deg) ||
           slope_declared(local_deg, local_sigma_deg)) {
         class_[c] = HazardClass::kSlope;
         ++slope;
-      } else if (rock_possible || slope_possible(slope_deg, slope_sigma_deg) ||
+      } else if (undecided_rock || slope_possible(slope_deg, slope_sigma_deg) ||
                  slope_possible(local_deg, local_sigma_deg)) {
         class_[c] = HazardClass::kUncertain;
         ++uncertain;

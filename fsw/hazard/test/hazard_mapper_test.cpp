@@ -336,6 +336,49 @@ TEST(RockCriterionTest, ReliefDecisionAndResolvability) {
   EXPECT_FALSE(coarse.Resolvable(0.3, 0.6, std::nan("")));
 }
 
+// The "possible" test's footprint box (RockCriterion, "Possible"): its side, the threshold rock's
+// box relief against a brute-force midpoint sum of the spheroid over the box, and the box sigma.
+TEST(RockCriterionTest, FootprintBoxOfThePossibleTest) {
+  const auto midpoint_box_mean = [](double cell, int side) {
+    // The rock (0.3 m x 0.6 m) centred on the corner of the box's centre cell.
+    constexpr int kSteps = 600;
+    const double lo = -0.5 * (side - 1) * cell;
+    const double step = side * cell / kSteps;
+    double sum = 0.0;
+    for (int b = 0; b < kSteps; ++b) {
+      for (int a = 0; a < kSteps; ++a) {
+        const double x = lo + (a + 0.5) * step;
+        const double y = lo + (b + 0.5) * step;
+        sum += 0.3 * std::sqrt(std::max(0.0, 1.0 - (x * x + y * y) / 0.09));
+      }
+    }
+    return sum / (kSteps * kSteps);
+  };
+  // 5 cm cells: window 3.05 m, plane lift 0.0060793 m (ReliefDecisionAndResolvability).
+  const RockCriterion fine(RockCriterionOptions{}, 0.05);
+  EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 1), fine.Relief(0.3, 0.6), 1e-12);
+  EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 5), midpoint_box_mean(0.05, 5) - 0.0060793, 1e-4);
+  EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 9), midpoint_box_mean(0.05, 9) - 0.0060793, 1e-4);
+  // The side maximizing r_m m / sqrt(1 + (m^2 - 1) rho), rho = 0.25: 5 at 5 cm (r_m 0.2734 m),
+  // 3 at 10 cm (0.2568 m), 1 at 20 cm (the cell's own test, r_h 0.2442 m).
+  EXPECT_EQ(fine.FootprintCells(), 5);
+  EXPECT_NEAR(fine.FootprintRelief(), 0.27338, 1e-4);
+  const RockCriterion medium(RockCriterionOptions{}, 0.1);
+  EXPECT_EQ(medium.FootprintCells(), 3);
+  EXPECT_NEAR(medium.FootprintRelief(), 0.25679, 1e-4);
+  const RockCriterion coarse(RockCriterionOptions{}, 0.2);
+  EXPECT_EQ(coarse.FootprintCells(), 1);
+  EXPECT_NEAR(coarse.FootprintRelief(), coarse.ThresholdRelief(), 1e-12);
+  // Independent errors (rho = 0) make the box a plain mean: larger box, smaller sigma.
+  RockCriterionOptions independent;
+  independent.relief_error_correlation = 0.0;
+  EXPECT_EQ(RockCriterion(independent, 0.05).FootprintCells(), 9);
+  // 25 cells of stereo sigma 0.1 m: sqrt((0.75 x 25 x 0.01 + 0.25 x 2.5^2) / 625) = 0.052915 m;
+  // a plane sigma of 0.01 m in each is shared by the box: sqrt(0.052915^2 + 0.01^2) = 0.053852 m.
+  EXPECT_NEAR(fine.FootprintSigma(2.5, 0.25, 0.0), 0.052915, 1e-6);
+  EXPECT_NEAR(fine.FootprintSigma(2.5, 0.25, 0.25), 0.053852, 1e-6);
+}
+
 // GIVEN a pose covariance with 1 m vertical sigma THEN the fused sigma reflects it (absolute
 // elevation uncertain) while rocks are still detected (relative heights do not depend on it).
 TEST(HazardMapperTest, PoseCovarianceEntersSigma) {
@@ -457,6 +500,93 @@ double ElevationAt(const HazardMapper& m, double x, double y) {
   int i = 0;
   int j = 0;
   return m.CellOf(x, y, &i, &j) ? m.Elevation()[j * m.GridCells() + i] : -1.0;
+}
+
+// A map made of anonymous landmarks alone, one at each cell centre (a textureless pair matches
+// nothing), each with the same elevation sigma: the relief and its sigma exactly as constructed.
+void FillWithLandmarks(HazardMapper* m, double sigma_m, double (*height_m)(double, double)) {
+  HazardMapperOptions o = Options();
+  o.max_landmarks = o.grid_cells * o.grid_cells;
+  ASSERT_EQ(m->Configure(o), core::Status::kOk);
+  BlankFrame blank;
+  const Eigen::Vector3d above(0.0, 0.0, 8.0);
+  ASSERT_EQ(m->Update(blank.Frame(above)), core::Status::kOk);  // places the grid
+  ASSERT_EQ(m->CellM(), 0.05);
+  const int n = m->GridCells();
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double x = m->CornerX() + (i + 0.5) * m->CellM();
+      const double y = m->CornerY() + (j + 0.5) * m->CellM();
+      blank.landmarks.push_back(Landmark(-1, x, y, height_m(x, y), sigma_m));
+    }
+  }
+  ASSERT_EQ(m->Update(blank.Frame(above)), core::Status::kOk);
+  ASSERT_EQ(m->Stats().landmarks_used, n * n);
+}
+
+// The threshold rock of Options() (0.3 m tall, 0.6 m wide half spheroid) with its centre on the
+// corner of four cells next to the grid's centre: the worst alignment of the rock criterion.
+double ThresholdRockAtCorner(double x, double y) {
+  const double q = 1.0 - (x * x + y * y) / (0.3 * 0.3);
+  return q > 0.0 ? 0.3 * std::sqrt(q) : 0.0;
+}
+
+double SpikeAtCentre(double x, double y) {
+  return std::abs(x - 0.025) < 0.01 && std::abs(y - 0.025) < 0.01 ? 0.2 : 0.0;
+}
+
+int CountOf(const HazardMapper& m, HazardClass k) {
+  int count = 0;
+  for (int c = 0; c < m.GridCells() * m.GridCells(); ++c) count += m.Classes()[c] == k ? 1 : 0;
+  return count;
+}
+
+// GIVEN flat ground mapped at a relief sigma of 0.08 m (above sigma_max: the criterion cannot
+// decide a rock there, only exclude one) with one cell 0.2 m high THEN that cell is kSafe: its 24
+// flat neighbours (the threshold rock's 5 x 5 core box) exclude a 0.3 m rock, which would lift
+// them too. The former per-cell test (relief + 2 sigma > 0.3 m: 0.36 m) marked it kUncertain.
+TEST(HazardMapperTest, OneNoisyCellCannotHideAThresholdRock) {
+  HazardMapper m;
+  FillWithLandmarks(&m, 0.08, &SpikeAtCentre);
+  const RockCriterion criterion(RockCriterionOf(m.Options()), m.CellM());
+  ASSERT_EQ(criterion.FootprintCells(), 5);
+  int i = 0;
+  int j = 0;
+  ASSERT_TRUE(m.CellOf(0.025, 0.025, &i, &j));
+  const int c = j * m.GridCells() + i;
+  ASSERT_NEAR(m.RockHeight()[c], 0.2, 0.01);
+  ASSERT_GT(m.ReliefSigma()[c], criterion.ResolvedSigma());
+  // The one-cell test fires here ...
+  ASSERT_GT(m.RockHeight()[c] + 2.0 * m.ReliefSigma()[c], m.Options().max_rock_height_m);
+  // ... the footprint's evidence does not.
+  EXPECT_EQ(m.Classes()[c], HazardClass::kSafe);
+  EXPECT_EQ(CountOf(m, HazardClass::kUncertain), 0);
+  EXPECT_EQ(CountOf(m, HazardClass::kRock), 0);
+  EXPECT_TRUE(m.Site().valid);
+}
+
+// GIVEN the threshold rock mapped at the same sigma (0.08 m, undecidable) THEN its centre cells
+// are kUncertain (the footprint's evidence leaves it possible); WHEN mapped sharp (0.02 m, below
+// sigma_max) THEN the criterion declares it kRock.
+TEST(HazardMapperTest, ThresholdRockStillMarkedUncertainOrRock) {
+  for (const double sigma : {0.08, 0.02}) {
+    HazardMapper m;
+    FillWithLandmarks(&m, sigma, &ThresholdRockAtCorner);
+    const RockCriterion criterion(RockCriterionOf(m.Options()), m.CellM());
+    const bool resolved = sigma <= criterion.ResolvedSigma();
+    EXPECT_EQ(resolved, sigma == 0.02);
+    const HazardClass expected = resolved ? HazardClass::kRock : HazardClass::kUncertain;
+    for (const double x : {-0.025, 0.025}) {
+      for (const double y : {-0.025, 0.025}) {
+        int i = 0;
+        int j = 0;
+        ASSERT_TRUE(m.CellOf(x, y, &i, &j));
+        EXPECT_EQ(m.Classes()[j * m.GridCells() + i], expected) << "sigma " << sigma;
+      }
+    }
+    std::printf("sigma %.2f: safe %d uncertain %d rock %d slope %d\n", sigma, m.Stats().safe_cells,
+                m.Stats().uncertain_cells, m.Stats().rock_cells, m.Stats().slope_cells);
+  }
 }
 
 // GIVEN one SWF landmark published at three updates as its estimate improves THEN its cell holds

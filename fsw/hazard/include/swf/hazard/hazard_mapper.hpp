@@ -44,8 +44,9 @@
 //     threshold by confidence_k sigma and its sigma resolves it (sigma <= a third of the
 //     threshold; the 1 m slope only where its window holds no kRock cell, since a plane over a
 //     rock tilts with it and the rock is the hazard there); kUncertain when value + k sigma
-//     exceeds a threshold otherwise (for rocks only where the criterion does not resolve the
-//     threshold rock: where it does, it has decided), kSafe otherwise, kUnknown without data.
+//     exceeds a slope threshold, or, where the criterion does not resolve the threshold rock
+//     (where it does, it has decided), when the relief over the threshold rock's footprint leaves
+//     such a rock possible (RockCriterion, "Possible"); kSafe otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
 //     is not kSafe or to the grid border; candidates need clearance >= footprint radius + margin
 //     (site_margin_sigmas x the horizontal position sigma). Score in
@@ -94,12 +95,33 @@ enum class HazardClass : std::uint8_t { kUnknown = 0, kSafe, kUncertain, kSlope,
 //  - Resolvable. A rock H >= h is resolvable at sigma when its relief clears T by z_d sigma:
 //    sigma <= sigma_max and r(H, D, c) - z_d sigma >= T(sigma), i.e. r(H, D, c) >= r_h. The map
 //    must detect it with probability >= 0.95.
+//  - Possible (where sigma > sigma_max: the map cannot decide, it can only exclude). A rock is a
+//    body, not a cell: the threshold rock covers pi (h / height_to_diameter / 2)^2 / c^2 cells
+//    (113 at 5 cm) and raises all of them. The question is whether the evidence over its
+//    footprint excludes it, not whether one cell's noise does: one cell 2 sigma high among flat
+//    neighbours cannot hide a rock that would lift the neighbours too. The test is a box matched
+//    filter: the mean relief over the m x m cells centred on the cell (m odd), against the relief
+//    r_m = r_box(h, h / height_to_diameter, c, m) that a threshold rock standing with its centre in
+//    that cell shows there (the box's centre cell with a corner at the rock's centre, the worst
+//    alignment, as r(H, D, c); less the plane lift). A threshold rock is excluded (at one-sided
+//    confidence Phi(k)) when mean + k sigma_m <= r_m; taller rocks of the model's shape show more,
+//    so they are excluded too. sigma_m: the cells' stereo relief errors are correlated (shared
+//    texture, SGM's correlated matches, frames seen at coarser resolution), modelled as
+//    equicorrelated with rho = relief_error_correlation, var = ((1 - rho) sum s_i^2 + rho (sum
+//    s_i)^2) / m^4; each cell's plane error is its window's, shared by the box's nearly identical
+//    windows, so it enters fully correlated (its mean). m maximizes the threshold rock's box SNR,
+//    r_m m / sqrt(1 + (m^2 - 1) rho): at rho = 0.25, m = 5 / 3 / 1 / 1 at 5 / 10 / 20 / 40 cm
+//    cells (r_m 0.273 / 0.257 / 0.244 / 0.084 m; sigma_m = 0.53 / 0.58 / 1 / 1 of a uniform stereo
+//    sigma). One cell's excess x moves the mean by x / m^2. Where m = 1, or where the box is not
+//    all mapped (grid edge, holes), the test is the cell's own: relief + k sigma > r_h.
 struct RockCriterionOptions {
   double max_height_m = 0.3;          // h: the rock hazard threshold
   double window_radius_m = 1.5;       // of the relief's reference plane
   double false_alarm_sigmas = 3.090;  // z_fa: 1 - Phi(z_fa) = 1e-3 per cell
   double detection_sigmas = 1.645;    // z_d: Phi(z_d) = 0.95
   double height_to_diameter = 0.5;    // the rock model's H / D (Golombek & Rapp 1997)
+  // rho of the "possible" test: the correlation of the relief errors of cells in one box.
+  double relief_error_correlation = 0.25;
 };
 
 class RockCriterion {
@@ -114,6 +136,15 @@ class RockCriterion {
   // A rock the map must detect with probability >= Phi(z_d) at the relief sigma sigma_m.
   bool Resolvable(double height_m, double diameter_m, double sigma_m) const;
   double ThresholdRelief() const { return threshold_relief_m_; }  // r(h, h / (H / D), c)
+  // The mean relief of a rock over side_cells x side_cells cells centred on the cell with a corner
+  // at its centre (Relief() is side 1).
+  double BoxRelief(double height_m, double diameter_m, int side_cells) const;
+  // The "possible" test's box: its side m (odd), the threshold rock's relief r_m over it, and the
+  // sigma of the box mean from the sums over its cells of the stereo relief sigma, of its square
+  // and of the plane's sigma.
+  int FootprintCells() const { return footprint_cells_; }
+  double FootprintRelief() const { return footprint_relief_m_; }
+  double FootprintSigma(double sum_sigma_m, double sum_sigma2_m2, double sum_plane_sigma_m) const;
 
  private:
   RockCriterionOptions options_;
@@ -121,6 +152,8 @@ class RockCriterion {
   double window_m_ = 0.0;
   double threshold_relief_m_ = 0.0;
   double resolved_sigma_m_ = 0.0;
+  int footprint_cells_ = 1;
+  double footprint_relief_m_ = 0.0;
 };
 
 struct HazardMapperOptions {
@@ -174,6 +207,7 @@ struct HazardMapperOptions {
   // averages below the threshold; the simulator's truth measures slope over 1 m).
   double local_slope_baseline_m = 1.0;
   double rock_window_radius_m = RockCriterionOptions{}.window_radius_m;
+  double relief_error_correlation = RockCriterionOptions{}.relief_error_correlation;
   double confidence_k = 2.0;
   double min_known_fraction = 0.6;  // of a window, for a plane fit
   // Safe site. Its clearance to every non-safe cell must exceed the footprint radius plus
