@@ -566,9 +566,16 @@ bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* o
 // its elevation error less the plane the mapper fits over the same window (the plane is linear in
 // the heights, so this is relief_map - relief_truth on the map's own known cells). Counted where
 // the rock criterion resolves the threshold (relief sigma <= sigma_max), the cells it decides.
+// Also the calibration of the "rock possible" test's box sigma (hazard_mapper.hpp, RockCriterion,
+// "Possible") where it applies (relief sigma > sigma_max): the mean relief error over each
+// rock-free, wholly known footprint box, over RockCriterion::FootprintSigma of the box's relief
+// sigmas (each taken as stereo sigma: the plane's part, ~1/60 of it, enters at rho instead of 1).
 struct ReliefCalibration {
   int cells = 0;
   double within1 = NAN, over309 = NAN, robust_scale = NAN;
+  int boxes = 0;
+  double box_within1 = NAN, box_over2 = NAN, box_robust_scale = NAN;
+  double cell_over2 = NAN;  // the same boxes' centre cells alone, relief error over relief sigma
 };
 
 ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardMapper& mapper) {
@@ -609,13 +616,14 @@ ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardM
     }
   }
   std::vector<double> z;
+  std::vector<double> rel(err.size(), NAN);  // relief error per cell (any relief sigma)
+  std::vector<double> rel_z(err.size(), NAN);
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const std::size_t c = static_cast<std::size_t>(j) * n + i;
       const double sigma = mapper.ReliefSigma()[c];
-      if (std::isnan(err[c]) || !(sigma <= criterion.ResolvedSigma()) || !truth.rock_free[c]) {
-        continue;
-      }
+      if (std::isnan(err[c]) || std::isnan(sigma) || !truth.rock_free[c]) continue;
+      const bool decided = sigma <= criterion.ResolvedSigma();
       const int i0 = std::max(0, i - rr), j0 = std::max(0, j - rr);
       const int i1 = std::min(n, i + rr + 1), j1 = std::min(n, j + rr + 1);
       double s[kCh];
@@ -633,8 +641,53 @@ ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardM
       if (!(det > 1e-6)) continue;
       const double b = (cyy * cxe - cxy * cye) / det;
       const double cc = (cxx * cye - cxy * cxe) / det;
-      z.push_back((err[c] - (me + b * (i - mx) + cc * (j - my))) / sigma);
+      rel[c] = err[c] - (me + b * (i - mx) + cc * (j - my));
+      rel_z[c] = rel[c] / sigma;
+      if (decided) z.push_back(rel_z[c]);
     }
+  }
+  // The footprint boxes centred on undecided cells, every box cell with a relief error.
+  const int half = (criterion.FootprintCells() - 1) / 2;
+  std::vector<double> box_z;
+  int cell_over2 = 0;
+  for (int j = half; j < n - half; ++j) {
+    for (int i = half; i < n - half; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * n + i;
+      if (std::isnan(rel[c]) || !(mapper.ReliefSigma()[c] > criterion.ResolvedSigma())) continue;
+      double sum = 0.0, sum_s = 0.0, sum_s2 = 0.0;
+      bool whole = true;
+      for (int b = j - half; b <= j + half && whole; ++b) {
+        for (int a = i - half; a <= i + half; ++a) {
+          const std::size_t q = static_cast<std::size_t>(b) * n + a;
+          if (std::isnan(rel[q])) {
+            whole = false;
+            break;
+          }
+          const double sq = mapper.ReliefSigma()[q];
+          sum += rel[q];
+          sum_s += sq;
+          sum_s2 += sq * sq;
+        }
+      }
+      if (!whole) continue;
+      const double cells = double(criterion.FootprintCells()) * criterion.FootprintCells();
+      box_z.push_back(sum / cells / criterion.FootprintSigma(sum_s, sum_s2, 0.0));
+      cell_over2 += rel_z[c] > 2.0;
+    }
+  }
+  r.boxes = static_cast<int>(box_z.size());
+  if (!box_z.empty()) {
+    int in1 = 0, over = 0;
+    std::vector<double> a;
+    for (double v : box_z) {
+      in1 += std::fabs(v) <= 1.0;
+      over += v > 2.0;
+      a.push_back(std::fabs(v));
+    }
+    r.box_within1 = double(in1) / box_z.size();
+    r.box_over2 = double(over) / box_z.size();
+    r.box_robust_scale = 1.4826 * Quantile(a, 0.5);
+    r.cell_over2 = double(cell_over2) / box_z.size();
   }
   r.cells = static_cast<int>(z.size());
   if (z.empty()) return r;
@@ -705,6 +758,16 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
           "%.4f above 3.09 sigma, robust scale %.2f | single frame %d cells, %.3f, %.4f, %.2f\n",
           alt, mapper->CellM(), fused.cells, fused.within1, fused.over309, fused.robust_scale,
           one.cells, one.within1, one.over309, one.robust_scale);
+      std::printf(
+          "# footprint calibration at %.1f m, cell %.3f m, box %d cells: fused %d boxes, %.3f "
+          "within 1 sigma, %.4f above 2 sigma (their centre cells alone: %.4f), robust scale "
+          "%.2f | single frame %d, %.3f, %.4f (%.4f), %.2f\n",
+          alt, mapper->CellM(),
+          swf::hazard::RockCriterion(swf::hazard::RockCriterionOf(mapper->Options()),
+                                     mapper->CellM())
+              .FootprintCells(),
+          fused.boxes, fused.box_within1, fused.box_over2, fused.cell_over2, fused.box_robust_scale,
+          one.boxes, one.box_within1, one.box_over2, one.cell_over2, one.box_robust_scale);
     }
     if (swf) {
       std::printf(
