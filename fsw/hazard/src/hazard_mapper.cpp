@@ -825,13 +825,13 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   // The footprint evidence of the "rock possible" test (hazard_mapper.hpp, RockCriterion): the
   // plane fits are done, so sat_ now holds per cell, over the cells with a relief: count, relief,
   // stereo sigma, its square and the plane's sigma.
-  constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kPlane = 4;
+  constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kPlane = 4, kChannels = 5;
   std::fill(sat_.begin(), sat_.begin() + static_cast<std::ptrdiff_t>(n1) * kSatChannels, 0.0);
   for (int j = 0; j < n_; ++j) {
-    double row[5] = {};
+    double row[kChannels] = {};
     double* out = sat_.data() + (static_cast<std::size_t>(j + 1) * n1) * kSatChannels;
     const double* above = sat_.data() + (static_cast<std::size_t>(j) * n1) * kSatChannels;
-    for (int q = 0; q < 5; ++q) out[q] = 0.0;
+    for (int q = 0; q < kChannels; ++q) out[q] = 0.0;
     for (int i = 0; i < n_; ++i) {
       const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
       if (!std::isnan(rock_m_[c])) {
@@ -845,7 +845,7 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       }
       double* o = out + static_cast<std::size_t>(i + 1) * kSatChannels;
       const double* a = above + static_cast<std::size_t>(i + 1) * kSatChannels;
-      for (int q = 0; q < 5; ++q) o[q] = a[q] + row[q];
+      for (int q = 0; q < kChannels; ++q) o[q] = a[q] + row[q];
     }
   }
   const int half_box = (rocks.FootprintCells() - 1) / 2;
