@@ -215,6 +215,10 @@ void AddEstimatorFields(std::map<std::string, ConfigSetter>* fields) {
   f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
   f["measurement_sigma_per_magnification_rad"] =
       Double(&FswConfig::measurement_sigma_per_magnification_rad, 0.0, 0.1);
+  f["measurement_disparity_sigma_px"] =
+      Double(&FswConfig::measurement_disparity_sigma_px, 0.0, 100.0);
+  f["measurement_disparity_sigma_per_parallax_px"] =
+      Double(&FswConfig::measurement_disparity_sigma_per_parallax_px, 0.0, 1e4);
   f["min_quality"] = Double(&FswConfig::min_quality, -1.0, 1.0);
   f["process_sigma_m"] = Double(&FswConfig::process_sigma_m, 1e-6, 1e3);
   f["process_sigma_rad"] = Double(&FswConfig::process_sigma_rad, 1e-8, 3.0);

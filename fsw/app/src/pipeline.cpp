@@ -18,10 +18,41 @@ double MeasurementSigmaPx(const PipelineOptions& options, double magnification) 
          options.camera.fx * options.measurement_sigma_per_magnification_rad * warp;
 }
 
+MeasurementNoise MeasurementNoiseOf(const PipelineOptions& options, double magnification,
+                                    double disparity_px) {
+  MeasurementNoise noise;
+  noise.sigma_px = MeasurementSigmaPx(options, magnification);
+  if (!(options.measurement_disparity_sigma_px > 0.0)) {
+    noise.disparity_sigma_px = std::sqrt(2.0) * noise.sigma_px;  // uR independent of uL
+    return noise;
+  }
+  const double parallax = std::max(0.0, disparity_px) / options.camera.fx;
+  noise.disparity_sigma_px = options.measurement_disparity_sigma_px +
+                             options.measurement_disparity_sigma_per_parallax_px * parallax;
+  noise.right_follows_left = true;
+  return noise;
+}
+
+estimator::Mat3<double> MeasurementSqrtInformation(const MeasurementNoise& noise) {
+  const double s = noise.sigma_px;
+  if (!noise.right_follows_left) return estimator::Mat3<double>::Identity() / s;
+  const double sd = noise.disparity_sigma_px;
+  estimator::Mat3<double> w = estimator::Mat3<double>::Zero();
+  w(0, 0) = 1.0 / s;
+  w(1, 0) = -1.0 / sd;
+  w(1, 1) = 1.0 / sd;
+  w(2, 2) = 1.0 / s;
+  return w;
+}
+
 Status Pipeline::Configure(const PipelineOptions& options) {
   if (!(options.measurement_sigma_px > 0.0) ||
       !(options.measurement_sigma_per_magnification_rad >= 0.0) ||
       !std::isfinite(options.measurement_sigma_per_magnification_rad) ||
+      !(options.measurement_disparity_sigma_px >= 0.0) ||
+      !std::isfinite(options.measurement_disparity_sigma_px) ||
+      !(options.measurement_disparity_sigma_per_parallax_px >= 0.0) ||
+      !std::isfinite(options.measurement_disparity_sigma_per_parallax_px) ||
       !(options.process_sigma_m > 0.0) || !(options.process_sigma_rad > 0.0) ||
       !options.camera.Valid() || options.width_px <= 0 || options.height_px <= 0 ||
       options.width_px > frontend::kMaxImageWidth ||
@@ -220,6 +251,7 @@ void Pipeline::RefineAfterUpdate() {
     if (i < marks && feature_marks_[i].id == m.landmark_id) {
       feature_marks_[i].u_px = static_cast<float>(m.u_left);
       feature_marks_[i].v_px = static_cast<float>(m.v);
+      feature_marks_[i].u_right_px = static_cast<float>(m.u_right);
     }
   }
 }
@@ -670,30 +702,28 @@ void Pipeline::AddMeasurements() {
     disparities_[num_disparities_++] = static_cast<float>(u_left - u_right);
   };
   for (const frontend::StereoMeasurement& m : output_->measurements) {
-    const double sigma_px = MeasurementSigmaPx(options_, m.magnification);
+    const Vec3<double> z(m.u_left, m.u_right, m.v);
+    const MeasurementNoise noise = MeasurementNoiseOf(options_, m.magnification, z.x() - z.y());
     if (m.quality < options_.min_quality) {
-      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected, sigma_px);
+      Mark(m.landmark_id, z, m.quality, FeatureFate::kRejected, noise);
       continue;
     }
-    if (AddObservation(m.landmark_id, Vec3<double>(m.u_left, m.u_right, m.v), sigma_px)) {
-      note(m.u_left, m.u_right, m.v);
-      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kTracked, sigma_px);
-    } else {
-      Mark(m.landmark_id, m.u_left, m.v, FeatureFate::kRejected, sigma_px);
-    }
+    const bool added = AddObservation(m.landmark_id, z, noise);
+    if (added) note(m.u_left, m.u_right, m.v);
+    Mark(m.landmark_id, z, m.quality, added ? FeatureFate::kTracked : FeatureFate::kRejected,
+         noise);
   }
-  // A first sighting is its template's own frame (magnification 1).
-  const double new_sigma_px = MeasurementSigmaPx(options_, 1.0);
   for (const frontend::NewLandmark& n : output_->new_landmarks) {
-    if (AddObservation(n.landmark_id, Vec3<double>(n.u_left, n.u_right, n.v), new_sigma_px)) {
-      note(n.u_left, n.u_right, n.v);
-      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kNew, new_sigma_px);
-      if (num_new_sightings_ < kMaxNewSightings) {
-        new_sightings_[num_new_sightings_++] =
-            NewSighting{n.landmark_id, seq_, static_cast<float>(n.u_left), static_cast<float>(n.v)};
-      }
-    } else {
-      Mark(n.landmark_id, n.u_left, n.v, FeatureFate::kRejected, new_sigma_px);
+    const Vec3<double> z(n.u_left, n.u_right, n.v);
+    // A first sighting is its template's own frame (magnification 1).
+    const MeasurementNoise noise = MeasurementNoiseOf(options_, 1.0, z.x() - z.y());
+    const bool added = AddObservation(n.landmark_id, z, noise);
+    Mark(n.landmark_id, z, n.quality, added ? FeatureFate::kNew : FeatureFate::kRejected, noise);
+    if (!added) continue;
+    note(n.u_left, n.u_right, n.v);
+    if (num_new_sightings_ < kMaxNewSightings) {
+      new_sightings_[num_new_sightings_++] =
+          NewSighting{n.landmark_id, seq_, static_cast<float>(n.u_left), static_cast<float>(n.v)};
     }
   }
   image_spread_px_ = 0.0;
@@ -709,10 +739,17 @@ void Pipeline::AddMeasurements() {
   }
 }
 
-void Pipeline::Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate, double sigma_px) {
+void Pipeline::Mark(std::int64_t id, const Vec3<double>& z, float quality, FeatureFate fate,
+                    const MeasurementNoise& noise) {
   if (num_feature_marks_ >= kMaxFeatureMarks) return;
-  feature_marks_[num_feature_marks_++] = FeatureMark{
-      id, static_cast<float>(u_px), static_cast<float>(v_px), fate, static_cast<float>(sigma_px)};
+  feature_marks_[num_feature_marks_++] = FeatureMark{id,
+                                                     static_cast<float>(z.x()),
+                                                     static_cast<float>(z.z()),
+                                                     fate,
+                                                     static_cast<float>(noise.sigma_px),
+                                                     static_cast<float>(z.y()),
+                                                     static_cast<float>(noise.disparity_sigma_px),
+                                                     quality};
 }
 
 // After the update: a measurement added this frame that is no longer among the newest pose's
@@ -972,8 +1009,9 @@ int Pipeline::NumPoses() const {
   return Visit([](const auto& filter) { return filter.NumPoses(); });
 }
 
-bool Pipeline::AddObservation(std::int64_t id, const Vec3<double>& z, double sigma_px) {
-  const estimator::Mat3<double> r_sqrt = estimator::Mat3<double>::Identity() / sigma_px;
+bool Pipeline::AddObservation(std::int64_t id, const Vec3<double>& z,
+                              const MeasurementNoise& noise) {
+  const estimator::Mat3<double> r_sqrt = MeasurementSqrtInformation(noise);
   return Visit([&](auto& filter) { return filter.AddObservation(id, z, r_sqrt); }) == Status::kOk;
 }
 

@@ -120,6 +120,58 @@ TEST(PipelineTest, MeasurementSigmaGrowsWithTheWarpsMagnification) {
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kOk);
 }
 
+// GIVEN the stereo match's own sigma (a base plus a growth with the parallax d / fx) WHEN a
+// measurement is stated THEN uR follows uL: a shift common to both coordinates (the tracker's
+// error, which the match carries over) whitens into the bearing alone and a change of uR alone
+// into the disparity alone, W^T W is the inverse of R = [s^2 s^2 0; s^2 s^2 + sd^2 0; 0 0 s^2],
+// and without a disparity
+// sigma the model of before holds (uR independent at uL's sigma); a negative or non-finite
+// disparity sigma is refused.
+TEST(PipelineTest, RightCoordinateFollowsTheLeftWithTheMatchsOwnSigma) {
+  PipelineOptions po;
+  po.camera.fx = 1000.0;
+  po.measurement_sigma_px = 0.05;
+  po.measurement_sigma_per_magnification_rad = 2e-4;
+  po.measurement_disparity_sigma_px = 0.02;
+  po.measurement_disparity_sigma_per_parallax_px = 0.6;
+  const MeasurementNoise n = MeasurementNoiseOf(po, 1.5, 50.0);
+  EXPECT_DOUBLE_EQ(n.sigma_px, 0.05 + 0.2 * 0.5);             // the left's, as MeasurementSigmaPx
+  EXPECT_DOUBLE_EQ(n.disparity_sigma_px, 0.02 + 0.6 * 0.05);  // d / fx = 0.05
+  EXPECT_TRUE(n.right_follows_left);
+  EXPECT_DOUBLE_EQ(MeasurementNoiseOf(po, 3.0, 50.0).disparity_sigma_px, 0.05);  // not with m
+  EXPECT_DOUBLE_EQ(MeasurementNoiseOf(po, 1.0, -3.0).disparity_sigma_px, 0.02);
+
+  const estimator::Mat3<double> w = MeasurementSqrtInformation(n);
+  estimator::Mat3<double> r;
+  const double s2 = n.sigma_px * n.sigma_px;
+  const double d2 = n.disparity_sigma_px * n.disparity_sigma_px;
+  r << s2, s2, 0.0, s2, s2 + d2, 0.0, 0.0, 0.0, s2;
+  EXPECT_LT(((w.transpose() * w) * r - estimator::Mat3<double>::Identity()).norm(), 1e-9);
+  const estimator::Vec3<double> bearing = w * estimator::Vec3<double>(0.3, 0.3, 0.0);
+  EXPECT_NEAR(bearing.x(), 0.3 / n.sigma_px, 1e-9);
+  EXPECT_NEAR(bearing.y(), 0.0, 1e-9);  // a shared shift says nothing about the depth
+  const estimator::Vec3<double> depth = w * estimator::Vec3<double>(0.0, -0.01, 0.0);
+  EXPECT_NEAR(depth.x(), 0.0, 1e-9);
+  EXPECT_NEAR(depth.y(), -0.01 / n.disparity_sigma_px, 1e-9);
+
+  po.measurement_disparity_sigma_px = 0.0;  // the model of before
+  const MeasurementNoise before = MeasurementNoiseOf(po, 1.0, 50.0);
+  EXPECT_FALSE(before.right_follows_left);
+  EXPECT_DOUBLE_EQ(before.disparity_sigma_px, std::sqrt(2.0) * 0.05);
+  EXPECT_EQ(MeasurementSqrtInformation(before), estimator::Mat3<double>::Identity() / 0.05);
+
+  const Descent descent;  // a valid configuration ...
+  PipelineOptions bad = testing::SmallRigOptions(*descent.world);
+  auto pipeline = std::make_unique<Pipeline>();
+  bad.measurement_disparity_sigma_px = -0.01;  // ... made invalid
+  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
+  bad.measurement_disparity_sigma_px = 0.02;
+  bad.measurement_disparity_sigma_per_parallax_px = std::nan("");
+  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
+  bad.measurement_disparity_sigma_per_parallax_px = 0.6;
+  EXPECT_EQ(pipeline->Configure(bad), core::Status::kOk);
+}
+
 TEST(PipelineTest, MotionGlitchesAreRefusedOrOverruledAndNeverPublishedValid) {
   Descent clean;
   clean.Run([](int, Pose<double>*) {});

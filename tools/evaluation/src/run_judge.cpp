@@ -1,6 +1,5 @@
 #include "swf/evaluation/run_judge.hpp"
 
-#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -114,7 +113,11 @@ void RunJudge::AddLandmarks(const swf_msgs::landmark_map_t& m) {
   map.landmarks.reserve(m.id.size());
   for (std::size_t i = 0; i < m.id.size(); ++i) {
     const double* p = m.position_world_m[i].data();
-    map.landmarks.push_back(Landmark{m.id[i], {p[0], p[1], p[2]}});
+    Landmark l{m.id[i], {p[0], p[1], p[2]}, {}, 0};
+    if (i < m.covariance_m2.size())
+      std::copy(m.covariance_m2[i].begin(), m.covariance_m2[i].end(), l.covariance_m2);
+    if (i < m.num_observations.size()) l.num_observations = m.num_observations[i];
+    map.landmarks.push_back(l);
   }
   maps_.push_back(std::move(map));
 }
@@ -130,7 +133,7 @@ void RunJudge::AddTruthLandmarks(const swf_msgs::landmark_map_t& m) {
   std::map<std::int64_t, Landmark>& truth = truth_maps_[m.frame_seq];
   for (std::size_t i = 0; i < m.id.size(); ++i) {
     const double* p = m.position_world_m[i].data();
-    truth[m.id[i]] = Landmark{m.id[i], {p[0], p[1], p[2]}};
+    truth[m.id[i]] = Landmark{m.id[i], {p[0], p[1], p[2]}, {}, 0};
   }
 }
 
@@ -234,9 +237,14 @@ RunScore RunJudge::Score() const {
       s.id = l.id;
       std::copy(l.p, l.p + 3, s.estimate_m);
       std::copy(truth->second.p, truth->second.p + 3, s.truth_m);
-      s.error_m = (Eigen::Vector3d(l.p[0], l.p[1], l.p[2]) -
-                   Eigen::Vector3d(s.truth_m[0], s.truth_m[1], s.truth_m[2]))
-                      .norm();
+      const Eigen::Vector3d e = Eigen::Vector3d(l.p[0], l.p[1], l.p[2]) -
+                                Eigen::Vector3d(s.truth_m[0], s.truth_m[1], s.truth_m[2]);
+      s.error_m = e.norm();
+      std::copy(l.covariance_m2, l.covariance_m2 + 6, s.covariance_m2);
+      s.num_observations = l.num_observations;
+      const double* c = l.covariance_m2;
+      const double full[9] = {c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5]};
+      s.nees = Nees(e, full);
       errors.push_back(s.error_m);
       score.last_map.push_back(s);
     }

@@ -177,6 +177,24 @@ TEST(RunJudge, JudgesLandmarksOfEachMapAgainstTheirTruthById) {
   EXPECT_DOUBLE_EQ(s.last_map[1].truth_m[0], 3.5);
 }
 
+// GIVEN a map whose landmarks state covariances WHEN it is judged THEN each landmark of the last
+// map keeps its stated covariance and observations and its NEES e^T P^-1 e; a landmark without
+// a positive definite covariance has none (NaN), not a number made up.
+TEST(RunJudge, KeepsEachLandmarksStatedCovarianceAndNees) {
+  RunJudge judge;
+  swf_msgs::landmark_map_t m = Map(5, {7, 9}, {1.0, 3.0});
+  m.covariance_m2[0] = {0.04, 0.0, 0.0, 1.0, 0.0, 1.0};  // x: 0.2 m 1-sigma
+  m.num_observations[0] = 4;
+  judge.AddLandmarks(m);
+  judge.AddTruthLandmarks(Map(5, {7, 9}, {1.5, 3.5}));  // both 0.5 m off in x
+  const RunScore s = judge.Score();
+  ASSERT_EQ(s.last_map.size(), 2u);
+  EXPECT_EQ(s.last_map[0].num_observations, 4);
+  EXPECT_DOUBLE_EQ(s.last_map[0].covariance_m2[0], 0.04);
+  EXPECT_NEAR(s.last_map[0].nees, 0.25 / 0.04, 1e-12);
+  EXPECT_TRUE(std::isnan(s.last_map[1].nees));  // a zero covariance
+}
+
 TEST(RunJudge, ReadsBytesByChannelAndCountsWhatDoesNotDecode) {
   RunJudge judge;
   const std::vector<std::uint8_t> nav =

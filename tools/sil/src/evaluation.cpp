@@ -83,12 +83,16 @@ void Evaluation::OnNav(const app::NavRecord& r) {
 void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<double>& pose) {
   for (std::int32_t k = 0; k < r.num_features; ++k) {
     const app::FeatureMark& m = r.features[k];
-    if (m.fate != app::FeatureFate::kTracked) continue;
+    if (m.fate != app::FeatureFate::kTracked && m.fate != app::FeatureFate::kNew) continue;
     Eigen::Vector3d p;
     if (!TrueLandmark(m.id, &p)) continue;
     const Eigen::Vector3d c = pose.ApplyInverse(p);
     if (!(c.z() > 0.0)) continue;
     const Eigen::Vector3d z = camera_.Project(c);
+    if (m.fate == app::FeatureFate::kNew) {
+      ScoreStereo(m, r.nav.frame_seq, z, 0, 1.0);
+      continue;
+    }
     const double du = m.u_px - z.x();
     const double dv = m.v_px - z.z();
     const double e = std::hypot(du, dv);
@@ -112,7 +116,33 @@ void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<do
       tracking_.first_frame_px.push_back(e);
       tracking_.first_frame_age.push_back(age);
     }
+    ScoreStereo(m, r.nav.frame_seq, z, age, magnification);
   }
+}
+
+void Evaluation::ScoreStereo(const app::FeatureMark& m, std::int64_t frame_seq,
+                             const Eigen::Vector3d& true_z, int age, double magnification) {
+  const double du_left = m.u_px - true_z.x();
+  const double du_right = m.u_right_px - true_z.y();
+  stereo_.du_left_px.push_back(du_left);
+  stereo_.du_right_px.push_back(du_right);
+  stereo_.dd_px.push_back(du_left - du_right);
+  stereo_.true_disparity_px.push_back(true_z.x() - true_z.y());
+  stereo_.age.push_back(age);
+  stereo_.magnification.push_back(magnification);
+  stereo_.altitude_m.push_back(truth_.altitude_m);
+  stereo_.stated_sigma_px.push_back(m.sigma_px);
+  stereo_.stated_sigma_disparity_px.push_back(m.sigma_disparity_px);
+  stereo_.quality.push_back(m.quality);
+  LastStereoError& last = last_stereo_[m.id];
+  if (age > 0 && last.frame_seq == frame_seq - 1) {
+    stereo_.left_then_px.push_back(last.du_left_px);
+    stereo_.left_now_px.push_back(du_left);
+    stereo_.disparity_then_px.push_back(last.dd_px);
+    stereo_.disparity_now_px.push_back(du_left - du_right);
+    stereo_.pair_age.push_back(age);
+  }
+  last = LastStereoError{frame_seq, du_left, du_left - du_right};
 }
 
 bool Evaluation::FirstSeen(std::int64_t id, app::NewSighting* sighting) const {

@@ -156,6 +156,130 @@ void WriteTrackingErrorBins(std::FILE* f, const Evaluation::TrackingErrors& t) {
       BinnedErrorsJson(t, t.altitude_m, {0, 15, 20, 30, 40, 50, 60, 70, 80, 90, 1e9}).c_str());
 }
 
+// The correlation of two error components over the pairs inside the filter's Huber threshold
+// (3.5 of each one's Huber-effective sigma): what the weights keep. NaN below 3 such pairs.
+double InlierCorrelation(const std::vector<double>& a, const std::vector<double>& b) {
+  const double ca = 3.5 * HuberEffectiveSigma(a);
+  const double cb = 3.5 * HuberEffectiveSigma(b);
+  std::vector<double> x;
+  std::vector<double> y;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!(std::abs(a[i]) < ca && std::abs(b[i]) < cb)) continue;
+    x.push_back(a[i]);
+    y.push_back(b[i]);
+  }
+  if (x.size() < 3) return NAN;
+  const double mx = evaluation::Mean(x);
+  const double my = evaluation::Mean(y);
+  double sxy = 0.0, sxx = 0.0, syy = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+    syy += (y[i] - my) * (y[i] - my);
+  }
+  return sxx > 0.0 && syy > 0.0 ? sxy / std::sqrt(sxx * syy) : NAN;
+}
+
+// The fraction of errors beyond k times their Huber-effective sigma (a Gaussian: 5.7e-7 at 5):
+// the tail that a sigma fitted to the core does not state.
+double TailFraction(const std::vector<double>& e, double k) {
+  const double limit = k * HuberEffectiveSigma(e);
+  if (e.empty() || !std::isfinite(limit)) return NAN;
+  double beyond = 0.0;
+  for (double x : e) beyond += std::abs(x) > limit ? 1.0 : 0.0;
+  return beyond / static_cast<double>(e.size());
+}
+
+// The stereo errors grouped by one property (bins [edges[i], edges[i+1])): per bin the count,
+// the Huber-effective sigma of the left u, the right u and the disparity errors, the disparity
+// error's median (a bias places every landmark of the bin at a wrong depth) and tail, the inlier
+// correlation of the left error with the right one and with the disparity's, and the disparity
+// error over the disparity sigma the filter was told.
+std::string BinnedStereoErrorsJson(const Evaluation::StereoErrors& t,
+                                   const std::vector<double>& property,
+                                   const std::vector<double>& edges) {
+  std::string text = "[";
+  for (std::size_t b = 0; b + 1 < edges.size(); ++b) {
+    std::vector<double> left, right, disparity, normalized;
+    for (std::size_t i = 0; i < property.size(); ++i) {
+      if (!(property[i] >= edges[b] && property[i] < edges[b + 1])) continue;
+      left.push_back(t.du_left_px[i]);
+      right.push_back(t.du_right_px[i]);
+      disparity.push_back(t.dd_px[i]);
+      if (t.stated_sigma_disparity_px[i] > 0.0)
+        normalized.push_back(t.dd_px[i] / t.stated_sigma_disparity_px[i]);
+    }
+    if (b > 0) text += ", ";
+    text +=
+        "{\"from\": " + app::JsonNumber(edges[b]) + ", \"to\": " + app::JsonNumber(edges[b + 1]) +
+        ", \"measurements\": " + std::to_string(left.size()) +
+        ", \"left_huber_sigma_px\": " + app::JsonNumber(HuberEffectiveSigma(left)) +
+        ", \"right_huber_sigma_px\": " + app::JsonNumber(HuberEffectiveSigma(right)) +
+        ", \"disparity_huber_sigma_px\": " + app::JsonNumber(HuberEffectiveSigma(disparity)) +
+        ", \"disparity_median_px\": " + app::JsonNumber(evaluation::Median(disparity)) +
+        ", \"disparity_beyond_5_sigma\": " + app::JsonNumber(TailFraction(disparity, 5.0)) +
+        ", \"left_right_correlation\": " + app::JsonNumber(InlierCorrelation(left, right)) +
+        ", \"left_disparity_correlation\": " + app::JsonNumber(InlierCorrelation(left, disparity)) +
+        ", \"disparity_normalized_huber_sigma\": " +
+        app::JsonNumber(HuberEffectiveSigma(normalized)) + "}";
+  }
+  return text + "]";
+}
+
+// How alike a track's errors are in consecutive frames, by its age (bins [edges[i],
+// edges[i+1])): the inlier correlation of the left u error and of the disparity error with the
+// frame before's. The filter takes them as independent; near 1 a window of K frames holds
+// about one measurement's worth of that error, not K.
+std::string FrameToFrameJson(const Evaluation::StereoErrors& t, const std::vector<int>& edges) {
+  std::string text = "[";
+  for (std::size_t b = 0; b + 1 < edges.size(); ++b) {
+    std::vector<double> left_then, left_now, disparity_then, disparity_now;
+    for (std::size_t i = 0; i < t.pair_age.size(); ++i) {
+      if (!(t.pair_age[i] >= edges[b] && t.pair_age[i] < edges[b + 1])) continue;
+      left_then.push_back(t.left_then_px[i]);
+      left_now.push_back(t.left_now_px[i]);
+      disparity_then.push_back(t.disparity_then_px[i]);
+      disparity_now.push_back(t.disparity_now_px[i]);
+    }
+    if (b > 0) text += ", ";
+    text += "{\"from_age\": " + std::to_string(edges[b]) +
+            ", \"to_age\": " + std::to_string(edges[b + 1]) +
+            ", \"pairs\": " + std::to_string(left_now.size()) +
+            ", \"left_correlation\": " + app::JsonNumber(InlierCorrelation(left_then, left_now)) +
+            ", \"disparity_correlation\": " +
+            app::JsonNumber(InlierCorrelation(disparity_then, disparity_now)) + "}";
+  }
+  return text + "]";
+}
+
+// The stereo match's own error (Evaluation::Stereo) beside the left image's
+// (tracking_error_bins): by track age (0: the first sighting), by the true magnification, by the
+// true altitude, by the true disparity (the landmark's range) and by the match's ZNCC (all, and
+// the first sightings alone).
+void WriteDisparityErrorBins(std::FILE* f, const Evaluation::StereoErrors& t) {
+  const std::vector<double> age(t.age.begin(), t.age.end());
+  std::vector<double> first_quality = t.quality;
+  for (std::size_t i = 0; i < first_quality.size(); ++i)
+    if (t.age[i] != 0) first_quality[i] = NAN;
+  const std::vector<double> quality_edges = {-1.0, 0.8, 0.85, 0.9, 0.95, 0.97, 0.98, 0.99, 1.01};
+  std::fprintf(
+      f,
+      "  \"disparity_error_bins\": {\"by_age\": %s,\n    \"by_magnification\": %s,\n    "
+      "\"by_altitude_m\": %s,\n    \"by_true_disparity_px\": %s,\n    \"by_quality\": %s,\n    "
+      "\"first_sighting_by_quality\": %s,\n    \"all\": %s,\n    \"frame_to_frame\": %s},\n",
+      BinnedStereoErrorsJson(t, age, {0, 1, 2, 4, 8, 16, 1e9}).c_str(),
+      BinnedStereoErrorsJson(t, t.magnification,
+                             {0.0, 1.02, 1.05, 1.1, 1.2, 1.35, 1.5, 1.75, 2.0, 2.5, 1e9})
+          .c_str(),
+      BinnedStereoErrorsJson(t, t.altitude_m, {0, 15, 20, 30, 40, 50, 60, 70, 80, 90, 1e9}).c_str(),
+      BinnedStereoErrorsJson(t, t.true_disparity_px, {0, 15, 20, 30, 40, 60, 80, 120, 160, 1e9})
+          .c_str(),
+      BinnedStereoErrorsJson(t, t.quality, quality_edges).c_str(),
+      BinnedStereoErrorsJson(t, first_quality, quality_edges).c_str(),
+      BinnedStereoErrorsJson(t, t.altitude_m, {-1e9, 1e9}).c_str(),
+      FrameToFrameJson(t, {1, 2, 4, 8, 16, 1000000000}).c_str());
+}
+
 // One hazard map's evaluation as a JSON object (without the safe site of the final map).
 // The front end's measurements against the renderer's truth (Evaluation::Tracking): every fused
 // measurement of a known landmark, and the landmarks of the first frame, overall and once they
@@ -201,6 +325,50 @@ void WriteLandmarkMaps(std::FILE* f, const std::vector<evaluation::MapScore>& ma
                "  \"landmark_maps_by_frame\": {\"frame\": [%s],\n    \"landmarks_evaluated\": "
                "[%s],\n    \"rms_error_m\": [%s]},\n",
                frame.c_str(), evaluated.c_str(), rms.c_str());
+}
+
+// The last map's landmarks against their stated covariances: the NEES's median and mean (3 for
+// a consistent map), and the worst landmarks by error with their error (world axes; the descent
+// looks down, so z is mostly the depth), stated 1-sigma per axis, NEES, observations in the
+// window and first-sighting frame: whether a map's RMS is its bulk or a few landmarks.
+void WriteLastMapLandmarks(std::FILE* f, const std::vector<evaluation::LandmarkScore>& last,
+                           const Evaluation& evaluation, int worst) {
+  std::vector<double> nees;
+  for (const evaluation::LandmarkScore& l : last)
+    if (std::isfinite(l.nees)) nees.push_back(l.nees);
+  std::vector<const evaluation::LandmarkScore*> order;
+  for (const evaluation::LandmarkScore& l : last) order.push_back(&l);
+  std::sort(order.begin(), order.end(),
+            [](const auto* a, const auto* b) { return a->error_m > b->error_m; });
+  std::string text;
+  for (int k = 0; k < worst && k < static_cast<int>(order.size()); ++k) {
+    const evaluation::LandmarkScore& l = *order[static_cast<std::size_t>(k)];
+    app::NewSighting first;
+    const bool seen = evaluation.FirstSeen(l.id, &first);
+    const double* c = l.covariance_m2;
+    std::string error;
+    std::string sigma;
+    const double variance[3] = {c[0], c[3], c[5]};
+    for (int i = 0; i < 3; ++i) {
+      if (i > 0) {
+        error += ", ";
+        sigma += ", ";
+      }
+      error += app::JsonNumber(l.estimate_m[i] - l.truth_m[i]);
+      sigma += app::JsonNumber(std::sqrt(std::max(0.0, variance[i])));
+    }
+    if (k > 0) text += ",\n      ";
+    text += "{\"id\": " + std::to_string(l.id) + ", \"error_m\": " + app::JsonNumber(l.error_m) +
+            ", \"error_world_m\": [" + error + "], \"sigma_world_m\": [" + sigma +
+            "], \"nees\": " + app::JsonNumber(l.nees) +
+            ", \"observations\": " + std::to_string(l.num_observations) +
+            ", \"first_frame\": " + (seen ? std::to_string(first.frame_seq) : "null") + "}";
+  }
+  std::fprintf(f,
+               "  \"last_map_landmarks\": {\"nees_median\": %s, \"nees_mean\": %s, "
+               "\"worst\": [\n      %s]},\n",
+               app::JsonNumber(evaluation::Median(nees)).c_str(),
+               app::JsonNumber(evaluation::Mean(nees)).c_str(), text.c_str());
 }
 
 void WriteHazardEvaluation(std::FILE* f, const evaluation::HazardScore& e) {
@@ -421,7 +589,9 @@ void SimulatedDescent::WriteSummaryHead(std::FILE* f) const {
       static_cast<long long>(score.maps.size()));
   WriteTrackingErrors(f, evaluation_.Tracking());
   WriteTrackingErrorBins(f, evaluation_.Tracking());
+  WriteDisparityErrorBins(f, evaluation_.Stereo());
   WriteLandmarkMaps(f, score.maps);
+  WriteLastMapLandmarks(f, score.last_map, evaluation_, 8);
   const app::FrontendCounters& fc = frontend_;
   std::fprintf(f,
                "  \"frontend\": {\"refine_in_loop\": %s, \"reference_from_estimate\": %s, "

@@ -10,9 +10,17 @@ divided by the sigma the filter was told. With the per-track sigma, which grows 
 magnification of the template's warp (app::MeasurementSigmaPx; 0.03 px + fx 1.645e-4 rad (m - 1),
 docs/imu.md), that ratio must be near 1 in every bin; with one constant sigma (the demo's 0.12 px)
 it spreads from conservative at m ~ 1 to overconfident at m > 2,
-which the test also checks, so that it sees what it guards. Fails when the front end's reported
-magnification, the pipeline's sigma or the front end's error change so that they no longer agree,
-or when either run's verdict is not ok."""
+which the test also checks, so that it sees what it guards.
+
+The right coordinate likewise (`disparity_error_bins`): the stereo match refines the disparity of
+the left point, so u_right's error is u_left's plus the match's own. The per-track run states
+that (app::MeasurementNoiseOf; 0.024 px + 0.6 px x d / fx, docs/imu.md): the disparity error over
+its stated sigma must be near 1 in every bin of the true disparity, the left and right errors
+strongly correlated and the left and disparity errors nearly not. The constant run states u_right
+independent of u_left at 0.12 px (the disparity at 0.17 px), which the measured disparity error
+(0.03-0.07 px) lies far below. Fails when the front end's reported magnification, the pipeline's
+sigmas or the front end's errors change so that they no longer agree, or when either run's
+verdict is not ok."""
 import sys
 import tempfile
 
@@ -28,13 +36,23 @@ def ratios(summary):
             if b['measurements'] >= MIN_MEASUREMENTS and b['normalized_huber_sigma'] is not None]
 
 
+def disparity_ratios(summary):
+    """(from, to, measurements, disparity error / stated sigma) by true disparity."""
+    return [(b['from'], b['to'], b['measurements'], b['disparity_normalized_huber_sigma'])
+            for b in summary['disparity_error_bins']['by_true_disparity_px']
+            if b['measurements'] >= MIN_MEASUREMENTS and
+            b['disparity_normalized_huber_sigma'] is not None]
+
+
 def main():
     if len(sys.argv) != 3:
         raise SystemExit(__doc__)
     sil, cfg = sys.argv[1], sys.argv[2]
     with tempfile.TemporaryDirectory() as workdir:
         per_track = fly(sil, cfg, workdir, 'per_track', 'measurement_sigma_px: 0.03',
-                        'measurement_sigma_per_magnification_rad: 1.645e-4')
+                        'measurement_sigma_per_magnification_rad: 1.645e-4',
+                        'measurement_disparity_sigma_px: 0.024',
+                        'measurement_disparity_sigma_per_parallax_px: 0.6')
         constant = fly(sil, cfg, workdir, 'constant', 'measurement_sigma_px: 0.12',
                        'measurement_sigma_per_magnification_rad: 0')
     failures = []
@@ -50,6 +68,31 @@ def main():
     off = [x for x in r if not 0.7 <= x[3] <= 1.4]
     if off:
         failures.append('per-track sigma off the error in bins %s' % off)
+    for name, s in (('per track', per_track), ('constant 0.12 px', constant)):
+        a = s['disparity_error_bins']['all'][0]
+        print('%s: disparity error / stated sigma by true disparity: %s; left-right error '
+              'correlation %.2f, left-disparity %.2f' %
+              (name, '; '.join('[%g, %g) %d: %.2f' % r for r in disparity_ratios(s)),
+               a['left_right_correlation'], a['left_disparity_correlation']))
+        # Measured on seeds 1-20: 0.90 and 0.08.
+        if not a['left_right_correlation'] > 0.8:
+            failures.append('%s: u_right no longer follows u_left (correlation %.2f)' %
+                            (name, a['left_right_correlation']))
+        if not abs(a['left_disparity_correlation']) < 0.3:
+            failures.append('%s: the disparity error is not independent of u_left\'s '
+                            '(correlation %.2f)' % (name, a['left_disparity_correlation']))
+    d = disparity_ratios(per_track)
+    if len(d) < 5:
+        failures.append('only %d true-disparity bins with %d measurements' %
+                        (len(d), MIN_MEASUREMENTS))
+    # Measured (seed 1): 0.87-1.12.
+    off = [x for x in d if not 0.7 <= x[3] <= 1.4]
+    if off:
+        failures.append('per-track disparity sigma off the error in bins %s' % off)
+    # Measured: 0.17-0.35 (0.03-0.06 px against the stated 0.17 px).
+    loose = [x for x in disparity_ratios(constant) if not x[3] < 0.5]
+    if loose or not disparity_ratios(constant):
+        failures.append('the constant sigma no longer overstates the disparity error (%s)' % loose)
     c = [x[3] for x in ratios(constant)]
     # Measured: 0.31 at m ~ 1 to 3.6 beyond 2.5.
     if not c or max(c) < 3.0 * min(c):

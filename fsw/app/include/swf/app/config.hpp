@@ -203,6 +203,8 @@ struct FswConfig {
   std::int32_t max_iterations = 10;
   double measurement_sigma_px = 0.5;
   double measurement_sigma_per_magnification_rad = 0.0;  // PipelineOptions, MeasurementSigmaPx
+  double measurement_disparity_sigma_px = 0.0;           // PipelineOptions, MeasurementNoiseOf
+  double measurement_disparity_sigma_per_parallax_px = 0.0;
   double min_quality = 0.7;
   double process_sigma_m = 0.5;
   double process_sigma_rad = 0.01;

@@ -89,13 +89,22 @@ struct PipelineOptions {
   // still holds this pose) uses them. One warped LK and one stereo LK per measurement.
   bool refine_in_loop = true;
   estimator::SwfOptions swf;
-  // The 1-sigma of a measurement per stereo coordinate (uL, uR, v): the tracker's sub-pixel
+  // The 1-sigma of a measurement's left coordinates (uL, v): the tracker's sub-pixel
   // precision, plus a misregistration that grows with the magnification m of its template's
   // warp (StereoMeasurement::magnification), an angle on the scene and so camera.fx times it in
   // pixels: measurement_sigma_px + fx * measurement_sigma_per_magnification_rad *
   // (max(m, 1 / m) - 1) (MeasurementSigmaPx).
   double measurement_sigma_px = 0.5;
   double measurement_sigma_per_magnification_rad = 0.0;
+  // The right coordinate uR = uL - d: the stereo match refines the disparity d of the left
+  // point wherever the tracker put it, so uR carries uL's error plus the match's own, which is
+  // independent of it and does not grow with m but with the parallax d / fx = baseline / range
+  // (the right view's perspective on the patch departs from the left's):
+  // measurement_disparity_sigma_px + measurement_disparity_sigma_per_parallax_px * d / fx
+  // (MeasurementNoiseOf). 0: the model of before, uR independent of uL at uL's sigma (the
+  // disparity then at sqrt(2) times it).
+  double measurement_disparity_sigma_px = 0.0;
+  double measurement_disparity_sigma_per_parallax_px = 0.0;
   float min_quality = 0.7f;  // measurements below this ZNCC are not used
   // Constant-velocity process model: 1-sigma of the per-frame deviation from the previous
   // relative motion, camera frame of the previous pose.
@@ -131,6 +140,22 @@ struct PipelineOptions {
 // how far the warp is from the identity, whichever way the scale goes, and its growth in pixels
 // doubles with the image's focal length (docs/imu.md, "Consistency along the descent").
 double MeasurementSigmaPx(const PipelineOptions& options, double magnification);
+
+// A stereo measurement's noise (PipelineOptions): the 1-sigma of uL and v, and of the disparity
+// uL - uR. right_follows_left: uR = uL - d with d's error independent of uL's; false: the model
+// of before, uR's error independent of uL's at the same sigma (the disparity's then sqrt(2) s).
+struct MeasurementNoise {
+  double sigma_px = 0.0;
+  double disparity_sigma_px = 0.0;
+  bool right_follows_left = false;
+};
+MeasurementNoise MeasurementNoiseOf(const PipelineOptions& options, double magnification,
+                                    double disparity_px);
+// W with W^T W = R^-1 for z = (uL, uR, v). With right_follows_left R = [s^2 s^2 0; s^2 s^2 +
+// sd^2 0; 0 0 s^2] (uR = uL - d), W = L^-1 for R = L L^T, which whitens a residual into
+// (e_uL / s, (e_uR - e_uL) / sd, e_v / s): the left bearing and the disparity as two independent
+// errors. Without: I / s.
+estimator::Mat3<double> MeasurementSqrtInformation(const MeasurementNoise& noise);
 
 // Integrity since Configure: statuses, restarts and every gate (health_t carries them).
 struct IntegrityCounters {
@@ -220,7 +245,10 @@ struct FeatureMark {
   float u_px = 0.0f;
   float v_px = 0.0f;
   FeatureFate fate = FeatureFate::kTracked;
-  float sigma_px = 0.0f;  // the 1-sigma the filter was told per stereo coordinate
+  float sigma_px = 0.0f;  // the 1-sigma the filter was told for u (left) and v
+  float u_right_px = 0.0f;
+  float sigma_disparity_px = 0.0f;  // ... and for the disparity u - u_right
+  float quality = 0.0f;             // StereoMeasurement / NewLandmark::quality (ZNCC)
 };
 inline constexpr int kMaxFeatureMarks =
     static_cast<int>(frontend::kMaxTracks + frontend::kMaxNewLandmarks);
@@ -326,7 +354,8 @@ class Pipeline {
   decltype(auto) Visit(F&& f) const {
     return inertial_ ? f(*inertial_) : f(*swf_);
   }
-  bool AddObservation(std::int64_t landmark_id, const estimator::Vec3<double>& z, double sigma_px);
+  bool AddObservation(std::int64_t landmark_id, const estimator::Vec3<double>& z,
+                      const MeasurementNoise& noise);
   estimator::Pose<double> NewestCameraPose() const;
   // The filter's covariances, and the newest camera pose's 6x6 from them (camera_covariance_).
   core::Status ComputeCovariances();
@@ -334,7 +363,8 @@ class Pipeline {
   std::unique_ptr<frontend::LandmarkEstimate[]> estimates_;
   std::unique_ptr<NewSighting[]> new_sightings_;
   int num_new_sightings_ = 0;
-  void Mark(std::int64_t id, double u_px, double v_px, FeatureFate fate, double sigma_px);
+  void Mark(std::int64_t id, const estimator::Vec3<double>& z, float quality, FeatureFate fate,
+            const MeasurementNoise& noise);
   void MarkUnfused();
   std::unique_ptr<FeatureMark[]> feature_marks_;
   int num_feature_marks_ = 0;

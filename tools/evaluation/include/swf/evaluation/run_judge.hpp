@@ -78,6 +78,11 @@ struct LandmarkScore {
   double estimate_m[3] = {0.0, 0.0, 0.0};
   double truth_m[3] = {0.0, 0.0, 0.0};
   double error_m = 0.0;
+  // The estimate's stated covariance (landmark_map_t: upper triangle xx xy xz yy yz zz, m^2),
+  // its observations in the window, and e^T P^-1 e (NaN when P is not positive definite).
+  double covariance_m2[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  std::int32_t num_observations = 0;
+  double nees = 0.0;
 };
 
 struct RunScore {
@@ -148,6 +153,8 @@ class RunJudge {
   struct Landmark {
     std::int64_t id;
     double p[3];
+    double covariance_m2[6];  // landmark_map_t's upper triangle (zero for a truth map)
+    std::int32_t num_observations;
   };
   struct Map {
     std::int64_t frame_seq;

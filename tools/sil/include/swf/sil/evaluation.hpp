@@ -78,6 +78,28 @@ class Evaluation : public app::OutputObserver {
     std::vector<double> stated_sigma_px;
   };
   const TrackingErrors& Tracking() const { return tracking_; }
+  // The stereo match's own error: per fused measurement of a known landmark, the first sighting
+  // included (its left error is 0 by the truth's construction, see the file comment), the signed
+  // errors of u (left), of u_right and of the disparity u - u_right against the true projection
+  // from the frame's true pose, with the properties they may depend on and the sigmas the filter
+  // was told (FeatureMark::sigma_px, sigma_disparity_px).
+  struct StereoErrors {
+    std::vector<double> du_left_px;
+    std::vector<double> du_right_px;
+    std::vector<double> dd_px;  // disparity - true disparity = du_left - du_right
+    std::vector<double> true_disparity_px;
+    std::vector<int> age;  // frames since the first sighting (0: the first sighting)
+    std::vector<double> magnification;
+    std::vector<double> altitude_m;
+    std::vector<double> stated_sigma_px;
+    std::vector<double> stated_sigma_disparity_px;
+    std::vector<double> quality;  // FeatureMark::quality
+    // The same track's errors in consecutive frames (the filter takes them as independent):
+    // per pair the left u error and the disparity error then and now, and the age now.
+    std::vector<double> left_then_px, left_now_px, disparity_then_px, disparity_now_px;
+    std::vector<int> pair_age;
+  };
+  const StereoErrors& Stereo() const { return stereo_; }
   // The terrain with the hazard truth maps are judged against (the mapper's thresholds), for
   // plot::DrawTerrainHazard; empty when the truth could not be drawn.
   plot::HeightGrid TerrainTruth() const;
@@ -99,8 +121,17 @@ class Evaluation : public app::OutputObserver {
   std::unordered_map<std::int64_t, app::NewSighting> first_seen_;
   std::unordered_map<std::int64_t, Eigen::Vector3d> true_landmarks_;  // NaN: the ray missed
   TrackingErrors tracking_;
+  StereoErrors stereo_;
+  struct LastStereoError {
+    std::int64_t frame_seq = -2;  // none yet
+    double du_left_px = 0.0;
+    double dd_px = 0.0;
+  };
+  std::unordered_map<std::int64_t, LastStereoError> last_stereo_;  // per track id
   std::int64_t first_frame_ = -1;  // frame_seq of the first navigation output
   void ScoreTracking(const app::NavRecord& r, const estimator::Pose<double>& pose);
+  void ScoreStereo(const app::FeatureMark& m, std::int64_t frame_seq, const Eigen::Vector3d& true_z,
+                   int age, double magnification);
   swf_msgs::truth_state_t truth_;
   swf_msgs::landmark_map_t truth_map_;
   std::vector<std::uint8_t> buffer_;
