@@ -570,11 +570,33 @@ bool RunSwfAlongDescent(int frames, double step, std::uint64_t seed, SwfPoses* o
 // "Possible") where it applies (relief sigma > sigma_max): the mean relief error over each
 // rock-free, wholly known footprint box, over RockCriterion::FootprintSigma of the box's relief
 // sigmas (each taken as stereo sigma: the plane's part, ~1/60 of it, enters at rho instead of 1).
+// Errors over their stated sigma: the share within 1 sigma, the share above `tail` sigmas and
+// the robust scale (1.4826 x the median |z|: 1 for a calibrated sigma).
+struct NormalizedErrors {
+  double within1 = NAN, over_tail = NAN, robust_scale = NAN;
+};
+
+NormalizedErrors SummarizeNormalizedErrors(const std::vector<double>& z, double tail) {
+  NormalizedErrors e;
+  if (z.empty()) return e;
+  int in1 = 0, over = 0;
+  std::vector<double> a;
+  for (double v : z) {
+    in1 += std::fabs(v) <= 1.0;
+    over += v > tail;
+    a.push_back(std::fabs(v));
+  }
+  e.within1 = double(in1) / z.size();
+  e.over_tail = double(over) / z.size();
+  e.robust_scale = 1.4826 * Quantile(a, 0.5);
+  return e;
+}
+
 struct ReliefCalibration {
   int cells = 0;
-  double within1 = NAN, over309 = NAN, robust_scale = NAN;
+  NormalizedErrors cell;  // tail 3.09 sigma
   int boxes = 0;
-  double box_within1 = NAN, box_over2 = NAN, box_robust_scale = NAN;
+  NormalizedErrors box;     // tail 2 sigma
   double cell_over2 = NAN;  // the same boxes' centre cells alone, relief error over relief sigma
 };
 
@@ -676,31 +698,10 @@ ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardM
     }
   }
   r.boxes = static_cast<int>(box_z.size());
-  if (!box_z.empty()) {
-    int in1 = 0, over = 0;
-    std::vector<double> a;
-    for (double v : box_z) {
-      in1 += std::fabs(v) <= 1.0;
-      over += v > 2.0;
-      a.push_back(std::fabs(v));
-    }
-    r.box_within1 = double(in1) / box_z.size();
-    r.box_over2 = double(over) / box_z.size();
-    r.box_robust_scale = 1.4826 * Quantile(a, 0.5);
-    r.cell_over2 = double(cell_over2) / box_z.size();
-  }
+  r.box = SummarizeNormalizedErrors(box_z, 2.0);
+  if (!box_z.empty()) r.cell_over2 = double(cell_over2) / box_z.size();
   r.cells = static_cast<int>(z.size());
-  if (z.empty()) return r;
-  int in1 = 0, over = 0;
-  std::vector<double> a;
-  for (double v : z) {
-    in1 += std::fabs(v) <= 1.0;
-    over += v > 3.09;
-    a.push_back(std::fabs(v));
-  }
-  r.within1 = double(in1) / z.size();
-  r.over309 = double(over) / z.size();
-  r.robust_scale = 1.4826 * Quantile(a, 0.5);
+  r.cell = SummarizeNormalizedErrors(z, 3.09);
   return r;
 }
 
@@ -756,8 +757,9 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
       std::printf(
           "# relief calibration at %.1f m, cell %.3f m: fused %d cells, %.3f within 1 sigma, "
           "%.4f above 3.09 sigma, robust scale %.2f | single frame %d cells, %.3f, %.4f, %.2f\n",
-          alt, mapper->CellM(), fused.cells, fused.within1, fused.over309, fused.robust_scale,
-          one.cells, one.within1, one.over309, one.robust_scale);
+          alt, mapper->CellM(), fused.cells, fused.cell.within1, fused.cell.over_tail,
+          fused.cell.robust_scale, one.cells, one.cell.within1, one.cell.over_tail,
+          one.cell.robust_scale);
       std::printf(
           "# footprint calibration at %.1f m, cell %.3f m, box %d cells: fused %d boxes, %.3f "
           "within 1 sigma, %.4f above 2 sigma (their centre cells alone: %.4f), robust scale "
@@ -766,8 +768,9 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
           swf::hazard::RockCriterion(swf::hazard::RockCriterionOf(mapper->Options()),
                                      mapper->CellM())
               .FootprintCells(),
-          fused.boxes, fused.box_within1, fused.box_over2, fused.cell_over2, fused.box_robust_scale,
-          one.boxes, one.box_within1, one.box_over2, one.cell_over2, one.box_robust_scale);
+          fused.boxes, fused.box.within1, fused.box.over_tail, fused.cell_over2,
+          fused.box.robust_scale, one.boxes, one.box.within1, one.box.over_tail, one.cell_over2,
+          one.box.robust_scale);
     }
     if (swf) {
       std::printf(

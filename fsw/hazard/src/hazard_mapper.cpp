@@ -13,6 +13,31 @@ namespace swf::hazard {
 namespace {
 
 constexpr int kSatChannels = 11;  // count, x, y, z, xx, xy, yy, xz, yz, zz, sigma^2
+
+// Fills the first kChannels sums of a summed-area table over an n x n grid whose entries lie
+// kSatChannels doubles apart ((n + 1)^2 entries, the first row and column zero); the other
+// channels keep what they held. cell_values(c, i, j, v) writes the values of cell c = (i, j)
+// to v, or returns false for a cell that adds nothing.
+template <int kChannels, typename CellValues>
+void FillSummedAreaTable(int n, double* sat, CellValues&& cell_values) {
+  static_assert(kChannels <= kSatChannels);
+  const std::size_t n1 = static_cast<std::size_t>(n) + 1;
+  std::fill(sat, sat + n1 * kSatChannels, 0.0);
+  for (int j = 0; j < n; ++j) {
+    double row[kChannels] = {};
+    double* out = sat + (static_cast<std::size_t>(j) + 1) * n1 * kSatChannels;
+    const double* above = sat + static_cast<std::size_t>(j) * n1 * kSatChannels;
+    for (int k = 0; k < kChannels; ++k) out[k] = 0.0;
+    for (int i = 0; i < n; ++i) {
+      double v[kChannels];
+      if (cell_values(static_cast<std::size_t>(j) * n + i, i, j, v))
+        for (int k = 0; k < kChannels; ++k) row[k] += v[k];
+      double* o = out + (static_cast<std::size_t>(i) + 1) * kSatChannels;
+      const double* a = above + (static_cast<std::size_t>(i) + 1) * kSatChannels;
+      for (int k = 0; k < kChannels; ++k) o[k] = a[k] + row[k];
+    }
+  }
+}
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kRadToDeg = 57.29577951308232;
 constexpr std::uint16_t kMaxCount = 65535;
@@ -719,30 +744,19 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   }
   stats_.known_cells = known;
   const double z_ref = known > 0 ? sum / known : 0.0;
-  // Summed-area tables.
+  // Summed-area tables of the plane fits' moments.
   const int n1 = n_ + 1;
-  std::fill(sat_.begin(), sat_.begin() + static_cast<std::ptrdiff_t>(n1) * kSatChannels, 0.0);
-  for (int j = 0; j < n_; ++j) {
-    double row[kSatChannels] = {};
-    double* out = sat_.data() + (static_cast<std::size_t>(j + 1) * n1) * kSatChannels;
-    const double* above = sat_.data() + (static_cast<std::size_t>(j) * n1) * kSatChannels;
-    for (int k = 0; k < kSatChannels; ++k) out[k] = 0.0;
-    for (int i = 0; i < n_; ++i) {
-      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
-      if (!std::isnan(elevation_[c])) {
-        const double x = i;
-        const double y = j;
-        const double z = elevation_[c] - z_ref;
-        const double s = sigma_rel_[c];
-        const double v[kSatChannels] = {1.0,   x,     y,     z,     x * x, x * y,
-                                        y * y, x * z, y * z, z * z, s * s};
-        for (int k = 0; k < kSatChannels; ++k) row[k] += v[k];
-      }
-      double* o = out + static_cast<std::size_t>(i + 1) * kSatChannels;
-      const double* a = above + static_cast<std::size_t>(i + 1) * kSatChannels;
-      for (int k = 0; k < kSatChannels; ++k) o[k] = a[k] + row[k];
-    }
-  }
+  FillSummedAreaTable<kSatChannels>(n_, sat_.data(), [&](std::size_t c, int i, int j, double* v) {
+    if (std::isnan(elevation_[c])) return false;
+    const double x = i;
+    const double y = j;
+    const double z = elevation_[c] - z_ref;
+    const double s = sigma_rel_[c];
+    const double moments[kSatChannels] = {1.0,   x,     y,     z,     x * x, x * y,
+                                          y * y, x * z, y * z, z * z, s * s};
+    std::copy(moments, moments + kSatChannels, v);
+    return true;
+  });
   const auto window = [&](int ci, int cj, int r) {
     std::array<double, kSatChannels> s{};
     const int i0 = std::max(0, ci - r);
@@ -826,28 +840,17 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   // plane fits are done, so sat_ now holds per cell, over the cells with a relief: count, relief,
   // stereo sigma, its square and the plane's sigma.
   constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kPlane = 4, kChannels = 5;
-  std::fill(sat_.begin(), sat_.begin() + static_cast<std::ptrdiff_t>(n1) * kSatChannels, 0.0);
-  for (int j = 0; j < n_; ++j) {
-    double row[kChannels] = {};
-    double* out = sat_.data() + (static_cast<std::size_t>(j + 1) * n1) * kSatChannels;
-    const double* above = sat_.data() + (static_cast<std::size_t>(j) * n1) * kSatChannels;
-    for (int q = 0; q < kChannels; ++q) out[q] = 0.0;
-    for (int i = 0; i < n_; ++i) {
-      const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
-      if (!std::isnan(rock_m_[c])) {
-        const double stereo = sigma_rel_[c];
-        const double total = relief_sigma_[c];
-        row[kCount] += 1.0;
-        row[kRelief] += rock_m_[c];
-        row[kStereo] += stereo;
-        row[kStereo2] += stereo * stereo;
-        row[kPlane] += std::sqrt(std::max(0.0, total * total - stereo * stereo));
-      }
-      double* o = out + static_cast<std::size_t>(i + 1) * kSatChannels;
-      const double* a = above + static_cast<std::size_t>(i + 1) * kSatChannels;
-      for (int q = 0; q < kChannels; ++q) o[q] = a[q] + row[q];
-    }
-  }
+  FillSummedAreaTable<kChannels>(n_, sat_.data(), [&](std::size_t c, int, int, double* v) {
+    if (std::isnan(rock_m_[c])) return false;
+    const double stereo = sigma_rel_[c];
+    const double total = relief_sigma_[c];
+    v[kCount] = 1.0;
+    v[kRelief] = rock_m_[c];
+    v[kStereo] = stereo;
+    v[kStereo2] = stereo * stereo;
+    v[kPlane] = std::sqrt(std::max(0.0, total * total - stereo * stereo));
+    return true;
+  });
   const int half_box = (rocks.FootprintCells() - 1) / 2;
   const double box_cells = static_cast<double>(rocks.FootprintCells()) * rocks.FootprintCells();
   // Can a rock of the threshold size stand with its centre in cell (i, j)? Where the whole box
