@@ -97,6 +97,9 @@ struct Problem {
   double sigma_z = 0.5;
   double sigma_q = 0.05;
   SwfOptions options;
+  // Covariances after every frame, as the flight pipeline computes them: they arm the
+  // prediction gate (without them a new measurement cannot be tested and is fused).
+  bool covariances_each_frame = false;
 
   // Information of the first state's prior, as the filter builds it (options and model).
   Eigen::Matrix<double, D, 1> FirstStateInformation() const {
@@ -243,6 +246,9 @@ void ExpectEqualsBatch(const Problem<D>& pr, SwfMode mode, int window, int last_
       ASSERT_EQ(swf->AddObservation(pr.obs[next].landmark, pr.obs[next].z, r_sqrt),
                 core::Status::kOk);
     ASSERT_EQ(swf->Update(), core::Status::kOk) << "frame " << j;
+    if (pr.covariances_each_frame) {
+      ASSERT_EQ(swf->ComputeCovariances(), core::Status::kOk);
+    }
   }
   const Batch<D> batch = SolveBatch(batch_problem ? *batch_problem : pr, last_frame);
   // The newest state's covariance alone (the factorization and the newest state's columns of
@@ -358,8 +364,8 @@ TYPED_TEST(SwfLinear, OneShotLandmarksTakeNoPriorSlot) {
 // Taken first come, the short tracks would fill it and every marginalized pose's sightings of
 // the long tracks would be dropped. Taken by use, only the short tracks' first sightings from
 // marginalized poses are dropped, and the filter equals the batch without exactly those.
-template <int D>
-void AFullPriorKeepsTheLandmarksTheWindowMeasuresMost() {
+TYPED_TEST(SwfLinear, AFullPriorKeepsTheLandmarksTheWindowMeasuresMost) {
+  constexpr int D = TypeParam::value;
   constexpr int kLong = 6;
   constexpr int kShortPerFrame = 3;
   constexpr int kFrames = 9;
@@ -389,8 +395,37 @@ void AFullPriorKeepsTheLandmarksTheWindowMeasuresMost() {
   ExpectEqualsBatch<D, kLong>(all, SwfMode::kSlidingWindow, kWindow, kLastFrame, &used,
                               kFaultPriorCapacity);
 }
-TEST(SwfLinear, AFullPriorKeepsTheLandmarksTheWindowMeasuresMost) {
-  AFullPriorKeepsTheLandmarksTheWindowMeasuresMost<6>();
+
+// A corrupted first sighting (30 sigma off in each coordinate) alone places its landmark; the
+// second, good sighting then fails the prediction gate. Neither is kept and the track starts
+// again from its third sighting, so the filter equals the batch without those two sightings.
+// Kept instead, the first would go on rejecting every later sighting.
+TYPED_TEST(SwfLinear, ALandmarkWhoseTwoSightingsDisagreeStartsAgain) {
+  constexpr int D = TypeParam::value;
+  constexpr int kLastFrame = 11;
+  Problem<D> all = MakeProblem<D>(9, kLastFrame + 1, 30, 6, 9);
+  all.covariances_each_frame = true;
+  std::vector<int> sightings(all.landmarks, 0);
+  std::vector<int> first_frame(all.landmarks, -1);
+  for (const Obs& o : all.obs) {
+    if (sightings[o.landmark]++ == 0) first_frame[o.landmark] = o.frame;
+  }
+  int corrupted = -1;
+  for (int i = 0; i < all.landmarks && corrupted < 0; ++i)
+    if (first_frame[i] >= 1 && first_frame[i] + 5 <= kLastFrame && sightings[i] >= 5) corrupted = i;
+  ASSERT_GE(corrupted, 0);
+  Problem<D> used = all;
+  used.obs.clear();
+  int seen = 0;
+  for (Obs& o : all.obs) {
+    if (o.landmark != corrupted) {
+      used.obs.push_back(o);
+      continue;
+    }
+    if (seen == 0) o.z += Vec3<double>::Constant(30.0 * all.sigma_z);
+    if (seen++ >= 2) used.obs.push_back(o);
+  }
+  ExpectEqualsBatch<D>(all, SwfMode::kSlidingWindow, 4, kLastFrame, &used);
 }
 
 // A window of one pose against a Kalman filter over [pose ; landmarks], written here in covariance

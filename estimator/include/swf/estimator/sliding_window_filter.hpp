@@ -246,9 +246,11 @@ struct SwfSummary {
   // Gates of this frame (see SwfOptions).
   int gate_checked = 0;           // measurements of known landmarks tested before fusion
   int gate_unchecked = 0;         // ... that could not be tested (no covariances yet)
-  int measurements_gated = 0;     // ... that failed and were not fused
+  int measurements_gated = 0;     // ... that failed and were not fused (with the first
+                                  // sighting they contradicted, for a landmark seen twice)
   int measurements_rejected = 0;  // removed after the solve
-  int landmarks_rejected = 0;     // removed after the solve with all their measurements
+  int landmarks_rejected = 0;     // removed with all their measurements: after the solve, or
+                                  // before it when its only two sightings disagree
   int new_landmarks_refused = 0;  // failed the depth, disparity or triangulation check
   bool gate_suspended = false;    // a gate stood down (kFaultGateSuspended)
   // The motion gate: the squared Mahalanobis distance between the motion prediction and the

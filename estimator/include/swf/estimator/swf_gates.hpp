@@ -90,7 +90,8 @@ bool SlidingWindowFilter<Model, K, N, M, P>::TriangulationAcceptable(
 }
 
 // Removes the newest pose's measurements that failed the prediction gate, unless too many
-// failed (then the prediction is the suspect: keep them, flag kFaultGateSuspended).
+// failed (then the prediction is the suspect: keep them, flag kFaultGateSuspended). A landmark
+// whose second sighting fails goes whole (the two disagree, and the first alone placed it).
 template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::ApplyPredictionGate() {
   summary_.gate_checked = pending_.gate_checked;
@@ -111,6 +112,15 @@ void SlidingWindowFilter<Model, K, N, M, P>::ApplyPredictionGate() {
   for (std::size_t k = p.obs.size(); k-- > 0;) {
     if (!p.obs[k].gate_failed) continue;
     LandmarkSlot& l = landmarks_[p.obs[k].landmark];
+    if (l.prior_index < 0 && l.total_obs == 2 && l.obs_in_window == 2) {
+      // Its second sighting disagrees with the first, which alone placed it: either may be
+      // the wrong one, and a wrong first sighting would go on rejecting every good later one.
+      // Neither is kept; the track starts again from its next sighting.
+      RemoveLandmark(p.obs[k].landmark);
+      summary_.measurements_gated += 2;
+      ++summary_.landmarks_rejected;
+      continue;
+    }
     --l.obs_in_window;
     --l.total_obs;
     p.obs.erase(k);
