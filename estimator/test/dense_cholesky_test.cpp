@@ -8,21 +8,14 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
-#include <random>
 
 #include "swf/testing/allocation_counter.hpp"
+#include "swf/testing/random_spd.hpp"
 
 namespace swf::estimator {
 namespace {
 
-Eigen::MatrixXd RandomSpd(int n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::MatrixXd a(n, n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) a(i, j) = u(rng);
-  return a * a.transpose() + n * Eigen::MatrixXd::Identity(n, n);
-}
+using testing::RandomSpd;
 
 // The symmetric matrix a into chol (its lower triangle), factorized.
 template <typename Chol>

@@ -29,7 +29,6 @@
 #include <cstdlib>
 #include <ctime>
 #include <memory>
-#include <random>
 #include <string>
 
 #include "kitti_vo.hpp"
@@ -40,6 +39,7 @@
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
 #include "swf/scene/runner.hpp"
+#include "swf/testing/random_spd.hpp"
 
 namespace {
 
@@ -302,15 +302,6 @@ BENCHMARK(BM_Fig14a_InertialSwf10)->Apply(Fig14aFrames);
 
 using Dense540 = swf::estimator::DenseCholesky<double, 540>;
 
-Eigen::MatrixXd RandomSpd(int n) {
-  std::mt19937_64 rng(17);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::MatrixXd a(n, n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) a(i, j) = u(rng);
-  return a * a.transpose() + n * Eigen::MatrixXd::Identity(n, n);
-}
-
 double FlopsOfCholesky(int n) { return static_cast<double>(n) * n * n / 3.0; }
 
 double ThreadCpuSeconds() {
@@ -335,7 +326,7 @@ void FactorEigen(Eigen::LLT<Eigen::MatrixXd>* llt, const Eigen::MatrixXd& a) {
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Cholesky_Dense(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const Eigen::MatrixXd a = RandomSpd(n);
+  const Eigen::MatrixXd a = swf::testing::RandomSpd(n, 17);
   auto chol = std::make_unique<Dense540>();
   const auto kernel = static_cast<Dense540::Kernel>(state.range(1));
   if (!chol->SetKernel(kernel)) {
@@ -359,7 +350,7 @@ BENCHMARK(BM_Cholesky_Dense)
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_CholeskyKernelRatio(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const Eigen::MatrixXd a = RandomSpd(n);
+  const Eigen::MatrixXd a = swf::testing::RandomSpd(n, 17);
   auto picked = std::make_unique<Dense540>();
   auto portable = std::make_unique<Dense540>();
   (void)portable->SetKernel(Dense540::Kernel::kPortable);
@@ -390,7 +381,7 @@ BENCHMARK(BM_CholeskyKernelRatio)
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Cholesky_EigenLlt(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const Eigen::MatrixXd a = RandomSpd(n);
+  const Eigen::MatrixXd a = swf::testing::RandomSpd(n, 17);
   Eigen::LLT<Eigen::MatrixXd> llt(n);
   for (auto _ : state) {
     FactorEigen(&llt, a);
@@ -404,7 +395,7 @@ BENCHMARK(BM_Cholesky_EigenLlt)->Arg(120)->Arg(510)->Unit(benchmark::kMillisecon
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_CholeskyRatio(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const Eigen::MatrixXd a = RandomSpd(n);
+  const Eigen::MatrixXd a = swf::testing::RandomSpd(n, 17);
   auto chol = std::make_unique<Dense540>();
   Eigen::LLT<Eigen::MatrixXd> llt(n);
   double dense_s = 0.0;
