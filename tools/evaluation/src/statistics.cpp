@@ -4,16 +4,15 @@
 #include <cmath>
 #include <limits>
 
+#include "swf/core/median.hpp"
+
 namespace swf::evaluation {
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
 double Median(std::vector<double> values) {
-  if (values.empty()) return kNaN;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  return core::MedianInPlace(values.data(), values.size());
 }
 
 double Quantile(std::vector<double> values, double q) {
