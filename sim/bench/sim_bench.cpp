@@ -4,9 +4,9 @@
 // per-pixel cost, and what size fits the 100 ms budget.
 #include <benchmark/benchmark.h>
 
-#include <cstdlib>
 #include <string>
 
+#include "swf/ground_cli/shared_dir.hpp"
 #include "swf/sim/renderer.hpp"
 #include "swf/sim/trajectory.hpp"
 
@@ -18,8 +18,7 @@ struct World {
   Appearance appearance;
   bool ok = false;
   World() {
-    const char* env = std::getenv("SWF_SHARED_DIR");
-    const std::string shared = env != nullptr ? env : "../shared";
+    const std::string shared = swf::ground_cli::SharedDir();
     ok = terrain.Configure(TerrainPresetOptions(TerrainPreset::kCraterField, 1)) ==
              core::Status::kOk &&
          appearance.Configure(terrain, DefaultImagery(shared)) == core::Status::kOk;

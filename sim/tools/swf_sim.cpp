@@ -18,7 +18,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -43,7 +42,7 @@ struct Settings {
   std::string scenario = "descent";
   std::string terrain_name = "craters";
   std::string out;
-  std::string shared = "../shared";
+  std::string shared;  // the shared data folder (ground_cli::SharedDir() unless --shared)
   int max_frames = -1;
   int every = 1;
   int spp = 1;
@@ -361,7 +360,7 @@ int Simulate(const Settings& settings, Json* summary) {
 
 int main(int argc, char** argv) {
   Settings settings;
-  if (const char* env = std::getenv("SWF_SHARED_DIR")) settings.shared = env;
+  settings.shared = swf::ground_cli::SharedDir();
   std::string summary_path;
   CLI::App app{
       "swf-sim: renders a simulated scenario to PNG stereo pairs plus ground truth "

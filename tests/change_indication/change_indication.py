@@ -64,13 +64,12 @@ def read_log(path):
 def fly_demo(fsw, workdir):
     log = os.path.join(workdir, 'demo.lcmlog')
     summary = os.path.join(workdir, 'summary.json')
-    env = dict(os.environ)
-    env.setdefault('SWF_SHARED_DIR', os.path.join(os.path.dirname(ROOT), 'shared'))
     cmd = [fsw, '--config', os.path.join(ROOT, 'fsw/app/config/demo.cfg'),
            '--set', 'pacing: lockstep', '--set', 'lcm.publish: false',
            '--set', 'rt.mlockall: false', '--set', 'rt.priority: 0',
            '--set', 'record.path: ' + log, '--set', 'summary.path: ' + summary]
-    run = subprocess.run(cmd, cwd=ROOT, env=env, stderr=subprocess.PIPE, text=True)
+    # From the repository's root, where swf-sil finds ../shared (or SWF_SHARED_DIR) itself.
+    run = subprocess.run(cmd, cwd=ROOT, stderr=subprocess.PIPE, text=True)
     if run.returncode not in (0, 3):
         sys.stderr.write(run.stderr)
         raise SystemExit('the demo failed (exit %d): %s' % (run.returncode, ' '.join(cmd)))

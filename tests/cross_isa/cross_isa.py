@@ -177,9 +177,10 @@ def flipped_copy(log, out, channel, offset=-1):
         f.write(bytes(data))
 
 
-def run(what, cmd, env):
+def run(what, cmd):
+    """`cmd` from the repository's root, where the programs find ../shared themselves."""
     start_wall, start_cpu = time.monotonic(), os.times()
-    proc = subprocess.run(cmd, cwd=ROOT, env=env, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.run(cmd, cwd=ROOT, stderr=subprocess.PIPE, text=True)
     end_cpu = os.times()
     cpu = (end_cpu.children_user - start_cpu.children_user +
            end_cpu.children_system - start_cpu.children_system)
@@ -192,8 +193,6 @@ def run(what, cmd, env):
 
 
 def check(args):
-    env = dict(os.environ)
-    env.setdefault('SWF_SHARED_DIR', os.path.join(os.path.dirname(ROOT), 'shared'))
     workdir = args.keep or tempfile.mkdtemp(prefix='cross_isa.')
     os.makedirs(workdir, exist_ok=True)
     try:
@@ -202,7 +201,7 @@ def check(args):
             [args.sil, '--config', os.path.join(ROOT, 'fsw/app/config/demo.cfg'),
              '--set', 'sim.frames: %d' % args.frames, '--set', 'pacing: lockstep',
              '--set', 'lcm.publish: false', '--set', 'rt.mlockall: false',
-             '--set', 'rt.priority: 0', '--set', 'record.path: ' + descent], env)
+             '--set', 'rt.priority: 0', '--set', 'record.path: ' + descent])
         camera = os.path.join(workdir, 'camera.lcmlog')
         frames = camera_log(descent, camera)
         if frames != args.frames:
@@ -212,15 +211,14 @@ def check(args):
             logs[name] = os.path.join(workdir, name + '.lcmlog')
             run('swf-fsw on the log (%s)' % name,
                 cmd + ['--config', os.path.join(HERE, 'flight.cfg'),
-                       '--set', 'log.path: ' + camera, '--set', 'record.path: ' + logs[name]],
-                env)
+                       '--set', 'log.path: ' + camera, '--set', 'record.path: ' + logs[name]])
         # Every descent replayable on the flight computer: the target's recording (its frames and
         # IMU samples with its outputs) flown again by the same binary gives the same outputs.
         replay = os.path.join(workdir, 'aarch64_replay.lcmlog')
         run('swf-fsw replaying its own recording (aarch64)',
             args.target + ['--config', os.path.join(HERE, 'flight.cfg'),
                            '--set', 'log.path: ' + logs['aarch64'],
-                           '--set', 'record.path: ' + replay], env)
+                           '--set', 'record.path: ' + replay])
         replay_report = compare(logs['aarch64'], replay)
         ok = not replay_report
         if replay_report:

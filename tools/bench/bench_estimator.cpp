@@ -38,6 +38,7 @@
 #include "swf/estimator/inertial_model.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
 #include "swf/estimator/stereo_model.hpp"
+#include "swf/ground_cli/shared_dir.hpp"
 #include "swf/scene/runner.hpp"
 #include "swf/testing/random_spd.hpp"
 
@@ -419,10 +420,7 @@ void BM_CholeskyRatio(benchmark::State& state) {
 }
 BENCHMARK(BM_CholeskyRatio)->Arg(120)->Arg(510)->Unit(benchmark::kMillisecond)->Repetitions(5);
 
-std::string KittiDir() {
-  const char* shared = std::getenv("SWF_SHARED_DIR");
-  return std::string(shared != nullptr ? shared : "../shared") + "/data/kitti-vo/";
-}
+std::string KittiDir() { return swf::ground_cli::SharedDir() + "/data/kitti-vo/"; }
 
 [[noreturn]] void Die(const std::string& error) {
   std::fprintf(stderr, "bench_estimator: %s\n", error.c_str());

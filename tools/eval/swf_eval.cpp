@@ -666,7 +666,7 @@ int main(int argc, char** argv) {
   std::string out;
   int runs = 5;
   int nees_runs = 50;
-  std::string shared = "../shared";
+  std::string shared = swf::ground_cli::SharedDir();
   std::string only_list;
   CLI::App* paper =
       app.add_subcommand("paper", "the paper's experiments -> OUT/*.json, results.md");

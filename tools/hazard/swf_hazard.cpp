@@ -878,8 +878,7 @@ int main(int argc, char** argv) {
   swf::ground_cli::Adopt(&app, "swf-hazard");
   app.require_subcommand(1);
   EvalOptions eo;
-  const char* env = std::getenv("SWF_SHARED_DIR");
-  eo.shared_dir = env != nullptr ? env : "../shared";
+  eo.shared_dir = swf::ground_cli::SharedDir();
   // The options every command takes.
   const auto add_common = [&eo](CLI::App* cmd) {
     cmd->add_option("--shared", eo.shared_dir, "the shared data directory")->capture_default_str();

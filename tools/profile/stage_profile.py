@@ -78,20 +78,19 @@ def mangled_prefixes(binary, nm):
     return found
 
 
-def plugin_counts(emulator, binary, nm, plugin, args, out, env):
+def plugin_counts(emulator, binary, nm, plugin, args, out):
     stages = mangled_prefixes(binary, nm)
     spec = ','.join(['out=' + out] + ['stage=%s:%s' % (name, m)
                                       for name, ms in stages.items() for m in ms])
     cross_isa.run('swf-fsw under %s with the stage counter' % os.path.basename(emulator[0]),
-                  emulator + ['-plugin', plugin + ',' + spec, binary] + args, env)
+                  emulator + ['-plugin', plugin + ',' + spec, binary] + args)
     with open(out) as f:
         return json.load(f)['stages']
 
 
-def callgrind_counts(binary, args, out, env):
+def callgrind_counts(binary, args, out):
     cross_isa.run('swf-fsw under callgrind',
-                  ['valgrind', '--tool=callgrind', '--callgrind-out-file=' + out, binary] + args,
-                  env)
+                  ['valgrind', '--tool=callgrind', '--callgrind-out-file=' + out, binary] + args)
     text = subprocess.run(['callgrind_annotate', '--inclusive=yes', '--threshold=100', out],
                           stdout=subprocess.PIPE, text=True, check=True).stdout
     inclusive = {}
@@ -166,7 +165,7 @@ def estimates(per):
     return out
 
 
-def profile_size(args, width, height, workdir, env):
+def profile_size(args, width, height, workdir):
     size = '%dx%d' % (width, height)
     descent = os.path.join(workdir, 'descent_%s.lcmlog' % size)
     cross_isa.run('recording the descent at %s (host swf-sil, %d frames)' % (size, args.frames),
@@ -174,7 +173,7 @@ def profile_size(args, width, height, workdir, env):
                    '--set', 'sim.frames: %d' % args.frames, '--set', 'sim.width_px: %d' % width,
                    '--set', 'sim.height_px: %d' % height, '--set', 'pacing: lockstep',
                    '--set', 'lcm.publish: false', '--set', 'rt.mlockall: false',
-                   '--set', 'rt.priority: 0', '--set', 'record.path: ' + descent], env)
+                   '--set', 'rt.priority: 0', '--set', 'record.path: ' + descent])
     camera = os.path.join(workdir, 'camera_%s.lcmlog' % size)
     frames = cross_isa.camera_log(descent, camera)
     calibrations = []
@@ -195,19 +194,19 @@ def profile_size(args, width, height, workdir, env):
     # (the guest's stacks are the flight computer's; its resident memory would be the emulator's).
     # As in flight: memory locked (mlockall), so that the faults after start are the real ones.
     cross_isa.run('swf-fsw natively (memory figures)',
-                  [args.fsw] + fsw_args('native') + ['--set', 'rt.mlockall: true'], env)
+                  [args.fsw] + fsw_args('native') + ['--set', 'rt.mlockall: true'])
     result['memory'] = {'x86-64': summary_memory(workdir, 'native', size)}
     with open(os.path.join(workdir, 'native_%s.json' % size)) as f:
         result['mlockall'] = json.load(f)['mlockall']
     counts = {'x86-64 callgrind': callgrind_counts(
-        args.fsw, fsw_args('callgrind'), os.path.join(workdir, 'callgrind_%s.out' % size), env)}
+        args.fsw, fsw_args('callgrind'), os.path.join(workdir, 'callgrind_%s.out' % size))}
     counts['x86-64 plugin'] = plugin_counts(
         [shutil.which('qemu-x86_64') or 'qemu-x86_64'], args.fsw, 'nm', args.plugin,
-        fsw_args('x86'), os.path.join(workdir, 'counts_x86_%s.json' % size), env)
+        fsw_args('x86'), os.path.join(workdir, 'counts_x86_%s.json' % size))
     if args.target_fsw:
         counts['aarch64 plugin'] = plugin_counts(
             shlex.split(args.emulator), args.target_fsw, 'aarch64-linux-gnu-nm', args.plugin,
-            fsw_args('aarch64'), os.path.join(workdir, 'counts_aarch64_%s.json' % size), env)
+            fsw_args('aarch64'), os.path.join(workdir, 'counts_aarch64_%s.json' % size))
         result['memory']['aarch64 stacks'] = summary_memory(
             workdir, 'aarch64', size)['stack_high_water_bytes']
     result['instructions'] = counts
@@ -276,15 +275,13 @@ def main():
                    help='fail when the plugin and callgrind disagree on the host')
     p.add_argument('--keep', help='work in this directory and keep it')
     args = p.parse_args()
-    env = dict(os.environ)
-    env.setdefault('SWF_SHARED_DIR', os.path.join(os.path.dirname(ROOT), 'shared'))
     workdir = args.keep or tempfile.mkdtemp(prefix='stage_profile.')
     os.makedirs(workdir, exist_ok=True)
     results, problems = [], []
     try:
         for size in args.size or ['512x384']:
             width, height = (int(v) for v in size.lower().split('x'))
-            result = profile_size(args, width, height, workdir, env)
+            result = profile_size(args, width, height, workdir)
             results.append(result)
             print_table(result)
             problems += agreement(result)

@@ -8,13 +8,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <memory>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
+#include "swf/ground_cli/shared_dir.hpp"
 #include "swf/hazard/hazard_mapper.hpp"
 #include "swf/image_io/image_io.hpp"
 #include "swf/sim/renderer.hpp"
@@ -23,11 +23,6 @@
 namespace {
 
 using swf::frontend::GrayView;
-
-std::string Shared() {
-  const char* env = std::getenv("SWF_SHARED_DIR");
-  return env != nullptr ? env : "../shared";
-}
 
 // One stereo pair at full and half resolution with truth disparity (half-resolution pixels).
 struct PairData {
@@ -58,7 +53,7 @@ const PairData& SimPair() {
     swf::sim::Renderer renderer;
     if (terrain.Configure(swf::sim::TerrainPresetOptions(swf::sim::TerrainPreset::kCraterField,
                                                          1)) != swf::core::Status::kOk ||
-        appearance.Configure(terrain, swf::sim::DefaultImagery(Shared())) !=
+        appearance.Configure(terrain, swf::sim::DefaultImagery(swf::ground_cli::SharedDir())) !=
             swf::core::Status::kOk ||
         renderer.Configure(swf::sim::RenderOptions{}) != swf::core::Status::kOk) {
       return p;
@@ -99,7 +94,7 @@ const PairData& SimPair() {
 const PairData& AloePair() {
   static const PairData kData = [] {
     PairData p;
-    const std::string dir = Shared() + "/data/middlebury/";
+    const std::string dir = swf::ground_cli::SharedDir() + "/data/middlebury/";
     swf::image_io::GrayImage l;
     swf::image_io::GrayImage r;
     swf::image_io::GrayImage gt;

@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdlib>
 #include <numbers>
 #include <random>
 #include <thread>
 
+#include "swf/ground_cli/shared_dir.hpp"
 #include "swf/sim/rng.hpp"
 
 namespace swf::sil {
@@ -28,8 +28,7 @@ double SceneScale(const app::FswConfig& config) {
 
 std::string SharedDir(const app::FswConfig& config) {
   if (!config.sim.shared_dir.empty()) return config.sim.shared_dir;
-  if (const char* env = std::getenv("SWF_SHARED_DIR")) return env;
-  return "../shared";
+  return ground_cli::SharedDir();
 }
 
 }  // namespace

@@ -1,15 +1,12 @@
-// Where the tests find the shared data (imagery, recordings, reference results): the directory
-// SWF_SHARED_DIR names (ctest sets it, swf_test()), else ../shared from the working directory.
+// Where the tests find the shared data (imagery, recordings, reference results): the ground
+// programs' rule (swf::ground_cli::SharedDir), so a test reads what the tool it checks would.
+// Not in the flight-only build (no ground programs there, and no test that reads shared data).
 #pragma once
 
-#include <cstdlib>
-#include <string>
+#include "swf/ground_cli/shared_dir.hpp"
 
 namespace swf::testing {
 
-inline std::string SharedDir() {
-  const char* dir = std::getenv("SWF_SHARED_DIR");
-  return dir != nullptr ? dir : "../shared";
-}
+using ground_cli::SharedDir;
 
 }  // namespace swf::testing

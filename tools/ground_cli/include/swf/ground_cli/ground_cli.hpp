@@ -1,6 +1,7 @@
 // The command-line convention (docs/cli.md) for the ground tools, on CLI11: the same --help,
 // --version, refusals and exit codes as the flight processes' parser (swf::cli), the run echoed
-// into every summary, and JSON written whole through swf::cli::OutputFile.
+// into every summary, JSON written whole through swf::cli::OutputFile, and where the shared data
+// is (SharedDir(), shared_dir.hpp).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -8,6 +9,7 @@
 #include <string>
 
 #include "swf/cli/cli.hpp"
+#include "swf/ground_cli/shared_dir.hpp"
 
 namespace swf::ground_cli {
 

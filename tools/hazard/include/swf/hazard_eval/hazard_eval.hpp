@@ -30,7 +30,7 @@ struct EvalOptions {
   double footprint_radius_m = 1.5;
   double max_rock_height_m = 0.3;
   double max_slope_deg = 10.0;
-  std::string shared_dir = "../shared";
+  std::string shared_dir;  // the shared data folder (swf-hazard: ground_cli::SharedDir())
 };
 
 class World {
