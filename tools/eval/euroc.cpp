@@ -62,9 +62,7 @@ bool ParseCsvLine(const std::string& line, const std::string& where, ListedImage
 }
 
 bool ReadCsv(const std::string& path, std::vector<ListedImage>* frames, std::string* error) {
-  std::ifstream csv;
-  if (!OpenInput(path, &csv, error)) return false;
-  return ParseImageList(csv, path, frames, error);
+  return ParseFile(path, ParseImageList, frames, error);
 }
 
 // A stereo pair is exposed together: line k of cam1's list must carry line k of cam0's

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "euroc.hpp"  // CheckCalibration: the same bounds
@@ -75,9 +74,7 @@ bool ImageSize(const std::string& dir, int* width, int* height, std::string* err
 
 bool ReadKittiCalibration(const std::string& path, estimator::StereoCamera<double>* camera,
                           std::string* error) {
-  std::ifstream file;
-  if (!OpenInput(path, &file, error)) return false;
-  return ParseKittiCalibration(file, path, camera, error);
+  return ParseFile(path, ParseKittiCalibration, camera, error);
 }
 
 bool ParseKittiCalibration(std::istream& file, const std::string& path,
@@ -117,9 +114,7 @@ bool ParseKittiCalibration(std::istream& file, const std::string& path,
 }
 
 bool ReadKittiPoses(const std::string& path, std::vector<PoseD>* poses, std::string* error) {
-  std::ifstream file;
-  if (!OpenInput(path, &file, error)) return false;
-  return ParseKittiPoses(file, path, poses, error);
+  return ParseFile(path, ParseKittiPoses, poses, error);
 }
 
 bool ParseKittiPoses(std::istream& file, const std::string& path, std::vector<PoseD>* poses,
