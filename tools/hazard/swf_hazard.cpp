@@ -725,7 +725,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
   const char* head =
       "# alt cell known safe unc slope rock in1s in2s sig_med err_med slope_err_med "
       "sgm_valid sgm_med_abs sgm_robust_sigma sgm_rms_clip sgm_over1 site clear rocks_res "
-      "rocks_det far c1 c2 c4 c8 dscale ncal\n";
+      "rocks_det far c1 c2 c4 c8 dscale ncal outliers replaced\n";
   std::fputs(head, dat);
   std::fputs(head, stdout);
   int f = 0;
@@ -797,7 +797,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
       char b[512];
       std::snprintf(b, sizeof b,
                     "%.1f %.3f %d %.3f %.3f %.3f %.4f %.3f %.3f %.4f %.4f %.2f %d %.3f %.3f %.3f "
-                    "%.4f %d %.2f %d %d %.5f %.2f %.2f %.2f %.2f %.2f %d\n",
+                    "%.4f %d %.2f %d %d %.5f %.2f %.2f %.2f %.2f %.2f %d %llu %llu\n",
                     agl, mapper->CellM(), st.known_cells, st.safe_cells / k, st.uncertain_cells / k,
                     st.slope_cells / k, st.rock_cells / k, acc.WithinSigma(1.0),
                     acc.WithinSigma(2.0), Quantile(acc.elev_sigma, 0.5),
@@ -805,7 +805,9 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
                     se.median_abs, se.robust_sigma, se.rms_clipped, se.frac_over_1px,
                     m.site_valid ? 1 : 0, m.site_valid ? m.site_clearance_m : NAN, m.rocks_resolved,
                     m.rocks_detected, acc.Far(), se.corr[0], se.corr[1], se.corr[2], se.corr[3],
-                    st.disparity_scale, st.calibration_landmarks);
+                    st.disparity_scale, st.calibration_landmarks,
+                    static_cast<unsigned long long>(st.outliers_rejected),
+                    static_cast<unsigned long long>(st.cells_replaced));
       return std::string(b);
     }();
     std::fputs(line.c_str(), dat);

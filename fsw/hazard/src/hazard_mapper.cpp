@@ -81,6 +81,15 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
   return p;
 }
 
+// The pose-free variance of a fused cell's height (the relief sigma's stereo part) from its summed
+// information and smallest single-frame variance: frames share rho of their error (fused variance
+// rho min_k var_k + (1 - rho) / sum_k 1/var_k, exact for equicorrelated frames); landmarks only
+// add information.
+double FusedVariance(double info, double min_var, double rho) {
+  const double shared = min_var > 0.0 ? rho : 0.0;
+  return (1.0 - shared) / info + shared * min_var;
+}
+
 // Cells each side of the centre of a square analysis window of +-radius_m (at least 1).
 // 1-sigma of the position's horizontal error along its worst direction (largest eigenvalue of the
 // covariance's world x-y block).
@@ -204,6 +213,8 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
       !positive(o.disparity_sigma_px) || o.max_independent_pixels < 1 ||
       !(o.pixels_per_independent >= 1.0) ||
       !(o.frame_error_correlation >= 0.0 && o.frame_error_correlation < 1.0) ||
+      !(o.outlier_gate_sigmas >= 0.0) || !std::isfinite(o.outlier_gate_sigmas) ||
+      o.outlier_replace_after < 1 || o.outlier_replace_after > 255 ||
       !(o.relief_error_correlation >= 0.0 && o.relief_error_correlation <= 1.0) ||
       !positive(o.max_slope_deg) || !positive(o.max_rock_height_m) ||
       !positive(o.footprint_radius_m) || !positive(o.rock_window_radius_m) ||
@@ -241,6 +252,9 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   info_z_.assign(cells, 0.0);
   min_var_.assign(cells, 0.0);
   count_.assign(cells, 0);
+  rejections_.assign(cells, 0);
+  f_rejections_.assign(cells, 0);
+  datum_diff_.assign(cells, 0.0);
   f_w_.assign(cells, 0.0);
   f_wz_.assign(cells, 0.0);
   f_min_var_.assign(cells, 0.0);
@@ -283,6 +297,7 @@ void HazardMapper::Reset() {
   std::fill(info_z_.begin(), info_z_.end(), 0.0);
   std::fill(min_var_.begin(), min_var_.end(), 0.0);
   std::fill(count_.begin(), count_.end(), 0);
+  std::fill(rejections_.begin(), rejections_.end(), 0);
   num_active_ = 0;
   std::fill(elevation_.begin(), elevation_.end(), kNaN);
   std::fill(sigma_.begin(), sigma_.end(), kNaN);
@@ -394,6 +409,7 @@ void HazardMapper::CopyStateToScratch() {
   std::copy(info_z_.begin(), info_z_.end(), f_wz_.begin());
   std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
   std::copy(count_.begin(), count_.end(), f_n_.begin());
+  std::copy(rejections_.begin(), rejections_.end(), f_rejections_.begin());
 }
 
 void HazardMapper::MaybeRefine(double altitude_m) {
@@ -431,6 +447,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
         info_[c] = info_z_[c] = min_var_[c] = 0.0;
         count_[c] = 0;
+        rejections_[c] = 0;
         continue;
       }
       const std::size_t o = static_cast<std::size_t>(oj) * n_ + oi;
@@ -438,6 +455,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       info_z_[c] = f_wz_[o] * scale;
       min_var_[c] = f_min_var_[o] / scale;
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
+      rejections_[c] = f_rejections_[o];
     }
   }
   site_.valid = site_.valid && CellOf(site_.position_world_m.x(), site_.position_world_m.y(),
@@ -469,6 +487,7 @@ void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
         info_[c] = info_z_[c] = min_var_[c] = 0.0;
         count_[c] = 0;
+        rejections_[c] = 0;
         continue;
       }
       const std::size_t o = static_cast<std::size_t>(oj) * n_ + static_cast<std::size_t>(oi);
@@ -476,6 +495,7 @@ void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
       info_z_[c] = f_wz_[o];
       min_var_[c] = f_min_var_[o];
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
+      rejections_[c] = f_rejections_[o];
       kept += f_w_[o] > 0.0 ? 1 : 0;
     }
   }
@@ -590,23 +610,66 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
   // accounts for, so the map is moved onto this frame's datum before fusing: the offset is the
   // inverse-variance mean of (frame - map) over the cells both hold. The map then carries the
   // newest pose's vertical error (Analyze adds it to the elevation sigma), and its relief only
-  // the stereo's.
-  double sum_w = 0.0;
-  double sum_wd = 0.0;
-  for (std::size_t c = 0; c < cells; ++c) {
-    if (f_n_[c] == 0 || !(info_[c] > 0.0)) continue;
-    const double w = 1.0 / (f_w_[c] + 1.0 / info_[c]);
-    sum_w += w;
-    sum_wd += w * (f_wz_[c] - info_z_[c] / info_[c]);
+  // the stereo's. Cells outside the outlier gate (below) are left out of the offset: their
+  // differences are gross errors, not the datum.
+  const double gate2 = options_.outlier_gate_sigmas * options_.outlier_gate_sigmas;
+  const auto outside_gate = [&](std::size_t c, double offset) {
+    if (!(gate2 > 0.0)) return false;
+    const double e = f_wz_[c] - (info_z_[c] / info_[c] + offset);
+    return e * e > gate2 * (f_w_[c] +
+                            FusedVariance(info_[c], min_var_[c], options_.frame_error_correlation));
+  };
+  const auto datum_offset = [&](bool gated, double guess) {
+    double sum_w = 0.0;
+    double sum_wd = 0.0;
+    for (std::size_t c = 0; c < cells; ++c) {
+      if (f_n_[c] == 0 || !(info_[c] > 0.0)) continue;
+      if (gated && outside_gate(c, guess)) continue;
+      const double w = 1.0 / (f_w_[c] + 1.0 / info_[c]);
+      sum_w += w;
+      sum_wd += w * (f_wz_[c] - info_z_[c] / info_[c]);
+    }
+    return sum_w > 0.0 ? sum_wd / sum_w : 0.0;
+  };
+  // The gate needs the datum and the datum the gate: the median of (frame - map) first (robust to
+  // the outliers, whose small sigmas would pull a weighted mean), then the inverse-variance mean
+  // over the cells within the gate around it (with no outlier: the mean over all shared cells).
+  double median = 0.0;
+  if (gate2 > 0.0) {
+    int shared = 0;
+    for (std::size_t c = 0; c < cells; ++c) {
+      if (f_n_[c] == 0 || !(info_[c] > 0.0)) continue;
+      datum_diff_[shared++] = f_wz_[c] - info_z_[c] / info_[c];
+    }
+    if (shared > 0) {
+      const auto mid = datum_diff_.begin() + shared / 2;
+      std::nth_element(datum_diff_.begin(), mid, datum_diff_.begin() + shared);
+      median = *mid;
+    }
   }
-  const double offset = sum_w > 0.0 ? sum_wd / sum_w : 0.0;
+  const double offset = datum_offset(gate2 > 0.0, median);
   stats_.datum_shift_m = offset;
   int fused = 0;
+  int rejected = 0;
+  int replaced = 0;
   for (std::size_t c = 0; c < cells; ++c) {
     info_z_[c] += offset * info_[c];
     const int n = f_n_[c];
     if (n == 0) continue;
     const double var = f_w_[c];
+    // Gross outliers (HazardMapperOptions::outlier_gate_sigmas): the frame's cell disagrees with
+    // the fused one beyond what both sigmas allow. Once: the frame's cell is the outlier and is
+    // not fused. outlier_replace_after frames in a row: the fused cell is, and is replaced.
+    if (info_[c] > 0.0 && outside_gate(c, 0.0)) {
+      if (++rejections_[c] < options_.outlier_replace_after) {
+        ++rejected;
+        continue;
+      }
+      info_[c] = info_z_[c] = min_var_[c] = 0.0;
+      count_[c] = 0;
+      ++replaced;
+    }
+    rejections_[c] = 0;
     info_[c] += 1.0 / var;
     info_z_[c] += f_wz_[c] / var;
     min_var_[c] = min_var_[c] > 0.0 ? std::min(min_var_[c], var) : var;
@@ -614,6 +677,10 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
     ++fused;
   }
   stats_.fused_cells = fused;
+  stats_.outlier_cells = rejected;
+  stats_.replaced_cells = replaced;
+  stats_.outliers_rejected += static_cast<std::uint64_t>(rejected);
+  stats_.cells_replaced += static_cast<std::uint64_t>(replaced);
 }
 
 void HazardMapper::CommitLandmark(double x_m, double y_m, double z_m, double var_m2) {
@@ -720,10 +787,7 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
     const double info = info_[c] + lm_info_[c];
     if (info > 0.0) {
       elevation_[c] = static_cast<float>((info_z_[c] + lm_info_z_[c]) / info);
-      // Frames share part of their error (frame_error_correlation); landmarks only add
-      // information. Never below the single-frame variance times rho.
-      const double rho = min_var_[c] > 0.0 ? options_.frame_error_correlation : 0.0;
-      const double var_rel = (1.0 - rho) / info + rho * min_var_[c];
+      const double var_rel = FusedVariance(info, min_var_[c], options_.frame_error_correlation);
       sigma_rel_[c] = static_cast<float>(std::sqrt(var_rel));
       // The datum: the newest pose's vertical error at this cell (pose update [rho, phi], p_w = R
       // Exp(phi) p_c + t + rho: dz = rho_z + (p_c x R^T e_z) . phi).

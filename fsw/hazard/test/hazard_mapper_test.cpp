@@ -65,6 +65,9 @@ TEST(HazardMapperTest, RejectsBadConfigurationAndInput) {
   EXPECT_EQ(m.Configure(o), core::Status::kInvalidArgument);
   HazardFrame f;
   EXPECT_EQ(m.Update(f), core::Status::kNotConfigured);
+  o = Options();
+  o.outlier_replace_after = 0;
+  EXPECT_EQ(m.Configure(o), core::Status::kInvalidArgument);
   ASSERT_EQ(m.Configure(Options()), core::Status::kOk);
   EXPECT_EQ(m.Update(f), core::Status::kInvalidArgument);
   std::vector<std::uint8_t> img(kW * kH, 100);
@@ -465,6 +468,95 @@ TEST(HazardMapperTest, LandmarksEnterTheMap) {
   EXPECT_NEAR(m.Sigma()[j * m.GridCells() + i], 0.1, 1e-6);
   ASSERT_TRUE(m.CellOf(-0.5, 0.4, &i, &j));
   EXPECT_NEAR(m.Sigma()[j * m.GridCells() + i], 0.2, 1e-6);
+}
+
+// A gross stereo mismatch made on purpose: in a 40 x 40 px patch the right image shows the left
+// image's texture 81 px further right, so SGM matches the left pixels there at a disparity of 81
+// px instead of 62.5 px (fx B / 8 m): points 6.2 m from the camera, 1.8 m above the plane, with
+// a sigma (Z^2 scaled) 0.6 of the true points'.
+Pair WithGrossMismatch(const Pair& clean) {
+  constexpr int kShiftPx = 81;
+  Pair p = clean;
+  for (int v = 100; v < 140; ++v) {
+    for (int u = 60; u < 100; ++u) p.right[v * kW + u] = clean.left[v * kW + u + kShiftPx];
+  }
+  return p;
+}
+
+HazardFrame FrameOf(const SceneRun& run, const Pair& pair) {
+  HazardFrame f = run.frame;
+  f.left = frontend::GrayView{pair.left.data(), kW, kH, kW};
+  f.right = frontend::GrayView{pair.right.data(), kW, kH, kW};
+  return f;
+}
+
+int CellsAbove(const HazardMapper& m, double z_m) {
+  int count = 0;
+  for (int c = 0; c < m.GridCells() * m.GridCells(); ++c) count += m.Elevation()[c] > z_m ? 1 : 0;
+  return count;
+}
+
+// GIVEN a flat plane mapped from two frames WHEN a third frame holds a gross mismatch (a patch
+// read 1.8 m high, with a smaller sigma than the true cells') THEN its cells are rejected by the
+// gate (counted), the map stays flat and, being no outlier, the next frame's cells are fused.
+// With the gate off the same frames raise the patch (the check that the scene makes the outlier).
+TEST(HazardMapperTest, AGrossMismatchIsNotFused) {
+  for (const double gate : {0.0, Options().outlier_gate_sigmas}) {
+    HazardMapperOptions o = Options();
+    o.outlier_gate_sigmas = gate;
+    SceneRun run;
+    Prepare(Scene{}, 8.0, &run, o);
+    const Pair bad = WithGrossMismatch(run.pair);
+    ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+    ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+    const int high_before = CellsAbove(*run.mapper, 0.5);
+    ASSERT_EQ(run.mapper->Update(FrameOf(run, bad)), core::Status::kOk);
+    const HazardMapper& m = *run.mapper;
+    if (gate == 0.0) {
+      EXPECT_GT(CellsAbove(m, 0.5), high_before + 50);  // the mismatch entered the map
+      EXPECT_EQ(m.Stats().outliers_rejected, 0u);
+      continue;
+    }
+    EXPECT_EQ(CellsAbove(m, 0.5), high_before);
+    EXPECT_GT(m.Stats().outlier_cells, 50);
+    EXPECT_EQ(m.Stats().replaced_cells, 0);
+    const std::uint64_t rejected = m.Stats().outliers_rejected;
+    ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+    EXPECT_LE(m.Stats().outlier_cells, 2);
+    EXPECT_EQ(m.Stats().replaced_cells, 0);
+    EXPECT_EQ(m.Stats().outliers_rejected, rejected + m.Stats().outlier_cells);
+  }
+}
+
+// GIVEN a gross mismatch in the first frame (nothing to gate it against: it enters) WHEN two clean
+// frames follow THEN the first rejects it once (the fused cell may be the outlier) and the second
+// replaces the fused cells by its own (counted): the patch is flat again. Without replacement the
+// gate would keep the outlier for ever; without the gate its small sigma keeps the patch high.
+TEST(HazardMapperTest, AnOutlierHeldByTheMapIsReplaced) {
+  for (const double gate : {0.0, Options().outlier_gate_sigmas}) {
+    HazardMapperOptions o = Options();
+    o.outlier_gate_sigmas = gate;
+    SceneRun run;
+    Prepare(Scene{}, 8.0, &run, o);
+    const Pair bad = WithGrossMismatch(run.pair);
+    ASSERT_EQ(run.mapper->Update(FrameOf(run, bad)), core::Status::kOk);
+    const HazardMapper& m = *run.mapper;
+    const int high = CellsAbove(m, 0.5);
+    ASSERT_GT(high, 50);
+    ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+    if (gate > 0.0) {
+      EXPECT_GT(m.Stats().outlier_cells, 50);
+      EXPECT_EQ(m.Stats().replaced_cells, 0);
+    }
+    ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+    if (gate == 0.0) {
+      EXPECT_GT(CellsAbove(m, 0.5), high / 2);
+      continue;
+    }
+    EXPECT_GT(m.Stats().replaced_cells, 50);
+    EXPECT_EQ(m.Stats().cells_replaced, static_cast<std::uint64_t>(m.Stats().replaced_cells));
+    EXPECT_LE(CellsAbove(m, 0.5), high / 20);
+  }
 }
 
 // A textureless pair (nothing matches): only landmarks and the grid's motion change the map.

@@ -20,21 +20,24 @@
 //     frame - map over the cells both hold; Stats().datum_shift_m). Frames fused with different
 //     weights per cell would otherwise turn their different pose errors into relief. Frames and
 //     landmarks (sigma^2 = their covariance's zz) are then fused per cell by inverse variance of
-//     the stereo alone; the elevation sigma adds the newest pose's vertical error at the cell
-//     (SWF update vector [rho, phi], p_w = R Exp(phi) p_c + t + rho: J Sigma J^T, J = [e_z^T,
-//     -e_z^T R [p_c]x]), the relief sigma does not (the datum is common to its plane window).
-//     Landmarks: the SWF publishes its map at every update, and a landmark it keeps is the same
-//     point re-estimated, each estimate holding the information of the earlier ones: fusing every
-//     publication would count it once per update. An identified landmark (HazardLandmark::id) is
-//     held at its newest estimate (replaced, not added, when published again) and enters the
-//     cells as an overlay; when the SWF no longer publishes it (marginalized: its estimate is
-//     final), that last estimate, moved with the map's datum, is fused for good. At most
-//     max_landmarks are held (the size of one published map).
-//     Unknown cells stay unknown (NaN). Before fusing, the grid is recentred by whole cells on
-//     the frame's nadir (grid_follows_lander): cells that leave are dropped with their state,
-//     cells that enter start unknown. The cell size is chosen from altitude
-//     (pixels_per_cell working pixels per cell, a power of 2 times min_cell_m) and only ever
-//     refined: on refinement the grid is resampled (information per child = parent / 4).
+//     the stereo alone, a frame's cell only when it agrees with the fused cell within
+//     outlier_gate_sigmas of their combined sigma (gross SGM mismatches: counted, not fused; a
+//     fused cell that rejects outlier_replace_after frames in a row is replaced by the frame's;
+//     the datum is the median first, then the mean over the cells within the gate); the elevation
+//     sigma adds the newest pose's vertical error at the cell (SWF update vector [rho, phi], p_w =
+//     R Exp(phi) p_c + t + rho: J Sigma J^T, J = [e_z^T, -e_z^T R [p_c]x]), the relief sigma does
+//     not (the datum is common to its plane window). Landmarks: the SWF publishes its map at every
+//     update, and a landmark it keeps is the same point re-estimated, each estimate holding the
+//     information of the earlier ones: fusing every publication would count it once per update. An
+//     identified landmark (HazardLandmark::id) is held at its newest estimate (replaced, not added,
+//     when published again) and enters the cells as an overlay; when the SWF no longer publishes it
+//     (marginalized: its estimate is final), that last estimate, moved with the map's datum, is
+//     fused for good. At most max_landmarks are held (the size of one published map). Unknown cells
+//     stay unknown (NaN). Before fusing, the grid is recentred by whole cells on the frame's nadir
+//     (grid_follows_lander): cells that leave are dropped with their state, cells that enter start
+//     unknown. The cell size is chosen from altitude (pixels_per_cell working pixels per cell, a
+//     power of 2 times min_cell_m) and only ever refined: on refinement the grid is resampled
+//     (information per child = parent / 4).
 //  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
 //     lander footprint gives slope and roughness, one over local_slope_baseline_m (1 m) the
 //     metre-scale slope; a plane over rock_window_radius_m gives each cell's rock height. Sigma
@@ -180,6 +183,16 @@ struct HazardMapperOptions {
   // texture gives the same SGM mismatches from similar viewpoints): fused variance =
   // rho min_k var_k + (1 - rho) / sum_k (1 / var_k) (exact for equicorrelated frames).
   double frame_error_correlation = 0.25;
+  // Gross stereo mismatches: a disparity off by many pixels puts a point metres too high, and
+  // since sigma_Z grows with Z^2 the too-near point also states a smaller sigma, so
+  // inverse-variance fusion trusts it more than the true ones. A frame's cell is fused only when
+  // its height agrees with the fused cell's (on the frame's datum) within outlier_gate_sigmas x
+  // the combined sigma of the two (Stats().outliers_rejected). A cell that rejects
+  // outlier_replace_after consecutive frames is taken to hold the outlier itself (one that
+  // entered where the map knew nothing, or knew it only coarsely): its state is replaced by the
+  // frame's (Stats().cells_replaced). Gate 0 = off.
+  double outlier_gate_sigmas = 5.0;
+  int outlier_replace_after = 2;
   // In-flight calibration of the disparity noise against the SWF landmarks in view: the robust
   // spread of (SGM disparity - landmark disparity), less the landmarks' own disparity variance,
   // scales the model sigma up (never down) when at least min_calibration_landmarks match.
@@ -275,6 +288,10 @@ struct HazardStats {
   int calibration_landmarks = 0;          // landmarks with a valid SGM disparity this update
   double disparity_scale = 1.0;  // measured / model disparity sigma applied this update (>= 1)
   double datum_shift_m = 0.0;    // the map moved onto this frame's vertical datum (FuseStereo)
+  int outlier_cells = 0;         // this frame's cells not fused: outside the gate (FuseStereo)
+  int replaced_cells = 0;        // this frame's cells that replaced the fused state
+  std::uint64_t outliers_rejected = 0;  // all updates: frame cells outside the gate, not fused
+  std::uint64_t cells_replaced = 0;     // all updates: fused cells replaced by a frame's
 };
 
 class HazardMapper {
@@ -373,11 +390,14 @@ class HazardMapper {
   std::vector<double> info_z_;   // sum z/sigma^2
   std::vector<double> min_var_;  // smallest single-frame variance fused (0 = none)
   std::vector<std::uint16_t> count_;
+  std::vector<std::uint8_t> rejections_;  // consecutive frames the cell rejected (outlier gate)
   // Per-frame scratch (also used for resampling).
   std::vector<double> f_w_;
   std::vector<double> f_wz_;
   std::vector<double> f_min_var_;  // resampling scratch
   std::vector<std::int32_t> f_n_;
+  std::vector<std::uint8_t> f_rejections_;  // resampling scratch
+  std::vector<double> datum_diff_;          // frame - map per shared cell (the datum's median)
   // Outputs.
   std::vector<float> elevation_;
   std::vector<float> sigma_;
