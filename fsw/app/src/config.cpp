@@ -215,6 +215,9 @@ void AddEstimatorFields(std::map<std::string, ConfigSetter>* fields) {
   f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
   f["measurement_sigma_per_magnification_rad"] =
       Double(&FswConfig::measurement_sigma_per_magnification_rad, 0.0, 0.1);
+  f["measurement_track_error"] =
+      OneOf<bool>([](FswConfig* c) { return &c->measurement_track_error_shared; },
+                  {{"independent", false}, {"shared", true}});
   f["measurement_disparity_sigma_px"] =
       Double(&FswConfig::measurement_disparity_sigma_px, 0.0, 100.0);
   f["measurement_disparity_sigma_per_parallax_px"] =

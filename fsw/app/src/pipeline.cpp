@@ -11,17 +11,19 @@ using core::Status;
 using estimator::Pose;
 using estimator::Vec3;
 
-double MeasurementSigmaPx(const PipelineOptions& options, double magnification) {
+double MeasurementSigmaPx(const PipelineOptions& options, double magnification, int sighting) {
   if (!(magnification > 0.0)) return options.measurement_sigma_px;
   const double warp = std::max(magnification, 1.0 / magnification) - 1.0;
-  return options.measurement_sigma_px +
-         options.camera.fx * options.measurement_sigma_per_magnification_rad * warp;
+  const double shared = options.camera.fx * options.measurement_sigma_per_magnification_rad * warp;
+  const double sigma = options.measurement_sigma_px + shared;
+  if (!options.track_error_shared || sighting <= 1) return sigma;
+  return std::sqrt(sigma * sigma + static_cast<double>(sighting - 1) * shared * shared);
 }
 
 MeasurementNoise MeasurementNoiseOf(const PipelineOptions& options, double magnification,
-                                    double disparity_px) {
+                                    double disparity_px, int sighting) {
   MeasurementNoise noise;
-  noise.sigma_px = MeasurementSigmaPx(options, magnification);
+  noise.sigma_px = MeasurementSigmaPx(options, magnification, sighting);
   if (!(options.measurement_disparity_sigma_px > 0.0)) {
     noise.disparity_sigma_px = std::sqrt(2.0) * noise.sigma_px;  // uR independent of uL
     return noise;
@@ -703,7 +705,10 @@ void Pipeline::AddMeasurements() {
   };
   for (const frontend::StereoMeasurement& m : output_->measurements) {
     const Vec3<double> z(m.u_left, m.u_right, m.v);
-    const MeasurementNoise noise = MeasurementNoiseOf(options_, m.magnification, z.x() - z.y());
+    const int sighting =
+        1 + Visit([&](const auto& filter) { return filter.LandmarkSightings(m.landmark_id); });
+    const MeasurementNoise noise =
+        MeasurementNoiseOf(options_, m.magnification, z.x() - z.y(), sighting);
     if (m.quality < options_.min_quality) {
       Mark(m.landmark_id, z, m.quality, FeatureFate::kRejected, noise);
       continue;

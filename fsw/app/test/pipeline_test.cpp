@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
@@ -118,6 +119,39 @@ TEST(PipelineTest, MeasurementSigmaGrowsWithTheWarpsMagnification) {
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
   bad.measurement_sigma_per_magnification_rad = 2e-4;
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kOk);
+}
+
+// GIVEN the warp-grown part of the left error shared by a track's sightings
+// (track_error_shared) WHEN its n-th sighting is stated THEN its variance is the single
+// sighting's plus (n - 1) times the shared part's, so n sightings stated so carry no more
+// information about their common error than the exact model with that error common to all of
+// them (sigma_w^2 I + sigma_b^2 1 1^T) does, and at least the share of it the base model's sum
+// of sigmas leaves; a first sighting, a template seen unwarped and the independent model keep the
+// sigma of before.
+TEST(PipelineTest, AWarpErrorSharedByATrackIsNotCountedOncePerSighting) {
+  PipelineOptions po;
+  po.camera.fx = 1000.0;
+  po.measurement_sigma_px = 0.03;
+  po.measurement_sigma_per_magnification_rad = 2e-4;  // 0.2 px per unit of m - 1 at this fx
+  po.track_error_shared = true;
+  const double w = 0.03;
+  const double b = 0.2 * 0.5;  // m = 1.5
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 1.5, 1), w + b);
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 1.5, 10), std::sqrt((w + b) * (w + b) + 9 * b * b));
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 1.0, 10), w);  // nothing warped, nothing shared
+  EXPECT_DOUBLE_EQ(MeasurementNoiseOf(po, 1.5, 40.0, 10).sigma_px, MeasurementSigmaPx(po, 1.5, 10));
+  for (const int n : {2, 5, 20, 60}) {
+    const Eigen::MatrixXd common =
+        w * w * Eigen::MatrixXd::Identity(n, n) + b * b * Eigen::MatrixXd::Ones(n, n);
+    const Eigen::VectorXd ones = Eigen::VectorXd::Ones(n);
+    const double exact = ones.dot(common.ldlt().solve(ones));
+    const double sigma = MeasurementSigmaPx(po, 1.5, n);
+    const double stated = n / (sigma * sigma);
+    EXPECT_LE(stated, exact) << n;
+    EXPECT_GE(stated, 0.5 * exact) << n;
+  }
+  po.track_error_shared = false;  // the independent model of before
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 1.5, 10), w + b);
 }
 
 // GIVEN the stereo match's own sigma (a base plus a growth with the parallax d / fx) WHEN a

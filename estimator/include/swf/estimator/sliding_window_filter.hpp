@@ -424,6 +424,11 @@ class SlidingWindowFilter {
   // World position of an active landmark; false for an unknown id or a point the model cannot
   // place (an inverse-depth landmark at or beyond infinity).
   bool GetLandmark(std::int64_t id, Vec3<S>* position) const;
+  // How many sightings an active landmark has had since it entered (0 for an unknown id).
+  int LandmarkSightings(std::int64_t id) const {
+    const int slot = ids_.Find(id);
+    return slot < 0 ? 0 : landmarks_[slot].total_obs;
+  }
   // World-frame covariance (the parameters' covariance mapped through dl/dm), after
   // ComputeCovariances().
   bool GetLandmarkCovariance(std::int64_t id, Mat3<S>* covariance) const;

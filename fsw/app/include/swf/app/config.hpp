@@ -204,6 +204,7 @@ struct FswConfig {
   double measurement_sigma_px = 0.5;
   double measurement_sigma_per_magnification_rad = 0.0;  // PipelineOptions, MeasurementSigmaPx
   double measurement_disparity_sigma_px = 0.0;           // PipelineOptions, MeasurementNoiseOf
+  bool measurement_track_error_shared = false;           // PipelineOptions::track_error_shared
   double measurement_disparity_sigma_per_parallax_px = 0.0;
   double min_quality = 0.7;
   double process_sigma_m = 0.5;

@@ -96,6 +96,16 @@ struct PipelineOptions {
   // (max(m, 1 / m) - 1) (MeasurementSigmaPx).
   double measurement_sigma_px = 0.5;
   double measurement_sigma_per_magnification_rad = 0.0;
+  // Whether the warp-grown part of that error is shared by a track's sightings. It is the
+  // template's misregistration, which drifts slowly as the warp grows: the same track's error
+  // in consecutive frames is correlated 0.5 at 2-3 frames of age and 0.94 beyond 16 (docs/imu.md).
+  // n sightings with a common error b and independent errors w carry 1 / (sigma_w^2 / n +
+  // sigma_b^2) about their mean, the information a diagonal model gives when each of them is
+  // stated with variance sigma_w^2 + n sigma_b^2; so with this on, the n-th sighting of a track
+  // (the filter's count, this one included) is stated with (sigma_w + sigma_b)^2 + (n - 1)
+  // sigma_b^2, sigma_w = measurement_sigma_px and sigma_b the warp term above. The first
+  // sighting keeps the sigma of before; the disparity's own error (below) is not shared.
+  bool track_error_shared = false;
   // The right coordinate uR = uL - d: the stereo match refines the disparity d of the left
   // point wherever the tracker put it, so uR carries uL's error plus the match's own, which is
   // independent of it and does not grow with m but with the parallax d / fx = baseline / range
@@ -139,7 +149,9 @@ struct PipelineOptions {
 // (PipelineOptions). The warped tracker's error against the renderer's truth grows linearly with
 // how far the warp is from the identity, whichever way the scale goes, and its growth in pixels
 // doubles with the image's focal length (docs/imu.md, "Consistency along the descent").
-double MeasurementSigmaPx(const PipelineOptions& options, double magnification);
+// sighting: the track's sighting count in the filter, this one included (1 = a first sighting;
+// PipelineOptions::track_error_shared).
+double MeasurementSigmaPx(const PipelineOptions& options, double magnification, int sighting = 1);
 
 // A stereo measurement's noise (PipelineOptions): the 1-sigma of uL and v, and of the disparity
 // uL - uR. right_follows_left: uR = uL - d with d's error independent of uL's; false: the model
@@ -150,7 +162,7 @@ struct MeasurementNoise {
   bool right_follows_left = false;
 };
 MeasurementNoise MeasurementNoiseOf(const PipelineOptions& options, double magnification,
-                                    double disparity_px);
+                                    double disparity_px, int sighting = 1);
 // W with W^T W = R^-1 for z = (uL, uR, v). With right_follows_left R = [s^2 s^2 0; s^2 s^2 +
 // sd^2 0; 0 0 s^2] (uR = uL - d), W = L^-1 for R = L L^T, which whitens a residual into
 // (e_uL / s, (e_uR - e_uL) / sd, e_v / s): the left bearing and the disparity as two independent
