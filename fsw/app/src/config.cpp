@@ -674,6 +674,20 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
     return fail("camera.right", "the same device as camera.left");
   }
   if (c.mode == "ekf" && c.window != 1) return fail("window", "must be 1 in mode ekf");
+  // The per-track sigma grows with the template's warp, which the front end measures from the
+  // estimator's reference pose of the template's frame; without it tracks started without a
+  // prediction follow frame-to-frame LK, drift, and report no warp: stated at the bare
+  // measurement_sigma_px.
+  if (c.measurement_sigma_per_magnification_rad > 0.0 && !c.frontend_reference_from_estimate) {
+    return fail("measurement_sigma_per_magnification_rad",
+                "needs frontend.reference_from_estimate: true (the template's warp is measured "
+                "from the estimator's reference pose)");
+  }
+  if (c.measurement_track_error_shared && !(c.measurement_sigma_per_magnification_rad > 0.0)) {
+    return fail("measurement_track_error",
+                "shared: needs measurement_sigma_per_magnification_rad > 0 (the shared part is "
+                "the warp-grown one)");
+  }
   if (c.vsdf_scalar_diagonal && c.mode != "vsdf") {
     return fail("vsdf.schur", "diagonal: only in mode vsdf (how the VSDF marginalizes)");
   }

@@ -122,6 +122,14 @@ TEST(ConfigTest, RefusesInconsistentCombinationsAtTheLineOfTheField) {
           "t.cfg:3: sim.target: 'orbital' selects a descent");
   Refused("source: sim\nenvelope.min_range_m: 5\n",
           "t.cfg:2: envelope.min_range_m: only for camera and log sources");
+  Refused(
+      "source: sim\nmeasurement_sigma_per_magnification_rad: 1e-4\n"
+      "frontend.reference_from_estimate: false\n",
+      "t.cfg:2: measurement_sigma_per_magnification_rad: needs "
+      "frontend.reference_from_estimate: true");
+  Refused("source: sim\nmeasurement_track_error: shared\n",
+          "t.cfg:2: measurement_track_error: shared: needs "
+          "measurement_sigma_per_magnification_rad > 0");
 }
 
 // source: lcm: raw pairs published on a channel by a camera process; the calibrations give their

@@ -21,8 +21,14 @@ def main():
     sil, cfg = sys.argv[1], sys.argv[2]
     with tempfile.TemporaryDirectory() as workdir:
         on = fly(sil, cfg, workdir, 'on', 'sim.frames: 20')
+        # Without the reference no warp is measured, so that run states the constant sigma
+        # of that state (the configuration refuses the per-track sigma there).
         before = fly(sil, cfg, workdir, 'reference_off', 'sim.frames: 20',
-                     'frontend.reference_from_estimate: false')
+                     'frontend.reference_from_estimate: false', 'measurement_sigma_px: 0.12',
+                     'measurement_sigma_per_magnification_rad: 0',
+                     'measurement_disparity_sigma_px: 0',
+                     'measurement_disparity_sigma_per_parallax_px: 0',
+                     'measurement_track_error: independent')
     failures = []
     for name, s in (('on', on), ('reference_off', before)):
         t = s['tracking_error_px']
