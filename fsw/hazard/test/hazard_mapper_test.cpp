@@ -490,6 +490,15 @@ HazardFrame FrameOf(const SceneRun& run, const Pair& pair) {
   return f;
 }
 
+// The flat scene at 8 m with the outlier gate at `gate` sigmas (0 = off), and its pair with the
+// gross mismatch above.
+void PrepareGrossMismatch(double gate, SceneRun* run, Pair* bad) {
+  HazardMapperOptions o = Options();
+  o.outlier_gate_sigmas = gate;
+  Prepare(Scene{}, 8.0, run, o);
+  *bad = WithGrossMismatch(run->pair);
+}
+
 int CellsAbove(const HazardMapper& m, double z_m) {
   int count = 0;
   for (int c = 0; c < m.GridCells() * m.GridCells(); ++c) count += m.Elevation()[c] > z_m ? 1 : 0;
@@ -502,11 +511,9 @@ int CellsAbove(const HazardMapper& m, double z_m) {
 // With the gate off the same frames raise the patch (the check that the scene makes the outlier).
 TEST(HazardMapperTest, AGrossMismatchIsNotFused) {
   for (const double gate : {0.0, Options().outlier_gate_sigmas}) {
-    HazardMapperOptions o = Options();
-    o.outlier_gate_sigmas = gate;
     SceneRun run;
-    Prepare(Scene{}, 8.0, &run, o);
-    const Pair bad = WithGrossMismatch(run.pair);
+    Pair bad;
+    PrepareGrossMismatch(gate, &run, &bad);
     ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
     ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
     const int high_before = CellsAbove(*run.mapper, 0.5);
@@ -534,11 +541,9 @@ TEST(HazardMapperTest, AGrossMismatchIsNotFused) {
 // gate would keep the outlier for ever; without the gate its small sigma keeps the patch high.
 TEST(HazardMapperTest, AnOutlierHeldByTheMapIsReplaced) {
   for (const double gate : {0.0, Options().outlier_gate_sigmas}) {
-    HazardMapperOptions o = Options();
-    o.outlier_gate_sigmas = gate;
     SceneRun run;
-    Prepare(Scene{}, 8.0, &run, o);
-    const Pair bad = WithGrossMismatch(run.pair);
+    Pair bad;
+    PrepareGrossMismatch(gate, &run, &bad);
     ASSERT_EQ(run.mapper->Update(FrameOf(run, bad)), core::Status::kOk);
     const HazardMapper& m = *run.mapper;
     const int high = CellsAbove(m, 0.5);
