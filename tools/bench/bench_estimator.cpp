@@ -322,8 +322,8 @@ void FactorEigen(Eigen::LLT<Eigen::MatrixXd>* llt, const Eigen::MatrixXd& a) {
   if (llt->info() != Eigen::Success) std::abort();
 }
 
-// Kernel argument: 0 = the one Configure picks (AVX where the CPU has it), 1 = portable 2-wide,
-// 2 = AVX (skipped where the CPU has none).
+// Kernel argument: 0 = the one Configure picks (the widest the CPU has), 1 = portable 2-wide,
+// 2 = AVX, 3 = AVX-512 (skipped where the CPU has none).
 // NOLINTNEXTLINE(readability-identifier-naming): Google Benchmark's BM_ convention
 void BM_Cholesky_Dense(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
@@ -342,7 +342,7 @@ void BM_Cholesky_Dense(benchmark::State& state) {
       benchmark::Counter(FlopsOfCholesky(n) * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_Cholesky_Dense)
-    ->ArgsProduct({{120, 510}, {0, 1, 2}})
+    ->ArgsProduct({{120, 510}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5);
 

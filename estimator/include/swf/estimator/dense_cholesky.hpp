@@ -30,7 +30,10 @@
 // panel J's scalars from memory, so no duplicated copy is needed. Each element still sees
 // C(r, c) -= A(r, p) * B(c, p) for p ascending, rounded after the multiply and after the
 // subtract (the kernel is compiled for "avx" only, never "fma"), so both kernels give the same
-// bits; the test forces each one and compares. The kernel is chosen once, at construction.
+// bits; the test forces each one and compares. The kernel is chosen once, at construction. Where
+// the CPU has AVX-512 the tile is instead eight 8-wide accumulators, one per column (half the
+// vector instructions of the AVX block for the same products), compiled for "avx512f" only: no
+// FMA there either, the same bits.
 #pragma once
 
 #include <Eigen/Core>
@@ -64,6 +67,8 @@ using PairT = typename Pair<S>::Type;
 #define SWF_DENSE_CHOLESKY_AVX 1
 // Four doubles in one AVX register; only used inside functions compiled for "avx".
 typedef double Quad __attribute__((vector_size(32), may_alias));
+// Eight doubles in one AVX-512 register; only inside functions compiled for "avx512f".
+typedef double Oct __attribute__((vector_size(64), may_alias));
 #endif
 
 template <typename S>
@@ -116,20 +121,26 @@ class DenseCholesky {
   // duplicated chunk (16 x kChunk) is 24 KiB in double, inside a 32 KiB L1.
   static constexpr int kChunk = 128;
 
-  // The inner-product kernel: kAuto picks AVX where the CPU has it (x86-64, double), else the
-  // 2-wide kernel. Every kernel gives the same bits; forcing one exists for tests and benchmarks.
-  enum class Kernel : std::uint8_t { kAuto, kPortable, kAvx };
+  // The inner-product kernel: kAuto picks the widest the CPU has (x86-64, double: AVX-512, else
+  // AVX), else the 2-wide kernel. Every kernel gives the same bits; forcing one exists for tests
+  // and benchmarks.
+  enum class Kernel : std::uint8_t { kAuto, kPortable, kAvx, kAvx512 };
 
   DenseCholesky() { (void)SetKernel(Kernel::kAuto); }
 
   // False (and no change) when the requested kernel cannot run here.
   bool SetKernel(Kernel kernel) {
-    const bool avx = AvxAvailable();
-    if (kernel == Kernel::kAvx && !avx) return false;
-    use_avx_ = kernel == Kernel::kAvx || (kernel == Kernel::kAuto && avx);
+    const bool avx = Available(Kernel::kAvx);
+    const bool avx512 = Available(Kernel::kAvx512);
+    if ((kernel == Kernel::kAvx && !avx) || (kernel == Kernel::kAvx512 && !avx512)) return false;
+    if (kernel == Kernel::kAuto)
+      kernel = avx512 ? Kernel::kAvx512 : avx ? Kernel::kAvx : Kernel::kPortable;
+    kernel_ = kernel;
+    use_avx_ = kernel != Kernel::kPortable;
     return true;
   }
-  bool UsesAvx() const { return use_avx_; }
+  bool UsesAvx() const { return use_avx_; }  // AVX or AVX-512
+  Kernel ActiveKernel() const { return kernel_; }
 
   // Sets the size and clears A to zero (identity on the padding). Must precede filling.
   void Reset(int n) {
@@ -177,12 +188,21 @@ class DenseCholesky {
 
   // Adds the lower triangle of the symmetric dim x dim matrix src (column-major, leading
   // dimension ld) at rows/columns offset..offset+dim-1.
+  // Panel by panel and column by column, so a panel's column (up to 8 consecutive scalars) takes
+  // consecutive scalars of one column of src: contiguous on both sides.
   void AddSymmetric(int offset, const S* src, int ld, int dim) {
     SWF_ASSERT(offset >= 0 && dim >= 0 && offset + dim <= n_ && ld >= dim);
-    for (int i = offset; i < offset + dim; ++i) {
-      S* row = a_ + PanelOffset(i / kBlock) + i % kBlock;
-      const S* src_row = src + (i - offset);
-      for (int j = offset; j <= i; ++j) row[j * kBlock] += src_row[(j - offset) * ld];
+    const int end = offset + dim;
+    for (int i0 = offset; i0 < end;) {
+      const int ib = i0 / kBlock;
+      const int i1 = (ib + 1) * kBlock < end ? (ib + 1) * kBlock : end;  // rows i0..i1-1
+      S* panel = a_ + PanelOffset(ib);
+      for (int j = offset; j < i1; ++j) {
+        S* column = panel + j * kBlock - ib * kBlock;  // column[i] = A(i, j), i in panel ib
+        const S* src_column = src + (j - offset) * ld;
+        for (int i = i0 > j ? i0 : j; i < i1; ++i) column[i] += src_column[i - offset];
+      }
+      i0 = i1;
     }
   }
 
@@ -199,8 +219,8 @@ class DenseCholesky {
           if (use_avx_) {
             for (int ib = jb; ib < nb_; ++ib) {
               S* panel_i = a_ + PanelOffset(ib);
-              SubtractProductAvx(panel_i + depth * kBlock, panel_i + p0 * kBlock,
-                                 panel_j + p0 * kBlock, len);
+              SubtractColumnsProduct(panel_i + depth * kBlock, panel_i + p0 * kBlock,
+                                     panel_j + p0 * kBlock, len);
             }
             continue;
           }
@@ -407,6 +427,10 @@ class DenseCholesky {
   void SubtractColumnsProduct(S* tile, const S* a, const S* b, int len) const {
 #ifdef SWF_DENSE_CHOLESKY_AVX
     if constexpr (std::is_same_v<S, double>) {
+      if (kernel_ == Kernel::kAvx512) {
+        SubtractProductAvx512(tile, a, b, len);
+        return;
+      }
       if (use_avx_) {
         SubtractProductAvx(tile, a, b, len);
         return;
@@ -610,14 +634,49 @@ class DenseCholesky {
   }
 #endif
 
-  static bool AvxAvailable() {
+#ifdef SWF_DENSE_CHOLESKY_AVX
+  // The same product with tile column k in one 8-wide accumulator: panel I's column p loaded
+  // once, panel J's eight scalars broadcast from memory (all three 64-byte aligned).
+  __attribute__((target("avx512f"))) static void SubtractProductAvx512(double* tile,
+                                                                       const double* a,
+                                                                       const double* b, int len) {
+    using dense_detail::Oct;
+    const Oct* av = static_cast<const Oct*>(__builtin_assume_aligned(a, 64));
+    Oct* t = static_cast<Oct*>(__builtin_assume_aligned(tile, 64));
+    Oct c0 = t[0], c1 = t[1], c2 = t[2], c3 = t[3], c4 = t[4], c5 = t[5], c6 = t[6], c7 = t[7];
+#pragma GCC unroll 2
+    for (int p = 0; p < len; ++p) {
+      const Oct ap = av[p];
+      const double* bp = b + kBlock * p;
+      c0 -= ap * Oct{bp[0], bp[0], bp[0], bp[0], bp[0], bp[0], bp[0], bp[0]};
+      c1 -= ap * Oct{bp[1], bp[1], bp[1], bp[1], bp[1], bp[1], bp[1], bp[1]};
+      c2 -= ap * Oct{bp[2], bp[2], bp[2], bp[2], bp[2], bp[2], bp[2], bp[2]};
+      c3 -= ap * Oct{bp[3], bp[3], bp[3], bp[3], bp[3], bp[3], bp[3], bp[3]};
+      c4 -= ap * Oct{bp[4], bp[4], bp[4], bp[4], bp[4], bp[4], bp[4], bp[4]};
+      c5 -= ap * Oct{bp[5], bp[5], bp[5], bp[5], bp[5], bp[5], bp[5], bp[5]};
+      c6 -= ap * Oct{bp[6], bp[6], bp[6], bp[6], bp[6], bp[6], bp[6], bp[6]};
+      c7 -= ap * Oct{bp[7], bp[7], bp[7], bp[7], bp[7], bp[7], bp[7], bp[7]};
+    }
+    t[0] = c0;
+    t[1] = c1;
+    t[2] = c2;
+    t[3] = c3;
+    t[4] = c4;
+    t[5] = c5;
+    t[6] = c6;
+    t[7] = c7;
+  }
+#endif
+
+  static bool Available(Kernel kernel) {
 #ifdef SWF_DENSE_CHOLESKY_AVX
     if constexpr (std::is_same_v<S, double>) {
       __builtin_cpu_init();
-      return __builtin_cpu_supports("avx") != 0;
+      if (kernel == Kernel::kAvx) return __builtin_cpu_supports("avx") != 0;
+      if (kernel == Kernel::kAvx512) return __builtin_cpu_supports("avx512f") != 0;
     }
 #endif
-    return false;
+    return kernel == Kernel::kPortable;
   }
 
   // In-place Cholesky of the 8x8 diagonal tile d (lower triangle) of rows r0..r0+7; keeps
@@ -662,7 +721,8 @@ class DenseCholesky {
   int nb_ = 0;
   int np_ = 0;
   bool factorized_ = false;
-  bool use_avx_ = false;
+  bool use_avx_ = false;  // kernel_ is AVX or AVX-512
+  Kernel kernel_ = Kernel::kPortable;
 };
 
 }  // namespace swf::estimator
