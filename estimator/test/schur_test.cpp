@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -54,7 +55,7 @@ Marginal DenseSchur(const Matrix& lambda, const Vector& g, int o, int width) {
           g(rest) - a_ro * llt.solve(g.segment(o, width))};
 }
 
-// Runs EliminateVariable + DropVariable on a copy of the system in a padded buffer (leading
+// Runs EliminateVariable + DropChunks on a copy of the system in a padded buffer (leading
 // dimension larger than the system, as in the filter) and returns the result.
 template <int D, typename Couple>
 Marginal Eliminate(const Matrix& lambda, const Vector& g, int o, Couple couple, bool* ok) {
@@ -68,7 +69,9 @@ Marginal Eliminate(const Matrix& lambda, const Vector& g, int o, Couple couple, 
     b[c] = g(c);
   }
   *ok = EliminateVariable<D>(a.data(), ld, b.data(), dim, o, x.data(), ld, couple);
-  DropVariable(a.data(), ld, b.data(), dim, o, D);
+  const std::unique_ptr<bool[]> dropped = std::make_unique<bool[]>(dim / 3);
+  for (int k = o / 3; k < (o + D) / 3; ++k) dropped[k] = true;
+  EXPECT_EQ(DropChunks(a.data(), ld, b.data(), dim, dropped.get()), dim - D);
   Marginal m{Matrix(dim - D, dim - D), Vector(dim - D)};
   for (int c = 0; c < dim - D; ++c) {
     for (int r = 0; r < dim - D; ++r) m.lambda(r, c) = a[c * ld + r];
@@ -294,6 +297,49 @@ TEST(Schur, VsdfScalarDiagonalLeavesAnOffAxisStereoLandmarkIndefiniteAlongItsRay
   // along an off-axis ray it claims the depth over ten times better than the landmark's own
   // 3x3 block of the exact prior gives it.
   EXPECT_GT(std::sqrt(v.dot(e.inverse() * v)) * std::sqrt(v.dot(kept * v)), 10.0);
+}
+
+// What the filter does when several prior landmarks leave at once: eliminate each in place,
+// skipping the rows of those eliminated before it, and drop them all in one pass. The same bits
+// as eliminating and dropping one at a time (each kept element sees the same operations).
+TEST(Schur, SeveralVariablesEliminatedInPlaceAndDroppedOnceEqualOneAtATimeBitForBit) {
+  Matrix lambda;
+  Vector g;
+  RandomSystem(6 + 3 * 9, 11, &lambda, &g);
+  const int order[] = {5, 2, 9, 6};  // chunks (3-wide) in the order they leave
+  // One at a time: each Eliminate drops its variable, shifting the later chunks down.
+  Marginal one{lambda, g};
+  std::vector<int> position = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
+  for (const int chunk : order) {
+    bool ok = false;
+    one = Eliminate<3>(one.lambda, one.g, 3 * position[chunk], kAll, &ok);
+    ASSERT_TRUE(ok);
+    for (int& p : position)
+      if (p > position[chunk]) --p;
+  }
+  // In place, then one DropChunks.
+  const int dim = static_cast<int>(g.size());
+  const int ld = dim + 3;
+  std::vector<double> a(static_cast<std::size_t>(ld * ld), -7.0);
+  std::vector<double> b(static_cast<std::size_t>(ld), -7.0);
+  std::vector<double> x(static_cast<std::size_t>(ld * 3), 0.0);
+  for (int c = 0; c < dim; ++c) {
+    for (int r = 0; r < dim; ++r) a[c * ld + r] = lambda(r, c);
+    b[c] = g(c);
+  }
+  bool dropped[11] = {};
+  for (const int chunk : order) {
+    ASSERT_TRUE(EliminateVariable<3>(
+        a.data(), ld, b.data(), dim, 3 * chunk, x.data(), ld, [&](int r, int c) {
+          return dropped[r] || dropped[c] ? SchurFill::kNone : SchurFill::kBlock;
+        }));
+    dropped[chunk] = true;
+  }
+  ASSERT_EQ(DropChunks(a.data(), ld, b.data(), dim, dropped), dim - 12);
+  for (int c = 0; c < dim - 12; ++c) {
+    EXPECT_EQ(b[c], one.g(c)) << c;
+    for (int r = 0; r < dim - 12; ++r) ASSERT_EQ(a[c * ld + r], one.lambda(r, c)) << r << ", " << c;
+  }
 }
 
 TEST(Schur, RefusesABlockThatIsNotPositiveDefiniteAndChangesNothing) {

@@ -75,20 +75,26 @@ bool EliminateVariable(S* lambda, int ld, S* g, int dim, int o, S* x, int ld_x, 
   return true;
 }
 
-// Removes the `width` rows and columns starting at `o` of the dim x dim system (lambda, g),
-// keeping the order of the rest: the last step of a marginalization.
+// Removes the 3-wide chunks c with dropped[c] from the dim x dim system (lambda, g), keeping the
+// order of the rest, in one pass (the last step of a marginalization; several variables
+// eliminated one after the other leave their rows to be dropped together). Returns the new dim.
 template <typename S>
-void DropVariable(S* lambda, int ld, S* g, int dim, int o, int width) {
+int DropChunks(S* lambda, int ld, S* g, int dim, const bool* dropped) {
+  // Every kept element moves to an index at or before its own, and the elements are visited in
+  // ascending order, so no source is overwritten before it is read.
+  int cc = 0;
   for (int c = 0; c < dim; ++c) {
-    if (c >= o && c < o + width) continue;
-    const int cc = c < o ? c : c - width;
+    if (dropped[c / 3]) continue;
+    int rr = 0;
     for (int r = 0; r < dim; ++r) {
-      if (r >= o && r < o + width) continue;
-      const int rr = r < o ? r : r - width;
+      if (dropped[r / 3]) continue;
       lambda[cc * ld + rr] = lambda[c * ld + r];
+      ++rr;
     }
+    g[cc] = g[c];
+    ++cc;
   }
-  for (int r = o + width; r < dim; ++r) g[r - width] = g[r];
+  return cc;
 }
 
 }  // namespace swf::estimator

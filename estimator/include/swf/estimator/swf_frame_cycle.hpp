@@ -32,7 +32,7 @@ template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::Reset() {
   num_poses_ = 0;
   head_ = 0;
-  for (int i = 0; i < N; ++i) landmarks_[i].used = false;
+  for (int i = 0; i < N; ++i) SetUsed(i, false);
   free_slots_.clear();
   for (int i = N - 1; i >= 0; --i) (void)free_slots_.push_back(i);
   ids_.Clear();
@@ -96,7 +96,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::AddObservation(
     free_slots_.pop_back();
     LandmarkSlot& l = landmarks_[slot];
     l = LandmarkSlot{};
-    l.used = true;
+    SetUsed(slot, true);
     l.id = landmark_id;
     l.params = params;
     l.anchor = anchor;
@@ -316,8 +316,9 @@ bool SlidingWindowFilter<Model, K, N, M, P>::StateIsFinite() const {
     const StateVec d = Model::Difference(prior_pose_lin_, Slot(j).pose, &scratch_jacobian_);
     if (!d.allFinite()) return false;
   }
-  for (int i = 0; i < N; ++i)
-    if (landmarks_[i].used && !landmarks_[i].params.allFinite()) return false;
+  bool finite = true;
+  ForEachUsedSlot([&](int i) { finite = finite && landmarks_[i].params.allFinite(); });
+  if (!finite) return false;
   for (int r = 0; r < prior_dim_; ++r)
     if (!std::isfinite(prior_g_[r])) return false;
   return true;

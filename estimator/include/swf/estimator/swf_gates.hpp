@@ -138,7 +138,7 @@ int SlidingWindowFilter<Model, K, N, M, P>::RejectResidualOutliers() {
   const S limit = gate_threshold_ * sigma * sigma;
   int checked = 0;
   int failed = 0;
-  for (int i = 0; i < N; ++i) landmarks_[i].lm_count = 0;
+  ForEachUsedSlot([&](int i) { landmarks_[i].lm_count = 0; });
   for (int j = 0; j < num_poses_; ++j) {
     for (Observation& o : Slot(j).obs) {
       o.gate_failed = o.valid && !(o.r.squaredNorm() <= limit);
@@ -156,13 +156,13 @@ int SlidingWindowFilter<Model, K, N, M, P>::RejectResidualOutliers() {
     fault_bits_ |= kFaultGateSuspended;
     return 0;
   }
-  for (int i = 0; i < N; ++i) {
-    LandmarkSlot& l = landmarks_[i];
-    if (l.used && l.lm_count > 0 && l.lm_count == l.obs_in_window) {
+  ForEachUsedSlot([&](int i) {
+    const LandmarkSlot& l = landmarks_[i];
+    if (l.lm_count > 0 && l.lm_count == l.obs_in_window) {
       RemoveLandmark(i);
       ++summary_.landmarks_rejected;
     }
-  }
+  });
   for (int j = 0; j < num_poses_; ++j) {
     PoseSlot& p = Slot(j);
     for (std::size_t k = p.obs.size(); k-- > 0;) {

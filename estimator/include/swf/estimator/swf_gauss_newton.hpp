@@ -16,7 +16,7 @@ template <typename Model, int K, int N, int M, int P>
 core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeNewestCovariance() {
   if (num_poses_ == 0) return core::Status::kNotConfigured;
   covariances_current_ = false;
-  for (int i = 0; i < N; ++i) landmarks_[i].covariance_valid = false;
+  ForEachUsedSlot([&](int i) { landmarks_[i].covariance_valid = false; });
   EvaluateMeasurements(true);
   const core::Status status = BuildAndFactor();
   if (status != core::Status::kOk) return status;
@@ -100,9 +100,9 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
       l.covariance_valid = l.covariance.allFinite();
     }
   }
-  for (int i = 0; i < N; ++i) {
+  ForEachUsedSlot([&](int i) {
     LandmarkSlot& l = landmarks_[i];
-    if (!l.used || l.prior_index >= 0 || !l.invertible) continue;
+    if (l.prior_index >= 0 || !l.invertible) return;
     Mat3<S> cross = Mat3<S>::Zero();  // sum_a sum_b W_a^T Sigma(ja, jb) W_b
     // dl = h^-1 (b - sum_a W_a^T dp_a): Cov(newest, l) = -sum_a Sigma(newest, ja) W_a h^-1
     // (W_a couples the landmark to the pose part of state ja only: its first 6 columns).
@@ -112,7 +112,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
           pose_cov_ + (kStateDim * jb) * kMaxPosesDim + kStateDim * ja,
           Eigen::OuterStride<>(kMaxPosesDim));
     };
-    for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
+    for (int a = l.adj_begin; a < l.adj_end; ++a) {
       const Observation& oa = ObsAt(adj_[a]);
       const Eigen::Map<const Eigen::Matrix<S, kStateDim, 6>, Eigen::Unaligned, Eigen::OuterStride<>>
           newest_a(pose_cov_ + (kStateDim * adj_[a].pose) * kMaxPosesDim + npd - kStateDim,
@@ -122,7 +122,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
       // transpose of (a, b), so each pair is formed once (a landmark has one measurement per
       // state, so a != b means different states).
       const Eigen::Matrix<S, 3, 6> wa_t = oa.w_pl.transpose();
-      for (int b = lm_begin_[i]; b < a; ++b) {
+      for (int b = l.adj_begin; b < a; ++b) {
         const Mat3<S> t = wa_t * sigma(adj_[a].pose, adj_[b].pose) * ObsAt(adj_[b]).w_pl;
         cross += t + t.transpose();
       }
@@ -130,7 +130,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeCovariances() {
     }
     l.covariance = l.h_inv + l.h_inv * cross * l.h_inv;
     l.covariance_valid = l.covariance.allFinite();
-  }
+  });
   return core::Status::kOk;
 }
 
@@ -260,11 +260,11 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::BuildAndFactor() {
   const int n = lm0 + 3 * nq;
   dense_.Reset(n);
   for (int i = 0; i < n; ++i) rhs_[i] = S(0);
-  for (int i = 0; i < N; ++i) {
+  ForEachUsedSlot([&](int i) {
     landmarks_[i].h.setZero();
     landmarks_[i].b.setZero();
     landmarks_[i].lm_count = 0;
-  }
+  });
   // Measurements (H^T R^-1 H and its right-hand side).
   for (int j = 0; j < np; ++j) {
     for (Observation& o : Slot(j).obs) {
@@ -283,18 +283,19 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::BuildAndFactor() {
   }
   // Adjacency of free landmarks (counting sort by slot) for the Schur complement.
   int offset = 0;
-  for (int i = 0; i < N; ++i) {
-    lm_begin_[i] = offset;
-    offset += landmarks_[i].lm_count;
-    landmarks_[i].lm_count = 0;
-  }
-  lm_begin_[N] = offset;
+  ForEachUsedSlot([&](int i) {
+    LandmarkSlot& l = landmarks_[i];
+    l.adj_begin = offset;
+    offset += l.lm_count;
+    l.adj_end = offset;
+    l.lm_count = 0;
+  });
   for (int j = 0; j < np; ++j) {
     const PoseSlot& p = Slot(j);
     for (int k = 0; k < static_cast<int>(p.obs.size()); ++k) {
       if (!p.obs[k].valid) continue;
       LandmarkSlot& l = landmarks_[p.obs[k].landmark];
-      adj_[lm_begin_[p.obs[k].landmark] + l.lm_count++] = AdjEntry{j, k};
+      adj_[l.adj_begin + l.lm_count++] = AdjEntry{j, k};
     }
   }
   // Process model (D^T Q^-1 D).
@@ -319,29 +320,29 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::BuildAndFactor() {
     Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * q, 0) += l.b;
   }
   // Schur complement of the free landmarks onto the poses.
-  for (int i = 0; i < N; ++i) {
+  ForEachUsedSlot([&](int i) {
     LandmarkSlot& l = landmarks_[i];
     l.invertible = false;
-    if (!l.used || l.prior_index >= 0 || lm_begin_[i] == lm_begin_[i + 1]) continue;
+    if (l.prior_index >= 0 || l.adj_begin == l.adj_end) return;
     Mat3<S> h_inv;
     if (!SpdInverse(l.h, &h_inv) || !(l.h.trace() > S(0))) {
       fault_bits_ |= kFaultDegenerateLandmark;
-      continue;  // held at its current estimate for this iteration
+      return;  // held at its current estimate for this iteration
     }
     l.h_inv = h_inv;
     l.invertible = true;
-    for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a) {
+    for (int a = l.adj_begin; a < l.adj_end; ++a) {
       const Observation& oa = ObsAt(adj_[a]);
       const Eigen::Matrix<S, 6, 3> x = oa.w_pl * l.h_inv;
       Blk<6, 1>(rhs_, kMaxDense, kStateDim * adj_[a].pose, 0) -= x * l.b;
-      for (int b = lm_begin_[i]; b < lm_begin_[i + 1]; ++b) {
+      for (int b = l.adj_begin; b < l.adj_end; ++b) {
         if (adj_[a].pose < adj_[b].pose) continue;
         const Observation& ob = ObsAt(adj_[b]);
         dense_.AddBlock(kStateDim * adj_[a].pose, kStateDim * adj_[b].pose,
                         -(x * ob.w_pl.transpose()));
       }
     }
-  }
+  });
   // Fixed poses: identity rows, zero right-hand side (conditioning on their value).
   for (int j = 0; j < np; ++j) {
     if (!Slot(j).fixed) continue;
@@ -387,23 +388,22 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::Solve() {
       max_step = std::max(max_step, std::abs(rhs_[i]));
       finite = finite && std::isfinite(rhs_[i]);
     }
-    for (int i = 0; i < N; ++i) {
+    ForEachUsedSlot([&](int i) {
       LandmarkSlot& l = landmarks_[i];
-      if (!l.used) continue;
       if (l.prior_index >= 0) {
         l.delta = Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * l.prior_index, 0);
-        continue;
+        return;
       }
       l.delta.setZero();
-      if (!l.invertible) continue;
+      if (!l.invertible) return;
       Vec3<S> g = l.b;
-      for (int a = lm_begin_[i]; a < lm_begin_[i + 1]; ++a)
+      for (int a = l.adj_begin; a < l.adj_end; ++a)
         g -= ObsAt(adj_[a]).w_pl.transpose() *
              Blk<6, 1>(rhs_, kMaxDense, kStateDim * adj_[a].pose, 0);
       l.delta = l.h_inv * g;
       max_step = std::max(max_step, l.delta.cwiseAbs().maxCoeff());
       finite = finite && l.delta.allFinite();
-    }
+    });
     if (!finite) {
       fault_bits_ |= kFaultNonFinite;
       status = core::Status::kNumericalFailure;
@@ -455,15 +455,13 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::Solve() {
 template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::Backup() {
   for (int j = 0; j < num_poses_; ++j) pose_backup_[j] = Slot(j).pose;
-  for (int i = 0; i < N; ++i)
-    if (landmarks_[i].used) landmarks_[i].backup = landmarks_[i].params;
+  ForEachUsedSlot([&](int i) { landmarks_[i].backup = landmarks_[i].params; });
 }
 
 template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::Restore() {
   for (int j = 0; j < num_poses_; ++j) Slot(j).pose = pose_backup_[j];
-  for (int i = 0; i < N; ++i)
-    if (landmarks_[i].used) landmarks_[i].params = landmarks_[i].backup;
+  ForEachUsedSlot([&](int i) { landmarks_[i].params = landmarks_[i].backup; });
 }
 
 template <typename Model, int K, int N, int M, int P>
@@ -473,10 +471,10 @@ void SlidingWindowFilter<Model, K, N, M, P>::ApplyStep(S alpha) {
     const StateVec d = alpha * StateVec(Blk<kStateDim, 1>(rhs_, kMaxDense, kStateDim * j, 0));
     Slot(j).pose = Model::Retract(pose_backup_[j], d);
   }
-  for (int i = 0; i < N; ++i) {
+  ForEachUsedSlot([&](int i) {
     LandmarkSlot& l = landmarks_[i];
-    if (l.used) l.params = l.backup + alpha * l.delta;
-  }
+    l.params = l.backup + alpha * l.delta;
+  });
 }
 
 }  // namespace swf::estimator

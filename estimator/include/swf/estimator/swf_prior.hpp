@@ -302,13 +302,12 @@ void SlidingWindowFilter<Model, K, N, M, P>::DeleteOldestPose() {
 // Landmarks with no measurement left in the window leave the estimator (Fig. 7c).
 template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::RetireUnsupportedLandmarks() {
-  for (int i = 0; i < N; ++i) {
+  leaving_prior_.clear();
+  if (options_.mode == SwfMode::kBatch) return;
+  ForEachUsedSlot([&](int i) {
     LandmarkSlot& l = landmarks_[i];
-    if (!l.used || l.obs_in_window > 0) continue;
-    if (options_.mode == SwfMode::kBatch) continue;
-    if (l.prior_index >= 0) {
-      if (!EliminatePriorLandmark(l.prior_index)) fault_bits_ |= kFaultNotPositiveDefinite;
-    }
+    if (l.obs_in_window > 0) return;
+    if (l.prior_index >= 0) (void)leaving_prior_.push_back(l.prior_index);
     RetiredLandmark<S> r;
     r.id = l.id;
     r.total_observations = l.total_obs;
@@ -318,29 +317,54 @@ void SlidingWindowFilter<Model, K, N, M, P>::RetireUnsupportedLandmarks() {
       ++summary_.landmarks_unplaced;  // at or beyond infinity: no position to report
     }
     ids_.Erase(l.id);
-    l.used = false;
+    SetUsed(i, false);
     (void)free_slots_.push_back(i);
     --num_landmarks_;
     ++summary_.landmarks_marginalized;
-  }
+  });
+  if (!EliminatePriorLandmarks()) fault_bits_ |= kFaultNotPositiveDefinite;
 }
 
-// Schur complement of prior landmark q onto the rest of the prior, then removal of its rows.
-// A landmark whose block is not positive definite is removed without the complement.
+// Schur complement of each prior landmark in leaving_prior_ (prior indices, eliminated in that
+// order) onto the rest of the prior, then the removal of all their rows at once. Each
+// elimination skips the rows of those before it, which are never read again for a kept element,
+// so every kept element sees the operations of eliminating and dropping the landmarks one at a
+// time, in the same order (the same bits), while the prior is compacted, an O(dim^2) pass, once
+// instead of once per landmark. A landmark whose block is not positive definite is removed
+// without its complement (false).
 template <typename Model, int K, int N, int M, int P>
-bool SlidingWindowFilter<Model, K, N, M, P>::EliminatePriorLandmark(int q) {
-  const int o = kStateDim + 3 * q;
-  const bool ok = EliminateVariable<3>(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, x_, kXRows,
-                                       [](int, int) { return SchurFill::kBlock; });
-  DropVariable(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, 3);
-  prior_dim_ -= 3;
-  landmarks_[prior_landmarks_[q]].prior_index = -1;
-  prior_landmarks_.erase(static_cast<std::size_t>(q));
-  for (int k = q; k < static_cast<int>(prior_landmarks_.size()); ++k) {
-    landmarks_[prior_landmarks_[k]].prior_index = k;
-    prior_landmark_lin_[k] = prior_landmark_lin_[k + 1];
-    first_estimate_[k] = first_estimate_[k + 1];
+bool SlidingWindowFilter<Model, K, N, M, P>::EliminatePriorLandmarks() {
+  if (leaving_prior_.empty()) return true;
+  const int chunks = prior_dim_ / 3;
+  for (int c = 0; c < chunks; ++c) prior_chunk_dropped_[c] = false;
+  bool ok = true;
+  for (const int q : leaving_prior_) {
+    const int o = kStateDim + 3 * q;
+    ok = EliminateVariable<3>(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, x_, kXRows,
+                              [&](int r, int c) {
+                                return prior_chunk_dropped_[r] || prior_chunk_dropped_[c]
+                                           ? SchurFill::kNone
+                                           : SchurFill::kBlock;
+                              }) &&
+         ok;
+    prior_chunk_dropped_[o / 3] = true;
   }
+  prior_dim_ = DropChunks(prior_, kMaxPriorDim, prior_g_, prior_dim_, prior_chunk_dropped_);
+  int kept = 0;
+  for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
+    LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
+    if (prior_chunk_dropped_[(kStateDim + 3 * q) / 3]) {
+      l.prior_index = -1;
+      continue;
+    }
+    l.prior_index = kept;
+    prior_landmarks_[kept] = prior_landmarks_[q];
+    prior_landmark_lin_[kept] = prior_landmark_lin_[q];
+    first_estimate_[kept] = first_estimate_[q];
+    ++kept;
+  }
+  while (static_cast<int>(prior_landmarks_.size()) > kept) prior_landmarks_.pop_back();
+  leaving_prior_.clear();
   return ok;
 }
 
@@ -354,10 +378,11 @@ void SlidingWindowFilter<Model, K, N, M, P>::RemoveLandmark(int slot) {
     for (std::size_t k = p.obs.size(); k-- > 0;)
       if (p.obs[k].landmark == slot) p.obs.erase(k);
   }
-  if (l.prior_index >= 0 && !EliminatePriorLandmark(l.prior_index))
-    fault_bits_ |= kFaultNotPositiveDefinite;
+  leaving_prior_.clear();
+  if (l.prior_index >= 0) (void)leaving_prior_.push_back(l.prior_index);
+  if (!EliminatePriorLandmarks()) fault_bits_ |= kFaultNotPositiveDefinite;
   ids_.Erase(l.id);
-  l.used = false;
+  SetUsed(slot, false);
   l.obs_in_window = 0;
   (void)free_slots_.push_back(slot);
   --num_landmarks_;
