@@ -1166,9 +1166,9 @@ void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int
   po->measurement_sigma_px = config.measurement_sigma_px;
   po->measurement_sigma_per_magnification_rad = config.measurement_sigma_per_magnification_rad;
   po->measurement_disparity_sigma_px = config.measurement_disparity_sigma_px;
-  po->track_error_shared = config.measurement_track_error_shared;
   po->measurement_disparity_sigma_per_parallax_px =
       config.measurement_disparity_sigma_per_parallax_px;
+  po->track_error_shared = config.measurement_track_error_shared;
   po->min_quality = static_cast<float>(config.min_quality);
   po->refine_in_loop = config.frontend_refine_in_loop;
   po->process_sigma_m = config.process_sigma_m;

@@ -136,10 +136,9 @@ class DenseCholesky {
     if (kernel == Kernel::kAuto)
       kernel = avx512 ? Kernel::kAvx512 : avx ? Kernel::kAvx : Kernel::kPortable;
     kernel_ = kernel;
-    use_avx_ = kernel != Kernel::kPortable;
     return true;
   }
-  bool UsesAvx() const { return use_avx_; }  // AVX or AVX-512
+  bool UsesAvx() const { return kernel_ != Kernel::kPortable; }  // AVX or AVX-512
   Kernel ActiveKernel() const { return kernel_; }
 
   // Sets the size and clears A to zero (identity on the padding). Must precede filling.
@@ -216,7 +215,7 @@ class DenseCholesky {
         const int len = depth - p0 < kChunk ? depth - p0 : kChunk;
 #ifdef SWF_DENSE_CHOLESKY_AVX
         if constexpr (std::is_same_v<S, double>) {
-          if (use_avx_) {
+          if (UsesAvx()) {
             for (int ib = jb; ib < nb_; ++ib) {
               S* panel_i = a_ + PanelOffset(ib);
               SubtractColumnsProduct(panel_i + depth * kBlock, panel_i + p0 * kBlock,
@@ -431,7 +430,7 @@ class DenseCholesky {
         SubtractProductAvx512(tile, a, b, len);
         return;
       }
-      if (use_avx_) {
+      if (kernel_ == Kernel::kAvx) {
         SubtractProductAvx(tile, a, b, len);
         return;
       }
@@ -471,7 +470,7 @@ class DenseCholesky {
   void SubtractTransposedProduct(const S* panel, const S* x, int rows) const {
 #ifdef SWF_DENSE_CHOLESKY_AVX
     if constexpr (std::is_same_v<S, double>) {
-      if (use_avx_) {
+      if (UsesAvx()) {
         SubtractTransposedProductAvx(panel, x, columns_, rows);
         return;
       }
@@ -721,7 +720,6 @@ class DenseCholesky {
   int nb_ = 0;
   int np_ = 0;
   bool factorized_ = false;
-  bool use_avx_ = false;  // kernel_ is AVX or AVX-512
   Kernel kernel_ = Kernel::kPortable;
 };
 

@@ -204,8 +204,8 @@ struct FswConfig {
   double measurement_sigma_px = 0.5;
   double measurement_sigma_per_magnification_rad = 0.0;  // PipelineOptions, MeasurementSigmaPx
   double measurement_disparity_sigma_px = 0.0;           // PipelineOptions, MeasurementNoiseOf
-  bool measurement_track_error_shared = false;           // PipelineOptions::track_error_shared
   double measurement_disparity_sigma_per_parallax_px = 0.0;
+  bool measurement_track_error_shared = false;  // PipelineOptions::track_error_shared
   double min_quality = 0.7;
   double process_sigma_m = 0.5;
   double process_sigma_rad = 0.01;
