@@ -1164,6 +1164,7 @@ void ApplyEstimatorConfig(const FswConfig& config, PipelineOptions* po, std::int
   po->frontend = FrontendFor(config, po->width_px, po->height_px);
   po->swf = SwfFor(config, nav_mode);
   po->measurement_sigma_px = config.measurement_sigma_px;
+  po->measurement_sigma_per_magnification_px = config.measurement_sigma_per_magnification_px;
   po->measurement_sigma_per_magnification_rad = config.measurement_sigma_per_magnification_rad;
   po->measurement_disparity_sigma_px = config.measurement_disparity_sigma_px;
   po->measurement_disparity_sigma_per_parallax_px =

@@ -213,6 +213,8 @@ void AddEstimatorFields(std::map<std::string, ConfigSetter>* fields) {
                                   " (kMaxWindow, the filter's compiled window capacity)");
   f["max_iterations"] = Int<std::int32_t>([](FswConfig* c) { return &c->max_iterations; }, 1, 100);
   f["measurement_sigma_px"] = Double(&FswConfig::measurement_sigma_px, 1e-3, 100.0);
+  f["measurement_sigma_per_magnification_px"] =
+      Double(&FswConfig::measurement_sigma_per_magnification_px, 0.0, 100.0);
   f["measurement_sigma_per_magnification_rad"] =
       Double(&FswConfig::measurement_sigma_per_magnification_rad, 0.0, 0.1);
   f["measurement_track_error"] =
@@ -678,15 +680,19 @@ bool ValidateConfig(const FswConfig& c, const std::string& origin, std::string* 
   // estimator's reference pose of the template's frame; without it tracks started without a
   // prediction follow frame-to-frame LK, drift, and report no warp: stated at the bare
   // measurement_sigma_px.
-  if (c.measurement_sigma_per_magnification_rad > 0.0 && !c.frontend_reference_from_estimate) {
-    return fail("measurement_sigma_per_magnification_rad",
+  const bool warp_term = c.measurement_sigma_per_magnification_px > 0.0 ||
+                         c.measurement_sigma_per_magnification_rad > 0.0;
+  if (warp_term && !c.frontend_reference_from_estimate) {
+    return fail(c.measurement_sigma_per_magnification_rad > 0.0
+                    ? "measurement_sigma_per_magnification_rad"
+                    : "measurement_sigma_per_magnification_px",
                 "needs frontend.reference_from_estimate: true (the template's warp is measured "
                 "from the estimator's reference pose)");
   }
-  if (c.measurement_track_error_shared && !(c.measurement_sigma_per_magnification_rad > 0.0)) {
+  if (c.measurement_track_error_shared && !warp_term) {
     return fail("measurement_track_error",
-                "shared: needs measurement_sigma_per_magnification_rad > 0 (the shared part is "
-                "the warp-grown one)");
+                "shared: needs measurement_sigma_per_magnification_px or _rad > 0 (the shared "
+                "part is the warp-grown one)");
   }
   if (c.vsdf_scalar_diagonal && c.mode != "vsdf") {
     return fail("vsdf.schur", "diagonal: only in mode vsdf (how the VSDF marginalizes)");

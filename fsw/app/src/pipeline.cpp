@@ -14,7 +14,9 @@ using estimator::Vec3;
 double MeasurementSigmaPx(const PipelineOptions& options, double magnification, int sighting) {
   if (!(magnification > 0.0)) return options.measurement_sigma_px;
   const double warp = std::max(magnification, 1.0 / magnification) - 1.0;
-  const double shared = options.camera.fx * options.measurement_sigma_per_magnification_rad * warp;
+  const double shared = (options.measurement_sigma_per_magnification_px +
+                         options.camera.fx * options.measurement_sigma_per_magnification_rad) *
+                        warp;
   const double sigma = options.measurement_sigma_px + shared;
   if (!options.track_error_shared || sighting <= 1) return sigma;
   return std::sqrt(sigma * sigma + static_cast<double>(sighting - 1) * shared * shared);
@@ -49,6 +51,8 @@ estimator::Mat3<double> MeasurementSqrtInformation(const MeasurementNoise& noise
 
 Status Pipeline::Configure(const PipelineOptions& options) {
   if (!(options.measurement_sigma_px > 0.0) ||
+      !(options.measurement_sigma_per_magnification_px >= 0.0) ||
+      !std::isfinite(options.measurement_sigma_per_magnification_px) ||
       !(options.measurement_sigma_per_magnification_rad >= 0.0) ||
       !std::isfinite(options.measurement_sigma_per_magnification_rad) ||
       !(options.measurement_disparity_sigma_px >= 0.0) ||

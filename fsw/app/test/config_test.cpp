@@ -129,7 +129,12 @@ TEST(ConfigTest, RefusesInconsistentCombinationsAtTheLineOfTheField) {
       "frontend.reference_from_estimate: true");
   Refused("source: sim\nmeasurement_track_error: shared\n",
           "t.cfg:2: measurement_track_error: shared: needs "
-          "measurement_sigma_per_magnification_rad > 0");
+          "measurement_sigma_per_magnification_px or _rad > 0");
+  Refused(
+      "source: sim\nmeasurement_sigma_per_magnification_px: 0.1\n"
+      "frontend.reference_from_estimate: false\n",
+      "t.cfg:2: measurement_sigma_per_magnification_px: needs "
+      "frontend.reference_from_estimate: true");
 }
 
 // source: lcm: raw pairs published on a channel by a camera process; the calibrations give their

@@ -92,8 +92,9 @@ bool Valid(std::int8_t status) { return status == static_cast<std::int8_t>(NavIn
 // GIVEN a base sigma and a growth per unit of magnification (an angle) WHEN measurements come
 // with their template's magnification THEN the stated sigma is the base for an unwarped template
 // (a first sighting), grows linearly with the scale change, alike for a view twice as near or
-// twice as far, twice as fast in pixels for twice the focal length, and is the base when no scale
-// is known; a negative or non-finite growth is refused.
+// twice as far, twice as fast in pixels for twice the focal length (a growth in pixels adds the
+// same at any focal length), and is the base when no scale is known; a negative or non-finite
+// growth is refused.
 TEST(PipelineTest, MeasurementSigmaGrowsWithTheWarpsMagnification) {
   PipelineOptions po;
   po.camera.fx = 1000.0;
@@ -107,7 +108,13 @@ TEST(PipelineTest, MeasurementSigmaGrowsWithTheWarpsMagnification) {
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, -1.0), 0.04);
   po.camera.fx = 2000.0;
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 2.0), 0.44);
+  po.measurement_sigma_per_magnification_px = 0.1;  // a part that does not scale with fx
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 2.0), 0.04 + 0.1 + 0.4);
+  po.camera.fx = 1000.0;
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 2.0), 0.04 + 0.1 + 0.2);
   po.measurement_sigma_per_magnification_rad = 0.0;
+  EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 1.5), 0.04 + 0.1 * 0.5);
+  po.measurement_sigma_per_magnification_px = 0.0;
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 3.0), 0.04);  // the constant sigma of before
 
   const Descent descent;  // a valid configuration ...
@@ -118,6 +125,11 @@ TEST(PipelineTest, MeasurementSigmaGrowsWithTheWarpsMagnification) {
   bad.measurement_sigma_per_magnification_rad = std::nan("");
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
   bad.measurement_sigma_per_magnification_rad = 2e-4;
+  bad.measurement_sigma_per_magnification_px = -0.1;
+  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
+  bad.measurement_sigma_per_magnification_px = std::nan("");
+  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
+  bad.measurement_sigma_per_magnification_px = 0.1;
   EXPECT_EQ(pipeline->Configure(bad), core::Status::kOk);
 }
 

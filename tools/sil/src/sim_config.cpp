@@ -122,6 +122,8 @@ std::map<std::string, ConfigSetter> SimFields() {
   f["sim.imu_unit"] =
       OneOf([](FswConfig* c) { return &c->sim.imu_unit; }, {"none", "mems", "tactical"});
   f["sim.imu_clock_offset_ms"] = SimNumber(&SimConfig::imu_clock_offset_ms, -500.0, 500.0);
+  f["sim.handover_error"] =
+      OneOf([](FswConfig* c) { return &c->sim.handover_error; }, {"none", "drawn"});
   AddDispersionFields(&f);
   f["sim.target"] = OneOf([](FswConfig* c) { return &c->sim.target; }, {"nominal", "orbital"});
   // 60 m keeps the search square (plus the 10 m clearance cap) and the 100 m view inside the

@@ -281,6 +281,28 @@ app::ImuOptions SimImuOptions(const app::FswConfig& c, const sim::Trajectory* tr
   return o;
 }
 
+void SimHandover(const app::FswConfig& config, const sim::Trajectory& truth,
+                 app::PipelineOptions* po) {
+  po->imu = SimImuOptions(config, &truth);
+  po->initial_world_T_camera = truth.WorldTCamera(0);
+  if (config.sim.handover_error != "drawn") return;
+  // Its own stream of the seed, as the IMU unit's: the draw does not change with the scene.
+  sim::Rng rng(config.sim.seed * 7919u + 11u);
+  estimator::Vec6<double> pose_error;
+  for (int i = 0; i < 3; ++i) pose_error(i) = po->swf.first_pose_sigma_m * rng.Gaussian();
+  for (int i = 3; i < 6; ++i) pose_error(i) = po->swf.first_pose_sigma_rad * rng.Gaussian();
+  // The estimator's first state: the IMU's pose with the IMU, the camera's without.
+  const estimator::Pose<double> state_T_camera =
+      po->imu.enabled ? po->imu.imu_T_camera : estimator::Pose<double>::Identity();
+  const estimator::Pose<double> world_T_state =
+      (po->initial_world_T_camera * state_T_camera.Inverse()).Retract(pose_error);
+  po->initial_world_T_camera = world_T_state * state_T_camera;
+  if (!po->imu.enabled) return;
+  for (int i = 0; i < 3; ++i) {
+    po->imu.initial_velocity_world_mps(i) += po->imu.first_velocity_sigma_mps * rng.Gaussian();
+  }
+}
+
 bool SimWorld::NextImu(std::int64_t until_utime, estimator::ImuSample<double>* sample) {
   return imu_samples_.NextImu(until_utime, sample);
 }

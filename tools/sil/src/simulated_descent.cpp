@@ -458,8 +458,7 @@ bool SimulatedDescent::OpenSource(const app::FswConfig& config, bool progress,
     return false;
   }
   if (config.initial == "truth") {
-    po->initial_world_T_camera = world.Trajectory().WorldTCamera(0);
-    po->imu = SimImuOptions(config, &world.Trajectory());
+    SimHandover(config, world.Trajectory(), po);
   } else {
     po->imu = SimImuOptions(config, nullptr);
   }
@@ -487,8 +486,7 @@ bool SimulatedDescent::Start(const app::FswConfig& config, app::PipelineOptions*
   sim::Trajectory trajectory;
   sim::RigOptions rig;
   if (!SimTrajectory(config, &trajectory, &rig, error)) return false;
-  po->initial_world_T_camera = trajectory.WorldTCamera(0);
-  po->imu = SimImuOptions(config, &trajectory);
+  SimHandover(config, trajectory, po);
   return true;
 }
 

@@ -51,6 +51,12 @@ struct SimConfig {
   // The simulated unit's clock against the cameras' (ms): it stamps an instant t as t + this
   // (a desynchronization for imu.estimate_time_offset to find).
   double imu_clock_offset_ms = 0.0;
+  // The state guidance hands over with the first frame (initial: truth): "none" gives the true
+  // pose and velocity; "drawn" adds an error drawn (seeded by sim.seed) from the sigmas the
+  // estimator states for them (the first pose's 1 mm / 0.1 mrad, imu.velocity_sigma_mps), as a
+  // real handover has: a Monte Carlo judges the filter's consistency only if its start is drawn
+  // from the prior the filter states.
+  std::string handover_error = "none";
 
   // Dispersions of the simulated flight (a Monte Carlo campaign sets them with --set). Every
   // default is the nominal flight, bit for bit.
@@ -202,8 +208,9 @@ struct FswConfig {
   std::int32_t window = 5;
   std::int32_t max_iterations = 10;
   double measurement_sigma_px = 0.5;
-  double measurement_sigma_per_magnification_rad = 0.0;  // PipelineOptions, MeasurementSigmaPx
-  double measurement_disparity_sigma_px = 0.0;           // PipelineOptions, MeasurementNoiseOf
+  double measurement_sigma_per_magnification_px = 0.0;  // PipelineOptions, MeasurementSigmaPx
+  double measurement_sigma_per_magnification_rad = 0.0;
+  double measurement_disparity_sigma_px = 0.0;  // PipelineOptions, MeasurementNoiseOf
   double measurement_disparity_sigma_per_parallax_px = 0.0;
   bool measurement_track_error_shared = false;  // PipelineOptions::track_error_shared
   double min_quality = 0.7;

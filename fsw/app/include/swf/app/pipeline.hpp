@@ -91,10 +91,12 @@ struct PipelineOptions {
   estimator::SwfOptions swf;
   // The 1-sigma of a measurement's left coordinates (uL, v): the tracker's sub-pixel
   // precision, plus a misregistration that grows with the magnification m of its template's
-  // warp (StereoMeasurement::magnification), an angle on the scene and so camera.fx times it in
-  // pixels: measurement_sigma_px + fx * measurement_sigma_per_magnification_rad *
-  // (max(m, 1 / m) - 1) (MeasurementSigmaPx).
+  // warp (StereoMeasurement::magnification), part of it in pixels (the template's resampling)
+  // and part an angle on the scene (camera.fx times it in pixels):
+  // measurement_sigma_px + (measurement_sigma_per_magnification_px + fx *
+  // measurement_sigma_per_magnification_rad) * (max(m, 1 / m) - 1) (MeasurementSigmaPx).
   double measurement_sigma_px = 0.5;
+  double measurement_sigma_per_magnification_px = 0.0;
   double measurement_sigma_per_magnification_rad = 0.0;
   // Whether the warp-grown part of that error is shared by a track's sightings. It is the
   // template's misregistration, which drifts slowly as the warp grows: the same track's error

@@ -10,6 +10,7 @@
 
 #include "swf/app/config.hpp"
 #include "swf/app/flight_loop.hpp"
+#include "swf/app/pipeline.hpp"
 #include "swf/drivers/stereo_source.hpp"
 #include "swf/sim/appearance.hpp"
 #include "swf/sim/imu_model.hpp"
@@ -35,6 +36,14 @@ bool SimImuUnit(const app::FswConfig& config, sim::ImuModelOptions* unit);
 // (app::ImuOptionsFor), with the simulator's unit's rate, noise, ranges, gravity and bias sigmas
 // when sim.imu_unit names one, and with `truth` (initial: truth) the true velocity at start.
 app::ImuOptions SimImuOptions(const app::FswConfig& config, const sim::Trajectory* truth);
+
+// initial: truth: the state guidance hands over at the first frame, the true camera pose and
+// (SimImuOptions) IMU velocity, with sim.handover_error: drawn an error drawn from the first
+// state's stated sigmas added to both (pose: po->swf's first_pose_sigma_*, in the estimator's
+// Retract convention on the first state, world_T_imu or world_T_camera; velocity: po->imu's
+// first_velocity_sigma_mps). Seeded by sim.seed on a stream of its own.
+void SimHandover(const app::FswConfig& config, const sim::Trajectory& truth,
+                 app::PipelineOptions* po);
 
 // The trajectory (and rig) of a sim configuration. Cheap (no terrain) unless `sim.target:
 // orbital`: the descent target then comes from `terrain` (built here when null), and `chosen`
