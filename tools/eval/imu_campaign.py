@@ -122,7 +122,15 @@ def describe(values):
                                                   statistics.fmean(values), max(values))
 
 
-def summarize(records, seeds, names=tuple(INPUTS)):
+def image_sizes(records):
+    """The image sizes the runs flew (swf-sil's summary), as text: '512 x 384'."""
+    sizes = sorted({(r['summary'].get('image_width_px'), r['summary'].get('image_height_px'))
+                    for r in records if 'summary' in r})
+    return ', '.join('%s x %s' % wh for wh in sizes) or 'no run finished'
+
+
+def summarize(records, seeds, names=tuple(INPUTS), config='fsw/app/config/demo.cfg',
+              overrides=()):
     by_input = {name: [r for r in records if r['input'] == name] for name in names}
     lines = ['| input | runs ok | pose RMS (m) | landmark RMS (m) | mean position NEES | '
              'NEES band: frames inside | VALID / DEGRADED / INVALID frames | protection '
@@ -164,10 +172,12 @@ def summarize(records, seeds, names=tuple(INPUTS)):
             LABELS[name], ok, len(runs), describe(pose), describe(landmark), describe(nees),
             inside, counted, valid, degraded, invalid, violations))
     text = ['## Stereo-inertial descent campaign (`tools/eval/imu_campaign.py`)', '',
-            'Seeds %d-%d of the demo descent (fsw/app/config/demo.cfg, 512 x 384 px, 100 m to '
-            '10 m at 10 m/s, lockstep), each flown by swf-sil with the process inputs below. NEES band '
-            '(95 %%, mean over %d seeds at a frame): [%.2f, %.2f].' % (
-                seeds[0], seeds[-1], len(seeds), lo, hi), ''] + lines + ['']
+            'Seeds %d-%d of the descent of %s%s (%s px, lockstep), each flown by swf-sil with '
+            'the process inputs below. NEES band (95 %%, mean over %d seeds at a frame): '
+            '[%.2f, %.2f].' % (
+                seeds[0], seeds[-1], config,
+                ''.join(' with `%s`' % o for o in overrides), image_sizes(records), len(seeds),
+                lo, hi), ''] + lines + ['']
     for name in by_input:
         text.append('- %s: mean position NEES over the seeds by tenths of the descent (first to '
                     'last): %s.' % (LABELS[name], ' '.join(
@@ -258,7 +268,7 @@ def main():
         records = [f.result() for f in futures]
     with open(os.path.join(a.out, 'runs.json'), 'w') as f:
         json.dump(records, f, indent=1, allow_nan=False, default=str)
-    text = summarize(records, seeds, names)
+    text = summarize(records, seeds, names, a.config, a.set)
     with open(os.path.join(a.out, 'summary.md'), 'w') as f:
         f.write(text)
     sys.stdout.write(text)

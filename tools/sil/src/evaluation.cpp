@@ -99,6 +99,10 @@ void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<do
     tracking_.all_px.push_back(e);
     tracking_.du_px.push_back(du);
     tracking_.dv_px.push_back(dv);
+    const double ru = z.x() - camera_.cx;
+    const double rv = z.z() - camera_.cy;
+    const double r2 = ru * ru + rv * rv;
+    tracking_.radial_fraction.push_back(r2 > 100.0 ? (du * ru + dv * rv) / r2 : NAN);
     app::NewSighting s;
     const bool seen = FirstSeen(m.id, &s);
     const int age = seen ? static_cast<int>(r.nav.frame_seq - s.frame_seq) : -1;

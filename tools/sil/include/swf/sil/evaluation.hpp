@@ -76,6 +76,10 @@ class Evaluation : public app::OutputObserver {
     std::vector<double> magnification;
     std::vector<double> altitude_m;
     std::vector<double> stated_sigma_px;
+    // The error along the ray from the principal point (the descent's focus of expansion), over
+    // the true distance from it: a tracker that under- or over-follows the image's expansion
+    // shows as a non-zero median here, which scales the motion the filter sees.
+    std::vector<double> radial_fraction;
   };
   const TrackingErrors& Tracking() const { return tracking_; }
   // The stereo match's own error: per fused measurement of a known landmark, the first sighting
