@@ -8,12 +8,23 @@
 
 namespace swf::estimator {
 
+namespace {
+
+// x = a^-1 b by the factorization Decomposition (Eigen::LLT or Eigen::LDLT); x is written only
+// when the factorization succeeded.
+template <typename Decomposition, typename Rhs, typename Out>
+bool FactorAndSolve(const typename Decomposition::MatrixType& a, const Rhs& b, Out* x) {
+  const Decomposition factorization(a);
+  if (factorization.info() != Eigen::Success) return false;
+  *x = factorization.solve(b);
+  return true;
+}
+
+}  // namespace
+
 template <typename S, int N>
 bool SpdInverse(const SquareMat<S, N>& a, SquareMat<S, N>* inverse) {
-  const Eigen::LLT<SquareMat<S, N>> llt(a);
-  if (llt.info() != Eigen::Success) return false;
-  *inverse = llt.solve(SquareMat<S, N>::Identity());
-  return true;
+  return FactorAndSolve<Eigen::LLT<SquareMat<S, N>>>(a, SquareMat<S, N>::Identity(), inverse);
 }
 
 template <typename S, int N>
@@ -26,18 +37,12 @@ bool InverseCholeskyFactor(const SquareMat<S, N>& a, SquareMat<S, N>* l_inverse)
 
 template <typename S, int N>
 bool LdltSolve(const SquareMat<S, N>& a, const ColumnVec<S, N>& b, ColumnVec<S, N>* x) {
-  const Eigen::LDLT<SquareMat<S, N>> ldlt(a);
-  if (ldlt.info() != Eigen::Success) return false;
-  *x = ldlt.solve(b);
-  return true;
+  return FactorAndSolve<Eigen::LDLT<SquareMat<S, N>>>(a, b, x);
 }
 
 template <typename S, int N>
 bool LdltInverse(const SquareMat<S, N>& a, SquareMat<S, N>* inverse) {
-  const Eigen::LDLT<SquareMat<S, N>> ldlt(a);
-  if (ldlt.info() != Eigen::Success) return false;
-  *inverse = ldlt.solve(SquareMat<S, N>::Identity());
-  return true;
+  return FactorAndSolve<Eigen::LDLT<SquareMat<S, N>>>(a, SquareMat<S, N>::Identity(), inverse);
 }
 
 template <typename S, int N>
