@@ -283,15 +283,13 @@ def main():
     p.add_argument('--fig16-seconds', type=float, default=0.0,
                    help='Fig. 16: seconds of descent per run, the same stretch at every rate '
                         '(0: the whole descent)')
-    p.add_argument('--fig16-set', action='append', default=[], metavar='"KEY: VALUE"',
-                   help='Fig. 16: a further swf-sil setting (the reduced ctest: a smaller '
-                        'terrain)')
     p.add_argument('--fig17-frames', type=int, default=41,
                    help='Fig. 17: frames of the descent (41: 100 m to 60 m, the measurement '
                         'level\'s 40 steps)')
-    p.add_argument('--fig17-set', action='append', default=[], metavar='"KEY: VALUE"',
-                   help='Fig. 17: a further swf-sil setting (the reduced ctest: a smaller '
-                        'terrain)')
+    for fig in (16, 17):
+        p.add_argument('--fig%d-set' % fig, action='append', default=[], metavar='"KEY: VALUE"',
+                       help='Fig. %d: a further swf-sil setting (the reduced ctest: a smaller '
+                            'terrain)' % fig)
     p.add_argument('--check', action='store_true')
     p.add_argument('--report-only', action='store_true',
                    help='no flights: rewrite the charts and text from OUT/image_*.json')

@@ -12,7 +12,7 @@ replacing the filter's measurements, or when either run's verdict is not ok."""
 import sys
 import tempfile
 
-from sil_run import fly
+from sil_run import CONSTANT_SIGMA, fly
 
 
 def main():
@@ -24,11 +24,7 @@ def main():
         # Without the reference no warp is measured, so that run states the constant sigma
         # of that state (the configuration refuses the per-track sigma there).
         before = fly(sil, cfg, workdir, 'reference_off', 'sim.frames: 20',
-                     'frontend.reference_from_estimate: false', 'measurement_sigma_px: 0.12',
-                     'measurement_sigma_per_magnification_rad: 0',
-                     'measurement_disparity_sigma_px: 0',
-                     'measurement_disparity_sigma_per_parallax_px: 0',
-                     'measurement_track_error: independent')
+                     'frontend.reference_from_estimate: false', *CONSTANT_SIGMA)
     failures = []
     for name, s in (('on', on), ('reference_off', before)):
         t = s['tracking_error_px']

@@ -26,7 +26,7 @@ verdict is not ok."""
 import sys
 import tempfile
 
-from sil_run import fly
+from sil_run import CONSTANT_SIGMA, fly
 
 MIN_MEASUREMENTS = 200  # per bin, for its ratio to count
 
@@ -56,11 +56,7 @@ def main():
                         'measurement_disparity_sigma_px: 0.024',
                         'measurement_disparity_sigma_per_parallax_px: 0.6',
                         'measurement_track_error: independent')
-        constant = fly(sil, cfg, workdir, 'constant', 'measurement_sigma_px: 0.12',
-                       'measurement_sigma_per_magnification_rad: 0',
-                       'measurement_disparity_sigma_px: 0',
-                       'measurement_disparity_sigma_per_parallax_px: 0',
-                       'measurement_track_error: independent')
+        constant = fly(sil, cfg, workdir, 'constant', *CONSTANT_SIGMA)
     failures = []
     for name, s in (('per track', per_track), ('constant 0.12 px', constant)):
         print('%s: error / stated sigma by magnification: %s; pose RMS %.4f m, mean position '
