@@ -36,15 +36,22 @@ Msg RoundTrip(const Msg& in, std::vector<std::uint8_t>* buffer) {
   return out;
 }
 
-TEST(Messages, StereoFrameRoundTripsAndRejectsTruncation) {
+// A 4 x 2 pair: left all 7, right all 9.
+swf_msgs::stereo_frame_t SmallFrame() {
   swf_msgs::stereo_frame_t frame{};
-  frame.utime = 123456789;
-  frame.seq = 42;
+  frame.seq = 3;
   frame.width = 4;
   frame.height = 2;
   frame.num_bytes = 8;
   frame.left.assign(8, 7);
   frame.right.assign(8, 9);
+  return frame;
+}
+
+TEST(Messages, StereoFrameRoundTripsAndRejectsTruncation) {
+  swf_msgs::stereo_frame_t frame = SmallFrame();
+  frame.utime = 123456789;
+  frame.seq = 42;
   frame.has_motion = true;
   frame.motion_translation_m[2] = -1.0;
   frame.motion_rotation_rad[0] = 1e-3;
@@ -123,17 +130,6 @@ void ExpectCountChecked(const std::vector<std::uint8_t>& bytes, std::size_t offs
   EXPECT_STREQ(e.field, field);
   EXPECT_EQ(Decode<Msg>(WithInt32(bytes, offset, count + 1)).result, DecodeResult::kTruncated);
   EXPECT_EQ(Decode<Msg>(WithInt32(bytes, offset, count - 1)).result, DecodeResult::kTrailingBytes);
-}
-
-swf_msgs::stereo_frame_t SmallFrame() {
-  swf_msgs::stereo_frame_t frame{};
-  frame.seq = 3;
-  frame.width = 4;
-  frame.height = 2;
-  frame.num_bytes = 8;
-  frame.left.assign(8, 7);
-  frame.right.assign(8, 9);
-  return frame;
 }
 
 // Field offsets in the encoded bytes (8-byte fingerprint first; messages/*.lcm in order).
