@@ -266,24 +266,24 @@ TEST_F(PlotTest, MalformedLineChartFilesAreNamedWithTheirLine) {
   EXPECT_EQ(error.rfind(Png("none.dat") + ": cannot read: ", 0), 0u) << error;
 }
 
-TEST_F(PlotTest, MissingGnuplotIsNamed) {
-  ::setenv("SWF_GNUPLOT", "/nonexistent/gnuplot", 1);
-  std::string error;
-  EXPECT_FALSE(DrawTrajectory(Descent(), Png("t.png"), &error));
-  EXPECT_EQ(error.rfind(Png("t.png") + ": cannot run /nonexistent/gnuplot: ", 0), 0u) << error;
-  EXPECT_FALSE(std::filesystem::exists(Png("t.png")));
-}
-
-TEST_F(PlotTest, FailingGnuplotIsNamedWithItsStatus) {
-  ::setenv("SWF_GNUPLOT", "false", 1);
-  std::string error;
-  EXPECT_FALSE(DrawLandmarkMap(Descent(), Png("m.png"), &error));
-  EXPECT_EQ(error.rfind(Png("m.png") + ": false exited with status 1", 0), 0u) << error;
-  EXPECT_FALSE(std::filesystem::exists(Png("m.png")));
-  // A program that succeeds without drawing is no plot either.
-  ::setenv("SWF_GNUPLOT", "true", 1);
-  EXPECT_FALSE(DrawLandmarkMap(Descent(), Png("m.png"), &error));
-  EXPECT_NE(error.find("drew no image"), std::string::npos) << error;
+// GIVEN a gnuplot that cannot be started, one that fails and one that succeeds without drawing
+// WHEN a run's plots are drawn THEN each fails naming the PNG and the cause, and leaves no PNG.
+TEST_F(PlotTest, GnuplotThatDrawsNothingIsNamed) {
+  const std::pair<const char*, std::string> cases[] = {
+      {"/nonexistent/gnuplot", "cannot run /nonexistent/gnuplot: "},
+      {"false", "false exited with status 1"},
+      {"true", "true exited with status 0 but drew no image"}};
+  using Draw = bool (*)(const evaluation::RunScore&, const std::string&, std::string*);
+  for (const auto& [gnuplot, cause] : cases) {
+    ::setenv("SWF_GNUPLOT", gnuplot, 1);
+    for (const Draw draw : {&DrawTrajectory, &DrawLandmarkMap}) {
+      const std::string png = Png("plot.png");
+      std::string error;
+      EXPECT_FALSE(draw(Descent(), png, &error)) << gnuplot;
+      EXPECT_EQ(error.rfind(png + ": " + cause, 0), 0u) << error;
+      EXPECT_FALSE(std::filesystem::exists(png)) << gnuplot;
+    }
+  }
 }
 
 TEST_F(PlotTest, UnwritableDestinationAndEmptyRunsAreNamed) {
