@@ -296,17 +296,16 @@ bool PrepareAndRun(const char* tool, const std::string& out, const Run& run) {
   return true;
 }
 
-// The flags every dataset command shares, onto its options (the same field names).
-template <typename DatasetOptions>
-void ApplyCommon(const SequenceArgs& a, DatasetOptions* options) {
-  options->window = a.window;
-  options->max_tracks = static_cast<std::size_t>(a.max_tracks);
+// The flags every dataset command shares, onto its runs' options.
+void ApplyCommon(const SequenceArgs& a, RunOptions* run) {
+  run->window = a.window;
+  run->max_tracks = static_cast<std::size_t>(a.max_tracks);
   if (a.motion_sigma_m > 0.0) {
-    options->motion_sigma_m = a.motion_sigma_m;
-    options->motion_sigma_rad = a.motion_sigma_rad;
+    run->process_sigma_m = a.motion_sigma_m;
+    run->process_sigma_rad = a.motion_sigma_rad;
   }
-  if (a.divergence_m > 0.0) options->divergence_m = a.divergence_m;
-  options->measurements_path = a.measurements;
+  if (a.divergence_m > 0.0) run->divergence_m = a.divergence_m;
+  run->measurements_path = a.measurements;
 }
 
 // Shared paragraph: what ran.
@@ -480,7 +479,7 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
   const std::string& dir = a.dir;
   EurocOptions options;
   options.loop_seconds = loop_seconds;
-  ApplyCommon(a, &options);
+  ApplyCommon(a, &options.run);
   const bool looped = options.loop_seconds > 0.0;
   const std::string prefix = looped ? "euroc_loop" : "euroc";
   if (!MeasurementsApartFromReport("swf-eval euroc", a, prefix)) return kExitBadArguments;
@@ -502,13 +501,13 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
   h["frames"] = result.sequence.frames.size();
   SetNumber(&h, "loop_seconds", options.loop_seconds);
   h["skipped_frames_without_truth"] = result.skipped_frames;
-  h["window"] = options.window;
-  h["max_tracks"] = options.max_tracks;
+  h["window"] = options.run.window;
+  h["max_tracks"] = options.run.max_tracks;
   SetNumber(&h, "rectified_focal_px", result.sequence.camera.fx);
   SetNumber(&h, "baseline_m", result.sequence.camera.baseline_m);
   SetNumber(&h, "gt_path_length_m", result.gt_path_length_m);
   SetNumber(&h, "gt_extent_m", result.gt_extent_m);
-  SetNumber(&h, "divergence_limit_m", options.divergence_m);
+  SetNumber(&h, "divergence_limit_m", options.run.divergence_m);
   h["alignment"] = "SE(3), Horn/Umeyama without scale, all frames; camera positions";
   e.description =
       Format("On `%s` (%d recorded stereo frames%s). ", dir.c_str(), result.recorded_frames,
@@ -519,7 +518,7 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
           "written in TUM format (`%s_swf_tum.txt`, `%s_vo_tum.txt`) and compared with "
           "`groundtruth_tum.txt` moved to the same camera; a run whose error without fit "
           "exceeds %.3g m is called diverged and not scored.",
-          e.prefix.c_str(), e.prefix.c_str(), options.divergence_m);
+          e.prefix.c_str(), e.prefix.c_str(), options.run.divergence_m);
   e.notes = EurocNotes(options, result);
   return WriteEvaluation(a.out, e);
 }
@@ -527,9 +526,9 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
 int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames) {
   const std::string& dir = a.dir;
   KittiOptions options;
-  options.max_disparity_px = max_disparity_px;
+  options.run.max_disparity_px = max_disparity_px;
   options.max_frames = max_frames;
-  ApplyCommon(a, &options);
+  ApplyCommon(a, &options.run);
   const std::string prefix = "kitti_odometry";
   if (!MeasurementsApartFromReport("swf-eval kitti", a, prefix)) return kExitBadArguments;
   KittiResult result;
@@ -542,13 +541,13 @@ int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames)
   e.dataset = "KITTI odometry excerpt";
   Json& h = e.header;
   h["frames"] = result.sequence.frames.size();
-  h["window"] = options.window;
-  h["max_tracks"] = options.max_tracks;
-  h["max_disparity_px"] = options.max_disparity_px;
+  h["window"] = options.run.window;
+  h["max_tracks"] = options.run.max_tracks;
+  h["max_disparity_px"] = options.run.max_disparity_px;
   SetNumber(&h, "focal_px", result.sequence.camera.fx);
   SetNumber(&h, "baseline_m", result.sequence.camera.baseline_m);
   SetNumber(&h, "gt_path_length_m", result.gt_path_length_m);
-  SetNumber(&h, "divergence_limit_m", options.divergence_m);
+  SetNumber(&h, "divergence_limit_m", options.run.divergence_m);
   h["alignment"] = "SE(3), Horn/Umeyama without scale, all frames; left camera positions";
   h["relative_error"] = "per frame-to-frame motion: truth_step^-1 * estimate_step";
   e.description =
@@ -560,7 +559,7 @@ int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames)
           "error without fit is the plain difference; a run whose error without fit exceeds "
           "%.3g m is called diverged and not scored. Relative error, KITTI-style per frame: "
           "translation and rotation of truth_step^-1 * estimate_step.",
-          options.divergence_m);
+          options.run.divergence_m);
   e.notes = KittiNotes(result);
   return WriteEvaluation(a.out, e);
 }

@@ -60,15 +60,9 @@ bool ParseImageList(std::istream& csv, const std::string& path, std::vector<List
                     std::string* error);
 
 struct EurocOptions {
-  int window = 5;                // poses in the window, for SWF and VO alike
-  std::size_t max_tracks = 150;  // front end tracks
-  double sigma_px = 0.5;         // measurement noise used by the estimator
-  double motion_sigma_m = 0.05;  // constant-velocity process noise per frame
-  double motion_sigma_rad = 0.02;
+  RunOptions run;  // window, tracks, noise and divergence for SWF and VO alike (name, mode unset)
   // > 0: loop the recorded frames forwards and backwards into this many seconds.
   double loop_seconds = 0.0;
-  double divergence_m = 1.0;      // anchored position error that calls a run diverged
-  std::string measurements_path;  // non-empty: the SWF run's measurements (RunOptions)
 };
 
 struct EurocResult {

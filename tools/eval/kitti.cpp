@@ -192,9 +192,7 @@ bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult*
 bool RunKitti(const std::string& dir, const KittiOptions& options, KittiResult* result,
               std::string* error) {
   if (!LoadKitti(dir, options, result, error)) return false;
-  RunOptions o = RunOptionsFrom(options);
-  o.max_disparity_px = options.max_disparity_px;
-  result->runs = RunSwfAndVo(result->sequence, o);
+  result->runs = RunSwfAndVo(result->sequence, options.run);
   result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
   return true;
 }

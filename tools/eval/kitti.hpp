@@ -14,16 +14,19 @@
 
 namespace swf::eval {
 
+// The runs' defaults on KITTI: more tracks, a car's process noise (0.5 m per frame: it changes
+// speed and heading slowly) and a 10 m anchored error before a run is called diverged.
+inline RunOptions KittiRunOptions() {
+  RunOptions o;
+  o.max_tracks = 300;
+  o.process_sigma_m = 0.5;
+  o.divergence_m = 10.0;
+  return o;
+}
+
 struct KittiOptions {
-  int window = 5;
-  std::size_t max_tracks = 300;
-  int max_disparity_px = 128;
-  double sigma_px = 0.5;
-  double motion_sigma_m = 0.5;  // per frame: the car changes speed and heading slowly
-  double motion_sigma_rad = 0.02;
-  double divergence_m = 10.0;     // anchored position error that calls a run diverged
-  int max_frames = 0;             // > 0: only the first max_frames frames
-  std::string measurements_path;  // non-empty: the SWF run's measurements (RunOptions)
+  RunOptions run = KittiRunOptions();  // for SWF and VO alike (name, mode unset)
+  int max_frames = 0;                  // > 0: only the first max_frames frames
 };
 
 struct KittiResult {

@@ -136,20 +136,6 @@ app::PipelineOptions PipelineFor(const StereoSequence& sequence, const RunOption
 // Runs the sequence; never throws, every problem ends in the verdict and reason.
 RunRecord RunSequence(const StereoSequence& sequence, const RunOptions& options);
 
-// The run options a dataset's options (EurocOptions, KittiOptions: the same field names) ask for.
-template <typename DatasetOptions>
-RunOptions RunOptionsFrom(const DatasetOptions& d) {
-  RunOptions o;
-  o.window = d.window;
-  o.max_tracks = d.max_tracks;
-  o.sigma_px = d.sigma_px;
-  o.process_sigma_m = d.motion_sigma_m;
-  o.process_sigma_rad = d.motion_sigma_rad;
-  o.divergence_m = d.divergence_m;
-  o.measurements_path = d.measurements_path;
-  return o;
-}
-
 // The same run as SWF(window) and as VO(window): name and mode set from `base`'s window.
 std::vector<RunRecord> RunSwfAndVo(const StereoSequence& sequence, const RunOptions& base);
 

@@ -419,13 +419,9 @@ TEST(EvalKitti, WithTheTrueMotionAsInputFollowsTheSixtyMetres) {
   std::vector<RunRecord> runs;
   for (const auto mode :
        {estimator::SwfMode::kSlidingWindow, estimator::SwfMode::kVisualOdometry}) {
-    RunOptions o;
+    RunOptions o = options.run;
     o.name = mode == estimator::SwfMode::kSlidingWindow ? "SWF(5)" : "VO(5)";
     o.mode = mode;
-    o.max_tracks = options.max_tracks;
-    o.process_sigma_m = options.motion_sigma_m;
-    o.process_sigma_rad = options.motion_sigma_rad;
-    o.divergence_m = options.divergence_m;
     o.truth_motion = true;
     runs.push_back(RunSequence(result.sequence, o));
     const TrajectoryErrors& e = runs.back().errors;
