@@ -44,16 +44,17 @@ std::string ErrorPanel(const std::string& data, const std::string& y_label, int 
   return s.str();
 }
 
-bool NoOutputs(const evaluation::RunScore& score, const std::string& png, std::string* error) {
-  if (!score.outputs.empty()) return false;
-  *error = png + ": the run has no navigation output with truth to plot";
+// True (and *error says so) when the run has none of `what`: there is nothing to draw.
+bool Missing(bool empty, const std::string& png, const char* what, std::string* error) {
+  if (!empty) return false;
+  *error = png + ": the run has no " + what + " to plot";
   return true;
 }
 
 }  // namespace
 
 bool DrawTrajectory(const evaluation::RunScore& score, const std::string& png, std::string* error) {
-  if (NoOutputs(score, png, error)) return false;
+  if (Missing(score.outputs.empty(), png, "navigation output with truth", error)) return false;
   GnuplotJob job(1300, 950);
   const std::string d = job.Data("outputs.dat", OutputTable(score));
   std::ostringstream s;
@@ -80,7 +81,7 @@ bool DrawTrajectory(const evaluation::RunScore& score, const std::string& png, s
 
 bool DrawAttitudeError(const evaluation::RunScore& score, const std::string& png,
                        std::string* error) {
-  if (NoOutputs(score, png, error)) return false;
+  if (Missing(score.outputs.empty(), png, "navigation output with truth", error)) return false;
   GnuplotJob job(1100, 800);
   const std::string d = job.Data("outputs.dat", OutputTable(score));
   std::ostringstream s;
@@ -103,10 +104,7 @@ bool DrawAttitudeError(const evaluation::RunScore& score, const std::string& png
 
 bool DrawLandmarkError(const evaluation::RunScore& score, const std::string& png,
                        std::string* error) {
-  if (score.maps.empty()) {
-    *error = png + ": the run has no landmark map with truth to plot";
-    return false;
-  }
+  if (Missing(score.maps.empty(), png, "landmark map with truth", error)) return false;
   const std::int64_t origin = TimeOriginUs(score);
   std::ostringstream data;
   for (const evaluation::MapScore& m : score.maps) {
@@ -132,10 +130,7 @@ bool DrawLandmarkError(const evaluation::RunScore& score, const std::string& png
 
 bool DrawLandmarkMap(const evaluation::RunScore& score, const std::string& png,
                      std::string* error) {
-  if (score.last_map.empty()) {
-    *error = png + ": the run has no judged landmark map to plot";
-    return false;
-  }
+  if (Missing(score.last_map.empty(), png, "judged landmark map", error)) return false;
   std::vector<double> errors;
   double x_lo = INFINITY, x_hi = -INFINITY, y_lo = INFINITY, y_hi = -INFINITY;
   for (const evaluation::LandmarkScore& l : score.last_map) {
