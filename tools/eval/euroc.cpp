@@ -485,10 +485,7 @@ bool LoadEuroc(const std::string& dir, const EurocOptions& options, EurocResult*
 
 bool RunEuroc(const std::string& dir, const EurocOptions& options, EurocResult* result,
               std::string* error) {
-  if (!LoadEuroc(dir, options, result, error)) return false;
-  result->runs = RunSwfAndVo(result->sequence, options.run);
-  result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
-  return true;
+  return LoadAndRun(&LoadEuroc, dir, options, result, error);
 }
 
 }  // namespace swf::eval

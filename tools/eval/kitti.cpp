@@ -191,10 +191,7 @@ bool LoadKitti(const std::string& dir, const KittiOptions& options, KittiResult*
 
 bool RunKitti(const std::string& dir, const KittiOptions& options, KittiResult* result,
               std::string* error) {
-  if (!LoadKitti(dir, options, result, error)) return false;
-  result->runs = RunSwfAndVo(result->sequence, options.run);
-  result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
-  return true;
+  return LoadAndRun(&LoadKitti, dir, options, result, error);
 }
 
 }  // namespace swf::eval

@@ -145,6 +145,19 @@ std::vector<RunRecord> RunSwfAndVo(const StereoSequence& sequence, const RunOpti
 std::vector<RunRecord> DiagnoseFailures(const StereoSequence& sequence,
                                         const std::vector<RunRecord>& runs);
 
+// A dataset's evaluation: `load` (LoadEuroc, LoadKitti) reads it into *result, then SWF and VO
+// run on it with options.run and the failed ones are diagnosed (DiagnoseFailures). False with
+// *error only when the dataset cannot be loaded; a failed run is in its RunRecord's verdict.
+template <typename Options, typename Result>
+bool LoadAndRun(bool (*load)(const std::string&, const Options&, Result*, std::string*),
+                const std::string& dir, const Options& options, Result* result,
+                std::string* error) {
+  if (!load(dir, options, result, error)) return false;
+  result->runs = RunSwfAndVo(result->sequence, options.run);
+  result->diagnostics = DiagnoseFailures(result->sequence, result->runs);
+  return true;
+}
+
 // `total` indices into n recorded frames, forwards then backwards (0, 1, ..., n-1, n-2, ..., 1,
 // 0, 1, ...): a ping-pong, so the image motion between consecutive frames stays continuous.
 std::vector<int> PingPong(int n, int total);
