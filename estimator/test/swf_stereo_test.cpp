@@ -354,12 +354,8 @@ TEST(SwfStereo, ReplaceNewestObservationFeedsTheCost) {
 
 // Paper Fig. 14 load on a long sideways pass: ~20 measurements per frame, tracks ~10 frames.
 SceneOptions LongPass(int frames) {
-  SceneOptions so;
-  so.motion = SceneOptions::Motion::kSideways;
+  SceneOptions so = swf::scene::Fig14Sideways();
   so.frames = frames;
-  so.start_altitude_m = 50.0;
-  so.step_m = 2.2;
-  so.landmark_density_per_m2 = 0.055;
   so.seed = 9;
   return so;
 }
