@@ -299,7 +299,7 @@ bool PrepareAndRun(const char* tool, const std::string& out, const Run& run) {
 // The flags every dataset command shares, onto its runs' options.
 void ApplyCommon(const SequenceArgs& a, RunOptions* run) {
   run->window = a.window;
-  run->max_tracks = static_cast<std::size_t>(a.max_tracks);
+  if (a.max_tracks > 0) run->max_tracks = static_cast<std::size_t>(a.max_tracks);
   if (a.motion_sigma_m > 0.0) {
     run->process_sigma_m = a.motion_sigma_m;
     run->process_sigma_rad = a.motion_sigma_rad;

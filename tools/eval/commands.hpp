@@ -28,7 +28,7 @@ struct SequenceArgs {
   std::string dir;
   std::string out = "out/eval";
   int window = 5;
-  int max_tracks = 150;
+  int max_tracks = 0;           // 0: the command's default
   double motion_sigma_m = 0.0;  // 0: the command's default (with motion_sigma_rad)
   double motion_sigma_rad = 0.0;
   double divergence_m = 0.0;  // 0: the command's default

@@ -692,10 +692,7 @@ int main(int argc, char** argv) {
     sequence.motion_sigma_rad = motion_sigma[1];
   }
   if (euroc->parsed()) return swf::eval::RunEurocCommand(sequence, loop_seconds);
-  if (kitti->parsed()) {
-    if (kitti->count("--max-tracks") == 0) sequence.max_tracks = 300;
-    return swf::eval::RunKittiCommand(sequence, max_disparity_px, max_frames);
-  }
+  if (kitti->parsed()) return swf::eval::RunKittiCommand(sequence, max_disparity_px, max_frames);
   const std::string only = only_list.empty() ? "" : "," + only_list + ",";
   std::string dir_error;
   if (!swf::cli::MakeDirectories(out, &dir_error)) {
