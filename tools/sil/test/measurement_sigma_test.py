@@ -9,7 +9,7 @@ its template was taken (`tracking_error_bins.by_magnification`) with their Huber
 divided by the sigma the filter was told. Both runs state each sighting alone
 (`measurement_track_error: independent`; the demo flies `shared`, which adds the error a track's
 sightings share and is judged by the campaign's NEES instead, docs/imu.md). With the per-track sigma, which grows with the
-magnification of the template's warp (app::MeasurementSigmaPx; 0.03 px + fx 1.645e-4 rad (m - 1),
+magnification of the template's warp (app::MeasurementSigmaPx; 0.03 px + (0.093 px + fx 8.4e-5 rad) (m - 1),
 docs/imu.md), that ratio must be near 1 in every bin; with one constant sigma (the demo's 0.12 px)
 it spreads from conservative at m ~ 1 to overconfident at m > 2,
 which the test also checks, so that it sees what it guards.
@@ -52,7 +52,8 @@ def main():
     sil, cfg = sys.argv[1], sys.argv[2]
     with tempfile.TemporaryDirectory() as workdir:
         per_track = fly(sil, cfg, workdir, 'per_track', 'measurement_sigma_px: 0.03',
-                        'measurement_sigma_per_magnification_rad: 1.645e-4',
+                        'measurement_sigma_per_magnification_px: 0.093',
+                        'measurement_sigma_per_magnification_rad: 8.4e-5',
                         'measurement_disparity_sigma_px: 0.024',
                         'measurement_disparity_sigma_per_parallax_px: 0.6',
                         'measurement_track_error: independent')

@@ -8,7 +8,8 @@ import sys
 
 # The constant 0.12 px measurement sigma of before the per-track sigma (no magnification or
 # disparity terms), each sighting stated alone: `--set` overrides for fly().
-CONSTANT_SIGMA = ('measurement_sigma_px: 0.12', 'measurement_sigma_per_magnification_rad: 0',
+CONSTANT_SIGMA = ('measurement_sigma_px: 0.12', 'measurement_sigma_per_magnification_px: 0',
+                  'measurement_sigma_per_magnification_rad: 0',
                   'measurement_disparity_sigma_px: 0',
                   'measurement_disparity_sigma_per_parallax_px: 0',
                   'measurement_track_error: independent')
