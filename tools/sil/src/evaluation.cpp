@@ -103,6 +103,8 @@ void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<do
     const double rv = z.z() - camera_.cy;
     const double r2 = ru * ru + rv * rv;
     tracking_.radial_fraction.push_back(r2 > 100.0 ? (du * ru + dv * rv) / r2 : NAN);
+    const auto relief = relief_fraction_.find(m.id);
+    tracking_.relief_fraction.push_back(relief != relief_fraction_.end() ? relief->second : NAN);
     app::NewSighting s;
     const bool seen = FirstSeen(m.id, &s);
     const int age = seen ? static_cast<int>(r.nav.frame_seq - s.frame_seq) : -1;
@@ -156,6 +158,21 @@ bool Evaluation::FirstSeen(std::int64_t id, app::NewSighting* sighting) const {
   return true;
 }
 
+double Evaluation::ReliefFraction(const Eigen::Vector3d& point,
+                                  const estimator::Pose<double>& pose) const {
+  constexpr int kRing = 16;
+  constexpr double kPatchRadiusPx = 6.0;
+  const double depth = pose.ApplyInverse(point).z();
+  const double radius_m = kPatchRadiusPx * depth / camera_.fx;
+  double ring = 0.0;
+  for (int k = 0; k < kRing; ++k) {
+    const double a = 2.0 * M_PI * k / kRing;
+    ring +=
+        terrain_->HeightAt(point.x() + radius_m * std::cos(a), point.y() + radius_m * std::sin(a));
+  }
+  return (point.z() - ring / kRing) / depth;
+}
+
 bool Evaluation::TrueLandmark(std::int64_t id, Eigen::Vector3d* position) {
   const auto cached = true_landmarks_.find(id);
   if (cached != true_landmarks_.end()) {
@@ -172,6 +189,7 @@ bool Evaluation::TrueLandmark(std::int64_t id, Eigen::Vector3d* position) {
                                                          (s.v - camera_.cy) / camera_.fy, 1.0);
     double t = 0.0;
     if (terrain_->Intersect(pose.t, ray, &t)) value = pose.t + t * ray;
+    if (std::isfinite(value.x())) relief_fraction_[id] = ReliefFraction(value, pose);
   }
   true_landmarks_[id] = value;
   *position = value;

@@ -158,12 +158,14 @@ void WriteTrackingErrorBins(std::FILE* f, const Evaluation::TrackingErrors& t) {
   std::fprintf(
       f,
       "  \"tracking_error_bins\": {\"by_age\": %s,\n    \"by_magnification\": %s,\n    "
-      "\"by_altitude_m\": %s},\n",
+      "\"by_altitude_m\": %s,\n    \"by_relief_fraction\": %s},\n",
       BinnedErrorsJson(t, age, {1, 2, 3, 4, 6, 9, 13, 17, 25, 1e9}).c_str(),
       BinnedErrorsJson(t, t.magnification,
                        {0.0, 1.02, 1.05, 1.1, 1.2, 1.35, 1.5, 1.75, 2.0, 2.5, 1e9})
           .c_str(),
-      BinnedErrorsJson(t, t.altitude_m, {0, 15, 20, 30, 40, 50, 60, 70, 80, 90, 1e9}).c_str());
+      BinnedErrorsJson(t, t.altitude_m, {0, 15, 20, 30, 40, 50, 60, 70, 80, 90, 1e9}).c_str(),
+      BinnedErrorsJson(t, t.relief_fraction, {-1e9, -2e-3, -5e-4, -1e-4, 1e-4, 5e-4, 2e-3, 1e9})
+          .c_str());
 }
 
 // The correlation of two error components over the pairs inside the filter's Huber threshold

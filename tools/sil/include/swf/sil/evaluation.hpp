@@ -60,6 +60,8 @@ class Evaluation : public app::OutputObserver {
   // (false: never seen, or the ray misses the terrain).
   bool FirstSeen(std::int64_t id, app::NewSighting* sighting) const;
   bool TrueLandmark(std::int64_t id, Eigen::Vector3d* position);
+  // TrackingErrors::relief_fraction of a true landmark first seen from `pose`.
+  double ReliefFraction(const Eigen::Vector3d& point, const estimator::Pose<double>& pose) const;
   // |(u, v) - true projection| of every fused measurement of a known landmark (pixels), its
   // signed components (the paper's Fig. 2a histogram), and of those whose landmark was first
   // seen in the first frame, with the frames since.
@@ -80,6 +82,10 @@ class Evaluation : public app::OutputObserver {
     // the true distance from it: a tracker that under- or over-follows the image's expansion
     // shows as a non-zero median here, which scales the motion the filter sees.
     std::vector<double> radial_fraction;
+    // The relief under the template at the first sighting: the landmark's height over the mean
+    // of the ground on a ring of the patch's radius (6 px) around it, over its depth then
+    // (positive: the landmark stands above what surrounds it, e.g. on a rock).
+    std::vector<double> relief_fraction;
   };
   const TrackingErrors& Tracking() const { return tracking_; }
   // The stereo match's own error: per fused measurement of a known landmark, the first sighting
@@ -124,6 +130,7 @@ class Evaluation : public app::OutputObserver {
   evaluation::RunJudge judge_;
   std::unordered_map<std::int64_t, app::NewSighting> first_seen_;
   std::unordered_map<std::int64_t, Eigen::Vector3d> true_landmarks_;  // NaN: the ray missed
+  std::unordered_map<std::int64_t, double> relief_fraction_;          // TrackingErrors
   TrackingErrors tracking_;
   StereoErrors stereo_;
   struct LastStereoError {
