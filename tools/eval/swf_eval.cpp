@@ -18,6 +18,7 @@
 #include "experiment_file.hpp"
 #include "experiments.hpp"
 #include "json.hpp"
+#include "kitti.hpp"
 #include "kitti_vo.hpp"
 #include "run_filter.hpp"
 #include "swf/estimator/sliding_window_filter.hpp"
@@ -634,7 +635,10 @@ int main(int argc, char** argv) {
     cmd->add_option("--window", sequence.window, "poses in the window (the flight capacity)")
         ->capture_default_str()
         ->check(CLI::Range(2, 10));
-    cmd->add_option("--max-tracks", sequence.max_tracks, "tracked features")
+    cmd->add_option("--max-tracks", sequence.max_tracks,
+                    "tracked features (default " +
+                        std::to_string(swf::eval::RunOptions{}.max_tracks) + " for euroc, " +
+                        std::to_string(swf::eval::KittiRunOptions().max_tracks) + " for kitti)")
         ->check(CLI::Range(10, static_cast<int>(swf::frontend::kMaxTracks)));
     cmd->add_option("--motion-sigma", motion_sigma, "motion input sigma M,RAD")
         ->delimiter(',')
