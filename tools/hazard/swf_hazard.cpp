@@ -600,7 +600,10 @@ struct ReliefCalibration {
   double cell_over2 = NAN;  // the same boxes' centre cells alone, relief error over relief sigma
 };
 
-ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardMapper& mapper) {
+// relief_error (optional): every rock-free cell's relief error over its relief sigma (NaN
+// elsewhere).
+ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardMapper& mapper,
+                                  std::vector<float>* relief_error = nullptr) {
   ReliefCalibration r;
   swf::hazard_eval::MetricOptions mo;
   mo.cell_errors = false;
@@ -668,6 +671,7 @@ ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardM
       if (decided) z.push_back(rel_z[c]);
     }
   }
+  if (relief_error != nullptr) relief_error->assign(rel_z.begin(), rel_z.end());
   // The footprint boxes centred on undecided cells, every box cell with a relief error.
   const int half = (criterion.FootprintCells() - 1) / 2;
   std::vector<double> box_z;
@@ -705,9 +709,52 @@ ReliefCalibration CalibrateRelief(const World& world, const swf::hazard::HazardM
   return r;
 }
 
+// One single-frame map's relief errors (CalibrateRelief), for the correlation between frames.
+struct FrameErrors {
+  double altitude_m = 0.0;
+  double cell_m = 0.0;
+  double corner_x = 0.0, corner_y = 0.0;
+  std::vector<float> relief_z;
+};
+
+// The correlation of two frames' relief errors over the cells both hold (same cell size and
+// lattice), against the ratio of their altitudes (nearer / farther; 1 = the same viewpoint): how
+// much of their stereo error frames share (hazard_mapper.hpp, frame_error_correlation).
+void PrintFrameCorrelation(const std::vector<FrameErrors>& frames) {
+  std::printf("# frame correlation: alt_a alt_b ratio cells correlation\n");
+  for (std::size_t a = 0; a < frames.size(); ++a) {
+    for (std::size_t b = a + 1; b < frames.size(); ++b) {
+      const FrameErrors& fa = frames[a];
+      const FrameErrors& fb = frames[b];
+      if (fa.cell_m != fb.cell_m || std::fabs(fa.corner_x - fb.corner_x) > 1e-6 ||
+          std::fabs(fa.corner_y - fb.corner_y) > 1e-6 || fa.relief_z.size() != fb.relief_z.size()) {
+        continue;
+      }
+      double n = 0, sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+      for (std::size_t c = 0; c < fa.relief_z.size(); ++c) {
+        const double x = fa.relief_z[c], y = fb.relief_z[c];
+        if (std::isnan(x) || std::isnan(y)) continue;
+        n += 1;
+        sa += x;
+        sb += y;
+        saa += x * x;
+        sbb += y * y;
+        sab += x * y;
+      }
+      if (n < 100) continue;
+      const double cov = sab / n - sa / n * sb / n;
+      const double va = saa / n - sa / n * sa / n, vb = sbb / n - sb / n * sb / n;
+      if (!(va > 0.0 && vb > 0.0)) continue;
+      std::printf("frame correlation %.1f %.1f %.3f %.0f %.3f\n", fa.altitude_m, fb.altitude_m,
+                  std::min(fa.altitude_m, fb.altitude_m) / std::max(fa.altitude_m, fb.altitude_m),
+                  n, cov / std::sqrt(va * vb));
+    }
+  }
+}
+
 int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPreset preset,
-           std::uint64_t seed, double x0, double y0, double step, bool swf,
-           bool relief_calibration) {
+           std::uint64_t seed, double x0, double y0, double step, bool swf, bool relief_calibration,
+           bool frame_correlation) {
   SwfPoses poses;
   const int frames = static_cast<int>(std::floor(90.0 / step + 1e-9)) + 1;
   if (swf && !RunSwfAlongDescent(frames, step, seed, &poses)) {
@@ -728,6 +775,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
       "rocks_det far c1 c2 c4 c8 dscale ncal outliers replaced\n";
   std::fputs(head, dat);
   std::fputs(head, stdout);
+  std::vector<FrameErrors> frame_errors;
   int f = 0;
   for (int fi = 0; fi < frames; ++fi) {
     const double alt = 100.0 - step * fi;
@@ -772,6 +820,16 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
           fused.box.robust_scale, one.boxes, one.box.within1, one.box.over_tail, one.cell_over2,
           one.box.robust_scale);
     }
+    if (frame_correlation) {
+      single->Reset();
+      double ms1 = 0.0;
+      (void)world.Step(pose, f, seed * 1000 + f, single.get(), &ms1,
+                       swf ? &poses.error[f] : nullptr, swf ? &poses.covariance[f] : nullptr);
+      (void)world.Publish(*single);
+      FrameErrors e{alt, single->CellM(), single->CornerX(), single->CornerY(), {}};
+      CalibrateRelief(world, *single, &e.relief_z);
+      frame_errors.push_back(std::move(e));
+    }
     if (swf) {
       std::printf(
           "# swf frame %d: position error %.3f m (sigma %.3f), attitude error %.4f deg "
@@ -815,6 +873,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     std::fflush(stdout);
   }
   if (!dat_file.Commit(&why)) return Fail(why);
+  if (frame_correlation) PrintFrameCorrelation(frame_errors);
   // Truth: how much of the final grid is a possible site (no truth hazard node within the
   // footprint radius, at least a footprint radius inside the grid).
   {
@@ -927,6 +986,7 @@ int main(int argc, char** argv) {
   double step = 5.0;
   int swf = 0;
   int relief_calibration = 0;
+  int frame_correlation = 0;
   CLI::App* flight =
       app.add_subcommand("flight", "one descent flown with the mapper -> OUTDIR/flight.dat, PNG");
   flight->add_option("OUTDIR", out, "output directory (created)")->required();
@@ -942,6 +1002,11 @@ int main(int argc, char** argv) {
       ->add_option("--relief-calibration", relief_calibration,
                    "1: print the relief sigma's calibration on rock-free cells per update "
                    "(fused and single-frame; renders each pair twice)")
+      ->capture_default_str();
+  flight
+      ->add_option("--frame-correlation", frame_correlation,
+                   "1: print the correlation of single-frame relief errors between every two "
+                   "frames of one cell size (renders each pair twice)")
       ->capture_default_str();
   flight
       ->add_option("--pose-sigma-per-altitude", eo.pose_sigma_per_altitude,
@@ -965,5 +1030,6 @@ int main(int argc, char** argv) {
     return Fail("unknown --preset " + preset_name.substr(0, 40) + " (plains, craters or rocks)");
   }
   if (map->parsed()) return Map(out, eo, preset, seed);
-  return Flight(out, eo, preset, seed, x, y, step, swf != 0, relief_calibration != 0);
+  return Flight(out, eo, preset, seed, x, y, step, swf != 0, relief_calibration != 0,
+                frame_correlation != 0);
 }

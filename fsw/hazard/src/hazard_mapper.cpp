@@ -52,8 +52,11 @@ struct Plane {
   double mean_var = 0.0;
 };
 
-// Least-squares plane through the window sums s (kSatChannels values).
-Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
+// Least-squares plane through the window sums s (kSatChannels values). correlation_factor scales
+// the stereo noise's share of the slope variance for cells whose errors are correlated
+// (CorrelatedSlopeVarianceFactor; 1: independent cells).
+Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count,
+               double correlation_factor = 1.0) {
   Plane p;
   const double n = s[0];
   if (n < std::max(3.0, min_count)) return p;
@@ -73,8 +76,11 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
   p.c = (cxx * cyz - cxy * cxz) / det;
   p.mean_var = s[10] / n;
   p.rss = std::max(0.0, n * (czz - p.b * cxz - p.c * cyz));
-  // Slope variance from the larger of the predicted noise and the fit's own residuals.
-  const double noise = std::max(p.mean_var, p.rss / (n - 3.0 + 1e-9));
+  // Slope variance from the larger of the predicted noise (for correlated cells) and the fit's
+  // own residuals. The residuals are mostly relief where they exceed the noise (a rock, a crest
+  // in the window), which tilts the plane as a bias, not as a correlated noise: the factor is
+  // the stereo error's only.
+  const double noise = std::max(correlation_factor * p.mean_var, p.rss / (n - 3.0 + 1e-9));
   p.var_b = noise / n * (cyy / det);
   p.var_c = noise / n * (cxx / det);
   p.ok = true;
@@ -88,6 +94,57 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count) {
 double FusedVariance(double info, double min_var, double rho) {
   const double shared = min_var > 0.0 ? rho : 0.0;
   return (1.0 - shared) / info + shared * min_var;
+}
+
+// The correlation of two cells' errors d cells apart (HazardMapperOptions::
+// cell_error_autocorrelation at lags 1, 2, 4, 8, 16 cells; linear between them, 1 at 0, zero from
+// 32).
+double CellErrorCorrelation(const std::array<double, 5>& at_lags, double d) {
+  if (!(d > 0.0)) return 1.0;
+  if (d < 1.0) return at_lags[0];
+  double lag = 1.0;
+  for (std::size_t k = 0; k < at_lags.size(); ++k, lag *= 2.0) {
+    const double next = k + 1 < at_lags.size() ? at_lags[k + 1] : 0.0;
+    if (d < 2.0 * lag) return at_lags[k] + (next - at_lags[k]) * (d - lag) / lag;
+  }
+  return 0.0;
+}
+
+// The variance of a least-squares plane's slope over a full (2r + 1)^2 window of cells whose
+// errors are correlated, over the variance the fit states for independent cells: g^T C g / g^T g
+// with g_i = x_i (the slope's weights up to a constant) and C_ij = CellErrorCorrelation(|p_i -
+// p_j|). Summed by offset: sum_d rho(d) sum_{i, i + d in the window} x_i x_{i + d} (the same along
+// y). At least 1.
+double CorrelatedSlopeVarianceFactor(const std::array<double, 5>& at_lags, int r) {
+  const int side = 2 * r + 1;
+  double sum_xx = 0.0;
+  for (int x = -r; x <= r; ++x) sum_xx += static_cast<double>(x) * x;
+  if (!(sum_xx > 0.0)) return 1.0;
+  double sum = 0.0;
+  for (int dx = -2 * r; dx <= 2 * r; ++dx) {
+    const int a = std::abs(dx);
+    double pairs_x = 0.0;  // sum of x (x + a) over x with both in the window (either sign of dx)
+    for (int x = -r; x + a <= r; ++x) pairs_x += static_cast<double>(x) * (x + a);
+    for (int dy = -2 * r; dy <= 2 * r; ++dy) {
+      const double rho = CellErrorCorrelation(at_lags, core::Hypot(dx, dy));
+      sum += rho * pairs_x * (side - std::abs(dy));
+    }
+  }
+  return std::max(1.0, sum / (sum_xx * side));
+}
+
+// The information a frame seen from range_m adds to a cell whose previous frame was seen from
+// previous_range_m (0: none), in units of its own: the frames' errors beyond the part shared by
+// all (frame_error_correlation) follow an AR(1) over the cell's frames with lag correlation phi
+// = max(0, 1 - (1 - r) / width), r = nearer / farther range (the same texture seen at nearly the
+// same scale gives nearly the same SGM mismatches), and each further frame of an AR(1) sequence
+// adds (1 - phi) / (1 + phi) of its information. Width 0: frames independent beyond the shared
+// part (1).
+double NewLooks(double previous_range_m, double range_m, double width) {
+  if (!(width > 0.0) || !(previous_range_m > 0.0) || !(range_m > 0.0)) return 1.0;
+  const double r = std::min(previous_range_m, range_m) / std::max(previous_range_m, range_m);
+  const double phi = std::max(0.0, 1.0 - (1.0 - r) / width);
+  return (1.0 - phi) / (1.0 + phi);
 }
 
 // Cells each side of the centre of a square analysis window of +-radius_m (at least 1).
@@ -213,9 +270,13 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
       !positive(o.disparity_sigma_px) || o.max_independent_pixels < 1 ||
       !(o.pixels_per_independent >= 1.0) ||
       !(o.frame_error_correlation >= 0.0 && o.frame_error_correlation < 1.0) ||
-      !(o.outlier_gate_sigmas >= 0.0) || !std::isfinite(o.outlier_gate_sigmas) ||
-      o.outlier_replace_after < 1 || o.outlier_replace_after > 255 ||
+      !(o.frame_viewpoint_correlation_width >= 0.0) ||
+      !std::isfinite(o.frame_viewpoint_correlation_width) || !(o.outlier_gate_sigmas >= 0.0) ||
+      !std::isfinite(o.outlier_gate_sigmas) || o.outlier_replace_after < 1 ||
+      o.outlier_replace_after > 255 ||
       !(o.relief_error_correlation >= 0.0 && o.relief_error_correlation <= 1.0) ||
+      !std::all_of(o.cell_error_autocorrelation.begin(), o.cell_error_autocorrelation.end(),
+                   [](double r) { return r >= 0.0 && r <= 1.0; }) ||
       !positive(o.max_slope_deg) || !positive(o.max_rock_height_m) ||
       !positive(o.footprint_radius_m) || !positive(o.rock_window_radius_m) ||
       !positive(o.local_slope_baseline_m) || !(o.site_margin_sigmas >= 0.0) ||
@@ -254,6 +315,8 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   count_.assign(cells, 0);
   rejections_.assign(cells, 0);
   f_rejections_.assign(cells, 0);
+  last_range_.assign(cells, 0.0);
+  f_last_range_.assign(cells, 0.0);
   datum_diff_.assign(cells, 0.0);
   f_w_.assign(cells, 0.0);
   f_wz_.assign(cells, 0.0);
@@ -298,6 +361,7 @@ void HazardMapper::Reset() {
   std::fill(min_var_.begin(), min_var_.end(), 0.0);
   std::fill(count_.begin(), count_.end(), 0);
   std::fill(rejections_.begin(), rejections_.end(), 0);
+  std::fill(last_range_.begin(), last_range_.end(), 0.0);
   num_active_ = 0;
   std::fill(elevation_.begin(), elevation_.end(), kNaN);
   std::fill(sigma_.begin(), sigma_.end(), kNaN);
@@ -410,6 +474,7 @@ void HazardMapper::CopyStateToScratch() {
   std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
   std::copy(count_.begin(), count_.end(), f_n_.begin());
   std::copy(rejections_.begin(), rejections_.end(), f_rejections_.begin());
+  std::copy(last_range_.begin(), last_range_.end(), f_last_range_.begin());
 }
 
 void HazardMapper::MaybeRefine(double altitude_m) {
@@ -445,7 +510,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       const double x = corner_x_ + (i + 0.5) * cell_m_;
       const int oi = static_cast<int>(std::floor((x - old_cx) / old_cell));
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
-        info_[c] = info_z_[c] = min_var_[c] = 0.0;
+        info_[c] = info_z_[c] = min_var_[c] = last_range_[c] = 0.0;
         count_[c] = 0;
         rejections_[c] = 0;
         continue;
@@ -456,6 +521,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       min_var_[c] = f_min_var_[o] / scale;
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
       rejections_[c] = f_rejections_[o];
+      last_range_[c] = f_last_range_[o];
     }
   }
   site_.valid = site_.valid && CellOf(site_.position_world_m.x(), site_.position_world_m.y(),
@@ -485,7 +551,7 @@ void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
       const long oi = i + di;
       const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
-        info_[c] = info_z_[c] = min_var_[c] = 0.0;
+        info_[c] = info_z_[c] = min_var_[c] = last_range_[c] = 0.0;
         count_[c] = 0;
         rejections_[c] = 0;
         continue;
@@ -496,6 +562,7 @@ void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
       min_var_[c] = f_min_var_[o];
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
       rejections_[c] = f_rejections_[o];
+      last_range_[c] = f_last_range_[o];
       kept += f_w_[o] > 0.0 ? 1 : 0;
     }
   }
@@ -553,7 +620,7 @@ void HazardMapper::CalibrateDisparitySigma(const HazardFrame& frame) {
   stats_.disparity_scale = disparity_scale_;
 }
 
-void HazardMapper::FuseStereo(const HazardFrame& frame) {
+void HazardMapper::FuseStereo(const HazardFrame& frame, double range_m) {
   const std::size_t cells = info_.size();
   std::fill(f_w_.begin(), f_w_.end(), 0.0);
   std::fill(f_wz_.begin(), f_wz_.end(), 0.0);
@@ -665,13 +732,18 @@ void HazardMapper::FuseStereo(const HazardFrame& frame) {
         ++rejected;
         continue;
       }
-      info_[c] = info_z_[c] = min_var_[c] = 0.0;
+      info_[c] = info_z_[c] = min_var_[c] = last_range_[c] = 0.0;
       count_[c] = 0;
       ++replaced;
     }
     rejections_[c] = 0;
-    info_[c] += 1.0 / var;
-    info_z_[c] += f_wz_[c] / var;
+    // The frame's information net of what it shares with the cell's previous frame (AR(1)
+    // across the cell's frames: HazardMapperOptions::frame_viewpoint_correlation_width).
+    const double looks =
+        NewLooks(last_range_[c], range_m, options_.frame_viewpoint_correlation_width);
+    last_range_[c] = range_m;
+    info_[c] += looks / var;
+    info_z_[c] += looks * f_wz_[c] / var;
     min_var_[c] = min_var_[c] > 0.0 ? std::min(min_var_[c], var) : var;
     if (count_[c] < kMaxCount) ++count_[c];
     ++fused;
@@ -847,6 +919,12 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   const double var_tilt = std::max(0.0, rot_cov(0, 0)) + std::max(0.0, rot_cov(1, 1));
   const double k = options_.confidence_k;
   const RockCriterion rocks(RockCriterionOf(options_), cell_m_);
+  // The slope fits' stereo noise for cells whose errors are correlated over the window
+  // (HazardMapperOptions::cell_error_autocorrelation).
+  const double footprint_factor =
+      CorrelatedSlopeVarianceFactor(options_.cell_error_autocorrelation, rf);
+  const double local_factor =
+      CorrelatedSlopeVarianceFactor(options_.cell_error_autocorrelation, rl);
   // A plane's slope and its sigma (the fit's and the map's tilt from attitude error), degrees.
   const auto slope_of = [&](const Plane& p, double* sigma_deg) {
     const double g = core::Hypot(p.b, p.c) / cell_m_;
@@ -874,8 +952,8 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       local_slope_deg_[c] = local_slope_sigma_deg_[c] = kNaN;
       class_[c] = HazardClass::kUnknown;
       if (std::isnan(elevation_[c])) continue;
-      const Plane pf = FitPlane(window(i, j, rf), min_f);
-      const Plane pl = FitPlane(window(i, j, rl), min_l);
+      const Plane pf = FitPlane(window(i, j, rf), min_f, footprint_factor);
+      const Plane pl = FitPlane(window(i, j, rl), min_l, local_factor);
       const Plane pr = FitPlane(window(i, j, rr), min_r);
       if (!pf.ok || !pr.ok || !pl.ok) continue;
       double slope_sigma_deg = 0.0;
@@ -1156,7 +1234,7 @@ core::Status HazardMapper::Update(const HazardFrame& frame) {
     FollowLander(nadir.head<2>());
   }
   CalibrateDisparitySigma(frame);
-  FuseStereo(frame);
+  FuseStereo(frame, range_m);
   FuseLandmarks(frame, stats_.datum_shift_m);
   Analyze(frame);
   site_margin_m_ = options_.site_margin_sigmas * HorizontalSigma(frame.pose_covariance);

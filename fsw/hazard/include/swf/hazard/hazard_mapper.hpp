@@ -59,6 +59,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -183,6 +184,12 @@ struct HazardMapperOptions {
   // texture gives the same SGM mismatches from similar viewpoints): fused variance =
   // rho min_k var_k + (1 - rho) / sum_k (1 / var_k) (exact for equicorrelated frames).
   double frame_error_correlation = 0.25;
+  // Beyond that shared part, a frame's error is correlated with the previous frame's over the
+  // same cell by phi = max(0, 1 - (1 - r) / width), r = the ratio of their ranges (nearer /
+  // farther): frames from nearly the same viewpoint see the same texture at nearly the same
+  // scale (an AR(1) over the cell's frames: a further frame adds (1 - phi) / (1 + phi) of its
+  // information). 0 = off.
+  double frame_viewpoint_correlation_width = 0.0;
   // Gross stereo mismatches: a disparity off by many pixels puts a point metres too high, and
   // since sigma_Z grows with Z^2 the too-near point also states a smaller sigma, so
   // inverse-variance fusion trusts it more than the true ones. A frame's cell is fused only when
@@ -221,6 +228,14 @@ struct HazardMapperOptions {
   double local_slope_baseline_m = 1.0;
   double rock_window_radius_m = RockCriterionOptions{}.window_radius_m;
   double relief_error_correlation = RockCriterionOptions{}.relief_error_correlation;
+  // The map's cell errors are correlated with their neighbours' (the SGM error's own spatial
+  // correlation: shared texture, aggregation paths), measured as the autocorrelation of (map -
+  // truth) at lags of 1, 2, 4, 8, 16 cells (5 cm cells of the campaigns' last maps: 0.23-0.28,
+  // 0.12-0.17, 0.07-0.08, 0.03-0.06, 0.01-0.02; docs/hazard.md, "The 1 m slope's error"),
+  // linear between them and zero from 32 cells. A plane fitted as if its cells were independent
+  // understates its slope's variance; the slope variance is the fit's times g^T C g / g^T g
+  // (g the least-squares gradient weights over the window, C this correlation).
+  std::array<double, 5> cell_error_autocorrelation{0.255, 0.145, 0.075, 0.045, 0.015};
   double confidence_k = 2.0;
   double min_known_fraction = 0.6;  // of a window, for a plane fit
   // Safe site. Its clearance to every non-safe cell must exceed the footprint radius plus
@@ -343,7 +358,7 @@ class HazardMapper {
   void CopyStateToScratch();
   void MaybeRefine(double altitude_m);
   void CalibrateDisparitySigma(const HazardFrame& frame);
-  void FuseStereo(const HazardFrame& frame);
+  void FuseStereo(const HazardFrame& frame, double range_m);
   void FollowLander(const Eigen::Vector2d& nadir_world_m);
   void FuseLandmarks(const HazardFrame& frame, double datum_shift_m);
   void CommitLandmark(double x_m, double y_m, double z_m, double var_m2);
@@ -391,12 +406,14 @@ class HazardMapper {
   std::vector<double> min_var_;  // smallest single-frame variance fused (0 = none)
   std::vector<std::uint16_t> count_;
   std::vector<std::uint8_t> rejections_;  // consecutive frames the cell rejected (outlier gate)
+  std::vector<double> last_range_;        // range of the last frame fused into the cell (0: none)
   // Per-frame scratch (also used for resampling).
   std::vector<double> f_w_;
   std::vector<double> f_wz_;
   std::vector<double> f_min_var_;  // resampling scratch
   std::vector<std::int32_t> f_n_;
   std::vector<std::uint8_t> f_rejections_;  // resampling scratch
+  std::vector<double> f_last_range_;        // resampling scratch
   std::vector<double> datum_diff_;          // frame - map per shared cell (the datum's median)
   // Outputs.
   std::vector<float> elevation_;
