@@ -24,10 +24,11 @@ constexpr std::size_t kFeaturePrefixBytes = 24;
 constexpr std::int64_t kBytesPerFeature = 8 + 4 + 4 + 1;
 // hazard_map_t: utime, seq, frame_seq (3 x 8), origin_world_m (2 x 8), up_world (3 x 8),
 // cell_size_m (8); then rows, cols, num_cells (3 x 4). Per cell: five floats and a class (21).
-// After the cells: safe_site_valid (1), safe_site_world_m (2 x 8), safe_site_score (8).
+// After the cells: safe_site_valid (1), safe_site_world_m (2 x 8), safe_site_score (8),
+// outliers_rejected, cells_replaced (2 x 8).
 constexpr std::size_t kHazardPrefixBytes = 24 + 16 + 24 + 8;
 constexpr std::int64_t kBytesPerCell = 5 * 4 + 1;
-constexpr std::int64_t kHazardSuffixBytes = 1 + 16 + 8;
+constexpr std::int64_t kHazardSuffixBytes = 1 + 16 + 8 + 16;
 // hazard_truth_t: utime, frame_seq (2 x 8), origin_world_m (2 x 8), cell_size_m (8); then rows,
 // cols, num_cells (3 x 4). Per cell: elevation (8), slope (4) and rock_free (1). After the cells:
 // max_rock_height_m, footprint_radius_m (2 x 8), then num_rocks. Per rock: centre (2 x 8),

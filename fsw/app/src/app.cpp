@@ -83,9 +83,14 @@ class HazardCounter : public OutputObserver {
   void OnHazard(const HazardRecord& r) override {
     ++maps;
     last_site_valid = r.safe_site_valid;
+    outliers_rejected = r.outliers_rejected;
+    cells_replaced = r.cells_replaced;
   }
   std::int64_t maps = 0;
   bool last_site_valid = false;
+  // The mapper's outlier gate since start, as the last published map states it.
+  std::int64_t outliers_rejected = 0;
+  std::int64_t cells_replaced = 0;
 };
 
 class LastHealth : public OutputObserver {
@@ -229,8 +234,12 @@ void WriteImu(std::FILE* f, const FswConfig& c, const ImuReport& r) {
 }
 
 // The hazard maps the run published; against truth when an extension has it.
-void WriteHazard(std::FILE* f, std::int64_t hazard_maps, const ProcessExtension* truth) {
-  std::fprintf(f, "  \"hazard_maps\": %lld,\n", static_cast<long long>(hazard_maps));
+void WriteHazard(std::FILE* f, const HazardCounter& hazard, const ProcessExtension* truth) {
+  std::fprintf(f, "  \"hazard_maps\": %lld,\n", static_cast<long long>(hazard.maps));
+  // The mapper's gross-outlier gate (docs/hazard.md): frame cells not fused, fused cells replaced.
+  std::fprintf(f, "  \"hazard_outliers\": {\"rejected\": %lld, \"cells_replaced\": %lld},\n",
+               static_cast<long long>(hazard.outliers_rejected),
+               static_cast<long long>(hazard.cells_replaced));
   if (truth == nullptr || !truth->WriteHazardTruth(f))
     std::fprintf(f, "  \"hazard\": null,\n  \"hazard_by_map\": [],\n  \"safe_site\": null\n");
 }
@@ -309,7 +318,7 @@ void WriteRunEcho(std::FILE* f, const RunEcho& run, const FswConfig& c) {
 
 bool WriteSummary(const std::string& path, const RunEcho& run, const FswConfig& c,
                   const LoopCounters& counters, const OutputCounters& output,
-                  const HealthRecord& health, std::int64_t hazard_maps, bool locked, bool fifo,
+                  const HealthRecord& health, const HazardCounter& hazard, bool locked, bool fifo,
                   const Verdict& verdict, const IntegrityCounters& integrity,
                   const ProcessExtension* truth, const drivers::LogStreamStats* log,
                   const ImuReport* imu, const FlightLoop::Memory& memory,
@@ -361,7 +370,7 @@ bool WriteSummary(const std::string& path, const RunEcho& run, const FswConfig& 
                  static_cast<long long>(log->duplicates),
                  static_cast<long long>(log->out_of_order));
   }
-  WriteHazard(f, hazard_maps, truth);
+  WriteHazard(f, hazard, truth);
   std::fprintf(f, "}\n");
   return out.Commit(error);
 }
@@ -969,10 +978,15 @@ void PrintRunLine(const FlightProcess& fp) {
                static_cast<long long>(h.allocations_after_start), h.stages[kStageCycle].p50_ms,
                h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms,
                fp.extension_source ? fp.extension->RunLine().c_str() : "");
-  std::fprintf(stderr, ", %lld hazard maps (%lld skipped, %lld failed), hazard p50 %.1f ms\n",
+  std::fprintf(stderr,
+               ", %lld hazard maps (%lld skipped, %lld failed; %lld outlier cells rejected, %lld "
+               "replaced), hazard p50 %.1f ms\n",
                static_cast<long long>(fp.hazard_counter.maps),
                static_cast<long long>(counters.hazard_skipped),
-               static_cast<long long>(fp.loop.HazardErrors()), h.stages[kStageHazard].p50_ms);
+               static_cast<long long>(fp.loop.HazardErrors()),
+               static_cast<long long>(fp.hazard_counter.outliers_rejected),
+               static_cast<long long>(fp.hazard_counter.cells_replaced),
+               h.stages[kStageHazard].p50_ms);
 }
 
 void PrintIntegrityLine(const FlightProcess& fp, const Verdict& verdict) {
@@ -1079,7 +1093,7 @@ int Report(FlightProcess* fp) {
   PrintMemoryLine(*fp);
   PrintIntegrityLine(*fp, verdict);
   if (!config.summary_path.empty() &&
-      !WriteSummary(config.summary_path, fp->run, config, counters, out, h, fp->hazard_counter.maps,
+      !WriteSummary(config.summary_path, fp->run, config, counters, out, h, fp->hazard_counter,
                     fp->locked, fp->fifo, verdict, integrity, truth, log_stream,
                     inertial ? &imu_report : nullptr, fp->loop.MemoryUse(),
                     fp->parts.output.Stack(), &fp->error)) {

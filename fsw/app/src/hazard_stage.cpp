@@ -38,6 +38,8 @@ Status FillHazardRecord(const hazard::HazardMapper& m, HazardRecord* out) {
   out->safe_site_world_m[0] = site.position_world_m.x();
   out->safe_site_world_m[1] = site.position_world_m.y();
   out->safe_site_score = site.score;
+  out->outliers_rejected = static_cast<std::int64_t>(m.Stats().outliers_rejected);
+  out->cells_replaced = static_cast<std::int64_t>(m.Stats().cells_replaced);
   return Status::kOk;
 }
 

@@ -259,6 +259,8 @@ void FillHazard(const HazardRecord& r, swf_msgs::hazard_map_t* m) {
   m->safe_site_world_m[0] = r.safe_site_world_m[0];
   m->safe_site_world_m[1] = r.safe_site_world_m[1];
   m->safe_site_score = r.safe_site_score;
+  m->outliers_rejected = r.outliers_rejected;
+  m->cells_replaced = r.cells_replaced;
 }
 
 void FillHealth(const HealthRecord& r, swf_msgs::health_t* m) {

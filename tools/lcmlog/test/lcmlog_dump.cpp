@@ -121,7 +121,9 @@ json Fields(const swf_msgs::hazard_map_t& m) {
           {"hazard_class", V(m.hazard_class)},
           {"safe_site_valid", Bool(m.safe_site_valid)},
           {"safe_site_world_m", V(m.safe_site_world_m)},
-          {"safe_site_score", V(m.safe_site_score)}};
+          {"safe_site_score", V(m.safe_site_score)},
+          {"outliers_rejected", V(m.outliers_rejected)},
+          {"cells_replaced", V(m.cells_replaced)}};
 }
 
 json Fields(const swf_msgs::hazard_truth_t& m) {

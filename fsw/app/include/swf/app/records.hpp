@@ -133,6 +133,8 @@ struct HazardRecord {
   bool safe_site_valid = false;
   double safe_site_world_m[2] = {0.0, 0.0};
   double safe_site_score = 0.0;
+  std::int64_t outliers_rejected = 0;  // the mapper's outlier gate since start (HazardStats)
+  std::int64_t cells_replaced = 0;
   float update_ms = 0.0f;  // wall time of the hazard update (not published; not deterministic)
 
   // Sizes the arrays for `cells` cells (grid_cells^2); before start only (it allocates).
