@@ -101,7 +101,6 @@ double FusedVariance(double info, double min_var, double rho) {
 // 32).
 double CellErrorCorrelation(const std::array<double, 5>& at_lags, double d) {
   if (!(d > 0.0)) return 1.0;
-  if (d < 1.0) return at_lags[0];
   double lag = 1.0;
   for (std::size_t k = 0; k < at_lags.size(); ++k, lag *= 2.0) {
     const double next = k + 1 < at_lags.size() ? at_lags[k + 1] : 0.0;
@@ -131,20 +130,6 @@ double CorrelatedSlopeVarianceFactor(const std::array<double, 5>& at_lags, int r
     }
   }
   return std::max(1.0, sum / (sum_xx * side));
-}
-
-// The information a frame seen from range_m adds to a cell whose previous frame was seen from
-// previous_range_m (0: none), in units of its own: the frames' errors beyond the part shared by
-// all (frame_error_correlation) follow an AR(1) over the cell's frames with lag correlation phi
-// = max(0, 1 - (1 - r) / width), r = nearer / farther range (the same texture seen at nearly the
-// same scale gives nearly the same SGM mismatches), and each further frame of an AR(1) sequence
-// adds (1 - phi) / (1 + phi) of its information. Width 0: frames independent beyond the shared
-// part (1).
-double NewLooks(double previous_range_m, double range_m, double width) {
-  if (!(width > 0.0) || !(previous_range_m > 0.0) || !(range_m > 0.0)) return 1.0;
-  const double r = std::min(previous_range_m, range_m) / std::max(previous_range_m, range_m);
-  const double phi = std::max(0.0, 1.0 - (1.0 - r) / width);
-  return (1.0 - phi) / (1.0 + phi);
 }
 
 // Cells each side of the centre of a square analysis window of +-radius_m (at least 1).
@@ -270,10 +255,8 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
       !positive(o.disparity_sigma_px) || o.max_independent_pixels < 1 ||
       !(o.pixels_per_independent >= 1.0) ||
       !(o.frame_error_correlation >= 0.0 && o.frame_error_correlation < 1.0) ||
-      !(o.frame_viewpoint_correlation_width >= 0.0) ||
-      !std::isfinite(o.frame_viewpoint_correlation_width) || !(o.outlier_gate_sigmas >= 0.0) ||
-      !std::isfinite(o.outlier_gate_sigmas) || o.outlier_replace_after < 1 ||
-      o.outlier_replace_after > 255 ||
+      !(o.outlier_gate_sigmas >= 0.0) || !std::isfinite(o.outlier_gate_sigmas) ||
+      o.outlier_replace_after < 1 || o.outlier_replace_after > 255 ||
       !(o.relief_error_correlation >= 0.0 && o.relief_error_correlation <= 1.0) ||
       !std::all_of(o.cell_error_autocorrelation.begin(), o.cell_error_autocorrelation.end(),
                    [](double r) { return r >= 0.0 && r <= 1.0; }) ||
@@ -315,8 +298,6 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
   count_.assign(cells, 0);
   rejections_.assign(cells, 0);
   f_rejections_.assign(cells, 0);
-  last_range_.assign(cells, 0.0);
-  f_last_range_.assign(cells, 0.0);
   datum_diff_.assign(cells, 0.0);
   f_w_.assign(cells, 0.0);
   f_wz_.assign(cells, 0.0);
@@ -361,7 +342,6 @@ void HazardMapper::Reset() {
   std::fill(min_var_.begin(), min_var_.end(), 0.0);
   std::fill(count_.begin(), count_.end(), 0);
   std::fill(rejections_.begin(), rejections_.end(), 0);
-  std::fill(last_range_.begin(), last_range_.end(), 0.0);
   num_active_ = 0;
   std::fill(elevation_.begin(), elevation_.end(), kNaN);
   std::fill(sigma_.begin(), sigma_.end(), kNaN);
@@ -474,7 +454,6 @@ void HazardMapper::CopyStateToScratch() {
   std::copy(min_var_.begin(), min_var_.end(), f_min_var_.begin());
   std::copy(count_.begin(), count_.end(), f_n_.begin());
   std::copy(rejections_.begin(), rejections_.end(), f_rejections_.begin());
-  std::copy(last_range_.begin(), last_range_.end(), f_last_range_.begin());
 }
 
 void HazardMapper::MaybeRefine(double altitude_m) {
@@ -510,7 +489,7 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       const double x = corner_x_ + (i + 0.5) * cell_m_;
       const int oi = static_cast<int>(std::floor((x - old_cx) / old_cell));
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
-        info_[c] = info_z_[c] = min_var_[c] = last_range_[c] = 0.0;
+        info_[c] = info_z_[c] = min_var_[c] = 0.0;
         count_[c] = 0;
         rejections_[c] = 0;
         continue;
@@ -521,7 +500,6 @@ void HazardMapper::MaybeRefine(double altitude_m) {
       min_var_[c] = f_min_var_[o] / scale;
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
       rejections_[c] = f_rejections_[o];
-      last_range_[c] = f_last_range_[o];
     }
   }
   site_.valid = site_.valid && CellOf(site_.position_world_m.x(), site_.position_world_m.y(),
@@ -551,7 +529,7 @@ void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
       const long oi = i + di;
       const std::size_t c = static_cast<std::size_t>(j) * n_ + i;
       if (oi < 0 || oj < 0 || oi >= n_ || oj >= n_) {
-        info_[c] = info_z_[c] = min_var_[c] = last_range_[c] = 0.0;
+        info_[c] = info_z_[c] = min_var_[c] = 0.0;
         count_[c] = 0;
         rejections_[c] = 0;
         continue;
@@ -562,7 +540,6 @@ void HazardMapper::FollowLander(const Eigen::Vector2d& nadir_world_m) {
       min_var_[c] = f_min_var_[o];
       count_[c] = static_cast<std::uint16_t>(f_n_[o]);
       rejections_[c] = f_rejections_[o];
-      last_range_[c] = f_last_range_[o];
       kept += f_w_[o] > 0.0 ? 1 : 0;
     }
   }
@@ -620,7 +597,7 @@ void HazardMapper::CalibrateDisparitySigma(const HazardFrame& frame) {
   stats_.disparity_scale = disparity_scale_;
 }
 
-void HazardMapper::FuseStereo(const HazardFrame& frame, double range_m) {
+void HazardMapper::FuseStereo(const HazardFrame& frame) {
   const std::size_t cells = info_.size();
   std::fill(f_w_.begin(), f_w_.end(), 0.0);
   std::fill(f_wz_.begin(), f_wz_.end(), 0.0);
@@ -732,18 +709,13 @@ void HazardMapper::FuseStereo(const HazardFrame& frame, double range_m) {
         ++rejected;
         continue;
       }
-      info_[c] = info_z_[c] = min_var_[c] = last_range_[c] = 0.0;
+      info_[c] = info_z_[c] = min_var_[c] = 0.0;
       count_[c] = 0;
       ++replaced;
     }
     rejections_[c] = 0;
-    // The frame's information net of what it shares with the cell's previous frame (AR(1)
-    // across the cell's frames: HazardMapperOptions::frame_viewpoint_correlation_width).
-    const double looks =
-        NewLooks(last_range_[c], range_m, options_.frame_viewpoint_correlation_width);
-    last_range_[c] = range_m;
-    info_[c] += looks / var;
-    info_z_[c] += looks * f_wz_[c] / var;
+    info_[c] += 1.0 / var;
+    info_z_[c] += f_wz_[c] / var;
     min_var_[c] = min_var_[c] > 0.0 ? std::min(min_var_[c], var) : var;
     if (count_[c] < kMaxCount) ++count_[c];
     ++fused;
@@ -1234,7 +1206,7 @@ core::Status HazardMapper::Update(const HazardFrame& frame) {
     FollowLander(nadir.head<2>());
   }
   CalibrateDisparitySigma(frame);
-  FuseStereo(frame, range_m);
+  FuseStereo(frame);
   FuseLandmarks(frame, stats_.datum_shift_m);
   Analyze(frame);
   site_margin_m_ = options_.site_margin_sigmas * HorizontalSigma(frame.pose_covariance);

@@ -41,10 +41,11 @@
 //  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
 //     lander footprint gives slope and roughness, one over local_slope_baseline_m (1 m) the
 //     metre-scale slope; a plane over rock_window_radius_m gives each cell's rock height. Sigma
-//     of a slope from its fit and the attitude covariance; sigma of the rock height from the
-//     cell's stereo sigma and the fit. Classes: kRock when the rock height exceeds the rock
-//     criterion's decision relief (RockCriterion below); kSlope when either slope exceeds its
-//     threshold by confidence_k sigma and its sigma resolves it (sigma <= a third of the
+//     of a slope from its fit (its stereo noise for cells whose errors are correlated with their
+//     neighbours': cell_error_autocorrelation) and the attitude covariance; sigma of the rock
+//     height from the cell's stereo sigma and the fit. Classes: kRock when the rock height exceeds
+//     the rock criterion's decision relief (RockCriterion below); kSlope when either slope exceeds
+//     its threshold by confidence_k sigma and its sigma resolves it (sigma <= a third of the
 //     threshold; the 1 m slope only where its window holds no kRock cell, since a plane over a
 //     rock tilts with it and the rock is the hazard there); kUncertain when value + k sigma
 //     exceeds a slope threshold, or, where the criterion does not resolve the threshold rock
@@ -184,12 +185,6 @@ struct HazardMapperOptions {
   // texture gives the same SGM mismatches from similar viewpoints): fused variance =
   // rho min_k var_k + (1 - rho) / sum_k (1 / var_k) (exact for equicorrelated frames).
   double frame_error_correlation = 0.25;
-  // Beyond that shared part, a frame's error is correlated with the previous frame's over the
-  // same cell by phi = max(0, 1 - (1 - r) / width), r = the ratio of their ranges (nearer /
-  // farther): frames from nearly the same viewpoint see the same texture at nearly the same
-  // scale (an AR(1) over the cell's frames: a further frame adds (1 - phi) / (1 + phi) of its
-  // information). 0 = off.
-  double frame_viewpoint_correlation_width = 0.0;
   // Gross stereo mismatches: a disparity off by many pixels puts a point metres too high, and
   // since sigma_Z grows with Z^2 the too-near point also states a smaller sigma, so
   // inverse-variance fusion trusts it more than the true ones. A frame's cell is fused only when
@@ -358,7 +353,7 @@ class HazardMapper {
   void CopyStateToScratch();
   void MaybeRefine(double altitude_m);
   void CalibrateDisparitySigma(const HazardFrame& frame);
-  void FuseStereo(const HazardFrame& frame, double range_m);
+  void FuseStereo(const HazardFrame& frame);
   void FollowLander(const Eigen::Vector2d& nadir_world_m);
   void FuseLandmarks(const HazardFrame& frame, double datum_shift_m);
   void CommitLandmark(double x_m, double y_m, double z_m, double var_m2);
@@ -406,14 +401,12 @@ class HazardMapper {
   std::vector<double> min_var_;  // smallest single-frame variance fused (0 = none)
   std::vector<std::uint16_t> count_;
   std::vector<std::uint8_t> rejections_;  // consecutive frames the cell rejected (outlier gate)
-  std::vector<double> last_range_;        // range of the last frame fused into the cell (0: none)
   // Per-frame scratch (also used for resampling).
   std::vector<double> f_w_;
   std::vector<double> f_wz_;
   std::vector<double> f_min_var_;  // resampling scratch
   std::vector<std::int32_t> f_n_;
   std::vector<std::uint8_t> f_rejections_;  // resampling scratch
-  std::vector<double> f_last_range_;        // resampling scratch
   std::vector<double> datum_diff_;          // frame - map per shared cell (the datum's median)
   // Outputs.
   std::vector<float> elevation_;
