@@ -2,6 +2,7 @@
 // a tilted plane (slope), boxes (rocks), site selection away from them, no allocation per update.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -117,6 +118,65 @@ TEST(HazardMapperTest, FlatPlaneIsSafeWithHonestSigma) {
   EXPECT_LT(m.Site().position_world_m.norm(), 1.0);
   EXPECT_GE(m.Site().clearance_m, Options().footprint_radius_m);
   EXPECT_EQ(m.Site().stable_updates, 1);
+}
+
+// GIVEN a flat plane mapped twice, with the map's cell errors taken as independent and as
+// correlated (the default cell_error_autocorrelation) WHEN the 1 m slope is fitted THEN where the
+// stereo noise sets the slope sigma, the correlated one is larger by sqrt(g^T C g / g^T g), here
+// computed by brute force over the 21 x 21 window (g_i = x_i), and nowhere by more.
+TEST(HazardMapperTest, LocalSlopeSigmaCountsCorrelatedCells) {
+  HazardMapperOptions independent = Options();
+  independent.cell_error_autocorrelation = {0.0, 0.0, 0.0, 0.0, 0.0};
+  SceneRun a;
+  SceneRun b;
+  Prepare(Scene{}, 8.0, &a, independent);
+  Prepare(Scene{}, 8.0, &b);
+  ASSERT_EQ(a.mapper->Update(a.frame), core::Status::kOk);
+  ASSERT_EQ(b.mapper->Update(b.frame), core::Status::kOk);
+  ASSERT_DOUBLE_EQ(a.mapper->CellM(), 0.05);
+  const int r = 10;  // +-0.5 m at 5 cm
+  const auto rho = [&](double d) {
+    const double lags[6] = {1, 2, 4, 8, 16, 32};
+    const auto& at = Options().cell_error_autocorrelation;
+    const double vals[6] = {at[0], at[1], at[2], at[3], at[4], 0.0};
+    if (d == 0.0) return 1.0;
+    for (int k = 0; k < 5; ++k)
+      if (d < lags[k + 1])
+        return vals[k] + (vals[k + 1] - vals[k]) * (d - lags[k]) / (lags[k + 1] - lags[k]);
+    return 0.0;
+  };
+  double num = 0.0;
+  double den = 0.0;
+  for (int y1 = -r; y1 <= r; ++y1)
+    for (int x1 = -r; x1 <= r; ++x1) {
+      den += x1 * x1;
+      for (int y2 = -r; y2 <= r; ++y2)
+        for (int x2 = -r; x2 <= r; ++x2) num += x1 * x2 * rho(std::hypot(x1 - x2, y1 - y2));
+    }
+  const double expected = std::sqrt(num / den);
+  std::vector<double> ratios;
+  const HazardMapper& ma = *a.mapper;
+  const HazardMapper& mb = *b.mapper;
+  for (int c = 0; c < ma.GridCells() * ma.GridCells(); ++c) {
+    const double sa = ma.LocalSlopeSigmaDeg()[c];
+    const double sb = mb.LocalSlopeSigmaDeg()[c];
+    if (std::isnan(sa) || std::isnan(sb)) continue;
+    ratios.push_back(sb / sa);
+  }
+  ASSERT_GT(ratios.size(), 500u);
+  std::sort(ratios.begin(), ratios.end());
+  const double median = ratios[ratios.size() / 2];
+  std::printf(
+      "1 m slope sigma, correlated / independent cells: median %.3f, max %.3f, model %.3f\n",
+      median, ratios.back(), expected);
+  EXPECT_GT(expected, 2.5);  // the measured correlation makes the slope sigma ~2.9x
+  EXPECT_NEAR(median, expected, 0.02 * expected);
+  EXPECT_LE(ratios.back(), expected * 1.001);
+  EXPECT_GE(ratios.front(), 0.999);
+  HazardMapper m;
+  HazardMapperOptions bad = Options();
+  bad.cell_error_autocorrelation[2] = 1.5;
+  EXPECT_EQ(m.Configure(bad), core::Status::kInvalidArgument);
 }
 
 // GIVEN a plane tilted 15 deg THEN the footprint slope is 15 +- 1 deg and cells are kSlope.
