@@ -726,20 +726,29 @@ void PrintFrameCorrelation(const std::vector<FrameErrors>& frames) {
     for (std::size_t b = a + 1; b < frames.size(); ++b) {
       const FrameErrors& fa = frames[a];
       const FrameErrors& fb = frames[b];
-      if (fa.cell_m != fb.cell_m || std::fabs(fa.corner_x - fb.corner_x) > 1e-6 ||
-          std::fabs(fa.corner_y - fb.corner_y) > 1e-6 || fa.relief_z.size() != fb.relief_z.size()) {
-        continue;
-      }
+      if (fa.cell_m != fb.cell_m || fa.relief_z.size() != fb.relief_z.size()) continue;
+      // The same ground: b's cell holding the centre of a's (the grids follow each frame's
+      // nadir, placed with that frame's pose).
+      const int side = static_cast<int>(std::lround(std::sqrt(double(fa.relief_z.size()))));
+      const int di = static_cast<int>(std::floor((fa.corner_x - fb.corner_x) / fa.cell_m + 0.5));
+      const int dj = static_cast<int>(std::floor((fa.corner_y - fb.corner_y) / fa.cell_m + 0.5));
       double n = 0, sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-      for (std::size_t c = 0; c < fa.relief_z.size(); ++c) {
-        const double x = fa.relief_z[c], y = fb.relief_z[c];
-        if (std::isnan(x) || std::isnan(y)) continue;
-        n += 1;
-        sa += x;
-        sb += y;
-        saa += x * x;
-        sbb += y * y;
-        sab += x * y;
+      for (int j = 0; j < side; ++j) {
+        const int jb = j + dj;
+        if (jb < 0 || jb >= side) continue;
+        for (int i = 0; i < side; ++i) {
+          const int ib = i + di;
+          if (ib < 0 || ib >= side) continue;
+          const double x = fa.relief_z[static_cast<std::size_t>(j) * side + i];
+          const double y = fb.relief_z[static_cast<std::size_t>(jb) * side + ib];
+          if (std::isnan(x) || std::isnan(y)) continue;
+          n += 1;
+          sa += x;
+          sb += y;
+          saa += x * x;
+          sbb += y * y;
+          sab += x * y;
+        }
       }
       if (n < 100) continue;
       const double cov = sab / n - sa / n * sb / n;
