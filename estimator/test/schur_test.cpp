@@ -342,6 +342,125 @@ TEST(Schur, SeveralVariablesEliminatedInPlaceAndDroppedOnceEqualOneAtATimeBitFor
   }
 }
 
+// EliminateVariablesExact (what the filter runs: all the variables' terms in one pass over the
+// matrix, SIMD) against EliminateVariable one variable at a time, skipping the chunks eliminated
+// before: the same bits in every kept element, for landmarks (D = 3, in batches, one of them not
+// positive definite) and for 6- and 15-dimensional pose states. The sizes are the filter's, so
+// the vector loops and their scalar tails both run.
+template <int D>
+void ExpectExactEliminationsBitForBit(int dim, const std::vector<int>& chunks, int batch,
+                                      unsigned seed) {
+  Matrix lambda;
+  Vector g;
+  RandomSystem(dim, seed, &lambda, &g);
+  if (D == 3 && chunks.size() > 2)  // one block that cannot be eliminated
+    lambda.block(3 * chunks[1], 3 * chunks[1], 3, 3) = -Matrix::Identity(3, 3);
+  const int ld = dim + 7;
+  std::vector<double> a(static_cast<std::size_t>(ld * ld), -7.0);
+  std::vector<double> b(static_cast<std::size_t>(ld), -7.0);
+  for (int c = 0; c < dim; ++c) {
+    for (int r = 0; r < dim; ++r) a[c * ld + r] = lambda(r, c);
+    b[c] = g(c);
+  }
+  std::vector<double> a_exact = a;
+  std::vector<double> b_exact = b;
+  std::vector<double> x(static_cast<std::size_t>(ld * D * batch), 0.0);
+  std::vector<char> dropped(static_cast<std::size_t>(dim / 3), 0);
+  bool ok = true;
+  for (const int chunk : chunks) {
+    ok = EliminateVariable<D>(a.data(), ld, b.data(), dim, 3 * chunk, x.data(), ld,
+                              [&](int r, int c) {
+                                return dropped[r] || dropped[c] ? SchurFill::kNone
+                                                                : SchurFill::kBlock;
+                              }) &&
+         ok;
+    for (int k = chunk; k < chunk + D / 3; ++k) dropped[k] = 1;
+  }
+  const std::unique_ptr<bool[]> dropped_exact = std::make_unique<bool[]>(dim / 3);
+  bool ok_exact = true;
+  for (std::size_t i = 0; i < chunks.size(); i += batch) {
+    std::vector<int> offsets;
+    for (std::size_t k = i; k < chunks.size() && k < i + batch; ++k)
+      offsets.push_back(3 * chunks[k]);
+    ok_exact = EliminateVariablesExact<D>(a_exact.data(), ld, b_exact.data(), dim, offsets.data(),
+                                          static_cast<int>(offsets.size()), dropped_exact.get(),
+                                          x.data(), ld) &&
+               ok_exact;
+  }
+  EXPECT_EQ(ok_exact, ok);
+  for (int c = 0; c < dim / 3; ++c) ASSERT_EQ(dropped_exact[c], dropped[c] != 0) << c;
+  int compared = 0;
+  for (int c = 0; c < dim; ++c) {
+    if (dropped[c / 3]) continue;
+    ASSERT_EQ(b_exact[c], b[c]) << c;
+    for (int r = 0; r < dim; ++r) {
+      if (dropped[r / 3]) continue;
+      ASSERT_EQ(a_exact[c * ld + r], a[c * ld + r]) << "D " << D << " row " << r << " col " << c;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 0);
+}
+
+TEST(Schur, ExactEliminationsInOnePassEqualOneAtATimeBitForBit) {
+  // Prior landmarks leaving an inertial prior (15 + 3 x 160 wide), 19 of them in batches of 8.
+  ExpectExactEliminationsBitForBit<3>(
+      15 + 3 * 160, {7, 100, 5, 6, 160, 33, 34, 35, 12, 150, 151, 80, 81, 9, 10, 11, 140, 20, 21},
+      8, 21);
+  ExpectExactEliminationsBitForBit<3>(6 + 3 * 31, {2, 3, 32}, 1, 22);
+  // The oldest pose out of the local system [p0 | p1 | landmarks].
+  ExpectExactEliminationsBitForBit<6>(12 + 3 * 53, {0}, 1, 23);
+  ExpectExactEliminationsBitForBit<15>(30 + 3 * 160, {0}, 1, 24);
+  ExpectExactEliminationsBitForBit<15>(30 + 3 * 3, {0}, 1, 25);
+}
+
+// The Schur term's SIMD loops at every vector width (the host's dispatch picks one: AVX-512 on
+// x86-64 where the CPU has it, else 2 lanes, as on aarch64) give the same bits, for one column
+// and for kSchurColumns at once, over rows that leave a scalar tail.
+template <int D, int W>
+void SchurTermAtWidth(std::vector<double>* columns, int ld, const std::vector<double>& x,
+                      const std::vector<double>& a, int count, int rows) {
+  double* pointers[schur_detail::kSchurColumns];
+  for (int c = 0; c < count; ++c) pointers[c] = columns->data() + c * ld;
+  schur_detail::SubtractSchurTermWidth<D, W>(pointers, count, x.data(), ld, a.data(), rows);
+}
+
+template <int D>
+void ExpectSchurTermSameAtEveryWidth() {
+  std::mt19937 rng(D);
+  std::normal_distribution<double> normal;
+  const int rows = 3 * 37;
+  const int ld = rows + 2;
+  std::vector<double> x(static_cast<std::size_t>(ld * D));
+  std::vector<double> a(static_cast<std::size_t>(schur_detail::kSchurColumns * D));
+  std::vector<double> columns(static_cast<std::size_t>(ld * schur_detail::kSchurColumns));
+  for (double& v : x) v = normal(rng);
+  for (double& v : a) v = normal(rng);
+  for (double& v : columns) v = normal(rng);
+  for (const int count : {1, schur_detail::kSchurColumns}) {
+    std::vector<double> w1 = columns;
+    std::vector<double> w2 = columns;
+    std::vector<double> w8 = columns;
+    std::vector<double> dispatched = columns;
+    SchurTermAtWidth<D, 1>(&w1, ld, x, a, count, rows);
+    SchurTermAtWidth<D, 2>(&w2, ld, x, a, count, rows);
+    SchurTermAtWidth<D, 8>(&w8, ld, x, a, count, rows);
+    double* pointers[schur_detail::kSchurColumns];
+    for (int c = 0; c < count; ++c) pointers[c] = dispatched.data() + c * ld;
+    schur_detail::SubtractSchurTerm<D>(pointers, count, x.data(), ld, a.data(), rows);
+    EXPECT_NE(w1, columns);
+    EXPECT_EQ(w2, w1) << D << " " << count;
+    EXPECT_EQ(w8, w1) << D << " " << count;
+    EXPECT_EQ(dispatched, w1) << D << " " << count;
+  }
+}
+
+TEST(Schur, SchurTermHasTheSameBitsAtEveryVectorWidth) {
+  ExpectSchurTermSameAtEveryWidth<3>();
+  ExpectSchurTermSameAtEveryWidth<6>();
+  ExpectSchurTermSameAtEveryWidth<15>();
+}
+
 TEST(Schur, RefusesABlockThatIsNotPositiveDefiniteAndChangesNothing) {
   Matrix lambda;
   Vector g;

@@ -71,6 +71,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <bit>
 #include <concepts>
 #include <cstdint>
@@ -649,6 +650,8 @@ class SlidingWindowFilter {
   // they occupy.
   core::StaticVector<int, P> leaving_prior_;
   bool prior_chunk_dropped_[kMaxPriorDim / 3] = {};
+  // Prior landmarks eliminated per pass over the prior (EliminateVariablesExact, schur.hpp).
+  static constexpr int kEliminationBatch = 8;
   Vec3<S> prior_landmark_lin_[P];
   Vec3<S> first_estimate_[P];  // where each prior landmark's Jacobians are evaluated
 
@@ -657,8 +660,11 @@ class SlidingWindowFilter {
   S rhs_[kMaxDense] = {};
   S local_[kMaxLocalDim * kMaxLocalDim] = {};
   S local_b_[kMaxLocalDim] = {};
-  static constexpr int kXRows = kMaxLocalDim;  // rows of x_: Lambda_ro Lambda_oo^-1 (schur.hpp)
-  S x_[kXRows * kStateDim] = {};
+  bool local_chunk_dropped_[kMaxLocalDim / 3] = {};  // EliminateFirstPose's (none but p0's)
+  // x_: Lambda_ro Lambda_oo^-1 of the pose or of a batch of prior landmarks (schur.hpp).
+  static constexpr int kXRows = kMaxLocalDim;
+  static constexpr int kXColumns = std::max(kStateDim, 3 * kEliminationBatch);
+  S x_[kXRows * kXColumns] = {};
   S norms_[kMaxObservations] = {};
   AdjEntry adj_[kMaxObservations] = {};
   PoseType pose_backup_[kMaxPoses];

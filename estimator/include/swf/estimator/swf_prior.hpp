@@ -241,16 +241,18 @@ void SlidingWindowFilter<Model, K, N, M, P>::GrowPrior() {
 // (nothing changed), or when the scalar diagonal left the new prior indefinite (see below).
 template <typename Model, int K, int N, int M, int P>
 bool SlidingWindowFilter<Model, K, N, M, P>::EliminateFirstPose(int dim) {
+  if (options_.mode != SwfMode::kVsdf) {
+    for (int c = 0; c < dim / 3; ++c) local_chunk_dropped_[c] = false;
+    const int p0 = 0;
+    return EliminateVariablesExact<kStateDim>(local_, kMaxLocalDim, local_b_, dim, &p0, 1,
+                                              local_chunk_dropped_, x_, kXRows);
+  }
   // Chunks of p1 are one variable; every later chunk is a landmark of its own.
   const auto variable = [](int chunk) { return chunk < 2 * kStateDim / 3 ? 0 : chunk; };
-  const bool vsdf = options_.mode == SwfMode::kVsdf;
-  const bool scalar = vsdf && options_.vsdf_scalar_diagonal;
+  const bool scalar = options_.vsdf_scalar_diagonal;
   const bool eliminated = EliminateVariable<kStateDim>(
       local_, kMaxLocalDim, local_b_, dim, 0, x_, kXRows, [&](int r, int c) {
-        if (!vsdf) return SchurFill::kBlock;
-        if (scalar) {
-          return r == c ? SchurFill::kDiagonal : SchurFill::kNone;
-        }
+        if (scalar) return r == c ? SchurFill::kDiagonal : SchurFill::kNone;
         return variable(r) == variable(c) ? SchurFill::kBlock : SchurFill::kNone;
       });
   return eliminated && (!scalar || NewPriorBlocksPositiveSemidefinite(dim));
@@ -330,24 +332,23 @@ void SlidingWindowFilter<Model, K, N, M, P>::RetireUnsupportedLandmarks() {
 // elimination skips the rows of those before it, which are never read again for a kept element,
 // so every kept element sees the operations of eliminating and dropping the landmarks one at a
 // time, in the same order (the same bits), while the prior is compacted, an O(dim^2) pass, once
-// instead of once per landmark. A landmark whose block is not positive definite is removed
-// without its complement (false).
+// instead of once per landmark; and up to kEliminationBatch of them update the prior in one
+// pass over it (EliminateVariablesExact). A landmark whose block is not positive definite is
+// removed without its complement (false).
 template <typename Model, int K, int N, int M, int P>
 bool SlidingWindowFilter<Model, K, N, M, P>::EliminatePriorLandmarks() {
   if (leaving_prior_.empty()) return true;
   const int chunks = prior_dim_ / 3;
   for (int c = 0; c < chunks; ++c) prior_chunk_dropped_[c] = false;
   bool ok = true;
-  for (const int q : leaving_prior_) {
-    const int o = kStateDim + 3 * q;
-    ok = EliminateVariable<3>(prior_, kMaxPriorDim, prior_g_, prior_dim_, o, x_, kXRows,
-                              [&](int r, int c) {
-                                return prior_chunk_dropped_[r] || prior_chunk_dropped_[c]
-                                           ? SchurFill::kNone
-                                           : SchurFill::kBlock;
-                              }) &&
+  const int leaving = static_cast<int>(leaving_prior_.size());
+  for (int b = 0; b < leaving; b += kEliminationBatch) {
+    const int count = std::min(kEliminationBatch, leaving - b);
+    int offsets[kEliminationBatch];
+    for (int i = 0; i < count; ++i) offsets[i] = kStateDim + 3 * leaving_prior_[b + i];
+    ok = EliminateVariablesExact<3>(prior_, kMaxPriorDim, prior_g_, prior_dim_, offsets, count,
+                                    prior_chunk_dropped_, x_, kXRows) &&
          ok;
-    prior_chunk_dropped_[o / 3] = true;
   }
   prior_dim_ = DropChunks(prior_, kMaxPriorDim, prior_g_, prior_dim_, prior_chunk_dropped_);
   int kept = 0;
