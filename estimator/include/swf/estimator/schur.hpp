@@ -128,6 +128,9 @@ inline void PairwiseSum(const S* e, S* sum) {
 template <typename S, int W>
 struct Lanes {
   typedef S Type __attribute__((vector_size(W * sizeof(S)), may_alias, aligned(sizeof(S))));
+  // The same vector in registers and local arrays: naturally aligned (a pointer to the
+  // scalar-aligned Type cannot be passed where the vector's own alignment is assumed).
+  typedef S Register __attribute__((vector_size(W * sizeof(S))));
 };
 template <typename S, int W>
 using LanesT = typename Lanes<S, W>::Type;
@@ -143,34 +146,35 @@ template <int D, int C, int W, typename S>
 inline __attribute__((always_inline)) void SubtractSchurTermLanes(S* const* columns, const S* x,
                                                                   int ld_x, const S* a, int rows) {
   using V = LanesT<S, W>;
+  using R = typename Lanes<S, W>::Register;
   int r = 0;
   if constexpr (D >= 8) {
     for (; r + W <= rows; r += W) {
-      V xk[D];
+      R xk[D];
       for (int k = 0; k < D; ++k) xk[k] = *reinterpret_cast<const V*>(x + k * ld_x + r);
       for (int c = 0; c < C; ++c) {
-        V e[D];
+        R e[D];
         for (int k = 0; k < D; ++k) e[k] = xk[k] * a[c * D + k];
-        V term;
+        R term;
         SequentialSum<D>(e, &term);
         *reinterpret_cast<V*>(columns[c] + r) -= term;
       }
     }
   } else {
     // 3 W rows (W chunks) per step; in lane terms, row 2 of a chunk is every third lane.
-    V third[3];
+    R third[3];
     for (int v = 0; v < 3; ++v)
       for (int w = 0; w < W; ++w) third[v][w] = (v * W + w) % 3 == 2 ? S(1) : S(0);
     for (; r + 3 * W <= rows; r += 3 * W) {
       for (int v = 0; v < 3; ++v) {
         const int rv = r + v * W;
-        V xk[D];
+        R xk[D];
         for (int k = 0; k < D; ++k) xk[k] = *reinterpret_cast<const V*>(x + k * ld_x + rv);
         for (int c = 0; c < C; ++c) {
-          V e[D];
+          R e[D];
           for (int k = 0; k < D; ++k) e[k] = xk[k] * a[c * D + k];
-          V sequential;
-          V pairwise;
+          R sequential;
+          R pairwise;
           SequentialSum<D>(e, &sequential);
           PairwiseSum<0, D>(e, &pairwise);
           *reinterpret_cast<V*>(columns[c] + rv) -= third[v] != S(0) ? pairwise : sequential;
