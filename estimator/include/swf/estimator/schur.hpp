@@ -139,47 +139,50 @@ using LanesT = typename Lanes<S, W>::Type;
 // vector of x is loaded once for all of them.
 constexpr int kSchurColumns = 4;
 
+// column_c[r + w] -= sum_k x[k ld_x + r + w] a[c D + k] for the W rows from r of C columns: the
+// lanes where `pairwise` is non-zero sum like PairwiseSum (row 2 of a 3-row chunk when D < 8),
+// the others like SequentialSum.
+template <int D, int C, int W, typename S>
+inline __attribute__((always_inline)) void SubtractSchurRows(
+    S* const* columns, const S* x, int ld_x, const S* a, int r,
+    const typename Lanes<S, W>::Register& pairwise) {
+  using V = LanesT<S, W>;
+  using R = typename Lanes<S, W>::Register;
+  R xk[D];
+  for (int k = 0; k < D; ++k) xk[k] = *reinterpret_cast<const V*>(x + k * ld_x + r);
+  for (int c = 0; c < C; ++c) {
+    R e[D];
+    for (int k = 0; k < D; ++k) e[k] = xk[k] * a[c * D + k];
+    R term;
+    SequentialSum<D>(e, &term);
+    if constexpr (D < 8) {
+      R paired;
+      PairwiseSum<0, D>(e, &paired);
+      term = pairwise != S(0) ? paired : term;
+    }
+    *reinterpret_cast<V*>(columns[c] + r) -= term;
+  }
+}
+
 // column_c[r] -= sum_k x[k ld_x + r] a[c D + k] for the rows r < rows (whole 3-row chunks) of
 // C columns: the Schur term of one eliminated variable, W rows per vector. Each lane does the
 // scalar operations of SequentialSum / PairwiseSum for its row.
 template <int D, int C, int W, typename S>
 inline __attribute__((always_inline)) void SubtractSchurTermLanes(S* const* columns, const S* x,
                                                                   int ld_x, const S* a, int rows) {
-  using V = LanesT<S, W>;
   using R = typename Lanes<S, W>::Register;
   int r = 0;
   if constexpr (D >= 8) {
-    for (; r + W <= rows; r += W) {
-      R xk[D];
-      for (int k = 0; k < D; ++k) xk[k] = *reinterpret_cast<const V*>(x + k * ld_x + r);
-      for (int c = 0; c < C; ++c) {
-        R e[D];
-        for (int k = 0; k < D; ++k) e[k] = xk[k] * a[c * D + k];
-        R term;
-        SequentialSum<D>(e, &term);
-        *reinterpret_cast<V*>(columns[c] + r) -= term;
-      }
-    }
+    const R none = {};
+    for (; r + W <= rows; r += W) SubtractSchurRows<D, C, W>(columns, x, ld_x, a, r, none);
   } else {
     // 3 W rows (W chunks) per step; in lane terms, row 2 of a chunk is every third lane.
     R third[3];
     for (int v = 0; v < 3; ++v)
       for (int w = 0; w < W; ++w) third[v][w] = (v * W + w) % 3 == 2 ? S(1) : S(0);
     for (; r + 3 * W <= rows; r += 3 * W) {
-      for (int v = 0; v < 3; ++v) {
-        const int rv = r + v * W;
-        R xk[D];
-        for (int k = 0; k < D; ++k) xk[k] = *reinterpret_cast<const V*>(x + k * ld_x + rv);
-        for (int c = 0; c < C; ++c) {
-          R e[D];
-          for (int k = 0; k < D; ++k) e[k] = xk[k] * a[c * D + k];
-          R sequential;
-          R pairwise;
-          SequentialSum<D>(e, &sequential);
-          PairwiseSum<0, D>(e, &pairwise);
-          *reinterpret_cast<V*>(columns[c] + rv) -= third[v] != S(0) ? pairwise : sequential;
-        }
-      }
+      for (int v = 0; v < 3; ++v)
+        SubtractSchurRows<D, C, W>(columns, x, ld_x, a, r + v * W, third[v]);
     }
   }
   // The rest row by row (r is at a chunk's start where the rows' position in it matters).
