@@ -1,6 +1,7 @@
 #include "swf/sil/evaluation.hpp"
 
 #include "swf/evaluation/statistics.hpp"
+#include "swf/frontend/tracker.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -161,9 +162,9 @@ bool Evaluation::FirstSeen(std::int64_t id, app::NewSighting* sighting) const {
 double Evaluation::ReliefFraction(const Eigen::Vector3d& point,
                                   const estimator::Pose<double>& pose) const {
   constexpr int kRing = 16;
-  constexpr double kPatchRadiusPx = 6.0;
+  const double patch_radius_px = frontend::TrackerOptions{}.patch_radius;  // the flight's
   const double depth = pose.ApplyInverse(point).z();
-  const double radius_m = kPatchRadiusPx * depth / camera_.fx;
+  const double radius_m = patch_radius_px * depth / camera_.fx;
   double ring = 0.0;
   for (int k = 0; k < kRing; ++k) {
     const double a = 2.0 * M_PI * k / kRing;

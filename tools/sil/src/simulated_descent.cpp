@@ -112,12 +112,6 @@ double HuberEffectiveSigma(const std::vector<double>& e, double k = 3.5) {
   return sigma;
 }
 
-// The median of the finite values; NaN when there are none.
-double MedianOfFinite(std::vector<double> v) {
-  std::erase_if(v, [](double x) { return !std::isfinite(x); });
-  return v.empty() ? NAN : evaluation::Median(v);
-}
-
 // The signed u and v errors grouped by one property of the measurement (bins [edges[i],
 // edges[i+1])): per bin the count, the median radial fraction (TrackingErrors), the errors'
 // Huber-effective sigma in pixels and that of the errors divided by the sigma the filter was told
@@ -132,7 +126,7 @@ std::string BinnedErrorsJson(const Evaluation::TrackingErrors& t,
     std::vector<double> radial;
     for (std::size_t i = 0; i < property.size(); ++i) {
       if (!(property[i] >= edges[b] && property[i] < edges[b + 1])) continue;
-      radial.push_back(t.radial_fraction[i]);
+      if (std::isfinite(t.radial_fraction[i])) radial.push_back(t.radial_fraction[i]);
       px.push_back(t.du_px[i]);
       px.push_back(t.dv_px[i]);
       if (t.stated_sigma_px[i] > 0.0) {
@@ -144,7 +138,7 @@ std::string BinnedErrorsJson(const Evaluation::TrackingErrors& t,
     text +=
         "{\"from\": " + app::JsonNumber(edges[b]) + ", \"to\": " + app::JsonNumber(edges[b + 1]) +
         ", \"measurements\": " + std::to_string(px.size() / 2) +
-        ", \"radial_fraction_median\": " + app::JsonNumber(MedianOfFinite(radial)) +
+        ", \"radial_fraction_median\": " + app::JsonNumber(evaluation::Median(radial)) +
         ", \"huber_sigma_px\": " + app::JsonNumber(HuberEffectiveSigma(px)) +
         ", \"normalized_huber_sigma\": " + app::JsonNumber(HuberEffectiveSigma(normalized)) + "}";
   }

@@ -83,7 +83,7 @@ class Evaluation : public app::OutputObserver {
     // shows as a non-zero median here, which scales the motion the filter sees.
     std::vector<double> radial_fraction;
     // The relief under the template at the first sighting: the landmark's height over the mean
-    // of the ground on a ring of the patch's radius (6 px) around it, over its depth then
+    // of the ground on a ring of the tracker's patch radius around it, over its depth then
     // (positive: the landmark stands above what surrounds it, e.g. on a rock).
     std::vector<double> relief_fraction;
   };
