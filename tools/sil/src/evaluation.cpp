@@ -91,7 +91,7 @@ void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<do
     if (!(c.z() > 0.0)) continue;
     const Eigen::Vector3d z = camera_.Project(c);
     if (m.fate == app::FeatureFate::kNew) {
-      ScoreStereo(m, r.nav.frame_seq, z, 0, 1.0);
+      ScoreStereo(m, r.nav.frame_seq, z, 0, 1.0, pose);
       continue;
     }
     const double du = m.u_px - z.x();
@@ -123,12 +123,13 @@ void Evaluation::ScoreTracking(const app::NavRecord& r, const estimator::Pose<do
       tracking_.first_frame_px.push_back(e);
       tracking_.first_frame_age.push_back(age);
     }
-    ScoreStereo(m, r.nav.frame_seq, z, age, magnification);
+    ScoreStereo(m, r.nav.frame_seq, z, age, magnification, pose);
   }
 }
 
 void Evaluation::ScoreStereo(const app::FeatureMark& m, std::int64_t frame_seq,
-                             const Eigen::Vector3d& true_z, int age, double magnification) {
+                             const Eigen::Vector3d& true_z, int age, double magnification,
+                             const estimator::Pose<double>& pose) {
   const double du_left = m.u_px - true_z.x();
   const double du_right = m.u_right_px - true_z.y();
   stereo_.du_left_px.push_back(du_left);
@@ -141,6 +142,8 @@ void Evaluation::ScoreStereo(const app::FeatureMark& m, std::int64_t frame_seq,
   stereo_.stated_sigma_px.push_back(m.sigma_px);
   stereo_.stated_sigma_disparity_px.push_back(m.sigma_disparity_px);
   stereo_.quality.push_back(m.quality);
+  stereo_.left_subpixel_phase.push_back(m.u_px - std::floor(m.u_px));
+  stereo_.depth_drift_fraction.push_back(DepthDriftFraction(m, age, pose));
   LastStereoError& last = last_stereo_[m.id];
   if (age > 0 && last.frame_seq == frame_seq - 1) {
     stereo_.left_then_px.push_back(last.du_left_px);
@@ -150,6 +153,22 @@ void Evaluation::ScoreStereo(const app::FeatureMark& m, std::int64_t frame_seq,
     stereo_.pair_age.push_back(age);
   }
   last = LastStereoError{frame_seq, du_left, du_left - du_right};
+}
+
+double Evaluation::DepthDriftFraction(const app::FeatureMark& m, int age,
+                                      const estimator::Pose<double>& pose) {
+  Eigen::Vector3d p_camera;
+  if (!camera_.Triangulate(estimator::Vec3<double>(m.u_px, m.u_right_px, m.v_px), &p_camera)) {
+    return NAN;
+  }
+  const Eigen::Vector3d p_world = pose.Apply(p_camera);
+  if (age == 0) {
+    first_stereo_point_[m.id] = p_world;
+    return NAN;
+  }
+  const auto first = first_stereo_point_.find(m.id);
+  if (first == first_stereo_point_.end()) return NAN;
+  return (pose.R.transpose() * (p_world - first->second)).z() / p_camera.z();
 }
 
 bool Evaluation::FirstSeen(std::int64_t id, app::NewSighting* sighting) const {

@@ -206,9 +206,10 @@ std::string BinnedStereoErrorsJson(const Evaluation::StereoErrors& t,
                                    const std::vector<double>& edges) {
   std::string text = "[";
   for (std::size_t b = 0; b + 1 < edges.size(); ++b) {
-    std::vector<double> left, right, disparity, normalized;
+    std::vector<double> left, right, disparity, normalized, drift;
     for (std::size_t i = 0; i < property.size(); ++i) {
       if (!(property[i] >= edges[b] && property[i] < edges[b + 1])) continue;
+      if (std::isfinite(t.depth_drift_fraction[i])) drift.push_back(t.depth_drift_fraction[i]);
       left.push_back(t.du_left_px[i]);
       right.push_back(t.du_right_px[i]);
       disparity.push_back(t.dd_px[i]);
@@ -223,6 +224,7 @@ std::string BinnedStereoErrorsJson(const Evaluation::StereoErrors& t,
         ", \"right_huber_sigma_px\": " + app::JsonNumber(HuberEffectiveSigma(right)) +
         ", \"disparity_huber_sigma_px\": " + app::JsonNumber(HuberEffectiveSigma(disparity)) +
         ", \"disparity_median_px\": " + app::JsonNumber(evaluation::Median(disparity)) +
+        ", \"depth_drift_fraction_median\": " + app::JsonNumber(evaluation::Median(drift)) +
         ", \"disparity_beyond_5_sigma\": " + app::JsonNumber(TailFraction(disparity, 5.0)) +
         ", \"left_right_correlation\": " + app::JsonNumber(InlierCorrelation(left, right)) +
         ", \"left_disparity_correlation\": " + app::JsonNumber(InlierCorrelation(left, disparity)) +
@@ -272,7 +274,9 @@ void WriteDisparityErrorBins(std::FILE* f, const Evaluation::StereoErrors& t) {
       f,
       "  \"disparity_error_bins\": {\"by_age\": %s,\n    \"by_magnification\": %s,\n    "
       "\"by_altitude_m\": %s,\n    \"by_true_disparity_px\": %s,\n    \"by_quality\": %s,\n    "
-      "\"first_sighting_by_quality\": %s,\n    \"all\": %s,\n    \"frame_to_frame\": %s},\n",
+      "\"first_sighting_by_quality\": %s,\n    \"by_left_subpixel_phase\": %s,\n    \"all\": %s,\n "
+      "   "
+      "\"frame_to_frame\": %s},\n",
       BinnedStereoErrorsJson(t, age, {0, 1, 2, 4, 8, 16, 1e9}).c_str(),
       BinnedStereoErrorsJson(t, t.magnification,
                              {0.0, 1.02, 1.05, 1.1, 1.2, 1.35, 1.5, 1.75, 2.0, 2.5, 1e9})
@@ -282,6 +286,7 @@ void WriteDisparityErrorBins(std::FILE* f, const Evaluation::StereoErrors& t) {
           .c_str(),
       BinnedStereoErrorsJson(t, t.quality, quality_edges).c_str(),
       BinnedStereoErrorsJson(t, first_quality, quality_edges).c_str(),
+      BinnedStereoErrorsJson(t, t.left_subpixel_phase, {0.0, 0.2, 0.4, 0.6, 0.8, 1.0}).c_str(),
       BinnedStereoErrorsJson(t, t.altitude_m, {-1e9, 1e9}).c_str(),
       FrameToFrameJson(t, {1, 2, 4, 8, 16, 1000000000}).c_str());
 }

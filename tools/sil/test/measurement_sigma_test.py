@@ -84,6 +84,18 @@ def main():
         if not abs(a['left_disparity_correlation']) < 0.3:
             failures.append('%s: the disparity error is not independent of u_left\'s '
                             '(correlation %.2f)' % (name, a['left_disparity_correlation']))
+    bins = per_track['disparity_error_bins']
+    if bins['by_age'][0]['depth_drift_fraction_median'] is not None:
+        failures.append('a first sighting has a depth drift from itself')
+    # Measured (seed 1): -1.1e-3 to +1e-4 of the depth; a wrong triangulation or pose reads
+    # metres.
+    drift = [(b['from'], b['depth_drift_fraction_median']) for b in bins['by_magnification']
+             if b['measurements'] >= MIN_MEASUREMENTS]
+    if len(drift) < 6 or any(x is None or not abs(x) < 5e-3 for _, x in drift):
+        failures.append('depth drift by magnification implausible: %s' % drift)
+    phases = bins['by_left_subpixel_phase']
+    if len(phases) != 5 or sum(b['measurements'] for b in phases) != bins['all'][0]['measurements']:
+        failures.append('the sub-pixel phase bins do not hold every measurement once')
     d = disparity_ratios(per_track)
     if len(d) < 5:
         failures.append('only %d true-disparity bins with %d measurements' %

@@ -104,6 +104,15 @@ class Evaluation : public app::OutputObserver {
     std::vector<double> stated_sigma_px;
     std::vector<double> stated_sigma_disparity_px;
     std::vector<double> quality;  // FeatureMark::quality
+    // The left column's sub-pixel phase, u - floor(u): bilinear sampling blurs a patch by an
+    // amount that depends on it, and LK between differently blurred patches is biased.
+    std::vector<double> left_subpixel_phase;
+    // Does the stereo point stay where it was first measured? The measurement triangulated from
+    // the frame's true pose, minus the first sighting's triangulated the same way, along the
+    // current optical axis, over the current depth (positive: it reads farther away now). A
+    // static landmark's should scatter about 0; a median that moves with the magnification is
+    // a bias the filter can only absorb in its pose (NaN on the first sighting).
+    std::vector<double> depth_drift_fraction;
     // The same track's errors in consecutive frames (the filter takes them as independent):
     // per pair the left u error and the disparity error then and now, and the age now.
     std::vector<double> left_then_px, left_now_px, disparity_then_px, disparity_now_px;
@@ -138,11 +147,14 @@ class Evaluation : public app::OutputObserver {
     double du_left_px = 0.0;
     double dd_px = 0.0;
   };
-  std::unordered_map<std::int64_t, LastStereoError> last_stereo_;  // per track id
+  std::unordered_map<std::int64_t, LastStereoError> last_stereo_;         // per track id
+  std::unordered_map<std::int64_t, Eigen::Vector3d> first_stereo_point_;  // depth_drift_fraction
   std::int64_t first_frame_ = -1;  // frame_seq of the first navigation output
   void ScoreTracking(const app::NavRecord& r, const estimator::Pose<double>& pose);
   void ScoreStereo(const app::FeatureMark& m, std::int64_t frame_seq, const Eigen::Vector3d& true_z,
-                   int age, double magnification);
+                   int age, double magnification, const estimator::Pose<double>& pose);
+  double DepthDriftFraction(const app::FeatureMark& m, int age,
+                            const estimator::Pose<double>& pose);
   swf_msgs::truth_state_t truth_;
   swf_msgs::landmark_map_t truth_map_;
   std::vector<std::uint8_t> buffer_;
