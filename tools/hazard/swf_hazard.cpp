@@ -139,6 +139,27 @@ std::string EvaluateFailure(swf::core::Status s) {
          ")";
 }
 
+// The render noise of frame `frame` of the run seeded `seed`: every run draws its own frames.
+std::uint64_t FrameSeed(std::uint64_t seed, int frame) { return seed * 1000 + frame; }
+
+// One frame of a seeded run: mapped at `pose`, then the published map judged against the truth
+// into `m` (the update's time in `ms`). False with the frame, its altitude and the failure in
+// `why`.
+bool MapAndJudge(World* world, swf::hazard::HazardMapper* mapper,
+                 const swf::estimator::Pose<double>& pose, int frame, std::uint64_t seed,
+                 double altitude_m, HazardMapMetrics* m, double* ms, std::string* why) {
+  if (const swf::core::Status st = world->Step(pose, frame, FrameSeed(seed, frame), mapper, ms);
+      st != swf::core::Status::kOk) {
+    *why = StepFailure(frame, altitude_m, st);
+    return false;
+  }
+  if (const swf::core::Status st = world->Evaluate(*mapper, m); st != swf::core::Status::kOk) {
+    *why = EvaluateFailure(st);
+    return false;
+  }
+  return true;
+}
+
 void Json(FILE* f, double v) {
   if (std::isfinite(v)) {
     std::fprintf(f, "%.6g", v);
@@ -171,14 +192,9 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
         const double y = rng.Uniform(-20.0, 20.0);
         const auto pose = CameraPose(world, x, y, kSweepAltitudes[a], rng.Uniform(0.0, 6.283));
         double ms = 0.0;
-        if (const swf::core::Status st = world.Step(pose, a, seed * 1000 + a, mapper.get(), &ms);
-            st != swf::core::Status::kOk) {
-          return Fail(std::string(kPresetNames[p]) + " seed " + std::to_string(seed) + ": " +
-                      StepFailure(a, kSweepAltitudes[a], st));
-        }
         HazardMapMetrics m;
-        if (const swf::core::Status st = world.Evaluate(*mapper, &m); st != swf::core::Status::kOk)
-          return Fail(EvaluateFailure(st));
+        if (!MapAndJudge(&world, mapper.get(), pose, a, seed, kSweepAltitudes[a], &m, &ms, &why))
+          return Fail(std::string(kPresetNames[p]) + " seed " + std::to_string(seed) + ": " + why);
         sweep[p][a].Add(m, ms);
         all_alt[a].Add(m, ms);
         if (p == 2 && s == 0 && (a == 5 || a == 7)) {
@@ -219,14 +235,11 @@ int Eval(const std::string& out, const EvalOptions& eo, int descents, int sweep_
       for (double alt : kDescentAltitudes) {
         const auto pose =
             CameraPose(world, x0 + 0.2 * rng.Gaussian(), y0 + 0.2 * rng.Gaussian(), alt, heading);
-        if (const swf::core::Status st = world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms);
-            st != swf::core::Status::kOk) {
+        if (!MapAndJudge(&world, mapper.get(), pose, f, seed, alt, &m, &ms, &why)) {
           return Fail(std::string(kPresetNames[p]) + " descent seed " + std::to_string(seed) +
-                      ": " + StepFailure(f, alt, st));
+                      ": " + why);
         }
         ++f;
-        if (const swf::core::Status st = world.Evaluate(*mapper, &m); st != swf::core::Status::kOk)
-          return Fail(EvaluateFailure(st));
       }
       descent_acc[p].Add(m, ms);
       results.push_back({p, s, m.site_valid, m.site_on_hazard, m.site_clearance_m,
@@ -420,7 +433,7 @@ int Map(const std::string& path, const EvalOptions& eo, swf::sim::TerrainPreset 
   int f = 0;
   for (double alt : kDescentAltitudes) {
     if (const swf::core::Status st = world.Step(CameraPose(world, 0.0, 0.0, alt, 0.0), f,
-                                                seed * 1000 + f, mapper.get(), nullptr);
+                                                FrameSeed(seed, f), mapper.get(), nullptr);
         st != swf::core::Status::kOk) {
       return Fail(path + ": " + StepFailure(f, alt, st));
     }
@@ -794,8 +807,8 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     pose.t = {x0, y0, alt};
     double ms = 0.0;
     if (const swf::core::Status st =
-            world.Step(pose, f, seed * 1000 + f, mapper.get(), &ms, swf ? &poses.error[f] : nullptr,
-                       swf ? &poses.covariance[f] : nullptr);
+            world.Step(pose, f, FrameSeed(seed, f), mapper.get(), &ms,
+                       swf ? &poses.error[f] : nullptr, swf ? &poses.covariance[f] : nullptr);
         st != swf::core::Status::kOk) {
       return Fail(StepFailure(f, alt, st));
     }
@@ -807,7 +820,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
       }();
       single->Reset();
       double ms1 = 0.0;
-      (void)world.Step(pose, f, seed * 1000 + f, single.get(), &ms1,
+      (void)world.Step(pose, f, FrameSeed(seed, f), single.get(), &ms1,
                        swf ? &poses.error[f] : nullptr, swf ? &poses.covariance[f] : nullptr);
       (void)world.Publish(*single);
       const ReliefCalibration one = CalibrateRelief(world, *single);
@@ -832,7 +845,7 @@ int Flight(const std::string& out, const EvalOptions& eo, swf::sim::TerrainPrese
     if (frame_correlation) {
       single->Reset();
       double ms1 = 0.0;
-      (void)world.Step(pose, f, seed * 1000 + f, single.get(), &ms1,
+      (void)world.Step(pose, f, FrameSeed(seed, f), single.get(), &ms1,
                        swf ? &poses.error[f] : nullptr, swf ? &poses.covariance[f] : nullptr);
       (void)world.Publish(*single);
       FrameErrors e{alt, single->CellM(), single->CornerX(), single->CornerY(), {}};
