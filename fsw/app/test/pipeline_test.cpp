@@ -26,6 +26,18 @@ using estimator::NavIntegrity;
 using estimator::Pose;
 using estimator::Vec3;
 
+// Sets `field` of `options` to a negative, a NaN and an infinite value, each of which Configure
+// must refuse (the other options valid), and leaves it at `good`, which Configure must take.
+void ExpectOnlyFiniteNonNegativeTaken(Pipeline* pipeline, PipelineOptions* options,
+                                      double PipelineOptions::*field, double good) {
+  for (const double bad : {-good, std::nan(""), HUGE_VAL}) {
+    options->*field = bad;
+    EXPECT_EQ(pipeline->Configure(*options), core::Status::kInvalidArgument) << bad;
+  }
+  options->*field = good;
+  EXPECT_EQ(pipeline->Configure(*options), core::Status::kOk) << good;
+}
+
 struct Descent {
   FswConfig config;
   std::unique_ptr<sil::SimWorld> world = std::make_unique<sil::SimWorld>();
@@ -117,20 +129,13 @@ TEST(PipelineTest, MeasurementSigmaGrowsWithTheWarpsMagnification) {
   po.measurement_sigma_per_magnification_px = 0.0;
   EXPECT_DOUBLE_EQ(MeasurementSigmaPx(po, 3.0), 0.04);  // the constant sigma of before
 
-  const Descent descent;  // a valid configuration ...
+  const Descent descent;  // a valid configuration, one field at a time made invalid
   PipelineOptions bad = testing::SmallRigOptions(*descent.world);
   auto pipeline = std::make_unique<Pipeline>();
-  bad.measurement_sigma_per_magnification_rad = -1e-4;  // ... made invalid
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_sigma_per_magnification_rad = std::nan("");
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_sigma_per_magnification_rad = 2e-4;
-  bad.measurement_sigma_per_magnification_px = -0.1;
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_sigma_per_magnification_px = std::nan("");
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_sigma_per_magnification_px = 0.1;
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kOk);
+  ExpectOnlyFiniteNonNegativeTaken(pipeline.get(), &bad,
+                                   &PipelineOptions::measurement_sigma_per_magnification_rad, 2e-4);
+  ExpectOnlyFiniteNonNegativeTaken(pipeline.get(), &bad,
+                                   &PipelineOptions::measurement_sigma_per_magnification_px, 0.1);
 }
 
 // GIVEN the warp-grown part of the left error shared by a track's sightings
@@ -206,16 +211,13 @@ TEST(PipelineTest, RightCoordinateFollowsTheLeftWithTheMatchsOwnSigma) {
   EXPECT_DOUBLE_EQ(before.disparity_sigma_px, std::sqrt(2.0) * 0.05);
   EXPECT_EQ(MeasurementSqrtInformation(before), estimator::Mat3<double>::Identity() / 0.05);
 
-  const Descent descent;  // a valid configuration ...
+  const Descent descent;  // a valid configuration, one field at a time made invalid
   PipelineOptions bad = testing::SmallRigOptions(*descent.world);
   auto pipeline = std::make_unique<Pipeline>();
-  bad.measurement_disparity_sigma_px = -0.01;  // ... made invalid
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_disparity_sigma_px = 0.02;
-  bad.measurement_disparity_sigma_per_parallax_px = std::nan("");
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kInvalidArgument);
-  bad.measurement_disparity_sigma_per_parallax_px = 0.6;
-  EXPECT_EQ(pipeline->Configure(bad), core::Status::kOk);
+  ExpectOnlyFiniteNonNegativeTaken(pipeline.get(), &bad,
+                                   &PipelineOptions::measurement_disparity_sigma_px, 0.02);
+  ExpectOnlyFiniteNonNegativeTaken(
+      pipeline.get(), &bad, &PipelineOptions::measurement_disparity_sigma_per_parallax_px, 0.6);
 }
 
 TEST(PipelineTest, MotionGlitchesAreRefusedOrOverruledAndNeverPublishedValid) {
