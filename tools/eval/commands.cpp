@@ -285,15 +285,19 @@ int WriteEvaluation(const std::string& out, const Evaluation& e) {
   return AllOk(*e.runs) ? 0 : kExitRunFailed;
 }
 
-// Creates the output directory and runs the dataset; false, after saying why, when either fails.
+// What every sequence command does before its report: --measurements checked against the
+// report's own files, the output directory created and the dataset run. 0, or the exit status
+// (kExitBadArguments, 1) after saying what failed.
 template <typename Run>
-bool PrepareAndRun(const char* tool, const std::string& out, const Run& run) {
+int CheckAndRun(const char* tool, const SequenceArgs& a, const std::string& prefix,
+                const Run& run) {
+  if (!MeasurementsApartFromReport(tool, a, prefix)) return kExitBadArguments;
   std::string error;
-  if (!cli::MakeDirectories(out, &error) || !run(&error)) {
+  if (!cli::MakeDirectories(a.out, &error) || !run(&error)) {
     std::fprintf(stderr, "%s: %s\n", tool, error.c_str());
-    return false;
+    return 1;
   }
-  return true;
+  return 0;
 }
 
 // The flags every dataset command shares, onto its runs' options.
@@ -482,11 +486,11 @@ int RunEurocCommand(const SequenceArgs& a, double loop_seconds) {
   ApplyCommon(a, &options.run);
   const bool looped = options.loop_seconds > 0.0;
   const std::string prefix = looped ? "euroc_loop" : "euroc";
-  if (!MeasurementsApartFromReport("swf-eval euroc", a, prefix)) return kExitBadArguments;
   EurocResult result;
-  if (!PrepareAndRun("swf-eval euroc", a.out,
-                     [&](std::string* error) { return RunEuroc(dir, options, &result, error); })) {
-    return 1;
+  if (const int failed = CheckAndRun("swf-eval euroc", a, prefix, [&](std::string* error) {
+        return RunEuroc(dir, options, &result, error);
+      })) {
+    return failed;
   }
   Evaluation e = EvaluationOf(prefix, a, result);
   e.title = looped ? Format(
@@ -530,11 +534,11 @@ int RunKittiCommand(const SequenceArgs& a, int max_disparity_px, int max_frames)
   options.max_frames = max_frames;
   ApplyCommon(a, &options.run);
   const std::string prefix = "kitti_odometry";
-  if (!MeasurementsApartFromReport("swf-eval kitti", a, prefix)) return kExitBadArguments;
   KittiResult result;
-  if (!PrepareAndRun("swf-eval kitti", a.out,
-                     [&](std::string* error) { return RunKitti(dir, options, &result, error); })) {
-    return 1;
+  if (const int failed = CheckAndRun("swf-eval kitti", a, prefix, [&](std::string* error) {
+        return RunKitti(dir, options, &result, error);
+      })) {
+    return failed;
   }
   Evaluation e = EvaluationOf(prefix, a, result);
   e.title = "Real data: KITTI odometry excerpt, the whole pipeline (`swf-eval kitti DIR`)";
