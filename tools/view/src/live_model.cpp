@@ -521,6 +521,44 @@ Json HealthJson(const swf_msgs::health_t& h) {
               {"stages", stages}};
 }
 
+// One digit a cell for the page to draw, and how many cells hold each value (by the names of
+// the message's enumeration, in its order).
+template <std::size_t N>
+Json DigitsWithCounts(const std::vector<std::int8_t>& values, const char* const (&names)[N],
+                      const char* digits_key) {
+  std::int64_t counts[N] = {};
+  const std::string digits = DigitsAndCounts(values, counts);
+  Json named = Json::object();
+  for (std::size_t k = 0; k < N; ++k) named[names[k]] = counts[k];
+  return Json{{digits_key, digits}, {"counts", named}};
+}
+
+Json HazardJson(const swf_msgs::hazard_map_t& h) {
+  static constexpr const char* kClasses[] = {"unknown", "safe",  "slope",
+                                             "rock",    "rough", "uncertain"};
+  Json j = DigitsWithCounts(h.hazard_class, kClasses, "classes");
+  j["frame_seq"] = h.frame_seq;
+  j["rows"] = h.rows;
+  j["cols"] = h.cols;
+  j["cell_size_m"] = h.cell_size_m;
+  j["origin_m"] = {h.origin_world_m[0], h.origin_world_m[1]};
+  j["known_cells"] = static_cast<std::int64_t>(std::count_if(
+      h.hazard_class.begin(), h.hazard_class.end(), [](std::int8_t c) { return c > 0; }));
+  j["safe_site"] = {{"valid", h.safe_site_valid},
+                    {"position_m", {h.safe_site_world_m[0], h.safe_site_world_m[1]}},
+                    {"score", h.safe_site_score}};
+  return j;
+}
+
+Json FeaturesJson(const swf_msgs::feature_set_t& f) {
+  static constexpr const char* kStatus[] = {"tracked", "new", "rejected", "gated"};
+  Json j = DigitsWithCounts(f.status, kStatus, "status");
+  j["frame_seq"] = f.frame_seq;
+  j["u_px"] = f.u_px;
+  j["v_px"] = f.v_px;
+  return j;
+}
+
 }  // namespace
 
 std::shared_ptr<const std::string> LiveModel::Json(Part part) {
@@ -628,34 +666,9 @@ std::shared_ptr<const std::string> LiveModel::Json(Part part) {
         j["truth_m"] = truth;
         break;
       }
-      case kHazard: {
-        if (!s.has_hazard) {
-          j = {{"frame_seq", nullptr}};
-          break;
-        }
-        const swf_msgs::hazard_map_t& h = s.hazard;
-        std::int64_t counts[6] = {};
-        const std::string classes = DigitsAndCounts(h.hazard_class, counts);
-        j = {{"frame_seq", h.frame_seq},
-             {"rows", h.rows},
-             {"cols", h.cols},
-             {"cell_size_m", h.cell_size_m},
-             {"origin_m", {h.origin_world_m[0], h.origin_world_m[1]}},
-             {"classes", classes},
-             {"counts",
-              {{"unknown", counts[0]},
-               {"safe", counts[1]},
-               {"slope", counts[2]},
-               {"rock", counts[3]},
-               {"rough", counts[4]},
-               {"uncertain", counts[5]}}},
-             {"known_cells", static_cast<std::int64_t>(classes.size()) - counts[0]},
-             {"safe_site",
-              {{"valid", h.safe_site_valid},
-               {"position_m", {h.safe_site_world_m[0], h.safe_site_world_m[1]}},
-               {"score", h.safe_site_score}}}};
+      case kHazard:
+        j = s.has_hazard ? HazardJson(s.hazard) : nlohmann::json{{"frame_seq", nullptr}};
         break;
-      }
       case kImage: {
         if (!s.has_image) {
           j = {{"seq", nullptr}};
@@ -670,25 +683,9 @@ std::shared_ptr<const std::string> LiveModel::Json(Part part) {
              {"gray_base64", Base64(s.image)}};
         break;
       }
-      case kFeatures: {
-        if (!s.has_features) {
-          j = {{"frame_seq", nullptr}};
-          break;
-        }
-        const swf_msgs::feature_set_t& f = s.features;
-        std::int64_t counts[4] = {};
-        const std::string status = DigitsAndCounts(f.status, counts);
-        j = {{"frame_seq", f.frame_seq},
-             {"u_px", f.u_px},
-             {"v_px", f.v_px},
-             {"status", status},
-             {"counts",
-              {{"tracked", counts[0]},
-               {"new", counts[1]},
-               {"rejected", counts[2]},
-               {"gated", counts[3]}}}};
+      case kFeatures:
+        j = s.has_features ? FeaturesJson(s.features) : nlohmann::json{{"frame_seq", nullptr}};
         break;
-      }
       case kNumParts: break;
     }
   }
