@@ -177,6 +177,25 @@ std::string NeesVerdict(const char* what, double mean, double dof, double lower,
   return text;
 }
 
+// A line of docs/results.md.
+void AddLine(std::string* md, const std::string& line) { *md += line + "\n"; }
+
+// A figure's section of docs/results.md: its heading and its plots, each followed by a blank line.
+void AddFigure(std::string* md, const std::string& heading, const std::string& plots) {
+  AddLine(md, heading);
+  AddLine(md, "");
+  AddLine(md, plots);
+  AddLine(md, "");
+}
+
+// The filter in `mode` with a window of k poses, as a Monte Carlo run.
+std::function<Trace(const SyntheticScene&, std::uint64_t)> SwfRun(SwfMode mode, int k) {
+  return [=](const SyntheticScene& s, std::uint64_t seed) {
+    return RunFilter<Filter>(s, mode, k, seed);
+  };
+}
+
+// Consistency: NEES over Monte Carlo runs.
 bool AddNees(const Output& out, int runs, std::string* md) {
   using swf::eval::NeesOptions;
   using swf::eval::NeesResult;
@@ -288,12 +307,13 @@ bool AddNees(const Output& out, int runs, std::string* md) {
   if (!WriteExperiment(out, "nees_landmark", landmark_figure, landmark, summary, frame_numbers)) {
     return false;
   }
-  auto add = [md](const std::string& line) { *md += line + "\n"; };
-  add("## Consistency: NEES over " + std::to_string(runs) + " Monte Carlo runs");
-  add("");
-  add("![nees pose](eval/nees_pose.png) ![nees landmark](eval/nees_landmark.png)");
-  add("");
-  add("Normalized estimation error squared of the newest pose (6 dof, error in the estimator's "
+  AddLine(md, "## Consistency: NEES over " + std::to_string(runs) + " Monte Carlo runs");
+  AddLine(md, "");
+  AddLine(md, "![nees pose](eval/nees_pose.png) ![nees landmark](eval/nees_landmark.png)");
+  AddLine(md, "");
+  AddLine(
+      md,
+      "Normalized estimation error squared of the newest pose (6 dof, error in the estimator's "
       "own retraction, against `ComputeCovariances`' marginal) and of the active landmarks (3 "
       "dof, averaged over the landmarks of a run), averaged over the runs at every frame. The "
       "bounds are the two-sided 95% chi-square bounds of that run average, chi2(dof*runs)/runs "
@@ -301,17 +321,17 @@ bool AddNees(const Output& out, int runs, std::string* md) {
       "a new scene, new pixel noise (0.5 px, as R states) and new motion-input noise (as Q "
       "states); the first pose's prior is centred on the truth. Averages below are over frames "
       "2-40 (`out/eval/nees_pose.json`).");
-  add("");
+  AddLine(md, "");
   for (const NeesResult& r : results) {
-    add("- " + r.name + ": " +
-        NeesVerdict("pose", r.mean_pose_nees, 6, r.pose_lower, r.pose_upper,
-                    r.pose_fraction_inside) +
-        ". " +
-        NeesVerdict("Landmark", r.mean_landmark_nees, 3, r.landmark_lower, r.landmark_upper,
-                    r.landmark_fraction_inside) +
-        ".");
+    AddLine(md, "- " + r.name + ": " +
+                    NeesVerdict("pose", r.mean_pose_nees, 6, r.pose_lower, r.pose_upper,
+                                r.pose_fraction_inside) +
+                    ". " +
+                    NeesVerdict("Landmark", r.mean_landmark_nees, 3, r.landmark_lower,
+                                r.landmark_upper, r.landmark_fraction_inside) +
+                    ".");
   }
-  add("");
+  AddLine(md, "");
   auto find = [&results](const char* name) -> const NeesResult& {
     for (const NeesResult& r : results)
       if (r.name == name) return r;
@@ -376,9 +396,9 @@ bool AddNees(const Output& out, int runs, std::string* md) {
       p10.final_error_m[0], p5.mean_poses, p10.mean_poses, p5.max_poses, p10.max_poses,
       p30.mean_poses, p30.max_poses, c30.mean_poses, c30.max_poses, p30.mean_pose_nees / 6);
   summary_text += buf;
-  add(summary_text);
+  AddLine(md, summary_text);
 
-  add("");
+  AddLine(md, "");
   return true;
 }
 
@@ -507,6 +527,7 @@ bool AddFig02b(const Output& out, int monte_carlo_runs, std::string* md) {
   return true;
 }
 
+// Fig. 16: final map MSE against average track length and window size.
 bool AddFig16(const Output& out, int runs, std::string* md) {
   swf::eval::TrackLengthOptions o;
   o.runs = runs;
@@ -553,17 +574,16 @@ bool AddFig16(const Output& out, int runs, std::string* md) {
   if (!WriteExperiment(out, "fig16_track_length", figure, series, summary, x)) {
     return false;
   }
-  auto add = [md](const std::string& line) { *md += line + "\n"; };
-  add("## Fig. 16: final map MSE against average track length and window size");
-  add("");
-  add("![fig16](eval/fig16_track_length.png)");
-  add("");
+  AddLine(md, "## Fig. 16: final map MSE against average track length and window size");
+  AddLine(md, "");
+  AddLine(md, "![fig16](eval/fig16_track_length.png)");
+  AddLine(md, "");
   std::string table = "| track length |";
   for (int k : o.windows) table += " SWF(" + std::to_string(k) + ") |";
-  add(table);
+  AddLine(md, table);
   table = "|---|";
   for (std::size_t w = 0; w < o.windows.size(); ++w) table += "---|";
-  add(table);
+  AddLine(md, table);
   for (const auto& p : points) {
     std::snprintf(buf, sizeof(buf), "| %.1f |", p.mean_track_length);
     table = buf;
@@ -571,9 +591,9 @@ bool AddFig16(const Output& out, int runs, std::string* md) {
       std::snprintf(buf, sizeof(buf), " %.3g |", v);
       table += buf;
     }
-    add(table);
+    AddLine(md, table);
   }
-  add("");
+  AddLine(md, "");
   // Where the window matters: the window ratio at long tracks (>= 8 frames) and the largest
   // ratio of the shortest window over the longest.
   double long_ratio = 1.0;
@@ -610,8 +630,376 @@ bool AddFig16(const Output& out, int runs, std::string* md) {
                   std::max(short_ratio, 1.0));
   }
   text += buf;
-  add(text);
-  add("");
+  AddLine(md, text);
+  AddLine(md, "");
+  return true;
+}
+
+// Fig. 12: static cameras, 30 landmarks.
+bool AddFig12(const Output& output, int runs, std::string* md) {
+  char buf[2048];
+  SceneOptions so = swf::scene::StaticRig();
+  so.frames = 40;
+  Series swf5 = MonteCarlo("SWF(5)", so, runs, SwfRun(SwfMode::kSlidingWindow, 5));
+  Series one_over_m{"1/m", {}};
+  for (std::size_t k = 0; k < swf5.y.size(); ++k) one_over_m.y.push_back(swf5.y[0] / (k + 1));
+  so.seed = 100;
+  Series crlb{"CRLB", CramerRao(so)};
+  Json summary = {{"runs", runs}};
+  SetNumbers(&summary, {{"mse_m2_at_40", swf5.y.back()}, {"crlb_m2_at_40", crlb.y.back()}});
+  const Figure figure{
+      "Fig. 12: landmark error with static cameras, 30 landmarks (" + RunsText(runs) + ")",
+      "frame number", kLandmarkMse, true};
+  if (!WriteExperiment(output, "fig12_static", figure, {swf5, one_over_m, crlb}, summary)) {
+    return false;
+  }
+  AddFigure(md, "## Fig. 12: static cameras, 30 landmarks", "![fig12](eval/fig12_static.png)");
+  const double vs_one_over_m = swf5.y.back() / one_over_m.y.back();
+  std::snprintf(
+      buf, sizeof(buf),
+      "SWF(5) MSE after 40 frames %.3g m^2; the 1/m curve from frame 1 gives %.3g m^2; CRLB "
+      "%.3g m^2. Paper: convergence close to 1/m with stationary cameras. Ours: %.2fx the 1/m "
+      "value and %.2fx the CRLB after 40 frames (%s).",
+      swf5.y.back(), one_over_m.y.back(), crlb.y.back(), vs_one_over_m,
+      swf5.y.back() / crlb.y.back(),
+      vs_one_over_m < 1.5 && vs_one_over_m > 0.67
+          ? "matches the paper"
+          : "differs from the paper: the 1/m line is anchored at one noisy first frame, the "
+            "CRLB is the measured reference");
+  AddLine(md, buf);
+  AddLine(md, "");
+  return true;
+}
+
+// Fig. 13: descent with 150 landmarks tracked throughout.
+bool AddFig13(const Output& output, int runs, std::string* md) {
+  char buf[2048];
+  SceneOptions so;
+  so.frames = 40;
+  std::vector<Series> s;
+  std::vector<double> rms_batch, rms_vo, rms_vo2, rms_s3, rms_s10, rms_plain3;
+  s.push_back(MonteCarlo("batch", so, runs, SwfRun(SwfMode::kBatch, 40), &rms_batch));
+  s.push_back(MonteCarlo("SWF(3)", so, runs, SwfRun(SwfMode::kSlidingWindow, 3), &rms_s3));
+  s.push_back(MonteCarlo("SWF(4)", so, runs, SwfRun(SwfMode::kSlidingWindow, 4)));
+  s.push_back(MonteCarlo("SWF(5)", so, runs, SwfRun(SwfMode::kSlidingWindow, 5)));
+  s.push_back(MonteCarlo("SWF(10)", so, runs, SwfRun(SwfMode::kSlidingWindow, 10), &rms_s10));
+  s.push_back(MonteCarlo("VO(10)", so, runs, SwfRun(SwfMode::kVisualOdometry, 10), &rms_vo));
+  s.push_back(MonteCarlo("VO(2)", so, runs, SwfRun(SwfMode::kVisualOdometry, 2), &rms_vo2));
+  // The paper's SWF relinearizes everything: "SWF(3-5) come close to batch" holds only with
+  // first-estimate Jacobians (estimator/README.md, known limits).
+  s.push_back(MonteCarlo(
+      "SWF(3) relinearized (paper)", so, runs,
+      [](const SyntheticScene& scene, std::uint64_t seed) {
+        return RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 3, seed, {}, kMotionSigmaM,
+                                 kMotionSigmaRad, false);
+      },
+      &rms_plain3));
+  so.seed = 100;
+  s.push_back(Series{"CRLB", CramerRao(so)});
+  // The paper's claim: over 10 frames SWF error ~76% below VO, std ~3.5x smaller.
+  Json final_rms = Json::object();
+  SetNumbers(&final_rms, {{"batch", Mean(rms_batch)},
+                          {"swf3", Mean(rms_s3)},
+                          {"swf10", Mean(rms_s10)},
+                          {"vo10", Mean(rms_vo)},
+                          {"swf3_relinearized", Mean(rms_plain3)}});
+  Json summary = {{"runs", runs}, {"final_rms_m", final_rms}};
+  SetNumbers(
+      &summary,
+      {{"swf10_error_below_vo10_percent", 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo))},
+       {"vo10_std_over_swf10_std", SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12)},
+       {"vo2_final_rms_m", Mean(rms_vo2)},
+       {"swf10_error_below_vo2_percent", 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2))},
+       {"vo2_std_over_swf10_std", SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12)}});
+  const Figure figure{
+      "Fig. 13: landmark error against window size on the descent, 150 "
+      "landmarks, 100 m to 41.5 m (" +
+          RunsText(runs) + ")",
+      "frame number", kLandmarkMse, true};
+  if (!WriteExperiment(output, "fig13_descent", figure, s, summary)) return false;
+  AddFigure(md, "## Fig. 13: descent, 150 landmarks tracked throughout (100 m to 41.5 m)",
+            "![fig13](eval/fig13_descent.png)");
+  std::snprintf(
+      buf, sizeof(buf),
+      "Final landmark RMS: batch %.3f m, SWF(3) %.3f m, SWF(10) %.3f m, VO(10) %.3f m. "
+      "Paper: 3-, 4-, 5-frame SWFs come close to batch. Ours: SWF(3) ends %+.0f%% and SWF(10) "
+      "%+.0f%% from batch in RMS, **with first-estimate Jacobians (our default, not in the "
+      "paper)**; the paper's SWF, which relinearizes every measurement of a prior landmark, "
+      "ends SWF(3) at %.3f m, %.2fx batch in RMS (\"SWF(3) relinearized (paper)\" in the "
+      "plot): the paper's claim holds here only with first-estimate Jacobians. What short "
+      "windows lose is linearization error frozen into the prior at far altitude: the NEES "
+      "section measures SWF(5) on this descent overconfident while batch and the same descent "
+      "from 30 m are not (and with 0.01 px noise every window equals batch to 1e-5 m; "
+      "estimator/README.md).",
+      Mean(rms_batch), Mean(rms_s3), Mean(rms_s10), Mean(rms_vo),
+      100.0 * (Mean(rms_s3) / Mean(rms_batch) - 1.0),
+      100.0 * (Mean(rms_s10) / Mean(rms_batch) - 1.0), Mean(rms_plain3),
+      Mean(rms_plain3) / Mean(rms_batch));
+  AddLine(md, buf);
+  AddLine(md, "");
+  std::snprintf(
+      buf, sizeof(buf),
+      "**Paper claim (4.2.4): over 10 frames SWF error ~76%% below VO, standard deviation "
+      "~3.5x smaller.** Ours on this descent (final landmark RMS, %d runs): SWF(10) is %.0f%% "
+      "below VO(10) (a 10-pose window that deletes instead of marginalizing), standard "
+      "deviation ratio %.2f; against VO(2) (frame-to-frame, the paper's k=1 deleting "
+      "filter) %.0f%% below, standard deviation ratio %.2f. %s",
+      runs, 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)),
+      SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12),
+      100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
+      SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12),
+      runs < 10 ? "The standard deviations come from fewer than 10 runs and are only "
+                  "indicative. The paper does not state its VO's window or scene, so the "
+                  "remaining gap to 76% is not attributable further."
+                : "The paper does not state its VO's window or scene, so the remaining gap to "
+                  "76% is not attributable further.");
+  AddLine(md, buf);
+  AddLine(md, "");
+  return true;
+}
+
+// Fig. 14: run time per frame and state-vector size.
+bool AddFig14(const Output& output, std::string* md) {
+  char buf[2048];
+  SceneOptions so = swf::scene::Fig14Sideways();
+  so.frames = 150;
+  so.seed = 7;
+  const SyntheticScene scene(so);
+  const Trace batch = RunFilter<BigBatch>(scene, SwfMode::kBatch, 150, 1);
+  double features_per_frame = 0.0;
+  for (const auto& f : scene.frames()) {
+    features_per_frame += static_cast<double>(f.obs.size()) / scene.frames().size();
+  }
+  const Trace s10 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 10, 1);
+  const Trace s20 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 20, 1);
+  const Figure runtime{"Fig. 14a: time of one filter update, sideways motion (one run)",
+                       "frame number", "Update() wall-clock time (ms)", true};
+  if (!WriteExperiment(
+          output, "fig14a_runtime", runtime,
+          {{"batch", batch.update_ms}, {"SWF(10)", s10.update_ms}, {"SWF(20)", s20.update_ms}},
+          {{"note", "wall-clock ms of Update() on the 2-core VM"}})) {
+    return false;
+  }
+  so.step_m = 4.4;  // ~5-frame tracks
+  so.landmark_density_per_m2 = 0.08;
+  so.frames = 100;
+  const SyntheticScene scene_b(so);
+  const Trace with = RunFilter<Filter>(scene_b, SwfMode::kSlidingWindow, 2, 1);
+  const Trace without = RunFilter<BigBatch>(scene_b, SwfMode::kBatch, 100, 1);
+  Json state_summary = Json::object();
+  SetNumbers(&state_summary, {{"mean_state_dim_swf2", Mean(with.state_dim)},
+                              {"final_state_dim_batch", without.state_dim.back()}});
+  const Figure state{"Fig. 14b: state-vector size with and without marginalization", "frame number",
+                     "state dimension (scalars)", false};
+  if (!WriteExperiment(output, "fig14b_state_size", state,
+                       {{"SWF(2) with marginalization", with.state_dim},
+                        {"without marginalization", without.state_dim}},
+                       state_summary)) {
+    return false;
+  }
+  AddFigure(md, "## Fig. 14: run time and state size",
+            "![fig14a](eval/fig14a_runtime.png) ![fig14b](eval/fig14b_state_size.png)");
+  std::snprintf(
+      buf, sizeof(buf),
+      "Per-frame update (wall clock, shared VM, one run): median over the 150 frames SWF(10) "
+      "%.2f ms, SWF(20) %.2f ms; batch %.1f ms at frame 150 and growing. Mean state size "
+      "SWF(10) %.0f, SWF(20) %.0f (paper: ~132 and ~172 with 76 landmarks and ~20 features "
+      "per frame; ours sees %.0f features per frame). State size with a 2-frame window: mean "
+      "%.0f, without marginalization %.0f after 100 frames (paper: bounded vs growing). "
+      "Benchmarks with medians: docs/benchmarks.md.",
+      Median(s10.update_ms), Median(s20.update_ms), batch.update_ms.back(), Mean(s10.state_dim),
+      Mean(s20.state_dim), features_per_frame, Mean(with.state_dim), without.state_dim.back());
+  AddLine(md, buf);
+  AddLine(md, "");
+  return true;
+}
+
+// Fig. 15: sideways motion, ~85% overlap, ~25 features per frame.
+bool AddFig15(const Output& output, int runs, std::string* md) {
+  char buf[2048];
+  const SceneOptions so = swf::scene::Fig15Sideways();
+  std::vector<Series> s;
+  s.push_back(MonteCarlo("batch", so, runs, SwfRun(SwfMode::kBatch, 40)));
+  s.push_back(MonteCarlo("SWF(2)", so, runs, SwfRun(SwfMode::kSlidingWindow, 2)));
+  s.push_back(MonteCarlo("SWF(10)", so, runs, SwfRun(SwfMode::kSlidingWindow, 10)));
+  // The paper's SWF relinearizes everything (no first-estimate Jacobians): with world points
+  // and with the inverse depth the paper suggests for early marginalization.
+  auto plain = [](SwfMode mode, int k, bool inverse_depth) {
+    return [=](const SyntheticScene& scene, std::uint64_t seed) {
+      return inverse_depth ? RunFilter<InverseDepthFilter>(scene, mode, k, seed, {}, kMotionSigmaM,
+                                                           kMotionSigmaRad, false)
+                           : RunFilter<Filter>(scene, mode, k, seed, {}, kMotionSigmaM,
+                                               kMotionSigmaRad, false);
+    };
+  };
+  s.push_back(
+      MonteCarlo("SWF(2) relinearized", so, runs, plain(SwfMode::kSlidingWindow, 2, false)));
+  s.push_back(MonteCarlo("SWF(2) relinearized, inverse depth", so, runs,
+                         plain(SwfMode::kSlidingWindow, 2, true)));
+  const Figure figure{
+      "Fig. 15: landmark error with sideways motion, ~85% overlap (" + RunsText(runs) + ")",
+      "frame number", kLandmarkMse, true};
+  if (!WriteExperiment(output, "fig15_sideways", figure, s, {{"runs", runs}})) return false;
+  AddFigure(md, "## Fig. 15: sideways motion, ~85% overlap", "![fig15](eval/fig15_sideways.png)");
+  std::snprintf(
+      buf, sizeof(buf),
+      "Final MSE: batch %.3g, SWF(2) %.3g, SWF(10) %.3g m^2 (first-estimate Jacobians, our "
+      "default). Paper: the 2-frame SWF suffers from early marginalization, the 10-frame SWF "
+      "follows batch. With the paper's plain relinearization SWF(2) ends at %.2fx the batch "
+      "MSE with world-point landmarks and %.2fx with inverse depth (the paper's suggested "
+      "remedy): the paper's effect is %s, and inverse depth reduces it. First-estimate "
+      "Jacobians remove it: SWF(2) %.2fx, SWF(10) %.2fx batch.",
+      s[0].y.back(), s[1].y.back(), s[2].y.back(), s[3].y.back() / s[0].y.back(),
+      s[4].y.back() / s[0].y.back(),
+      s[3].y.back() > 1.5 * s[0].y.back() ? "reproduced" : "not reproduced on this scene",
+      s[1].y.back() / s[0].y.back(), s[2].y.back() / s[0].y.back());
+  AddLine(md, buf);
+  AddLine(md, "");
+  return true;
+}
+
+// Fig. 17: VSDF against SWF with three active frames, every landmark in every frame. The VSDF
+// twice: eq. 12 as we fly it (the Schur term's blocks within each variable) and read literally
+// (only its scalar diagonal, SwfOptions::vsdf_scalar_diagonal).
+bool AddFig17(const Output& output, int runs, std::string* md) {
+  char buf[2048];
+  SceneOptions so;
+  so.frames = 40;
+  so.num_landmarks = 100;
+  const auto vsdf_diagonal = [](const SyntheticScene& scene, std::uint64_t seed) {
+    return RunFilter<Filter>(scene, SwfMode::kVsdf, 3, seed, {}, kMotionSigmaM, kMotionSigmaRad,
+                             true, true);
+  };
+  std::vector<Series> s;
+  std::vector<double> mse_swf, mse_block, mse_diagonal;
+  int failed_swf = 0, failed_block = 0, failed_diagonal = 0;
+  s.push_back(MonteCarlo("SWF(3)", so, runs, SwfRun(SwfMode::kSlidingWindow, 3), nullptr, &mse_swf,
+                         &failed_swf));
+  s.push_back(MonteCarlo("VSDF(3), block diagonal", so, runs, SwfRun(SwfMode::kVsdf, 3), nullptr,
+                         &mse_block, &failed_block));
+  s.push_back(MonteCarlo("batch", so, runs, SwfRun(SwfMode::kBatch, 40)));
+  Series diagonal_median;
+  s.push_back(MonteCarlo("VSDF(3), diagonal elements", so, runs, vsdf_diagonal, nullptr,
+                         &mse_diagonal, &failed_diagonal, &diagonal_median));
+  s.push_back(diagonal_median);
+  // Medians over the runs beside the means: one run that runs away dominates a mean.
+  const double swf3 = Median(mse_swf);
+  const double block = Median(mse_block);
+  const double diagonal = Median(mse_diagonal);
+  int diverged = 0;  // runs ending above 10x the median SWF(3) MSE
+  for (double m : mse_diagonal) diverged += m > 10.0 * swf3 ? 1 : 0;
+  Json mean_mse = Json::object();
+  SetNumbers(&mean_mse, {{"swf3", s[0].y.back()},
+                         {"vsdf3_block", s[1].y.back()},
+                         {"batch", s[2].y.back()},
+                         {"vsdf3_diagonal", s[3].y.back()}});
+  Json median_mse = Json::object();
+  SetNumbers(&median_mse, {{"swf3", swf3}, {"vsdf3_block", block}, {"vsdf3_diagonal", diagonal}});
+  const Json summary = {
+      {"runs", runs},
+      {"final_mse_m2_mean", mean_mse},
+      {"final_mse_m2_median", median_mse},
+      {"failed_updates",
+       {{"swf3", failed_swf}, {"vsdf3_block", failed_block}, {"vsdf3_diagonal", failed_diagonal}}},
+      {"vsdf3_diagonal_diverged_runs", diverged}};
+  const Figure figure{
+      "Fig. 17: landmark error of VSDF and SWF, 3 active frames, 100 "
+      "landmarks (" +
+          RunsText(runs) + ")",
+      "frame number", kLandmarkMse, true};
+  if (!WriteExperiment(output, "fig17_vsdf", figure, s, summary)) return false;
+  AddFigure(md, "## Fig. 17: VSDF against SWF, 3 active frames", "![fig17](eval/fig17_vsdf.png)");
+  const auto verdict = [swf3](double vsdf) {
+    return vsdf > 1.2 * swf3 ? "worse than SWF(3), the paper's ordering"
+                             : "within 20% of SWF(3): the paper's clear difference is not "
+                               "reproduced";
+  };
+  std::snprintf(
+      buf, sizeof(buf),
+      "Final MSE, median over the %d runs (the plot shows means, and the diagonal variant's "
+      "median too): SWF(3) %.3g m^2 (batch, "
+      "mean, %.3g m^2); VSDF(3) with the Schur term's blocks within each variable (what "
+      "`SwfMode::kVsdf` flies) %.3g m^2, %.2fx SWF(3), %s; VSDF(3) with only the diagonal "
+      "elements of the Schur term (eq. 12 read literally, `SwfOptions::vsdf_scalar_diagonal`) "
+      "%.3g m^2, %.2fx SWF(3), %s. The diagonal variant ran away in %d of %d runs (final MSE "
+      "above 10x SWF(3)'s; its mean ends at %.3g m^2) with %d failed updates (SWF(3): %d, "
+      "block-diagonal VSDF: %d). Paper: VSDF converges worse; \"a majority of the usefulness "
+      "of carrying a prior comes from the off-diagonal terms\".",
+      runs, swf3, s[2].y.back(), block, block / swf3, verdict(block), diagonal, diagonal / swf3,
+      verdict(diagonal), diverged, runs, s[3].y.back(), failed_diagonal, failed_swf, failed_block);
+  AddLine(md, buf);
+  AddLine(md, "");
+  AddLine(md,
+          "Why the two readings differ: subtracting only part of a positive semi-definite Schur "
+          "term from the information matrix does not keep the result positive definite. Lambda_rr "
+          "keeps its own off-diagonal elements (the marginalized pose's measurements couple each "
+          "landmark's x, y and depth, and the next pose's six coordinates) while the diagonal "
+          "loses what the exact complement would take from them, so the prior can claim more "
+          "correlation than variance. Keeping whole blocks within each variable removes that "
+          "inside a variable, and only the fill-in *between* variables is dropped: the "
+          "correlation that the marginalized pose's uncertainty puts between its landmarks, which "
+          "matters only when the pose is weakly determined relative to the landmarks; with 100 "
+          "landmarks tracked it is not. Measured in the estimator (estimator/README.md, known "
+          "limits): with 10-50 landmarks in the linear regime the block-diagonal VSDF is 7-15% "
+          "worse in MSE on average (too little against run-to-run spread to assert), and in the "
+          "nonlinear regime (20 landmarks from 100 m, loose motion input) it is better, because "
+          "the dense prior also carries the linearization error of a weakly determined pose. "
+          "Where the block-diagonal VSDF does fail clearly is the covariance: the NEES section "
+          "below runs it on the same descents as SWF, and its marginals are several times "
+          "over-confident where SWF's are consistent.");
+  AddLine(md, "");
+  return true;
+}
+
+// Real data: kitti-vo batch against sliding windows on the same global cost.
+bool AddKittiWindows(const Output& output, const std::string& shared, std::string* md) {
+  char buf[2048];
+  swf::tools::KittiVoProblem problem;
+  std::string error;
+  const std::string dir = shared + "/data/kitti-vo/";
+  if (!swf::tools::LoadKittiVo(dir + "VO_calibration.txt", dir + "VO_camera_poses_large.txt",
+                               dir + "VO_stereo_factors_large.txt", &problem, &error)) {
+    std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
+    return false;
+  }
+  swf::tools::KittiVoSolver solver;  // one ~40 MB filter for every window
+  const auto batch = solver.Solve(problem, 0);
+  Series cost{"final cost", {}};
+  Series dpos{"max position difference to batch (m)", {}};
+  Json list = Json::array();
+  std::vector<double> windows;
+  for (int k : {2, 3, 5, 10, 20}) {
+    windows.push_back(k);
+    const auto r = solver.Solve(problem, k);
+    double worst = 0;
+    for (std::size_t j = 0; j < r.poses.size(); ++j)
+      worst = std::max(worst, (r.poses[j].t - batch.poses[j].t).norm());
+    cost.y.push_back(r.final_cost);
+    dpos.y.push_back(worst);
+    Json row = {{"window", k}};
+    SetNumbers(&row, {{"final_cost", r.final_cost}, {"max_position_diff_m", worst}});
+    list.push_back(row);
+  }
+  Json summary = Json::object();
+  SetNumbers(&summary,
+             {{"initial_cost", batch.initial_cost}, {"batch_final_cost", batch.final_cost}});
+  summary["windows"] = list;
+  const Figure figure{"kitti-vo: sliding windows against batch on the same global cost",
+                      "window size (frames)",
+                      "final cost (unitless), position difference to batch (m)", true};
+  if (!WriteExperiment(output, "kitti_windows", figure, {cost, dpos}, summary, windows))
+    return false;
+  AddLine(md, "## Real data: kitti-vo, batch against sliding windows");
+  AddLine(md, "");
+  std::snprintf(
+      buf, sizeof(buf),
+      "Initial cost %.6g, batch optimum %.6g (equal to Ceres's, tested). Windowed final costs "
+      "on the same global cost, windows 2/3/5/10/20: %.6g / %.6g / %.6g / %.6g / %.6g; largest "
+      "camera position difference to batch: %.3g / %.3g / %.3g / %.3g / %.3g m.",
+      batch.initial_cost, batch.final_cost, cost.y[0], cost.y[1], cost.y[2], cost.y[3], cost.y[4],
+      dpos.y[0], dpos.y[1], dpos.y[2], dpos.y[3], dpos.y[4]);
+  AddLine(md, buf);
+  AddLine(md, "");
   return true;
 }
 
@@ -707,388 +1095,27 @@ int main(int argc, char** argv) {
   auto want = [&only](const char* name) {
     return only.empty() || only.find("," + std::string(name) + ",") != std::string::npos;
   };
-  auto swf = [&](SwfMode mode, int k) {
-    return [=](const SyntheticScene& s, std::uint64_t seed) {
-      return RunFilter<Filter>(s, mode, k, seed);
-    };
-  };
-  char buf[2048];
   std::string md;  // docs/results.md, written from the same numbers as the JSON files
-  auto add = [&md](const std::string& line) { md += line + "\n"; };
-  // A figure's section: its heading and its plots, each followed by a blank line.
-  auto add_figure = [&add](const std::string& heading, const std::string& plots) {
-    add(heading);
-    add("");
-    add(plots);
-    add("");
-  };
-  add("# Results: the paper's experiments rerun");
-  add("");
-  add("Generated by `tools/run eval` (`swf-eval paper out/eval --runs " + std::to_string(runs) +
-      "` and `swf-eval euroc`); every number below is in a JSON file under `out/eval/` from the "
-      "same run. Scenes are "
-      "measurement-level (the estimator's synthetic scene: EDL rig, 1 m baseline, ~25 deg FOV, "
-      "1024x768, 0.5 px noise, IMU-like motion input 10 cm / 2 mrad per frame). Errors are mean "
-      "squared landmark error against truth over every landmark seen so far, averaged over the "
-      "Monte Carlo runs.");
-  add("");
-
-  // Fig. 2b: depth error at the focus of expansion against the CRLB.
+  AddLine(&md, "# Results: the paper's experiments rerun");
+  AddLine(&md, "");
+  AddLine(&md,
+          "Generated by `tools/run eval` (`swf-eval paper out/eval --runs " + std::to_string(runs) +
+              "` and `swf-eval euroc`); every number below is in a JSON file under `out/eval/` "
+              "from the same run. Scenes are measurement-level (the estimator's synthetic scene: "
+              "EDL rig, 1 m baseline, ~25 deg FOV, 1024x768, 0.5 px noise, IMU-like motion input "
+              "10 cm / 2 mrad per frame). Errors are mean squared landmark error against truth "
+              "over every landmark seen so far, averaged over the Monte Carlo runs.");
+  AddLine(&md, "");
+  // The sections in the order of the paper; the experiments are described at their functions.
   if (want("fig02b") && !AddFig02b(output, runs, &md)) return 1;
-  // Fig. 12: static cameras, 30 landmarks.
-  if (want("fig12")) {
-    SceneOptions so = swf::scene::StaticRig();
-    so.frames = 40;
-    Series swf5 = MonteCarlo("SWF(5)", so, runs, swf(SwfMode::kSlidingWindow, 5));
-    Series one_over_m{"1/m", {}};
-    for (std::size_t k = 0; k < swf5.y.size(); ++k) one_over_m.y.push_back(swf5.y[0] / (k + 1));
-    so.seed = 100;
-    Series crlb{"CRLB", CramerRao(so)};
-    Json summary = {{"runs", runs}};
-    SetNumbers(&summary, {{"mse_m2_at_40", swf5.y.back()}, {"crlb_m2_at_40", crlb.y.back()}});
-    const Figure figure{
-        "Fig. 12: landmark error with static cameras, 30 landmarks (" + RunsText(runs) + ")",
-        "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(output, "fig12_static", figure, {swf5, one_over_m, crlb}, summary)) {
-      return 1;
-    }
-    add_figure("## Fig. 12: static cameras, 30 landmarks", "![fig12](eval/fig12_static.png)");
-    const double vs_one_over_m = swf5.y.back() / one_over_m.y.back();
-    std::snprintf(
-        buf, sizeof(buf),
-        "SWF(5) MSE after 40 frames %.3g m^2; the 1/m curve from frame 1 gives %.3g m^2; CRLB "
-        "%.3g m^2. Paper: convergence close to 1/m with stationary cameras. Ours: %.2fx the 1/m "
-        "value and %.2fx the CRLB after 40 frames (%s).",
-        swf5.y.back(), one_over_m.y.back(), crlb.y.back(), vs_one_over_m,
-        swf5.y.back() / crlb.y.back(),
-        vs_one_over_m < 1.5 && vs_one_over_m > 0.67
-            ? "matches the paper"
-            : "differs from the paper: the 1/m line is anchored at one noisy first frame, the "
-              "CRLB is the measured reference");
-    add(buf);
-    add("");
-  }
-  // Fig. 13: descent with 150 landmarks tracked throughout.
-  if (want("fig13")) {
-    SceneOptions so;
-    so.frames = 40;
-    std::vector<Series> s;
-    std::vector<double> rms_batch, rms_vo, rms_vo2, rms_s3, rms_s10, rms_plain3;
-    s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40), &rms_batch));
-    s.push_back(MonteCarlo("SWF(3)", so, runs, swf(SwfMode::kSlidingWindow, 3), &rms_s3));
-    s.push_back(MonteCarlo("SWF(4)", so, runs, swf(SwfMode::kSlidingWindow, 4)));
-    s.push_back(MonteCarlo("SWF(5)", so, runs, swf(SwfMode::kSlidingWindow, 5)));
-    s.push_back(MonteCarlo("SWF(10)", so, runs, swf(SwfMode::kSlidingWindow, 10), &rms_s10));
-    s.push_back(MonteCarlo("VO(10)", so, runs, swf(SwfMode::kVisualOdometry, 10), &rms_vo));
-    s.push_back(MonteCarlo("VO(2)", so, runs, swf(SwfMode::kVisualOdometry, 2), &rms_vo2));
-    // The paper's SWF relinearizes everything: "SWF(3-5) come close to batch" holds only with
-    // first-estimate Jacobians (estimator/README.md, known limits).
-    s.push_back(MonteCarlo(
-        "SWF(3) relinearized (paper)", so, runs,
-        [](const SyntheticScene& scene, std::uint64_t seed) {
-          return RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 3, seed, {}, kMotionSigmaM,
-                                   kMotionSigmaRad, false);
-        },
-        &rms_plain3));
-    so.seed = 100;
-    s.push_back(Series{"CRLB", CramerRao(so)});
-    // The paper's claim: over 10 frames SWF error ~76% below VO, std ~3.5x smaller.
-    Json final_rms = Json::object();
-    SetNumbers(&final_rms, {{"batch", Mean(rms_batch)},
-                            {"swf3", Mean(rms_s3)},
-                            {"swf10", Mean(rms_s10)},
-                            {"vo10", Mean(rms_vo)},
-                            {"swf3_relinearized", Mean(rms_plain3)}});
-    Json summary = {{"runs", runs}, {"final_rms_m", final_rms}};
-    SetNumbers(
-        &summary,
-        {{"swf10_error_below_vo10_percent", 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo))},
-         {"vo10_std_over_swf10_std", SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12)},
-         {"vo2_final_rms_m", Mean(rms_vo2)},
-         {"swf10_error_below_vo2_percent", 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2))},
-         {"vo2_std_over_swf10_std", SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12)}});
-    const Figure figure{
-        "Fig. 13: landmark error against window size on the descent, 150 "
-        "landmarks, 100 m to 41.5 m (" +
-            RunsText(runs) + ")",
-        "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(output, "fig13_descent", figure, s, summary)) return 1;
-    add_figure("## Fig. 13: descent, 150 landmarks tracked throughout (100 m to 41.5 m)",
-               "![fig13](eval/fig13_descent.png)");
-    std::snprintf(
-        buf, sizeof(buf),
-        "Final landmark RMS: batch %.3f m, SWF(3) %.3f m, SWF(10) %.3f m, VO(10) %.3f m. "
-        "Paper: 3-, 4-, 5-frame SWFs come close to batch. Ours: SWF(3) ends %+.0f%% and SWF(10) "
-        "%+.0f%% from batch in RMS, **with first-estimate Jacobians (our default, not in the "
-        "paper)**; the paper's SWF, which relinearizes every measurement of a prior landmark, "
-        "ends SWF(3) at %.3f m, %.2fx batch in RMS (\"SWF(3) relinearized (paper)\" in the "
-        "plot): the paper's claim holds here only with first-estimate Jacobians. What short "
-        "windows lose is linearization error frozen into the prior at far altitude: the NEES "
-        "section measures SWF(5) on this descent overconfident while batch and the same descent "
-        "from 30 m are not (and with 0.01 px noise every window equals batch to 1e-5 m; "
-        "estimator/README.md).",
-        Mean(rms_batch), Mean(rms_s3), Mean(rms_s10), Mean(rms_vo),
-        100.0 * (Mean(rms_s3) / Mean(rms_batch) - 1.0),
-        100.0 * (Mean(rms_s10) / Mean(rms_batch) - 1.0), Mean(rms_plain3),
-        Mean(rms_plain3) / Mean(rms_batch));
-    add(buf);
-    add("");
-    std::snprintf(
-        buf, sizeof(buf),
-        "**Paper claim (4.2.4): over 10 frames SWF error ~76%% below VO, standard deviation "
-        "~3.5x smaller.** Ours on this descent (final landmark RMS, %d runs): SWF(10) is %.0f%% "
-        "below VO(10) (a 10-pose window that deletes instead of marginalizing), standard "
-        "deviation ratio %.2f; against VO(2) (frame-to-frame, the paper's k=1 deleting "
-        "filter) %.0f%% below, standard deviation ratio %.2f. %s",
-        runs, 100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo)),
-        SampleStd(rms_vo) / std::max(SampleStd(rms_s10), 1e-12),
-        100.0 * (1.0 - Mean(rms_s10) / Mean(rms_vo2)),
-        SampleStd(rms_vo2) / std::max(SampleStd(rms_s10), 1e-12),
-        runs < 10 ? "The standard deviations come from fewer than 10 runs and are only "
-                    "indicative. The paper does not state its VO's window or scene, so the "
-                    "remaining gap to 76% is not attributable further."
-                  : "The paper does not state its VO's window or scene, so the remaining gap to "
-                    "76% is not attributable further.");
-    add(buf);
-    add("");
-  }
-  // Fig. 14: run time per frame and state-vector size.
-  if (want("fig14")) {
-    SceneOptions so = swf::scene::Fig14Sideways();
-    so.frames = 150;
-    so.seed = 7;
-    const SyntheticScene scene(so);
-    const Trace batch = RunFilter<BigBatch>(scene, SwfMode::kBatch, 150, 1);
-    double features_per_frame = 0.0;
-    for (const auto& f : scene.frames()) {
-      features_per_frame += static_cast<double>(f.obs.size()) / scene.frames().size();
-    }
-    const Trace s10 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 10, 1);
-    const Trace s20 = RunFilter<Filter>(scene, SwfMode::kSlidingWindow, 20, 1);
-    const Figure runtime{"Fig. 14a: time of one filter update, sideways motion (one run)",
-                         "frame number", "Update() wall-clock time (ms)", true};
-    if (!WriteExperiment(
-            output, "fig14a_runtime", runtime,
-            {{"batch", batch.update_ms}, {"SWF(10)", s10.update_ms}, {"SWF(20)", s20.update_ms}},
-            {{"note", "wall-clock ms of Update() on the 2-core VM"}})) {
-      return 1;
-    }
-    so.step_m = 4.4;  // ~5-frame tracks
-    so.landmark_density_per_m2 = 0.08;
-    so.frames = 100;
-    const SyntheticScene scene_b(so);
-    const Trace with = RunFilter<Filter>(scene_b, SwfMode::kSlidingWindow, 2, 1);
-    const Trace without = RunFilter<BigBatch>(scene_b, SwfMode::kBatch, 100, 1);
-    Json state_summary = Json::object();
-    SetNumbers(&state_summary, {{"mean_state_dim_swf2", Mean(with.state_dim)},
-                                {"final_state_dim_batch", without.state_dim.back()}});
-    const Figure state{"Fig. 14b: state-vector size with and without marginalization",
-                       "frame number", "state dimension (scalars)", false};
-    if (!WriteExperiment(output, "fig14b_state_size", state,
-                         {{"SWF(2) with marginalization", with.state_dim},
-                          {"without marginalization", without.state_dim}},
-                         state_summary)) {
-      return 1;
-    }
-    add_figure("## Fig. 14: run time and state size",
-               "![fig14a](eval/fig14a_runtime.png) ![fig14b](eval/fig14b_state_size.png)");
-    std::snprintf(
-        buf, sizeof(buf),
-        "Per-frame update (wall clock, shared VM, one run): median over the 150 frames SWF(10) "
-        "%.2f ms, SWF(20) %.2f ms; batch %.1f ms at frame 150 and growing. Mean state size "
-        "SWF(10) %.0f, SWF(20) %.0f (paper: ~132 and ~172 with 76 landmarks and ~20 features "
-        "per frame; ours sees %.0f features per frame). State size with a 2-frame window: mean "
-        "%.0f, without marginalization %.0f after 100 frames (paper: bounded vs growing). "
-        "Benchmarks with medians: docs/benchmarks.md.",
-        Median(s10.update_ms), Median(s20.update_ms), batch.update_ms.back(), Mean(s10.state_dim),
-        Mean(s20.state_dim), features_per_frame, Mean(with.state_dim), without.state_dim.back());
-    add(buf);
-    add("");
-  }
-  // Fig. 15: sideways motion, ~85% overlap, ~25 features per frame.
-  if (want("fig15")) {
-    const SceneOptions so = swf::scene::Fig15Sideways();
-    std::vector<Series> s;
-    s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40)));
-    s.push_back(MonteCarlo("SWF(2)", so, runs, swf(SwfMode::kSlidingWindow, 2)));
-    s.push_back(MonteCarlo("SWF(10)", so, runs, swf(SwfMode::kSlidingWindow, 10)));
-    // The paper's SWF relinearizes everything (no first-estimate Jacobians): with world points
-    // and with the inverse depth the paper suggests for early marginalization.
-    auto plain = [](SwfMode mode, int k, bool inverse_depth) {
-      return [=](const SyntheticScene& scene, std::uint64_t seed) {
-        return inverse_depth ? RunFilter<InverseDepthFilter>(scene, mode, k, seed, {},
-                                                             kMotionSigmaM, kMotionSigmaRad, false)
-                             : RunFilter<Filter>(scene, mode, k, seed, {}, kMotionSigmaM,
-                                                 kMotionSigmaRad, false);
-      };
-    };
-    s.push_back(
-        MonteCarlo("SWF(2) relinearized", so, runs, plain(SwfMode::kSlidingWindow, 2, false)));
-    s.push_back(MonteCarlo("SWF(2) relinearized, inverse depth", so, runs,
-                           plain(SwfMode::kSlidingWindow, 2, true)));
-    const Figure figure{
-        "Fig. 15: landmark error with sideways motion, ~85% overlap (" + RunsText(runs) + ")",
-        "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(output, "fig15_sideways", figure, s, {{"runs", runs}})) return 1;
-    add_figure("## Fig. 15: sideways motion, ~85% overlap", "![fig15](eval/fig15_sideways.png)");
-    std::snprintf(
-        buf, sizeof(buf),
-        "Final MSE: batch %.3g, SWF(2) %.3g, SWF(10) %.3g m^2 (first-estimate Jacobians, our "
-        "default). Paper: the 2-frame SWF suffers from early marginalization, the 10-frame SWF "
-        "follows batch. With the paper's plain relinearization SWF(2) ends at %.2fx the batch "
-        "MSE with world-point landmarks and %.2fx with inverse depth (the paper's suggested "
-        "remedy): the paper's effect is %s, and inverse depth reduces it. First-estimate "
-        "Jacobians remove it: SWF(2) %.2fx, SWF(10) %.2fx batch.",
-        s[0].y.back(), s[1].y.back(), s[2].y.back(), s[3].y.back() / s[0].y.back(),
-        s[4].y.back() / s[0].y.back(),
-        s[3].y.back() > 1.5 * s[0].y.back() ? "reproduced" : "not reproduced on this scene",
-        s[1].y.back() / s[0].y.back(), s[2].y.back() / s[0].y.back());
-    add(buf);
-    add("");
-  }
-  // Fig. 16: final map MSE against average track length and window size.
+  if (want("fig12") && !AddFig12(output, runs, &md)) return 1;
+  if (want("fig13") && !AddFig13(output, runs, &md)) return 1;
+  if (want("fig14") && !AddFig14(output, &md)) return 1;
+  if (want("fig15") && !AddFig15(output, runs, &md)) return 1;
   if (want("fig16") && !AddFig16(output, runs, &md)) return 1;
-  // Fig. 17: VSDF against SWF with three active frames, every landmark in every frame. The VSDF
-  // twice: eq. 12 as we fly it (the Schur term's blocks within each variable) and read literally
-  // (only its scalar diagonal, SwfOptions::vsdf_scalar_diagonal).
-  if (want("fig17")) {
-    SceneOptions so;
-    so.frames = 40;
-    so.num_landmarks = 100;
-    const auto vsdf_diagonal = [](const SyntheticScene& scene, std::uint64_t seed) {
-      return RunFilter<Filter>(scene, SwfMode::kVsdf, 3, seed, {}, kMotionSigmaM, kMotionSigmaRad,
-                               true, true);
-    };
-    std::vector<Series> s;
-    std::vector<double> mse_swf, mse_block, mse_diagonal;
-    int failed_swf = 0, failed_block = 0, failed_diagonal = 0;
-    s.push_back(MonteCarlo("SWF(3)", so, runs, swf(SwfMode::kSlidingWindow, 3), nullptr, &mse_swf,
-                           &failed_swf));
-    s.push_back(MonteCarlo("VSDF(3), block diagonal", so, runs, swf(SwfMode::kVsdf, 3), nullptr,
-                           &mse_block, &failed_block));
-    s.push_back(MonteCarlo("batch", so, runs, swf(SwfMode::kBatch, 40)));
-    Series diagonal_median;
-    s.push_back(MonteCarlo("VSDF(3), diagonal elements", so, runs, vsdf_diagonal, nullptr,
-                           &mse_diagonal, &failed_diagonal, &diagonal_median));
-    s.push_back(diagonal_median);
-    // Medians over the runs beside the means: one run that runs away dominates a mean.
-    const double swf3 = Median(mse_swf);
-    const double block = Median(mse_block);
-    const double diagonal = Median(mse_diagonal);
-    int diverged = 0;  // runs ending above 10x the median SWF(3) MSE
-    for (double m : mse_diagonal) diverged += m > 10.0 * swf3 ? 1 : 0;
-    Json mean_mse = Json::object();
-    SetNumbers(&mean_mse, {{"swf3", s[0].y.back()},
-                           {"vsdf3_block", s[1].y.back()},
-                           {"batch", s[2].y.back()},
-                           {"vsdf3_diagonal", s[3].y.back()}});
-    Json median_mse = Json::object();
-    SetNumbers(&median_mse, {{"swf3", swf3}, {"vsdf3_block", block}, {"vsdf3_diagonal", diagonal}});
-    const Json summary = {{"runs", runs},
-                          {"final_mse_m2_mean", mean_mse},
-                          {"final_mse_m2_median", median_mse},
-                          {"failed_updates",
-                           {{"swf3", failed_swf},
-                            {"vsdf3_block", failed_block},
-                            {"vsdf3_diagonal", failed_diagonal}}},
-                          {"vsdf3_diagonal_diverged_runs", diverged}};
-    const Figure figure{
-        "Fig. 17: landmark error of VSDF and SWF, 3 active frames, 100 "
-        "landmarks (" +
-            RunsText(runs) + ")",
-        "frame number", kLandmarkMse, true};
-    if (!WriteExperiment(output, "fig17_vsdf", figure, s, summary)) return 1;
-    add_figure("## Fig. 17: VSDF against SWF, 3 active frames", "![fig17](eval/fig17_vsdf.png)");
-    const auto verdict = [swf3](double vsdf) {
-      return vsdf > 1.2 * swf3 ? "worse than SWF(3), the paper's ordering"
-                               : "within 20% of SWF(3): the paper's clear difference is not "
-                                 "reproduced";
-    };
-    std::snprintf(
-        buf, sizeof(buf),
-        "Final MSE, median over the %d runs (the plot shows means, and the diagonal variant's "
-        "median too): SWF(3) %.3g m^2 (batch, "
-        "mean, %.3g m^2); VSDF(3) with the Schur term's blocks within each variable (what "
-        "`SwfMode::kVsdf` flies) %.3g m^2, %.2fx SWF(3), %s; VSDF(3) with only the diagonal "
-        "elements of the Schur term (eq. 12 read literally, `SwfOptions::vsdf_scalar_diagonal`) "
-        "%.3g m^2, %.2fx SWF(3), %s. The diagonal variant ran away in %d of %d runs (final MSE "
-        "above 10x SWF(3)'s; its mean ends at %.3g m^2) with %d failed updates (SWF(3): %d, "
-        "block-diagonal VSDF: %d). Paper: VSDF converges worse; \"a majority of the usefulness "
-        "of carrying a prior comes from the off-diagonal terms\".",
-        runs, swf3, s[2].y.back(), block, block / swf3, verdict(block), diagonal, diagonal / swf3,
-        verdict(diagonal), diverged, runs, s[3].y.back(), failed_diagonal, failed_swf,
-        failed_block);
-    add(buf);
-    add("");
-    add("Why the two readings differ: subtracting only part of a positive semi-definite Schur "
-        "term from the information matrix does not keep the result positive definite. Lambda_rr "
-        "keeps its own off-diagonal elements (the marginalized pose's measurements couple each "
-        "landmark's x, y and depth, and the next pose's six coordinates) while the diagonal "
-        "loses what the exact complement would take from them, so the prior can claim more "
-        "correlation than variance. Keeping whole blocks within each variable removes that "
-        "inside a variable, and only the fill-in *between* variables is dropped: the "
-        "correlation that the marginalized pose's uncertainty puts between its landmarks, which "
-        "matters only when the pose is weakly determined relative to the landmarks; with 100 "
-        "landmarks tracked it is not. Measured in the estimator (estimator/README.md, known "
-        "limits): with 10-50 landmarks in the linear regime the block-diagonal VSDF is 7-15% "
-        "worse in MSE on average (too little against run-to-run spread to assert), and in the "
-        "nonlinear regime (20 landmarks from 100 m, loose motion input) it is better, because "
-        "the dense prior also carries the linearization error of a weakly determined pose. "
-        "Where the block-diagonal VSDF does fail clearly is the covariance: the NEES section "
-        "below runs it on the same descents as SWF, and its marginals are several times "
-        "over-confident where SWF's are consistent.");
-    add("");
-  }
-  // Consistency: NEES over Monte Carlo runs.
+  if (want("fig17") && !AddFig17(output, runs, &md)) return 1;
   if (want("nees") && !AddNees(output, nees_runs, &md)) return 1;
-  // Real data: kitti-vo batch against sliding windows on the same global cost.
-  if (want("kitti")) {
-    swf::tools::KittiVoProblem problem;
-    std::string error;
-    const std::string dir = shared + "/data/kitti-vo/";
-    if (!swf::tools::LoadKittiVo(dir + "VO_calibration.txt", dir + "VO_camera_poses_large.txt",
-                                 dir + "VO_stereo_factors_large.txt", &problem, &error)) {
-      std::fprintf(stderr, "swf-eval: %s\n", error.c_str());
-      return 1;
-    }
-    swf::tools::KittiVoSolver solver;  // one ~40 MB filter for every window
-    const auto batch = solver.Solve(problem, 0);
-    Series cost{"final cost", {}};
-    Series dpos{"max position difference to batch (m)", {}};
-    Json list = Json::array();
-    std::vector<double> windows;
-    for (int k : {2, 3, 5, 10, 20}) {
-      windows.push_back(k);
-      const auto r = solver.Solve(problem, k);
-      double worst = 0;
-      for (std::size_t j = 0; j < r.poses.size(); ++j)
-        worst = std::max(worst, (r.poses[j].t - batch.poses[j].t).norm());
-      cost.y.push_back(r.final_cost);
-      dpos.y.push_back(worst);
-      Json row = {{"window", k}};
-      SetNumbers(&row, {{"final_cost", r.final_cost}, {"max_position_diff_m", worst}});
-      list.push_back(row);
-    }
-    Json summary = Json::object();
-    SetNumbers(&summary,
-               {{"initial_cost", batch.initial_cost}, {"batch_final_cost", batch.final_cost}});
-    summary["windows"] = list;
-    const Figure figure{"kitti-vo: sliding windows against batch on the same global cost",
-                        "window size (frames)",
-                        "final cost (unitless), position difference to batch (m)", true};
-    if (!WriteExperiment(output, "kitti_windows", figure, {cost, dpos}, summary, windows)) return 1;
-    add("## Real data: kitti-vo, batch against sliding windows");
-    add("");
-    std::snprintf(
-        buf, sizeof(buf),
-        "Initial cost %.6g, batch optimum %.6g (equal to Ceres's, tested). Windowed final costs "
-        "on the same global cost, windows 2/3/5/10/20: %.6g / %.6g / %.6g / %.6g / %.6g; largest "
-        "camera position difference to batch: %.3g / %.3g / %.3g / %.3g / %.3g m.",
-        batch.initial_cost, batch.final_cost, cost.y[0], cost.y[1], cost.y[2], cost.y[3], cost.y[4],
-        dpos.y[0], dpos.y[1], dpos.y[2], dpos.y[3], dpos.y[4]);
-    add(buf);
-    add("");
-  }
+  if (want("kitti") && !AddKittiWindows(output, shared, &md)) return 1;
   std::ofstream md_file(out + "/results.md");
   md_file << md;
   if (!md_file) {
