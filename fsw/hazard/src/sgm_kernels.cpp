@@ -80,24 +80,24 @@ struct Portable {
 // builds (the sanitizer pass) take the generic vector code below: the same integers, slower.
 using C16 [[gnu::vector_size(16)]] = char;
 using C32 [[gnu::vector_size(32)]] = char;
-constexpr V32b kNibbleBits = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,
-                              0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
-[[gnu::always_inline]] inline V32b PopcountNibbles(V32b v) {
-  const C32 table = reinterpret_cast<C32>(kNibbleBits);
-  const V32b low = reinterpret_cast<V32b>(
-      __builtin_ia32_pshufb256(table, reinterpret_cast<C32>(v & static_cast<std::uint8_t>(0x0F))));
-  const V32b high = reinterpret_cast<V32b>(__builtin_ia32_pshufb256(
-      table, reinterpret_cast<C32>((v >> 4) & static_cast<std::uint8_t>(0x0F))));
-  return low + high;
+constexpr V16b kNibbleBits = {0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4};
+// Bits set in each byte's low nibble (the byte < 16), one pshufb table lookup per width.
+[[gnu::always_inline]] inline V16b NibbleBits(V16b nibbles) {
+  return reinterpret_cast<V16b>(
+      __builtin_ia32_pshufb128(reinterpret_cast<C16>(kNibbleBits), reinterpret_cast<C16>(nibbles)));
 }
-[[gnu::always_inline]] inline V16b PopcountNibbles(V16b v) {
-  const C16 table = reinterpret_cast<C16>(__builtin_shufflevector(
-      kNibbleBits, kNibbleBits, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15));
-  const V16b low = reinterpret_cast<V16b>(
-      __builtin_ia32_pshufb128(table, reinterpret_cast<C16>(v & static_cast<std::uint8_t>(0x0F))));
-  const V16b high = reinterpret_cast<V16b>(__builtin_ia32_pshufb128(
-      table, reinterpret_cast<C16>((v >> 4) & static_cast<std::uint8_t>(0x0F))));
-  return low + high;
+[[gnu::always_inline]] inline V32b NibbleBits(V32b nibbles) {
+  // vpshufb looks up within each 128-bit half: the table twice.
+  const V32b table =
+      __builtin_shufflevector(kNibbleBits, kNibbleBits, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12,
+                              13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  return reinterpret_cast<V32b>(
+      __builtin_ia32_pshufb256(reinterpret_cast<C32>(table), reinterpret_cast<C32>(nibbles)));
+}
+template <class B>
+[[gnu::always_inline]] inline B PopcountNibbles(B v) {
+  constexpr auto kLowNibble = static_cast<std::uint8_t>(0x0F);
+  return NibbleBits(v & kLowNibble) + NibbleBits((v >> 4) & kLowNibble);
 }
 
 // The minimum of 16 lanes by SSE4.1's phminposuw (unsigned: every vector the kernels reduce is
