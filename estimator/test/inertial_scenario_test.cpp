@@ -88,10 +88,7 @@ TEST(InertialSwf, NeesOfTheWholeStateIsConsistent) {
 TEST(InertialSwf, CameraBlindForTwoSecondsTheImuCarriesTheEstimate) {
   // Frames 20-39 (2 s) without a single measurement (black images): the process factor alone
   // carries the state, its covariance grows, and the filter tracks again from frame 40.
-  InertialSceneOptions o;
-  o.seed = 4;
-  o.frames = 60;
-  InertialScene scene = MakeInertialScene(o);
+  InertialScene scene = DescentScene(4, 60);
   constexpr int kBlindFrom = 20;
   constexpr int kBlindTo = 39;
   for (int j = kBlindFrom; j <= kBlindTo; ++j) scene.obs[static_cast<std::size_t>(j)].clear();
