@@ -34,6 +34,51 @@ bool Sample(const GrayView& image, const float* offsets, int count, int grid_rad
   return true;
 }
 
+// The image's gradient at each sample by central differences of bilinear samples one pixel to
+// either side (the caller guarantees a margin of the offsets' reach + 2).
+void SampleGradients(const GrayView& image, const float* offsets, int count, float x, float y,
+                     float* ix, float* iy) {
+  for (int k = 0; k < count; ++k) {
+    const float sx = x + offsets[2 * k];
+    const float sy = y + offsets[2 * k + 1];
+    ix[k] = 0.5f * (SampleBilinear(image, sx + 1.0f, sy) - SampleBilinear(image, sx - 1.0f, sy));
+    iy[k] = 0.5f * (SampleBilinear(image, sx, sy + 1.0f) - SampleBilinear(image, sx, sy - 1.0f));
+  }
+}
+
+// Solves the centred 2x2 normal equations [sum j j^T] d = sum j e for the step d; false when
+// they are singular. `centre` is 1/count with the brightness offset, 0 without.
+bool SolveStep(const float* jx, const float* jy, const float* e, int count, float centre, float* dx,
+               float* dy) {
+  float mean_x = 0.0f;
+  float mean_y = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    mean_x += jx[k];
+    mean_y += jy[k];
+  }
+  mean_x *= centre;
+  mean_y *= centre;
+  float hxx = 0.0f;
+  float hxy = 0.0f;
+  float hyy = 0.0f;
+  float bx = 0.0f;
+  float by = 0.0f;
+  for (int k = 0; k < count; ++k) {
+    const float cx = jx[k] - mean_x;
+    const float cy = jy[k] - mean_y;
+    hxx += cx * cx;
+    hxy += cx * cy;
+    hyy += cy * cy;
+    bx += cx * e[k];
+    by += cy * e[k];
+  }
+  const float det = hxx * hyy - hxy * hxy;
+  if (!(det > 0.0f)) return false;
+  *dx = (hyy * bx - hxy * by) / det;
+  *dy = (hxx * by - hxy * bx) / det;
+  return true;
+}
+
 }  // namespace
 
 float Zncc(const float* a, float mean_a, const float* b, float mean_b, int count) {
@@ -141,7 +186,8 @@ void PatchTracker::ExtractTemplateClamped(const GrayView& image, float x, float 
 
 bool PatchTracker::Align(const GrayView& image, const float* value, const float* gx,
                          const float* gy, const float* offsets, int count, int grid_radius,
-                         bool clamped, float epsilon, float* cx, float* cy, float* quality) const {
+                         bool clamped, bool second_order, float epsilon, float* cx, float* cy,
+                         float* quality) const {
   float mean_gx = 0.0f;
   float mean_gy = 0.0f;
   float mean_t = 0.0f;
@@ -179,7 +225,11 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
   const float min_eig = 0.5f * (trace - std::sqrt(std::fmax(0.0f, trace * trace - 4.0f * det)));
   if (!(min_eig > 1e-2f * static_cast<float>(count))) return false;
 
-  const float margin = max_offset + 1.0f;
+  // The second-order Jacobian samples one more pixel around every sample.
+  const float margin = max_offset + (second_order ? 2.0f : 1.0f);
+  float ix[kMaxPatchPixels];
+  float iy[kMaxPatchPixels];
+  float residual[kMaxPatchPixels];
   float samples[kMaxPatchPixels];
   float x = *cx;
   float y = *cy;
@@ -190,15 +240,27 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
       return false;
     sampled_at_xy = true;
     const float offset_s = options_.brightness_offset ? mean_s : 0.0f;
-    float bx = 0.0f;
-    float by = 0.0f;
-    for (int k = 0; k < count; ++k) {
-      const float e = (value[k] - offset_t) - (samples[k] - offset_s);
-      bx += cgx[k] * e;
-      by += cgy[k] * e;
+    float dx = 0.0f;
+    float dy = 0.0f;
+    if (second_order) {
+      SampleGradients(image, offsets, count, x, y, ix, iy);
+      for (int k = 0; k < count; ++k) {
+        ix[k] = 0.5f * (ix[k] + gx[k]);
+        iy[k] = 0.5f * (iy[k] + gy[k]);
+        residual[k] = (value[k] - offset_t) - (samples[k] - offset_s);
+      }
+      if (!SolveStep(ix, iy, residual, count, centre, &dx, &dy)) return false;
+    } else {
+      float bx = 0.0f;
+      float by = 0.0f;
+      for (int k = 0; k < count; ++k) {
+        const float e = (value[k] - offset_t) - (samples[k] - offset_s);
+        bx += cgx[k] * e;
+        by += cgy[k] * e;
+      }
+      dx = (hyy * bx - hxy * by) / det;
+      dy = (hxx * by - hxy * bx) / det;
     }
-    const float dx = (hyy * bx - hxy * by) / det;
-    const float dy = (hxx * by - hxy * bx) / det;
     x += dx;
     y += dy;
     sampled_at_xy = false;
@@ -250,8 +312,8 @@ bool PatchTracker::TrackFlow(const Pyramid& prev, const Pyramid& cur, float prev
     float x = px + dx * scale;
     float y = py + dy * scale;
     const float epsilon = l == 0 ? options_.epsilon_px : options_.coarse_epsilon_px;
-    if (!Align(cur.Level(l), tmpl.value, tmpl.gx, tmpl.gy, offsets, count, r, clamped, epsilon, &x,
-               &y, &q)) {
+    if (!Align(cur.Level(l), tmpl.value, tmpl.gx, tmpl.gy, offsets, count, r, clamped, false,
+               epsilon, &x, &y, &q)) {
       if (l == 0) return false;
       continue;
     }
@@ -307,8 +369,8 @@ bool PatchTracker::TrackWarped(const GrayView& image, const PatchTemplate& tmpl,
   float x = x0;
   float y = y0;
   float q = 0.0f;
-  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, options_.epsilon_px, &x, &y,
-             &q)) {
+  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, true, options_.epsilon_px, &x,
+             &y, &q)) {
     return false;
   }
   const float ex = x - x0;
@@ -402,8 +464,8 @@ bool PatchTracker::SearchWarped(const GrayView& image, const PatchTemplate& tmpl
   float x = px + static_cast<float>(best_i);
   float y = py + static_cast<float>(best_j);
   float q = 0.0f;
-  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, options_.epsilon_px, &x, &y,
-             &q) ||
+  if (!Align(image, tmpl.value, gx, gy, offsets, count, -1, false, true, options_.epsilon_px, &x,
+             &y, &q) ||
       q < options_.min_zncc) {
     return false;
   }
