@@ -42,12 +42,18 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kRadToDeg = 57.29577951308232;
 constexpr std::uint16_t kMaxCount = 65535;
 
+// A slope: dz / d(cell) along x and y and their variances.
+struct Gradient {
+  bool ok = false;
+  double b = 0.0, c = 0.0;
+  double var_b = 0.0, var_c = 0.0;
+};
+
 struct Plane {
   bool ok = false;
   double n = 0.0;
   double mx = 0.0, my = 0.0, mz = 0.0;
-  double b = 0.0, c = 0.0;          // dz / d(cell) along x and y
-  double var_b = 0.0, var_c = 0.0;  // from the mean cell sigma^2
+  Gradient gradient;  // var from the mean cell sigma^2 or the residuals
   double rss = 0.0;
   double mean_var = 0.0;
 };
@@ -72,18 +78,19 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count,
   const double czz = s[9] / n - p.mz * p.mz;
   const double det = cxx * cyy - cxy * cxy;
   if (!(det > 1e-6)) return p;
-  p.b = (cyy * cxz - cxy * cyz) / det;
-  p.c = (cxx * cyz - cxy * cxz) / det;
+  Gradient& g = p.gradient;
+  g.b = (cyy * cxz - cxy * cyz) / det;
+  g.c = (cxx * cyz - cxy * cxz) / det;
   p.mean_var = s[10] / n;
-  p.rss = std::max(0.0, n * (czz - p.b * cxz - p.c * cyz));
+  p.rss = std::max(0.0, n * (czz - g.b * cxz - g.c * cyz));
   // Slope variance from the larger of the predicted noise (for correlated cells) and the fit's
   // own residuals. The residuals are mostly relief where they exceed the noise (a rock, a crest
   // in the window), which tilts the plane as a bias, not as a correlated noise: the factor is
   // the stereo error's only.
   const double noise = std::max(correlation_factor * p.mean_var, p.rss / (n - 3.0 + 1e-9));
-  p.var_b = noise / n * (cyy / det);
-  p.var_c = noise / n * (cxx / det);
-  p.ok = true;
+  g.var_b = noise / n * (cyy / det);
+  g.var_c = noise / n * (cxx / det);
+  g.ok = p.ok = true;
   return p;
 }
 
@@ -132,7 +139,28 @@ double CorrelatedSlopeVarianceFactor(const std::array<double, 5>& at_lags, int r
   return std::max(1.0, sum / (sum_xx * side));
 }
 
-// Cells each side of the centre of a square analysis window of +-radius_m (at least 1).
+// The variance of the 1 m slope's central difference (the mean of a (2p + 1)^2 patch centred r
+// cells along an axis, less the mean of the one -r cells along it) for cells whose errors are
+// correlated, over its variance for independent cells: g^T C g / g^T g with g = +-1 over the two
+// patches and C_ij = CellErrorCorrelation(|p_i - p_j|), summed over every pair of the patches'
+// cells (2 (2p + 1)^2 cells: done once per analysis). At least 1.
+double CorrelatedDifferenceVarianceFactor(const std::array<double, 5>& at_lags, int r, int p) {
+  double sum = 0.0;
+  int cells = 0;
+  for (int sa = -1; sa <= 1; sa += 2)
+    for (int ya = -p; ya <= p; ++ya)
+      for (int xa = -p; xa <= p; ++xa) {
+        ++cells;
+        for (int sb = -1; sb <= 1; sb += 2)
+          for (int yb = -p; yb <= p; ++yb)
+            for (int xb = -p; xb <= p; ++xb) {
+              const double d = core::Hypot(sa * r + xa - sb * r - xb, ya - yb);
+              sum += sa * sb * CellErrorCorrelation(at_lags, d);
+            }
+      }
+  return std::max(1.0, sum / cells);
+}
+
 // 1-sigma of the position's horizontal error along its worst direction (largest eigenvalue of the
 // covariance's world x-y block).
 double HorizontalSigma(const Eigen::Matrix<double, 6, 6>& cov) {
@@ -144,6 +172,7 @@ double HorizontalSigma(const Eigen::Matrix<double, 6, 6>& cov) {
   return std::sqrt(std::max(0.0, mean + std::sqrt(half_diff * half_diff + b * b)));
 }
 
+// Cells each side of the centre of a square analysis window of +-radius_m (at least 1).
 int HalfWindowCells(double radius_m, double cell_m) {
   return std::max(1, static_cast<int>(std::lround(radius_m / cell_m)));
 }
@@ -262,7 +291,8 @@ core::Status HazardMapper::Configure(const HazardMapperOptions& o) {
                    [](double r) { return r >= 0.0 && r <= 1.0; }) ||
       !positive(o.max_slope_deg) || !positive(o.max_rock_height_m) ||
       !positive(o.footprint_radius_m) || !positive(o.rock_window_radius_m) ||
-      !positive(o.local_slope_baseline_m) || !(o.site_margin_sigmas >= 0.0) ||
+      !positive(o.local_slope_baseline_m) || !positive(o.local_slope_patch_m) ||
+      !(o.local_slope_patch_m < o.local_slope_baseline_m) || !(o.site_margin_sigmas >= 0.0) ||
       !(o.confidence_k >= 0.0) || !(o.min_known_fraction >= 0.0 && o.min_known_fraction <= 1.0) ||
       !positive(o.clearance_cap_m) || !(o.target_weight >= 0.0) || !(o.site_hysteresis >= 0.0) ||
       o.max_landmarks < 0 || o.min_calibration_landmarks < 3 || !std::isfinite(o.ground_z_hint_m) ||
@@ -880,9 +910,11 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   };
   const int rf = HalfWindowCells(options_.footprint_radius_m, cell_m_);
   const int rl = HalfWindowCells(0.5 * options_.local_slope_baseline_m, cell_m_);
+  const int pl = std::max(
+      0, static_cast<int>(std::lround(0.5 * (options_.local_slope_patch_m / cell_m_ - 1.0))));
   const int rr = HalfWindowCells(options_.rock_window_radius_m, cell_m_);
   const double min_f = options_.min_known_fraction * (2 * rf + 1) * (2 * rf + 1);
-  const double min_l = options_.min_known_fraction * (2 * rl + 1) * (2 * rl + 1);
+  const double min_l = 2 * pl + 1;  // cells of a 1 m slope patch: at least one row's worth
   const double min_r = options_.min_known_fraction * (2 * rr + 1) * (2 * rr + 1);
   const Eigen::Matrix<double, 6, 6>& cov = frame.pose_covariance;
   // Tilt of the map from attitude error: rotations about the horizontal world axes.
@@ -891,18 +923,42 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   const double var_tilt = std::max(0.0, rot_cov(0, 0)) + std::max(0.0, rot_cov(1, 1));
   const double k = options_.confidence_k;
   const RockCriterion rocks(RockCriterionOf(options_), cell_m_);
-  // The slope fits' stereo noise for cells whose errors are correlated over the window
+  // The slopes' stereo noise for cells whose errors are correlated over their windows
   // (HazardMapperOptions::cell_error_autocorrelation).
   const double footprint_factor =
       CorrelatedSlopeVarianceFactor(options_.cell_error_autocorrelation, rf);
   const double local_factor =
-      CorrelatedSlopeVarianceFactor(options_.cell_error_autocorrelation, rl);
-  // A plane's slope and its sigma (the fit's and the map's tilt from attitude error), degrees.
-  const auto slope_of = [&](const Plane& p, double* sigma_deg) {
-    const double g = core::Hypot(p.b, p.c) / cell_m_;
-    const double var_g = (p.var_b + p.var_c) / (cell_m_ * cell_m_) + var_tilt;
+      CorrelatedDifferenceVarianceFactor(options_.cell_error_autocorrelation, rl, pl);
+  // A gradient's slope and its sigma (its own and the map's tilt from attitude error), degrees.
+  const auto slope_of = [&](const Gradient& d, double* sigma_deg) {
+    const double g = core::Hypot(d.b, d.c) / cell_m_;
+    const double var_g = (d.var_b + d.var_c) / (cell_m_ * cell_m_) + var_tilt;
     *sigma_deg = std::sqrt(var_g) / (1.0 + g * g) * kRadToDeg;
     return std::atan(g) * kRadToDeg;
+  };
+  // The 1 m slope (HazardMapperOptions::local_slope_patch_m): the patch means rl cells either
+  // side along x and along y, over the distance of the patches' centroids along that axis (2 rl
+  // where both are whole; less where the known area ends inside a patch: a patch counts from one
+  // row of known cells, so the slope reaches to within rl - pl + 1 cells of the known area's
+  // edge). The variance of a difference of two means of k+ and k- cells of mean variance v+, v-
+  // is v+ / k+ + v- / k-, times local_factor for their correlation (that of whole patches: a
+  // partial patch's cells are fewer and as close, so it overstates rather than understates).
+  const auto local_gradient = [&](int ci, int cj) {
+    Gradient d;
+    const auto difference = [&](int di, int dj, int axis, double* value, double* var) {
+      const auto inside = [&](int a, int b) { return a >= 0 && b >= 0 && a < n_ && b < n_; };
+      if (!inside(ci + di, cj + dj) || !inside(ci - di, cj - dj)) return false;
+      const std::array<double, kSatChannels> hi = window(ci + di, cj + dj, pl);
+      const std::array<double, kSatChannels> lo = window(ci - di, cj - dj, pl);
+      if (hi[0] < min_l || lo[0] < min_l) return false;
+      const double baseline = hi[axis] / hi[0] - lo[axis] / lo[0];
+      *value = (hi[3] / hi[0] - lo[3] / lo[0]) / baseline;
+      *var = (hi[10] / (hi[0] * hi[0]) + lo[10] / (lo[0] * lo[0])) * local_factor /
+             (baseline * baseline);
+      return true;
+    };
+    d.ok = difference(rl, 0, 1, &d.b, &d.var_b) && difference(0, rl, 2, &d.c, &d.var_c);
+    return d;
   };
   // A slope is a hazard where it exceeds the threshold by k sigma and the map resolves it (sigma
   // below a third of the threshold); it cannot be excluded where value + k sigma exceeds it.
@@ -925,14 +981,14 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       class_[c] = HazardClass::kUnknown;
       if (std::isnan(elevation_[c])) continue;
       const Plane pf = FitPlane(window(i, j, rf), min_f, footprint_factor);
-      const Plane pl = FitPlane(window(i, j, rl), min_l, local_factor);
+      const Gradient gl = local_gradient(i, j);
       const Plane pr = FitPlane(window(i, j, rr), min_r);
-      if (!pf.ok || !pr.ok || !pl.ok) continue;
+      if (!pf.ok || !pr.ok || !gl.ok) continue;
       double slope_sigma_deg = 0.0;
-      const double slope_deg = slope_of(pf, &slope_sigma_deg);
+      const double slope_deg = slope_of(pf.gradient, &slope_sigma_deg);
       double local_sigma_deg = 0.0;
-      const double local_deg = slope_of(pl, &local_sigma_deg);
-      const double plane_here = pr.mz + pr.b * (i - pr.mx) + pr.c * (j - pr.my);
+      const double local_deg = slope_of(gl, &local_sigma_deg);
+      const double plane_here = pr.mz + pr.gradient.b * (i - pr.mx) + pr.gradient.c * (j - pr.my);
       const double h = (elevation_[c] - z_ref) - plane_here;
       const double sr = sigma_rel_[c];
       const double sigma_h = std::sqrt(sr * sr + pr.mean_var / pr.n);
@@ -1016,7 +1072,7 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       if (class_[c] == HazardClass::kRock || std::isnan(slope_deg_[c])) continue;
       const double slope_deg = slope_deg_[c];
       const double slope_sigma_deg = slope_sigma_deg_[c];
-      const bool local = rocks_within(i, j, rl) == 0;
+      const bool local = rocks_within(i, j, rl + pl) == 0;
       const double local_deg = local ? local_slope_deg_[c] : 0.0;
       const double local_sigma_deg = local ? local_slope_sigma_deg_[c] : 0.0;
       // Where the map resolves the threshold rock, the rock criterion has decided the cell (kRock

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -121,20 +122,22 @@ TEST(HazardMapperTest, FlatPlaneIsSafeWithHonestSigma) {
 }
 
 // GIVEN a flat plane mapped twice, with the map's cell errors taken as independent and as
-// correlated (the default cell_error_autocorrelation) WHEN the 1 m slope is fitted THEN where the
-// stereo noise sets the slope sigma, the correlated one is larger by sqrt(g^T C g / g^T g), here
-// computed by brute force over the 21 x 21 window (g_i = x_i), and nowhere by more.
+// correlated (the default cell_error_autocorrelation) WHEN the 1 m slope is measured (the
+// difference of the 7 x 7-cell patch means +-0.5 m away) THEN the correlated sigma is larger by
+// sqrt(g^T C g / g^T g), here computed by brute force over the two patches (g = +-1), and
+// nowhere by more.
 TEST(HazardMapperTest, LocalSlopeSigmaCountsCorrelatedCells) {
   HazardMapperOptions independent = Options();
   independent.cell_error_autocorrelation = {0.0, 0.0, 0.0, 0.0, 0.0};
   SceneRun a;
   SceneRun b;
   Prepare(Scene{}, 8.0, &a, independent);
-  Prepare(Scene{}, 8.0, &b);
+  Prepare(Scene{}, 8.0, &b, Options());
   ASSERT_EQ(a.mapper->Update(a.frame), core::Status::kOk);
   ASSERT_EQ(b.mapper->Update(b.frame), core::Status::kOk);
   ASSERT_DOUBLE_EQ(a.mapper->CellM(), 0.05);
   const int r = 10;  // +-0.5 m at 5 cm
+  const int p = 3;   // 0.35 m patches
   const auto rho = [&](double d) {
     const double lags[6] = {1, 2, 4, 8, 16, 32};
     const auto& at = Options().cell_error_autocorrelation;
@@ -145,14 +148,17 @@ TEST(HazardMapperTest, LocalSlopeSigmaCountsCorrelatedCells) {
         return vals[k] + (vals[k + 1] - vals[k]) * (d - lags[k]) / (lags[k + 1] - lags[k]);
     return 0.0;
   };
+  // The stencil's cells: (x, y, g).
+  std::vector<std::array<int, 3>> stencil;
+  for (int side = -1; side <= 1; side += 2)
+    for (int y = -p; y <= p; ++y)
+      for (int x = -p; x <= p; ++x) stencil.push_back({side * r + x, y, side});
   double num = 0.0;
   double den = 0.0;
-  for (int y1 = -r; y1 <= r; ++y1)
-    for (int x1 = -r; x1 <= r; ++x1) {
-      den += x1 * x1;
-      for (int y2 = -r; y2 <= r; ++y2)
-        for (int x2 = -r; x2 <= r; ++x2) num += x1 * x2 * rho(std::hypot(x1 - x2, y1 - y2));
-    }
+  for (const auto& u : stencil) {
+    den += u[2] * u[2];
+    for (const auto& v : stencil) num += u[2] * v[2] * rho(std::hypot(u[0] - v[0], u[1] - v[1]));
+  }
   const double expected = std::sqrt(num / den);
   std::vector<double> ratios;
   const HazardMapper& ma = *a.mapper;
@@ -169,9 +175,9 @@ TEST(HazardMapperTest, LocalSlopeSigmaCountsCorrelatedCells) {
   std::printf(
       "1 m slope sigma, correlated / independent cells: median %.3f, max %.3f, model %.3f\n",
       median, ratios.back(), expected);
-  EXPECT_GT(expected, 2.5);  // the measured correlation makes the slope sigma ~2.9x
-  EXPECT_NEAR(median, expected, 0.02 * expected);
-  EXPECT_LE(ratios.back(), expected * 1.001);
+  EXPECT_GT(expected, 2.0);  // the measured correlation makes the slope sigma ~2.4x
+  EXPECT_NEAR(median, expected, 0.01 * expected);
+  EXPECT_LE(ratios.back(), expected * 1.001);  // the attitude's share of the sigma is not scaled
   EXPECT_GE(ratios.front(), 0.999);
   HazardMapper m;
   HazardMapperOptions bad = Options();
@@ -205,11 +211,13 @@ TEST(HazardMapperTest, TiltedPlaneIsSlopeHazard) {
 
 // GIVEN a ripple of 3 m wavelength and 0.15 m amplitude (the metre-scale relief of a crater rim)
 // seen from 12 m with the flight footprint (radius 1.5 m) THEN the footprint plane, which spans a
-// whole wavelength, tilts at most ~5.5 deg (< 8 deg where its window is whole), but the plane
-// over 1 m follows the flanks (up to ~16 deg; within 5 deg of the least-squares slope of the true
-// surface over the same window: the whole ripple is +-0.5 px of disparity at 12 m, where SGM's
-// subpixel bias shapes it, measured 95 %), the steep flanks are not kSafe, the crests are, and no
-// 3 m disc fits between the flanks: no site. With the footprint slope alone a site is chosen.
+// whole wavelength, tilts at most ~5.5 deg (< 8 deg where its window is whole), but the 1 m slope
+// follows the flanks (up to ~16 deg; within 5 deg of the same central difference of patch means
+// on the true surface: the whole ripple is +-0.5 px of disparity at 12 m, where SGM's subpixel
+// bias shapes it), the steep flanks are not kSafe, no crest is kSlope and most are kSafe (the
+// others kUncertain: at 12 m the slope's sigma is ~2.8 deg, and a gradient's magnitude reads its
+// noise as slope, 4-8 deg where the truth is < 4), and no 3 m disc fits between the flanks: no
+// site.
 TEST(HazardMapperTest, MetreScaleSlopeIsAHazardTheFootprintPlaneMisses) {
   HazardMapperOptions o = Options();
   o.grid_cells = 128;
@@ -223,15 +231,14 @@ TEST(HazardMapperTest, MetreScaleSlopeIsAHazardTheFootprintPlaneMisses) {
   ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
   const HazardMapper& m = *run.mapper;
   const double k = 2.0 * M_PI / scene.ripple_wavelength_m;
-  // Least-squares slope of A sin(k x) over the cells of the 1 m window, per unit A cos(k x).
+  // The difference of A sin(k x) over the patch means at x +- a (a = 0.5 m, patches of 7 cells),
+  // over 2 a, per unit cos(k x): A (mean over the patch of cos(k d)) sin(k a) / a.
   const int half = static_cast<int>(std::lround(0.5 / m.CellM()));
-  double sxz = 0.0;
-  double sxx = 0.0;
-  for (int d = -half; d <= half; ++d) {
-    sxz += d * m.CellM() * std::sin(k * d * m.CellM());
-    sxx += d * m.CellM() * d * m.CellM();
-  }
-  const double gain = scene.ripple_amplitude_m * sxz / sxx;
+  const int patch = 3;
+  double patch_mean = 0.0;
+  for (int d = -patch; d <= patch; ++d) patch_mean += std::cos(k * d * m.CellM()) / (2 * patch + 1);
+  const double a = half * m.CellM();
+  const double gain = scene.ripple_amplitude_m * patch_mean * std::sin(k * a) / a;
   int fitted = 0;
   int whole_footprints = 0;
   int close = 0;
@@ -239,6 +246,7 @@ TEST(HazardMapperTest, MetreScaleSlopeIsAHazardTheFootprintPlaneMisses) {
   int flanks_flagged = 0;
   int crests = 0;
   int crests_safe = 0;
+  int crests_slope = 0;
   for (int j = 0; j < m.GridCells(); ++j) {
     for (int i = 0; i < m.GridCells(); ++i) {
       const int c = j * m.GridCells() + i;
@@ -265,6 +273,7 @@ TEST(HazardMapperTest, MetreScaleSlopeIsAHazardTheFootprintPlaneMisses) {
       } else if (expected < 4.0) {
         ++crests;
         crests_safe += m.Classes()[c] == HazardClass::kSafe;
+        crests_slope += m.Classes()[c] == HazardClass::kSlope;
       }
     }
   }
@@ -278,25 +287,83 @@ TEST(HazardMapperTest, MetreScaleSlopeIsAHazardTheFootprintPlaneMisses) {
   ASSERT_GT(flanks, 200);
   EXPECT_GT(flanks_flagged, flanks * 95 / 100);
   ASSERT_GT(crests, 200);
-  EXPECT_GT(crests_safe, crests * 8 / 10);
+  EXPECT_GT(crests_safe, crests * 2 / 3);
+  EXPECT_EQ(crests_slope, 0);
   EXPECT_FALSE(m.Site().valid);
+}
 
-  // The same scene with slopes judged at footprint scale only: a site.
-  HazardMapperOptions footprint_only = o;
-  footprint_only.local_slope_baseline_m = 2.0 * o.footprint_radius_m;
-  SceneRun coarse;
-  Prepare(scene, 12.0, &coarse, footprint_only);
-  ASSERT_EQ(coarse.mapper->Update(coarse.frame), core::Status::kOk);
-  ASSERT_EQ(coarse.mapper->Update(coarse.frame), core::Status::kOk);
-  EXPECT_TRUE(coarse.mapper->Site().valid);
+// GIVEN flat ground meeting a wall that rises at 40 deg by 0.5 m (a crater's inner wall beside
+// its floor: 40 m campaign runs 6 and 58 chose sites there) seen from 8 m THEN on the floor the
+// 1 m slope is the truth's (sim/hazard.hpp: the central difference of the heights 1 m apart, up
+// to 22 deg where the wall rises in the outer part of the window): mostly within 3 of its stated
+// sigmas (~1 deg; SGM's bias on the synthetic texture reaches 2.4 deg in some rows) of that
+// difference between the true surface's 0.35 m patch means (which is within 3 deg of the truth's:
+// the patch straddling the wall's foot averages it), and the floor cells whose true 1 m slope
+// exceeds 11 deg are not kSafe. A least-squares plane over the 1 m window reads 4.5-8.7 deg where
+// the truth says 10.3-11.7 in those runs (on the truth's own heights as on the map's): it weights
+// the window's ends, where the wall is, least.
+TEST(HazardMapperTest, WallInTheMetreWindowReadsItsHeightDifference) {
+  HazardMapperOptions o = Options();
+  o.grid_cells = 96;
+  Scene scene;
+  scene.wall_start_m = 0.4;
+  scene.wall_slope = std::tan(40.0 * M_PI / 180.0);
+  scene.wall_height_m = 0.5;
+  SceneRun run;
+  Prepare(scene, 8.0, &run, o);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
+  const HazardMapper& m = *run.mapper;
+  const double a = 0.5 * o.local_slope_baseline_m;
+  int floor_cells = 0;
+  int close = 0;
+  int steep = 0;
+  int steep_flagged = 0;
+  double worst = 0.0;
+  for (int j = 0; j < m.GridCells(); ++j) {
+    for (int i = 0; i < m.GridCells(); ++i) {
+      const int c = j * m.GridCells() + i;
+      const double x = m.CornerX() + (i + 0.5) * m.CellM();
+      // The floor beside the wall: the wall rises in the outer part of the cell's window.
+      if (std::isnan(m.LocalSlopeDeg()[c]) || x > scene.wall_start_m || x < scene.wall_start_m - a)
+        continue;
+      const double truth =
+          std::atan((scene.GroundZ(x + a) - scene.GroundZ(x - a)) / (2.0 * a)) * 180.0 / M_PI;
+      // The same difference of the true surface's 7-cell patch means (what the map estimates).
+      double dz = 0.0;
+      for (int d = -3; d <= 3; ++d)
+        dz += (scene.GroundZ(x + a + d * m.CellM()) - scene.GroundZ(x - a + d * m.CellM())) / 7.0;
+      const double patches = std::atan(dz / (2.0 * a)) * 180.0 / M_PI;
+      EXPECT_NEAR(patches, truth, 3.0) << "x " << x;  // the patch's mean over the wall's foot
+      ++floor_cells;
+      const double error = std::fabs(m.LocalSlopeDeg()[c] - patches);
+      worst = std::max(worst, error);
+      close += error < 3.0 * m.LocalSlopeSigmaDeg()[c];
+      if (truth > 11.0) {
+        ++steep;
+        steep_flagged += m.Classes()[c] != HazardClass::kSafe;
+      }
+    }
+  }
+  std::printf(
+      "wall: %d floor cells, %d within 3 sigma of the patches' 1 m slope (worst %.2f deg), "
+      "%d / %d above 11 deg not safe\n",
+      floor_cells, close, worst, steep_flagged, steep);
+  ASSERT_GT(floor_cells, 300);
+  EXPECT_GT(close, floor_cells * 8 / 10);
+  ASSERT_GT(steep, 100);
+  EXPECT_EQ(steep_flagged, steep);
 }
 
 // GIVEN a flat plane WHEN the navigation's horizontal sigma grows THEN the site keeps the
 // footprint radius plus site_margin_sigmas x that sigma from every non-safe cell (the grid border
-// included), and says so in its margin.
+// included), and says so in its margin. (A grid wider than the view: the 1 m slope needs the
+// heights 0.5 m beyond a cell, so the 0.7 m along the known area's edges have none.)
 TEST(HazardMapperTest, SiteMarginFollowsTheHorizontalSigma) {
   SceneRun run;
-  Prepare(Scene{}, 8.0, &run);
+  HazardMapperOptions o = Options();
+  o.grid_cells = 96;
+  Prepare(Scene{}, 8.0, &run, o);
   run.frame.pose_covariance(0, 0) = 0.04;  // 0.2 m along x, 0.1 m along y
   run.frame.pose_covariance(1, 1) = 0.01;
   ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
@@ -310,11 +377,13 @@ TEST(HazardMapperTest, SiteMarginFollowsTheHorizontalSigma) {
 // their centres, the small one is not, and the safe site keeps a footprint away from the rocks.
 TEST(HazardMapperTest, RocksDetectedAndAvoided) {
   SceneRun run;
+  HazardMapperOptions o = Options();
+  o.grid_cells = 96;  // as in SiteMarginFollowsTheHorizontalSigma
   Scene scene;
   scene.boxes.push_back(Box{0.0, 0.0, 0.15, 0.5});
   scene.boxes.push_back(Box{0.9, 0.8, 0.15, 0.5});
   scene.boxes.push_back(Box{0.9, -0.8, 0.15, 0.1});
-  Prepare(scene, 8.0, &run);
+  Prepare(scene, 8.0, &run, o);
   ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
   ASSERT_EQ(run.mapper->Update(run.frame), core::Status::kOk);
   const HazardMapper& m = *run.mapper;

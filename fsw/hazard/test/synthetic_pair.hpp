@@ -1,9 +1,11 @@
 // Synthetic rectified stereo pairs for the hazard tests: a nadir camera over a textured plane
-// z = tilt_x * x (plus an optional ripple along x and flat-topped square rocks), rendered by ray
-// casting (exact for the plane and the boxes, iterated to convergence for the ripple).
+// z = tilt_x * x (plus an optional ripple along x, an optional wall along x and flat-topped square
+// rocks), rendered by ray casting (exact for the plane and the boxes, iterated to convergence for
+// the ripple and the wall).
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -22,6 +24,11 @@ struct Scene {
   // slopes that a plane over a whole wavelength does not see.
   double ripple_amplitude_m = 0.0;
   double ripple_wavelength_m = 3.0;
+  // A wall along x: from x = wall_start_m the ground rises at wall_slope (dz / dx) until it is
+  // wall_height_m higher, then stays flat (a crater's inner wall beside its floor, and its rim).
+  double wall_start_m = 0.0;
+  double wall_slope = 0.0;
+  double wall_height_m = 0.0;
   std::vector<Box> boxes;
   double texture_cell_m = 0.04;
 
@@ -45,7 +52,9 @@ struct Scene {
     return a * (1 - ay) + b * ay;
   }
   double GroundZ(double x) const {
-    return tilt_x * x + ripple_amplitude_m * std::sin(2.0 * M_PI * x / ripple_wavelength_m);
+    const double wall =
+        wall_slope > 0.0 ? std::clamp(wall_slope * (x - wall_start_m), 0.0, wall_height_m) : 0.0;
+    return tilt_x * x + ripple_amplitude_m * std::sin(2.0 * M_PI * x / ripple_wavelength_m) + wall;
   }
   // True height at (x, y).
   double HeightAt(double x, double y) const {
@@ -70,9 +79,10 @@ struct Scene {
       }
     }
     double s_plane = (o.z() - tilt_x * o.x()) / (tilt_x * dir.x() - dir.z());
-    // The ripple by fixed-point iteration on the ray's height: a contraction for near-nadir
-    // rays (|dz/dx| |dir.x / dir.z| well below 1).
-    for (int k = 0; k < 40 && ripple_amplitude_m != 0.0; ++k) {
+    // The ripple and the wall by fixed-point iteration on the ray's height: a contraction for
+    // near-nadir rays (|dz/dx| |dir.x / dir.z| well below 1).
+    const bool curved = ripple_amplitude_m != 0.0 || wall_height_m != 0.0;
+    for (int k = 0; k < 40 && curved; ++k) {
       s_plane = (o.z() - GroundZ(o.x() + s_plane * dir.x())) / -dir.z();
     }
     if (s_plane < best_s) {
