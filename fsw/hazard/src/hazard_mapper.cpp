@@ -12,7 +12,9 @@
 namespace swf::hazard {
 namespace {
 
-constexpr int kSatChannels = 11;  // count, x, y, z, xx, xy, yy, xz, yz, zz, sigma^2
+// count, x, y, z, xx, xy, yy, xz, yz, zz, sigma^2 (the plane fits), then the quadric's: xxx, xxy,
+// xyy, yyy, xxxx, xxxy, xxyy, xyyy, yyyy, xxz, xyz, yyz.
+constexpr int kSatChannels = 23;
 
 // Fills the first kChannels sums of a summed-area table over an n x n grid whose entries lie
 // kSatChannels doubles apart ((n + 1)^2 entries, the first row and column zero); the other
@@ -92,6 +94,65 @@ Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count,
   g.var_c = noise / n * (cxx / det);
   g.ok = p.ok = true;
   return p;
+}
+
+double IntPow(double x, int power) {
+  double result = 1.0;
+  for (int k = 0; k < power; ++k) result *= x;
+  return result;
+}
+
+// The least-squares quadric z = a + b u + c v + d u^2 + e u v + f v^2 (u, v: cells from the centre
+// (cx, cy) over r) through the window sums s, at its centre: a, and the variance of a per unit
+// cell variance ((A^T A)^-1 at a: the centre's leverage).
+struct Quadric {
+  bool ok = false;
+  double centre = 0.0;
+  double leverage = 0.0;
+  double mean_var = 0.0;
+};
+
+Quadric FitQuadric(const std::array<double, kSatChannels>& s, double cx, double cy, int r,
+                   double min_count) {
+  Quadric q;
+  if (s[0] < std::max(6.0, min_count)) return q;
+  // The sums of x^p y^q (p + q <= 4) and of x^p y^q z (p + q <= 2) by channel.
+  constexpr int kNone = -1;
+  constexpr int kMoment[5][5] = {{0, 2, 6, 14, 19},
+                                 {1, 5, 13, 18, kNone},
+                                 {4, 12, 17, kNone, kNone},
+                                 {11, 16, kNone, kNone, kNone},
+                                 {15, kNone, kNone, kNone, kNone}};
+  constexpr int kMomentZ[3][3] = {{3, 8, 22}, {7, 21, kNone}, {20, kNone, kNone}};
+  constexpr double kBinomial[5][5] = {
+      {1, 0, 0, 0, 0}, {1, 1, 0, 0, 0}, {1, 2, 1, 0, 0}, {1, 3, 3, 1, 0}, {1, 4, 6, 4, 1}};
+  // Moments about the centre, scaled by 1/r per power (u = (x - cx) / r): binomial shifts of the
+  // grid-centred sums.
+  const auto local = [&](int a, int b, const auto& channel) {
+    double sum = 0.0;
+    for (int p = 0; p <= a; ++p)
+      for (int k = 0; k <= b; ++k)
+        sum += kBinomial[a][p] * kBinomial[b][k] * IntPow(-cx, a - p) * IntPow(-cy, b - k) *
+               s[channel[p][k]];
+    return sum / IntPow(static_cast<double>(r), a + b);
+  };
+  constexpr int kBasis[6][2] = {{0, 0}, {1, 0}, {0, 1}, {2, 0}, {1, 1}, {0, 2}};
+  Eigen::Matrix<double, 6, 6> normal;
+  Eigen::Matrix<double, 6, 1> rhs;
+  for (int k = 0; k < 6; ++k) {
+    for (int l = 0; l < 6; ++l)
+      normal(k, l) = local(kBasis[k][0] + kBasis[l][0], kBasis[k][1] + kBasis[l][1], kMoment);
+    rhs(k) = local(kBasis[k][0], kBasis[k][1], kMomentZ);
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(normal);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9 * s[0])) return q;
+  const Eigen::Matrix<double, 6, 1> theta = ldlt.solve(rhs);
+  const Eigen::Matrix<double, 6, 1> leverage = ldlt.solve(Eigen::Matrix<double, 6, 1>::Unit(0));
+  q.centre = theta(0);
+  q.leverage = leverage(0);
+  q.mean_var = s[10] / s[0];
+  q.ok = std::isfinite(q.centre) && q.leverage > 0.0;
+  return q;
 }
 
 // The pose-free variance of a fused cell's height (the relief sigma's stereo part) from its summed
@@ -204,7 +265,21 @@ double SpheroidQuadrantIntegral(double radius_m, double x_m, double y_m) {
 
 RockCriterion::RockCriterion(const RockCriterionOptions& options, double cell_m)
     : options_(options), cell_m_(cell_m) {
-  window_m_ = (2 * HalfWindowCells(options.window_radius_m, cell_m) + 1) * cell_m;
+  // The quadric's weights of the cells for its value at the centre of a whole window of m x m
+  // cells: w_i = alpha + beta (x_i^2 + y_i^2) (cells; by symmetry), from sum w = 1 and sum w x^2
+  // = 0: alpha m^2 + 2 beta m S2 = 1, alpha m S2 + beta (m S4 + S2^2) = 0 (S2, S4 the sums of
+  // x^2, x^4 over one side).
+  const int half = HalfWindowCells(options.window_radius_m, cell_m);
+  const double m = 2 * half + 1;
+  double s2 = 0.0;
+  double s4 = 0.0;
+  for (int x = -half; x <= half; ++x) {
+    s2 += static_cast<double>(x) * x;
+    s4 += static_cast<double>(x) * x * x * x;
+  }
+  const double ratio = -m * s2 / (m * s4 + s2 * s2);  // beta / alpha
+  lift_alpha_ = 1.0 / (m * m + 2.0 * m * s2 * ratio);
+  lift_beta_ = ratio * lift_alpha_;
   const double h = options.max_height_m;
   const double d = h / options.height_to_diameter;
   threshold_relief_m_ = Relief(h, d);
@@ -240,9 +315,21 @@ double RockCriterion::BoxRelief(double height_m, double diameter_m, int side_cel
       SpheroidQuadrantIntegral(radius, b, a) + SpheroidQuadrantIntegral(radius, a, a);
   const double side_m = side_cells * cell_m_;
   const double box_mean = height_m * integral / (side_m * side_m);
-  constexpr double kTwoThirdsPi = 2.0943951023931953;
-  const double plane_lift = kTwoThirdsPi * radius * radius * height_m / (window_m_ * window_m_);
-  return std::max(0.0, box_mean - plane_lift);
+  // The rock lifts each box cell's reference quadric by sum_i w_i (its cells' mean heights) =
+  // (alpha V + beta integral |p - d|^2 h dA / c^2) / c^2 (d the cell's centre from the rock's):
+  // V = 2/3 pi R^2 H, integral |p|^2 h dA = 4/15 pi H R^4, the cross term vanishes, and the mean
+  // |d|^2 over the box's cells is 2 c^2 mean_k (k + 1/2)^2.
+  constexpr double kPi = 3.141592653589793;
+  const double volume = 2.0 / 3.0 * kPi * radius * radius * height_m;
+  const double second_moment = 4.0 / 15.0 * kPi * height_m * radius * radius * radius * radius;
+  double mean_offset2 = 0.0;
+  const int half = (side_cells - 1) / 2;
+  for (int k = -half; k <= half; ++k) mean_offset2 += (k + 0.5) * (k + 0.5) / side_cells;
+  mean_offset2 *= 2.0 * cell_m_ * cell_m_;
+  const double c2 = cell_m_ * cell_m_;
+  const double lift =
+      (lift_alpha_ * volume + lift_beta_ * (second_moment + volume * mean_offset2) / c2) / c2;
+  return std::max(0.0, box_mean - lift);
 }
 
 double RockCriterion::DecisionRelief(double sigma_m) const {
@@ -882,16 +969,22 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   }
   stats_.known_cells = known;
   const double z_ref = known > 0 ? sum / known : 0.0;
-  // Summed-area tables of the plane fits' moments.
+  // Summed-area tables of the plane and quadric fits' moments (about the grid's centre, where the
+  // fourth powers stay small enough for the tables' differences).
   const int n1 = n_ + 1;
+  const double grid_centre = 0.5 * (n_ - 1);
   FillSummedAreaTable<kSatChannels>(n_, sat_.data(), [&](std::size_t c, int i, int j, double* v) {
     if (std::isnan(elevation_[c])) return false;
-    const double x = i;
-    const double y = j;
+    const double x = i - grid_centre;
+    const double y = j - grid_centre;
     const double z = elevation_[c] - z_ref;
     const double s = sigma_rel_[c];
-    const double moments[kSatChannels] = {1.0,   x,     y,     z,     x * x, x * y,
-                                          y * y, x * z, y * z, z * z, s * s};
+    const double xx = x * x;
+    const double yy = y * y;
+    const double moments[kSatChannels] = {
+        1.0,        x,       y,          z,       xx,     x * y,     yy,     x * z,
+        y * z,      z * z,   s * s,      xx * x,  xx * y, x * yy,    yy * y, xx * xx,
+        xx * x * y, xx * yy, x * yy * y, yy * yy, xx * z, x * y * z, yy * z};
     std::copy(moments, moments + kSatChannels, v);
     return true;
   });
@@ -982,16 +1075,15 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       if (std::isnan(elevation_[c])) continue;
       const Plane pf = FitPlane(window(i, j, rf), min_f, footprint_factor);
       const Gradient gl = local_gradient(i, j);
-      const Plane pr = FitPlane(window(i, j, rr), min_r);
+      const Quadric pr = FitQuadric(window(i, j, rr), i - grid_centre, j - grid_centre, rr, min_r);
       if (!pf.ok || !pr.ok || !gl.ok) continue;
       double slope_sigma_deg = 0.0;
       const double slope_deg = slope_of(pf.gradient, &slope_sigma_deg);
       double local_sigma_deg = 0.0;
       const double local_deg = slope_of(gl, &local_sigma_deg);
-      const double plane_here = pr.mz + pr.gradient.b * (i - pr.mx) + pr.gradient.c * (j - pr.my);
-      const double h = (elevation_[c] - z_ref) - plane_here;
+      const double h = (elevation_[c] - z_ref) - pr.centre;
       const double sr = sigma_rel_[c];
-      const double sigma_h = std::sqrt(sr * sr + pr.mean_var / pr.n);
+      const double sigma_h = std::sqrt(sr * sr + pr.mean_var * pr.leverage);
       slope_deg_[c] = static_cast<float>(slope_deg);
       slope_sigma_deg_[c] = static_cast<float>(slope_sigma_deg);
       local_slope_deg_[c] = static_cast<float>(local_deg);
@@ -1007,9 +1099,9 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
     }
   }
   // The footprint evidence of the "rock possible" test (hazard_mapper.hpp, RockCriterion): the
-  // plane fits are done, so sat_ now holds per cell, over the cells with a relief: count, relief,
-  // stereo sigma, its square and the plane's sigma.
-  constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kPlane = 4, kChannels = 5;
+  // fits are done, so sat_ now holds per cell, over the cells with a relief: count, relief,
+  // stereo sigma, its square and the reference quadric's sigma.
+  constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kFit = 4, kChannels = 5;
   FillSummedAreaTable<kChannels>(n_, sat_.data(), [&](std::size_t c, int, int, double* v) {
     if (std::isnan(rock_m_[c])) return false;
     const double stereo = sigma_rel_[c];
@@ -1018,7 +1110,7 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
     v[kRelief] = rock_m_[c];
     v[kStereo] = stereo;
     v[kStereo2] = stereo * stereo;
-    v[kPlane] = std::sqrt(std::max(0.0, total * total - stereo * stereo));
+    v[kFit] = std::sqrt(std::max(0.0, total * total - stereo * stereo));
     return true;
   });
   const int half_box = (rocks.FootprintCells() - 1) / 2;
@@ -1039,13 +1131,13 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       };
       if (sum(kCount) >= box_cells - 0.5) {
         const double mean = sum(kRelief) / box_cells;
-        const double sigma = rocks.FootprintSigma(sum(kStereo), sum(kStereo2), sum(kPlane));
+        const double sigma = rocks.FootprintSigma(sum(kStereo), sum(kStereo2), sum(kFit));
         return mean + k * sigma > rocks.FootprintRelief();
       }
     }
     return rock_m_[c] + k * relief_sigma_[c] > rocks.ThresholdRelief();
   };
-  // Declared rocks per window: a 1 m plane over a rock tilts with the rock, which is a hazard
+  // Declared rocks per window: a 1 m height difference across a rock is the rock's, a hazard
   // already (and kept a footprint away from any site); the truth's slopes are the rock-free
   // surface's, so the local slope is judged only where its window holds no declared rock.
   for (int j = 0; j < n_; ++j) {

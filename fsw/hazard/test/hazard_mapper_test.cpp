@@ -36,7 +36,6 @@ HazardMapperOptions Options() {
   o.min_cell_m = 0.05;
   o.max_cell_m = 0.4;
   o.footprint_radius_m = 0.6;
-  o.rock_window_radius_m = 0.5;
   return o;
 }
 
@@ -405,10 +404,10 @@ TEST(HazardMapperTest, RocksDetectedAndAvoided) {
 }
 
 // GIVEN a box just above the rock threshold and one well below it, seen sharp from 8 m THEN the
-// first is kRock (its relief, ~0.30 m after lifting its own 1.05 m plane window, exceeds the
-// criterion's decision relief of ~0.25 m; the former rule, relief - 2 sigma > 0.3 m, could never
-// declare it) and the second is not (hazard relevance: 0.18 m of relief stays below the decision
-// relief however small sigma is).
+// first is kRock (its relief, ~0.30 m after lifting its own +-1.5 m reference quadric, exceeds
+// the criterion's decision relief of ~0.24 m; the former rule, relief - 2 sigma > 0.3 m, could
+// never declare it) and the second is not (hazard relevance: 0.18 m of relief stays below the
+// decision relief however small sigma is).
 TEST(HazardMapperTest, ThresholdRockDetectedSmallRockNot) {
   SceneRun run;
   Scene scene;
@@ -432,39 +431,44 @@ TEST(HazardMapperTest, ThresholdRockDetectedSmallRockNot) {
   EXPECT_LT(m.Stats().rock_cells, 60);  // the 0.3 m box top: 36 cells of 5 cm, plus its rim
 }
 
-// The rock criterion's numbers, by hand (RockCriterionOptions defaults: h = 0.3 m, plane window
-// +-1.5 m, z_fa = 3.090, z_d = 1.645).
+// The rock criterion's numbers, by hand (RockCriterionOptions defaults: h = 0.3 m, reference
+// quadric over +-1.5 m, z_fa = 3.090, z_d = 1.645).
 TEST(RockCriterionTest, ReliefDecisionAndResolvability) {
-  // 5 cm cells: plane window 61 cells = 3.05 m. A 0.3 m x 0.6 m rock: quadrant mean of the
-  // spheroid 1 - c^2 / (3 R^2) - (0.6222 c^4) / (8 R^4) = 0.990731; plane lift (2/3) pi R^2 H /
-  // W^2 = 0.0060793 m; relief 0.3 x 0.990731 - 0.0060793 = 0.291140 m.
+  // 5 cm cells: window 61 cells = 3.05 m, S2 = 18910, S4 = 10547998 (sums of x^2, x^4 over
+  // -30..30), the quadric's centre weights alpha + beta |x|^2: beta / alpha = -61 S2 / (61 S4 +
+  // S2^2) = -1.15233e-3, alpha = 1 / (3721 + 2 x 61 x S2 x beta / alpha) = 9.41150e-4, beta =
+  // -1.08452e-6. A 0.3 m x 0.6 m rock: quadrant mean of the spheroid 1 - c^2 / (3 R^2) - (0.6222
+  // c^4) / (8 R^4) = 0.990731; its lift of the quadric (alpha V + beta (4/15 pi H R^4 + V c^2 /
+  // 2) / c^2) / c^2 with V = 2/3 pi R^2 H: 0.020923 m (a plane's: V / W^2 = 0.0060793 m); relief
+  // 0.3 x 0.990731 - 0.020923 = 0.276296 m.
   const RockCriterion fine(RockCriterionOptions{}, 0.05);
-  EXPECT_NEAR(fine.Relief(0.3, 0.6), 0.291140, 2e-5);
-  EXPECT_NEAR(fine.ThresholdRelief(), 0.291140, 2e-5);
-  // A 0.6 x 1.2 m rock: 0.6 x 0.997685 - 0.048636 = 0.549975 m.
-  EXPECT_NEAR(fine.Relief(0.6, 1.2), 0.549975, 2e-5);
-  // The threshold is resolved up to sigma_max = 0.291140 / 4.735 = 0.061487 m; the decision
-  // there is 0.291140 - 1.645 sigma, beyond it nothing is a rock.
-  EXPECT_NEAR(fine.ResolvedSigma(), 0.061487, 1e-5);
-  EXPECT_NEAR(fine.DecisionRelief(0.01), 0.274690, 2e-5);
-  EXPECT_NEAR(fine.DecisionRelief(0.06), 0.192440, 2e-5);
-  EXPECT_GE(fine.DecisionRelief(0.06), 3.090 * 0.06);  // flat ground: <= 1e-3 per cell
-  EXPECT_TRUE(std::isinf(fine.DecisionRelief(0.062)));
+  EXPECT_NEAR(fine.Relief(0.3, 0.6), 0.276296, 2e-5);
+  EXPECT_NEAR(fine.ThresholdRelief(), 0.276296, 2e-5);
+  // A 0.6 x 1.2 m rock lifts the quadric by 0.158904 m: 0.6 x 0.997685 - 0.158904 = 0.439707 m.
+  EXPECT_NEAR(fine.Relief(0.6, 1.2), 0.439707, 2e-5);
+  // The threshold is resolved up to sigma_max = 0.276296 / 4.735 = 0.058352 m; the decision
+  // there is 0.276296 - 1.645 sigma, beyond it nothing is a rock.
+  EXPECT_NEAR(fine.ResolvedSigma(), 0.058352, 1e-5);
+  EXPECT_NEAR(fine.DecisionRelief(0.01), 0.259846, 2e-5);
+  EXPECT_NEAR(fine.DecisionRelief(0.055), 0.185821, 2e-5);
+  EXPECT_GE(fine.DecisionRelief(0.055), 3.090 * 0.055);  // flat ground: <= 1e-3 per cell
+  EXPECT_TRUE(std::isinf(fine.DecisionRelief(0.059)));
   EXPECT_TRUE(std::isinf(fine.DecisionRelief(std::nan(""))));
   // Resolvable: sigma <= sigma_max and a relief at least a threshold rock's.
-  EXPECT_TRUE(fine.Resolvable(0.3, 0.6, 0.061));
-  EXPECT_FALSE(fine.Resolvable(0.3, 0.6, 0.062));
-  EXPECT_TRUE(fine.Resolvable(0.6, 1.2, 0.061));
-  EXPECT_FALSE(fine.Resolvable(0.6, 1.2, 0.062));  // large, but the map does not resolve h there
+  EXPECT_TRUE(fine.Resolvable(0.3, 0.6, 0.058));
+  EXPECT_FALSE(fine.Resolvable(0.3, 0.6, 0.059));
+  EXPECT_TRUE(fine.Resolvable(0.6, 1.2, 0.058));
+  EXPECT_FALSE(fine.Resolvable(0.6, 1.2, 0.059));  // large, but the map does not resolve h there
   EXPECT_FALSE(fine.Resolvable(0.29, 0.58, 0.0));  // below the threshold: never
-  // A rock narrower than the cell is averaged down: 0.8 m cells (window 5 cells = 4 m), a 0.3 m
-  // x 0.6 m rock whose quarter (volume (1/4)(2/3) pi R^2 H) fills one cell of 0.64 m^2:
-  // 0.3 x pi x 0.09 / (6 x 0.64) - 0.3 x (2/3) pi x 0.09 / 16 = 0.022089 - 0.003534 = 0.018555 m.
+  // A rock narrower than the cell is averaged down: 0.8 m cells (window 5 cells = 4 m; alpha =
+  // 27 / 175, beta = -1 / 35), a 0.3 m x 0.6 m rock whose quarter (volume (1/4)(2/3) pi R^2 H)
+  // fills one cell of 0.64 m^2: 0.3 x pi x 0.09 / (6 x 0.64) - 0.012228 = 0.022089 - 0.012228 =
+  // 0.009861 m.
   const RockCriterion coarse(RockCriterionOptions{}, 0.8);
-  EXPECT_NEAR(coarse.Relief(0.3, 0.6), 0.018555, 2e-5);
-  EXPECT_NEAR(coarse.ResolvedSigma(), 0.018555 / 4.735, 1e-5);
-  EXPECT_FALSE(coarse.Resolvable(0.3, 0.6, 0.0045));  // 4.735 sigma > 0.018555
-  EXPECT_TRUE(coarse.Resolvable(0.3, 0.6, 0.0039));
+  EXPECT_NEAR(coarse.Relief(0.3, 0.6), 0.009861, 2e-5);
+  EXPECT_NEAR(coarse.ResolvedSigma(), 0.009861 / 4.735, 1e-5);
+  EXPECT_FALSE(coarse.Resolvable(0.3, 0.6, 0.0021));  // 4.735 sigma > 0.009861
+  EXPECT_TRUE(coarse.Resolvable(0.3, 0.6, 0.0020));
   EXPECT_FALSE(coarse.Resolvable(0.3, 0.6, std::nan("")));
 }
 
@@ -486,18 +490,20 @@ TEST(RockCriterionTest, FootprintBoxOfThePossibleTest) {
     }
     return sum / (kSteps * kSteps);
   };
-  // 5 cm cells: window 3.05 m, plane lift 0.0060793 m (ReliefDecisionAndResolvability).
+  // 5 cm cells: window 3.05 m; the quadric's lift (ReliefDecisionAndResolvability) at the box's
+  // mean squared cell offset 2 c^2 mean_k (k + 1/2)^2: 0.020825 m over 5 x 5 cells, 0.020596 m
+  // over 9 x 9.
   const RockCriterion fine(RockCriterionOptions{}, 0.05);
   EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 1), fine.Relief(0.3, 0.6), 1e-12);
-  EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 5), midpoint_box_mean(0.05, 5) - 0.0060793, 1e-4);
-  EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 9), midpoint_box_mean(0.05, 9) - 0.0060793, 1e-4);
-  // The side maximizing r_m m / sqrt(1 + (m^2 - 1) rho), rho = 0.25: 5 at 5 cm (r_m 0.2734 m),
-  // 3 at 10 cm (0.2568 m), 1 at 20 cm (the cell's own test, r_h 0.2442 m).
+  EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 5), midpoint_box_mean(0.05, 5) - 0.020825, 1e-4);
+  EXPECT_NEAR(fine.BoxRelief(0.3, 0.6, 9), midpoint_box_mean(0.05, 9) - 0.020596, 1e-4);
+  // The side maximizing r_m m / sqrt(1 + (m^2 - 1) rho), rho = 0.25: 5 at 5 cm (r_m 0.2586 m),
+  // 3 at 10 cm (0.2425 m), 1 at 20 cm (the cell's own test, r_h 0.2322 m).
   EXPECT_EQ(fine.FootprintCells(), 5);
-  EXPECT_NEAR(fine.FootprintRelief(), 0.27338, 1e-4);
+  EXPECT_NEAR(fine.FootprintRelief(), 0.25864, 1e-4);
   const RockCriterion medium(RockCriterionOptions{}, 0.1);
   EXPECT_EQ(medium.FootprintCells(), 3);
-  EXPECT_NEAR(medium.FootprintRelief(), 0.25679, 1e-4);
+  EXPECT_NEAR(medium.FootprintRelief(), 0.24254, 1e-4);
   const RockCriterion coarse(RockCriterionOptions{}, 0.2);
   EXPECT_EQ(coarse.FootprintCells(), 1);
   EXPECT_NEAR(coarse.FootprintRelief(), coarse.ThresholdRelief(), 1e-12);

@@ -54,7 +54,7 @@ std::vector<std::uint8_t> Encode(const Msg& m) {
 }
 
 // A 4 x 4 map of 1 m cells at the origin: all known but cell (0, 3), elevation sigma 0.05 m (the
-// pose's share), relief sigma 0.05 m but 0.002 m at cell (1, 1), safe but a rock at cell (1, 1)
+// pose's share), relief sigma 0.05 m but 0.001 m at cell (1, 1), safe but a rock at cell (1, 1)
 // and one at (3, 3); its site at (0.5, 0.5).
 swf_msgs::hazard_map_t HazardMap(std::int64_t frame) {
   swf_msgs::hazard_map_t m{};
@@ -67,7 +67,7 @@ swf_msgs::hazard_map_t HazardMap(std::int64_t frame) {
   m.elevation_m[3 * 4 + 0] = NAN;
   m.sigma_m.assign(16, 0.05f);
   m.relief_sigma_m.assign(16, 0.05f);
-  m.relief_sigma_m[1 * 4 + 1] = 0.002f;
+  m.relief_sigma_m[1 * 4 + 1] = 0.001f;
   m.slope_deg.assign(16, 1.0f);
   m.roughness_m.assign(16, 0.0f);
   m.hazard_class.assign(16, swf_msgs::hazard_map_t::CLASS_SAFE);
@@ -241,10 +241,12 @@ TEST(RunJudge, JudgesHazardMapsAgainstTheTruthOfTheirGrid) {
   const HazardMapMetrics& m = s.hazard_maps[0].map;
   EXPECT_EQ(m.known_cells, 15);
   EXPECT_EQ(m.rock_cells, 2);
-  // Resolved (hazard::RockCriterion): 1 m cells, a 5 m plane window; the threshold rock (0.3 m x
-  // 0.6 m) fits in a cell's quarter and shows 0.3 (pi 0.09 / 6 - (2/3) pi 0.09 / 25) = 11.875 mm,
-  // so the threshold is resolved for a relief sigma <= 11.875 / 4.735 = 2.508 mm (0.002 m at the
-  // rock's cell, whose elevation sigma of 0.05 m would not resolve it; not the others' 0.05 m,
+  // Resolved (hazard::RockCriterion): 1 m cells, a 5 m reference quadric window (centre weights
+  // alpha + beta |x|^2, alpha = 27 / 175, beta = -1 / 35); the threshold rock (0.3 m x 0.6 m)
+  // fits in a cell's quarter and shows 0.3 pi 0.09 / 6 = 14.137 mm less its lift of the quadric
+  // (alpha V + beta (4/15 pi H R^4 + V / 2), V = 2/3 pi R^2 H) 7.859 mm = 6.279 mm, so the
+  // threshold is resolved for a relief sigma <= 6.279 / 4.735 = 1.326 mm (0.001 m at the rock's
+  // cell, whose elevation sigma of 0.05 m would not resolve it; not the others' 0.05 m,
   // although 3 sigma <= h there); the 0.5 m rock shows more.
   EXPECT_EQ(m.rocks_resolved, 1);
   EXPECT_EQ(m.rocks_detected, 1);               // the rock cell (1, 1) lies on it

@@ -7,11 +7,13 @@
 // rock-free unless a rock >= 0.04 m is within 0.25 + 0.3 = 0.55 m of its centre (its own cell and
 // the 4 neighbours at 0.5 m), and a rock is detected by a rock cell within 0.1 + 0.5 = 0.6 m.
 // Resolvability (hazard::RockCriterion): a rock of radius R <= c / 2 fits in a quarter of a cell,
-// so its relief is H (pi R^2 / (6 c^2) - (2/3) pi R^2 / W^2) with the plane window W = 7 cells =
-// 3.5 m: the threshold rock (0.08 m x 0.16 m) shows r_h = 0.98479 mm (averaged down), so the map
-// resolves the threshold where r_h >= (3.090 + 1.645) sigma: sigma <= 0.20798 mm, sigma being the
-// published relief sigma (the elevation sigma, 0.25 m everywhere here as if the pose error
-// dominated it, resolves nothing). The truth rocks (0.2 m wide) show 0.0192342 H >= r_h.
+// so its relief is pi R^2 H / (6 c^2) less its lift of the reference quadric over 7 x 7 cells
+// (3.5 m; centre weights alpha + beta |x|^2 with alpha = 11 / 147, beta = -1 / 147): (alpha V +
+// beta (4/15 pi H R^4 + V c^2 / 2) / c^2) / c^2, V = 2/3 pi R^2 H. The threshold rock (0.08 m x
+// 0.16 m) shows r_h = 1.07233 - 0.30608 = 0.76625 mm (averaged down), so the map resolves the
+// threshold where r_h >= (3.090 + 1.645) sigma: sigma <= 0.16183 mm, sigma being the published
+// relief sigma (the elevation sigma, 0.25 m everywhere here as if the pose error dominated it,
+// resolves nothing). The truth rocks (0.2 m wide) show 0.0149691 H >= r_h.
 #include "swf/hazard_eval/map_metrics.hpp"
 
 #include <gtest/gtest.h>
@@ -75,10 +77,10 @@ class MapMetricsTest : public ::testing::Test {
     At(&slope_, 0, 0) = NAN;                                    // no slope there
     const std::int8_t rock = app::HazardClassCode(hazard::HazardClass::kRock);
     const std::int8_t uncertain = app::HazardClassCode(hazard::HazardClass::kUncertain);
-    At(&relief_sigma_, 2, 2) = 0.0002f;  // A resolved (<= 0.00020798)
-    At(&classes_, 3, 2) = rock;          // 0.5 m from A: detected; A's neighbour, so no false alarm
-    At(&relief_sigma_, 12, 2) = 0.0002f;  // B resolved
-    At(&relief_sigma_, 2, 12) = 0.02f;    // C not, though 3 sigma <= h
+    At(&relief_sigma_, 2, 2) = 0.00015f;  // A resolved (<= 0.00016183)
+    At(&classes_, 3, 2) = rock;  // 0.5 m from A: detected; A's neighbour, so no false alarm
+    At(&relief_sigma_, 12, 2) = 0.00015f;  // B resolved
+    At(&relief_sigma_, 2, 12) = 0.02f;     // C not, though 3 sigma <= h
     At(&classes_, 12, 2) = uncertain;
     At(&classes_, 13, 2) = uncertain;
     At(&classes_, 14, 2) = rock;  // 1.0 m from B (> 0.6): missed; rock-free: a false alarm

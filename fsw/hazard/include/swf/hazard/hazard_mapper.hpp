@@ -26,26 +26,27 @@
 //     the datum is the median first, then the mean over the cells within the gate); the elevation
 //     sigma adds the newest pose's vertical error at the cell (SWF update vector [rho, phi], p_w =
 //     R Exp(phi) p_c + t + rho: J Sigma J^T, J = [e_z^T, -e_z^T R [p_c]x]), the relief sigma does
-//     not (the datum is common to its plane window). Landmarks: the SWF publishes its map at every
-//     update, and a landmark it keeps is the same point re-estimated, each estimate holding the
-//     information of the earlier ones: fusing every publication would count it once per update. An
-//     identified landmark (HazardLandmark::id) is held at its newest estimate (replaced, not added,
-//     when published again) and enters the cells as an overlay; when the SWF no longer publishes it
-//     (marginalized: its estimate is final), that last estimate, moved with the map's datum, is
-//     fused for good. At most max_landmarks are held (the size of one published map). Unknown cells
-//     stay unknown (NaN). Before fusing, the grid is recentred by whole cells on the frame's nadir
-//     (grid_follows_lander): cells that leave are dropped with their state, cells that enter start
-//     unknown. The cell size is chosen from altitude (pixels_per_cell working pixels per cell, a
-//     power of 2 times min_cell_m) and only ever refined: on refinement the grid is resampled
-//     (information per child = parent / 4).
+//     not (the datum is common to its reference window). Landmarks: the SWF publishes its map at
+//     every update, and a landmark it keeps is the same point re-estimated, each estimate holding
+//     the information of the earlier ones: fusing every publication would count it once per update.
+//     An identified landmark (HazardLandmark::id) is held at its newest estimate (replaced, not
+//     added, when published again) and enters the cells as an overlay; when the SWF no longer
+//     publishes it (marginalized: its estimate is final), that last estimate, moved with the map's
+//     datum, is fused for good. At most max_landmarks are held (the size of one published map).
+//     Unknown cells stay unknown (NaN). Before fusing, the grid is recentred by whole cells on the
+//     frame's nadir (grid_follows_lander): cells that leave are dropped with their state, cells
+//     that enter start unknown. The cell size is chosen from altitude (pixels_per_cell working
+//     pixels per cell, a power of 2 times min_cell_m) and only ever refined: on refinement the grid
+//     is resampled (information per child = parent / 4).
 //  4. Analysis over square windows (summed-area tables, O(1) per cell): a plane fit over the
 //     lander footprint gives slope and roughness; the metre-scale slope is the central difference
 //     of the heights local_slope_baseline_m (1 m) apart along x and y, each end the mean over a
 //     local_slope_patch_m square (the height a footpad stands on; see local_slope_patch_m for why
-//     not a plane); a plane over rock_window_radius_m gives each cell's rock height. Sigma of a
+//     not a plane); a quadric over rock_window_radius_m gives each cell's rock height. Sigma of a
 //     slope from its cells (their stereo noise, correlated with their neighbours':
 //     cell_error_autocorrelation; the footprint plane also from its fit's residuals) and the
-//     attitude covariance; sigma of the rock height from the cell's stereo sigma and the fit.
+//     attitude covariance; sigma of the rock height from the cell's stereo sigma and the fit's
+//     (the mean cell variance times the quadric's leverage at the cell).
 //     Classes: kRock when the rock height exceeds the rock criterion's decision relief
 //     (RockCriterion below); kSlope when either slope exceeds its threshold by confidence_k sigma
 //     and its sigma resolves it (sigma <= a third of the threshold; the 1 m slope only where its
@@ -79,25 +80,32 @@ enum class HazardClass : std::uint8_t { kUnknown = 0, kSafe, kUncertain, kSlope,
 // The rock criterion (docs/hazard.md, "The rock criterion"): when a cell is declared a rock, and
 // which rocks a map resolves. One statement, used by the mapper's classification and by the
 // hazard-map-vs-truth metric (swf/evaluation/hazard_score.hpp), so the two cannot disagree.
-//  - Relief. A cell's rock height is its elevation above the plane fitted over +-window_radius_m
-//    (window side W = (2 round(window_radius_m / c) + 1) c at cell size c). A rock of height H and
-//    diameter D, modelled as a half spheroid (the simulator's and Golombek's rock shape), shows the
-//    noise-free relief r(H, D, c) = (mean of its profile over a c x c cell with a corner at the
-//    rock's centre) - (its volume / W^2). The corner is the worst alignment with the grid: a rock
-//    narrower than a cell is averaged down, and the criterion says so. The second term is the
-//    rock lifting its own reference plane.
+//  - Relief. A cell's rock height is its elevation above the quadric z = a + b x + c y + d x^2 +
+//    e x y + f y^2 fitted over +-window_radius_m (window side m = 2 round(window_radius_m / c) + 1
+//    cells at cell size c), at the cell. A quadric, not a plane: crater rims and walls curve
+//    within 3 m, and their relief above a plane (a crest 0.5 s a above a plane over +-a on a
+//    crest of flank slope s, 0.19 s a above the quadric) was read as rocks (the every-2nd-frame
+//    campaign's false alarms at 5-10 m, 74-77 % of them on true slopes above 10 deg). A rock of
+//    height H and diameter D, modelled as a half spheroid (the simulator's and Golombek's rock
+//    shape), shows the noise-free relief r(H, D, c) = (mean of its profile over a c x c cell with
+//    a corner at the rock's centre) - (its lift of the quadric at that cell). The corner is the
+//    worst alignment with the grid: a rock narrower than a cell is averaged down, and the
+//    criterion says so. The lift: the quadric's value at the centre of a whole window weighs the
+//    cells by w_i = alpha + beta |x_i|^2 (by symmetry; alpha = 3.5 / m^2 at 5 cm, a plane's
+//    1 / m^2), so the rock lifts it by (alpha V + beta (4/15 pi H R^4 + V |d|^2) / c^2) / c^2 (V =
+//    2/3 pi R^2 H, R = D / 2, d the cell's centre from the rock's).
 //  - Resolution. The map resolves the threshold at sigma (the relief's 1-sigma) when a
 //    threshold rock (height h, diameter h / height_to_diameter) stands out of flat ground by the
 //    false-alarm and the detection margins together: r_h = r(h, h / height_to_diameter, c) >=
-//    (z_fa + z_d) sigma, i.e. sigma <= sigma_max(c) = r_h / (z_fa + z_d): 0.061 / 0.060 / 0.052
-//    / 0.018 m at 5 / 10 / 20 / 40 cm cells (r_h 0.29 / 0.28 / 0.24 / 0.08 m: a rock narrower
-//    than the cell is averaged down).
+//    (z_fa + z_d) sigma, i.e. sigma <= sigma_max(c) = r_h / (z_fa + z_d): 0.058 / 0.057 / 0.049
+//    / 0.015 m at 5 / 10 / 20 / 40 cm cells (r_h 0.276 / 0.268 / 0.232 / 0.073 m: a rock
+//    narrower than the cell is averaged down).
 //  - Decision. Where the threshold is resolved, kRock when relief > T(sigma) = r_h - z_d sigma.
 //    Then T >= z_fa sigma: a cell of flat ground is declared with probability <= 1 - Phi(z_fa) =
 //    1e-3 (one-sided Gaussian); a threshold rock's cell exceeds T with probability Phi(z_d) =
 //    0.95. Hazard relevance: T sits at a threshold rock's relief less z_d sigma, never at a
 //    multiple of sigma alone, so a sharp map does not declare small rocks (at sigma = 0.02 m and
-//    5 cm cells a 0.2 m rock is declared with probability 7e-4, a 0.15 m one 5e-9). Where sigma
+//    5 cm cells a 0.2 m rock is declared with probability 4e-3, a 0.15 m one 2e-7). Where sigma
 //    > sigma_max nothing is declared a rock (an exceedance is kUncertain): those are the cells
 //    whose sigma is least trustworthy in its tails (SGM mismatches at altitude).
 //  - Resolvable. A rock H >= h is resolvable at sigma when its relief clears T by z_d sigma:
@@ -111,20 +119,20 @@ enum class HazardClass : std::uint8_t { kUnknown = 0, kSafe, kUncertain, kSlope,
 //    filter: the mean relief over the m x m cells centred on the cell (m odd), against the relief
 //    r_m = r_box(h, h / height_to_diameter, c, m) that a threshold rock standing with its centre in
 //    that cell shows there (the box's centre cell with a corner at the rock's centre, the worst
-//    alignment, as r(H, D, c); less the plane lift). A threshold rock is excluded (at one-sided
-//    confidence Phi(k)) when mean + k sigma_m <= r_m; taller rocks of the model's shape show more,
-//    so they are excluded too. sigma_m: the cells' stereo relief errors are correlated (shared
-//    texture, SGM's correlated matches, frames seen at coarser resolution), modelled as
-//    equicorrelated with rho = relief_error_correlation, var = ((1 - rho) sum s_i^2 + rho (sum
-//    s_i)^2) / m^4; each cell's plane error is its window's, shared by the box's nearly identical
-//    windows, so it enters fully correlated (its mean). m maximizes the threshold rock's box SNR,
-//    r_m m / sqrt(1 + (m^2 - 1) rho): at rho = 0.25, m = 5 / 3 / 1 / 1 at 5 / 10 / 20 / 40 cm
-//    cells (r_m 0.273 / 0.257 / 0.244 / 0.084 m; sigma_m = 0.53 / 0.58 / 1 / 1 of a uniform stereo
-//    sigma). One cell's excess x moves the mean by x / m^2. Where m = 1, or where the box is not
-//    all mapped (grid edge, holes), the test is the cell's own: relief + k sigma > r_h.
+//    alignment, as r(H, D, c); less the quadric's lift at the box's mean |d|^2). A threshold rock
+//    is excluded (at one-sided confidence Phi(k)) when mean + k sigma_m <= r_m; taller rocks of the
+//    model's shape show more, so they are excluded too. sigma_m: the cells' stereo relief errors
+//    are correlated (shared texture, SGM's correlated matches, frames seen at coarser resolution),
+//    modelled as equicorrelated with rho = relief_error_correlation, var = ((1 - rho) sum s_i^2 +
+//    rho (sum s_i)^2) / m^4; each cell's quadric error is its window's, shared by the box's nearly
+//    identical windows, so it enters fully correlated (its mean). m maximizes the threshold rock's
+//    box SNR, r_m m / sqrt(1 + (m^2 - 1) rho): at rho = 0.25, m = 5 / 3 / 1 / 1 at 5 / 10 / 20 / 40
+//    cm cells (r_m 0.259 / 0.243 / 0.232 / 0.073 m; sigma_m = 0.53 / 0.58 / 1 / 1 of a uniform
+//    stereo sigma). One cell's excess x moves the mean by x / m^2. Where m = 1, or where the box is
+//    not all mapped (grid edge, holes), the test is the cell's own: relief + k sigma > r_h.
 struct RockCriterionOptions {
   double max_height_m = 0.3;          // h: the rock hazard threshold
-  double window_radius_m = 1.5;       // of the relief's reference plane
+  double window_radius_m = 1.5;       // of the relief's reference quadric
   double false_alarm_sigmas = 3.090;  // z_fa: 1 - Phi(z_fa) = 1e-3 per cell
   double detection_sigmas = 1.645;    // z_d: Phi(z_d) = 0.95
   double height_to_diameter = 0.5;    // the rock model's H / D (Golombek & Rapp 1997)
@@ -157,7 +165,8 @@ class RockCriterion {
  private:
   RockCriterionOptions options_;
   double cell_m_ = 0.0;
-  double window_m_ = 0.0;
+  double lift_alpha_ = 0.0;  // the reference quadric's centre weights, alpha + beta |x|^2 (cells)
+  double lift_beta_ = 0.0;
   double threshold_relief_m_ = 0.0;
   double resolved_sigma_m_ = 0.0;
   int footprint_cells_ = 1;
@@ -262,7 +271,7 @@ struct HazardMapperOptions {
   double site_hysteresis = 0.05;  // score units ([0, 1])
 };
 
-// The rock criterion of a mapper's configuration (its threshold and plane window).
+// The rock criterion of a mapper's configuration (its threshold and reference window).
 RockCriterionOptions RockCriterionOf(const HazardMapperOptions& options);
 
 // A landmark of the SWF (world frame) with its marginal covariance. With an id (>= 0, the SWF's
@@ -344,7 +353,7 @@ class HazardMapper {
   const float* Elevation() const { return elevation_.data(); }  // NaN = unknown
   const float* Sigma() const { return sigma_.data(); }          // NaN = unknown
   // The 1-sigma of RockHeight(): the cell's pose-free stereo sigma and the plane fit's. The rock
-  // criterion decides with it (the pose error common to the plane window cancels); NaN where no
+  // criterion decides with it (the pose error common to the quadric's window cancels); NaN where no
   // plane was fitted.
   const float* ReliefSigma() const { return relief_sigma_.data(); }
   // Frames and committed landmarks fused (a landmark still in the SWF counts when it leaves).
