@@ -127,22 +127,37 @@ Quadric FitQuadric(const std::array<double, kSatChannels>& s, double cx, double 
   constexpr double kBinomial[5][5] = {
       {1, 0, 0, 0, 0}, {1, 1, 0, 0, 0}, {1, 2, 1, 0, 0}, {1, 3, 3, 1, 0}, {1, 4, 6, 4, 1}};
   // Moments about the centre, scaled by 1/r per power (u = (x - cx) / r): binomial shifts of the
-  // grid-centred sums.
+  // grid-centred sums, each of the 15 (and 6 with z) once.
+  double power_x[5];
+  double power_y[5];
+  double power_r[5];
+  for (int k = 0; k < 5; ++k) {
+    power_x[k] = IntPow(-cx, k);
+    power_y[k] = IntPow(-cy, k);
+    power_r[k] = IntPow(static_cast<double>(r), k);
+  }
   const auto local = [&](int a, int b, const auto& channel) {
     double sum = 0.0;
     for (int p = 0; p <= a; ++p)
       for (int k = 0; k <= b; ++k)
-        sum += kBinomial[a][p] * kBinomial[b][k] * IntPow(-cx, a - p) * IntPow(-cy, b - k) *
-               s[channel[p][k]];
-    return sum / IntPow(static_cast<double>(r), a + b);
+        sum +=
+            kBinomial[a][p] * kBinomial[b][k] * power_x[a - p] * power_y[b - k] * s[channel[p][k]];
+    return sum / power_r[a + b];
   };
+  double moment[5][5] = {};
+  double moment_z[3][3] = {};
+  for (int a = 0; a <= 4; ++a)
+    for (int b = 0; a + b <= 4; ++b) {
+      moment[a][b] = local(a, b, kMoment);
+      if (a + b <= 2) moment_z[a][b] = local(a, b, kMomentZ);
+    }
   constexpr int kBasis[6][2] = {{0, 0}, {1, 0}, {0, 1}, {2, 0}, {1, 1}, {0, 2}};
   Eigen::Matrix<double, 6, 6> normal;
   Eigen::Matrix<double, 6, 1> rhs;
   for (int k = 0; k < 6; ++k) {
     for (int l = 0; l < 6; ++l)
-      normal(k, l) = local(kBasis[k][0] + kBasis[l][0], kBasis[k][1] + kBasis[l][1], kMoment);
-    rhs(k) = local(kBasis[k][0], kBasis[k][1], kMomentZ);
+      normal(k, l) = moment[kBasis[k][0] + kBasis[l][0]][kBasis[k][1] + kBasis[l][1]];
+    rhs(k) = moment_z[kBasis[k][0]][kBasis[k][1]];
   }
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(normal);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9 * s[0])) return q;
