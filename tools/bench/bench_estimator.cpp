@@ -227,7 +227,8 @@ BENCHMARK(BM_Fig13Gates_K10)->Arg(0)->Arg(1)->Apply(Fig13Timing);
 
 // The covariances the integrity checks need each frame (newest pose, every landmark and its
 // correlation with the newest pose), at the Fig. 13 load. Arg 0: ComputeCovariances(); 1:
-// ComputeNewestCovariance() alone (what the navigation output needs).
+// ComputeNewestCovariance() alone (what the navigation output needs). Both after Update(), as
+// the pipeline calls them: from the solve's last factor, with no factorization of their own.
 // NOLINTNEXTLINE(readability-identifier-naming)
 void BM_Fig13Covariances_K10(benchmark::State& state) {
   const SyntheticScene& scene = Fig13Scene();

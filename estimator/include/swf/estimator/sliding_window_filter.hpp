@@ -388,16 +388,20 @@ class SlidingWindowFilter {
   // Marginalizes (per mode) and runs robust Gauss-Newton over the window.
   core::Status Update();
 
-  // Marginal covariances of every window pose block and active landmark at the current
-  // estimate (inverse of the full information matrix, by the Schur complement). O(n^3) in the
-  // reduced dimension: call it at the output rate, not inside the estimation loop.
+  // Marginal covariances of every window pose block and active landmark (inverse of the full
+  // information matrix, by the Schur complement). After Update(): at the linearization point of
+  // its last Gauss-Newton iteration, from that iteration's factor (the final estimate is one
+  // converged step further; as an iterated EKF reports it). When the window or its measurements
+  // changed since, at the current estimate, factorized here. O(n^3) in the reduced dimension:
+  // call it at the output rate, not inside the estimation loop.
   core::Status ComputeCovariances();
 
   // Only the newest state's covariance (NewestStateCovariance, NewestPoseCovariance) and its
-  // correlation with the window: the factorization at the current estimate, O(n^3 / 3), and
-  // kStateDim columns of its inverse, O(n^2) each. The other poses' blocks and every landmark's
-  // marginal stay invalid (the prediction gate then skips, counted as unchecked) until
-  // ComputeCovariances(), which runs this first and gives the same bits for these blocks.
+  // correlation with the window: kStateDim columns of the inverse, O(n^2) each, from the factor
+  // above (after Update() no factorization; else one at the current estimate, O(n^3 / 3)). The
+  // other poses' blocks and every landmark's marginal stay invalid (the prediction gate then
+  // skips, counted as unchecked) until ComputeCovariances(), which runs this first and gives the
+  // same bits for these blocks.
   core::Status ComputeNewestCovariance();
 
   // ---- results -----------------------------------------------------------------------------
@@ -690,6 +694,9 @@ class SlidingWindowFilter {
   MotionType motion_fallback_{};
   StateMat motion_fallback_sqrt_info_ = StateMat::Zero();
   bool covariances_current_ = false;  // ComputeCovariances() ran since the last Update()
+  // dense_ holds the factor of the reduced system of the current window and measurements: the
+  // last Gauss-Newton iteration's, or ComputeNewestCovariance()'s when none was current.
+  bool factor_current_ = false;
   bool predicted_cov_valid_ = false;  // predicted_pose_cov_ holds the newest pose's prediction
   StateMat predicted_pose_cov_ = StateMat::Zero();
   StateMat prediction_transition_ = StateMat::Zero();  // Phi: d_newest = Phi d_prev + noise

@@ -45,6 +45,7 @@ void SlidingWindowFilter<Model, K, N, M, P>::Reset() {
   summary_ = SwfSummary{};
   pending_ = SwfSummary{};
   covariances_current_ = false;
+  factor_current_ = false;
   predicted_cov_valid_ = false;
   has_motion_fallback_ = false;
   retired_.clear();
@@ -69,6 +70,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::AddObservation(
     std::int64_t landmark_id, const Vec3<S>& z, const Mat3<S>& sqrt_information) {
   if (num_poses_ == 0) return core::Status::kNotConfigured;
   if (!z.allFinite() || !sqrt_information.allFinite()) return core::Status::kInvalidArgument;
+  factor_current_ = false;
   PoseSlot& pose = Newest();
   if (pose.obs.full()) {
     fault_bits_ |= kFaultMeasurementCapacity;
@@ -142,6 +144,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ReplaceNewestObservation(
   for (Observation& o : Newest().obs) {
     if (o.landmark != slot) continue;
     o.z = z;
+    factor_current_ = false;
     return core::Status::kOk;
   }
   return core::Status::kEmpty;
@@ -169,6 +172,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::Update() {
   if (!configured_) return core::Status::kNotConfigured;
   summary_ = SwfSummary{};
   retired_.clear();
+  factor_current_ = false;
   RefreshMotions();
   const MotionGateResult motion_gate = GateNewestMotion();
   ApplyPredictionGate();
@@ -263,6 +267,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::PushPose(const PoseType& es
   if (num_poses_ >= limit) return core::Status::kFull;
   if (num_poses_ == 0) head_ = 0;
   ++num_poses_;
+  factor_current_ = false;
   predicted_cov_valid_ = u != nullptr && num_poses_ >= 2 && covariances_current_ &&
                          PredictPoseCovariance(Slot(num_poses_ - 2).pose, estimate, *u, *sqrt_info,
                                                &predicted_pose_cov_, &prediction_transition_);

@@ -17,12 +17,21 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::ComputeNewestCovariance() {
   if (num_poses_ == 0) return core::Status::kNotConfigured;
   covariances_current_ = false;
   ForEachUsedSlot([&](int i) { landmarks_[i].covariance_valid = false; });
-  EvaluateMeasurements(true);
-  const core::Status status = BuildAndFactor();
-  if (status != core::Status::kOk) return status;
+  // The covariance at the last Gauss-Newton iteration's linearization point, from that
+  // iteration's factor: factorizing again at the final estimate, one (converged, small) step
+  // further, cost as much as the iteration itself and moved the covariance by second-order
+  // terms only (an iterated EKF reports its covariance at its last linearization point too).
+  // Only when the window or its measurements changed since is the system built and factorized
+  // at the current estimate.
+  if (!factor_current_) {
+    EvaluateMeasurements(true);
+    const core::Status status = BuildAndFactor();
+    if (status != core::Status::kOk) return status;
+    factor_current_ = true;
+  }
   // The newest state's columns of S^-1 (its rows of the pose block and its correlation with
-  // the prior landmarks) from the factor at the final estimate: a forward and a backward
-  // O(n^2) solve per kCovarianceWidth columns, nothing else of the inverse.
+  // the prior landmarks): a forward and a backward O(n^2) solve per kCovarianceWidth columns,
+  // nothing else of the inverse.
   const int npd = kStateDim * num_poses_;
   const int newest0 = npd - kStateDim;
   const int nq = static_cast<int>(prior_landmarks_.size());
@@ -366,6 +375,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::Solve() {
   summary_.num_measurements = total;
   summary_.state_dimension = kStateDim * num_poses_ + 3 * num_landmarks_;
   summary_.termination = SwfTermination::kNoSolve;
+  factor_current_ = false;
   if (num_poses_ == 0) return core::Status::kOk;
   core::Status status = core::Status::kOk;
   SwfTermination termination = SwfTermination::kMaxIterations;
@@ -442,6 +452,8 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::Solve() {
     }
   }
   summary_.termination = termination;
+  // The last iteration's factor (not overwritten by the solve) is the covariances' (above).
+  factor_current_ = dense_.IsFactorized();
   if (status == core::Status::kOk && !summary_.Converged()) {
     fault_bits_ |= kFaultNotConverged;
     status = core::Status::kNotConverged;
