@@ -638,9 +638,13 @@ class SlidingWindowFilter {
   core::IdMap<N> ids_;  // landmark id -> slot
   int num_landmarks_ = 0;
 
-  // Prior (full symmetric, column-major, leading dimension kMaxPriorDim) over
-  // [oldest pose | prior landmarks], its right-hand side and linearization point.
-  S prior_[kMaxPriorDim * kMaxPriorDim] = {};
+  // Prior (full symmetric, column-major, leading dimension kPriorLd) over
+  // [oldest pose | prior landmarks], its right-hand side and linearization point. It lives at
+  // row and column kStateDim of prior_storage_: the rows and columns before it are where
+  // MarginalizeOldestPose puts the next pose, so that its local system is the prior itself.
+  static constexpr int kPriorLd = kMaxLocalDim;
+  S prior_storage_[kPriorLd * kPriorLd] = {};
+  S* const prior_ = prior_storage_ + kStateDim * kPriorLd + kStateDim;
   S prior_g_[kMaxPriorDim] = {};
   S prior_delta_[kMaxPriorDim] = {};
   S prior_grad_[kMaxPriorDim] = {};
@@ -662,7 +666,6 @@ class SlidingWindowFilter {
   // Workspaces.
   DenseCholesky<S, kMaxDense> dense_;
   S rhs_[kMaxDense] = {};
-  S local_[kMaxLocalDim * kMaxLocalDim] = {};
   S local_b_[kMaxLocalDim] = {};
   bool local_chunk_dropped_[kMaxLocalDim / 3] = {};  // EliminateFirstPose's (none but p0's)
   // x_: Lambda_ro Lambda_oo^-1 of the pose or of a batch of prior landmarks (schur.hpp).

@@ -61,7 +61,7 @@ core::Status SlidingWindowFilter<Model, K, N, M, P>::AddFirstPose(const PoseType
   const core::Status status = PushPose(estimate, nullptr, nullptr);
   if (status != core::Status::kOk || Slot(0).fixed) return status;
   for (int c = 0; c < kStateDim; ++c)
-    for (int r = 0; r < kStateDim; ++r) prior_[c * kMaxPriorDim + r] = information(r, c);
+    for (int r = 0; r < kStateDim; ++r) prior_[c * kPriorLd + r] = information(r, c);
   return core::Status::kOk;
 }
 

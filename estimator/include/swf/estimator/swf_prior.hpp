@@ -22,15 +22,15 @@ void SlidingWindowFilter<Model, K, N, M, P>::InitializePrior() {
   Slot(0).fixed = fixed;
   if (!fixed) {
     for (int i = 0; i < 3; ++i) {
-      prior_[i * kMaxPriorDim + i] =
+      prior_[i * kPriorLd + i] =
           S(1.0 / (options_.first_pose_sigma_m * options_.first_pose_sigma_m));
-      prior_[(i + 3) * kMaxPriorDim + i + 3] =
+      prior_[(i + 3) * kPriorLd + i + 3] =
           S(1.0 / (options_.first_pose_sigma_rad * options_.first_pose_sigma_rad));
     }
     if constexpr (kStateDim > 6) {
       const Eigen::Matrix<S, kStateDim - 6, 1> sigma = model_.FirstStateSigmas();
       for (int i = 6; i < kStateDim; ++i)
-        prior_[i * kMaxPriorDim + i] = S(1) / (sigma[i - 6] * sigma[i - 6]);
+        prior_[i * kPriorLd + i] = S(1) / (sigma[i - 6] * sigma[i - 6]);
     }
   }
 }
@@ -39,7 +39,7 @@ template <typename Model, int K, int N, int M, int P>
 void SlidingWindowFilter<Model, K, N, M, P>::ClearPosePrior() {
   prior_dim_ = kStateDim;
   for (int c = 0; c < kStateDim; ++c)
-    for (int r = 0; r < kStateDim; ++r) prior_[c * kMaxPriorDim + r] = S(0);
+    for (int r = 0; r < kStateDim; ++r) prior_[c * kPriorLd + r] = S(0);
   for (int i = 0; i < kStateDim; ++i) prior_g_[i] = S(0);
 }
 
@@ -52,7 +52,7 @@ void SlidingWindowFilter<Model, K, N, M, P>::PriorGradient() {
   for (int r = 0; r < prior_dim_; ++r) prior_grad_[r] = -prior_g_[r];
   for (int c = 0; c < prior_dim_; ++c) {
     const S dc = prior_delta_[c];
-    const S* column = prior_ + c * kMaxPriorDim;
+    const S* column = prior_ + c * kPriorLd;
     for (int r = 0; r < prior_dim_; ++r) prior_grad_[r] += column[r] * dc;
   }
 }
@@ -73,19 +73,19 @@ void SlidingWindowFilter<Model, K, N, M, P>::AddPrior(int lm0) {
   const int nq = static_cast<int>(prior_landmarks_.size());
   PriorGradient();
   const StateMat& jp = prior_pose_jacobian_;
-  const StateMat pi_pp = Blk<kStateDim, kStateDim>(prior_, kMaxPriorDim, 0, 0);
+  const StateMat pi_pp = Blk<kStateDim, kStateDim>(prior_, kPriorLd, 0, 0);
   dense_.AddBlock(0, 0, jp.transpose() * pi_pp * jp);
   Blk<kStateDim, 1>(rhs_, kMaxDense, 0, 0) -=
       jp.transpose() * Blk<kStateDim, 1>(prior_grad_, kMaxPriorDim, 0, 0);
   for (int q = 0; q < nq; ++q) {
     const Eigen::Matrix<S, 3, kStateDim> pi_qp =
-        Blk<3, kStateDim>(prior_, kMaxPriorDim, kStateDim + 3 * q, 0);
+        Blk<3, kStateDim>(prior_, kPriorLd, kStateDim + 3 * q, 0);
     dense_.AddBlock(lm0 + 3 * q, 0, pi_qp * jp);
     Blk<3, 1>(rhs_, kMaxDense, lm0 + 3 * q, 0) -=
         Blk<3, 1>(prior_grad_, kMaxPriorDim, kStateDim + 3 * q, 0);
   }
   // Landmark-landmark block of Pi, copied as a whole (it is dense: Fig. 8).
-  dense_.AddSymmetric(lm0, prior_ + kStateDim * kMaxPriorDim + kStateDim, kMaxPriorDim, 3 * nq);
+  dense_.AddSymmetric(lm0, prior_ + kStateDim * kPriorLd + kStateDim, kPriorLd, 3 * nq);
 }
 
 // Removes the oldest pose by the Schur complement (eqs. 8-10), or by its block diagonal only
@@ -106,31 +106,36 @@ void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
     // A new prior variable enters with zero information about itself until the Schur below.
     GrowPrior();
   }
+  // The local system is the prior's own storage (prior_storage_, leading dimension kPriorLd)
+  // from its first row and column: [p1 | p0 | landmarks], the prior [p0 | landmarks] in place
+  // behind kStateDim rows and columns kept for p1. So the prior is not copied into a separate
+  // system and back (two ~2 MB copies with an inertial window); p1 is moved to p0's place after
+  // the elimination instead, O(dim) columns of kStateDim. Each element sees the operations it saw
+  // in a separate local system (the Schur step is element by element), so the same bits.
   const int nq = static_cast<int>(prior_landmarks_.size());
-  const int dim = 2 * kStateDim + 3 * nq;  // [p0 | p1 | landmarks]
-  for (int c = 0; c < dim; ++c)
-    for (int r = 0; r < dim; ++r) local_[c * kMaxLocalDim + r] = S(0);
+  const int dim = 2 * kStateDim + 3 * nq;
+  constexpr int kP1 = 0;          // p1's offset in the local system
+  constexpr int kP0 = kStateDim;  // p0's: the prior's pose
+  S* const local = prior_storage_;
+  for (int c = 0; c < kStateDim; ++c)
+    for (int r = 0; r < dim; ++r) local[c * kPriorLd + r] = S(0);
+  for (int c = kStateDim; c < dim; ++c)
+    for (int r = 0; r < kStateDim; ++r) local[c * kPriorLd + r] = S(0);
   for (int r = 0; r < dim; ++r) local_b_[r] = S(0);
-  auto local_index = [](int prior_index) {
-    return prior_index < kStateDim ? prior_index : prior_index + kStateDim;
-  };
   // Prior at the current estimate: Hessian J^T Pi J, right-hand side -J^T (Pi Delta - g).
+  // J = blockdiag(prior_pose_jacobian_, I): scale the pose rows/columns of Pi (in place).
   PriorGradient();
-  // J = blockdiag(prior_pose_jacobian_, I): scale the pose rows/columns of Pi.
-  for (int c = 0; c < prior_dim_; ++c)
-    for (int r = 0; r < prior_dim_; ++r)
-      local_[local_index(c) * kMaxLocalDim + local_index(r)] = prior_[c * kMaxPriorDim + r];
   {
     const StateMat& jp = prior_pose_jacobian_;
-    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, 0) =
-        jp.transpose() * Blk<kStateDim, kStateDim>(prior_, kMaxPriorDim, 0, 0) * jp;
+    Blk<kStateDim, kStateDim>(local, kPriorLd, kP0, kP0) =
+        jp.transpose() * Blk<kStateDim, kStateDim>(prior_, kPriorLd, 0, 0) * jp;
     for (int q = 0; q < nq; ++q) {
       const Eigen::Matrix<S, 3, kStateDim> pi_qp =
-          Blk<3, kStateDim>(prior_, kMaxPriorDim, kStateDim + 3 * q, 0);
-      Blk<3, kStateDim>(local_, kMaxLocalDim, 2 * kStateDim + 3 * q, 0) = pi_qp * jp;
-      Blk<kStateDim, 3>(local_, kMaxLocalDim, 0, 2 * kStateDim + 3 * q) = (pi_qp * jp).transpose();
+          Blk<3, kStateDim>(prior_, kPriorLd, kStateDim + 3 * q, 0);
+      Blk<3, kStateDim>(local, kPriorLd, 2 * kStateDim + 3 * q, kP0) = pi_qp * jp;
+      Blk<kStateDim, 3>(local, kPriorLd, kP0, 2 * kStateDim + 3 * q) = (pi_qp * jp).transpose();
     }
-    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, 0, 0) =
+    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, kP0, 0) =
         -(jp.transpose() * Blk<kStateDim, 1>(prior_grad_, kMaxPriorDim, 0, 0));
     for (int r = kStateDim; r < prior_dim_; ++r) local_b_[r + kStateDim] = -prior_grad_[r];
   }
@@ -139,12 +144,12 @@ void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
     StateMat a;
     StateMat b;
     const StateVec r = WhitenedProcessFactor(1, &a, &b);
-    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, 0) += a.transpose() * a;
-    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, kStateDim) += b.transpose() * b;
-    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, 0) += b.transpose() * a;
-    Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, 0, kStateDim) += a.transpose() * b;
-    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, 0, 0) -= a.transpose() * r;
-    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, kStateDim, 0) -= b.transpose() * r;
+    Blk<kStateDim, kStateDim>(local, kPriorLd, kP0, kP0) += a.transpose() * a;
+    Blk<kStateDim, kStateDim>(local, kPriorLd, kP1, kP1) += b.transpose() * b;
+    Blk<kStateDim, kStateDim>(local, kPriorLd, kP1, kP0) += b.transpose() * a;
+    Blk<kStateDim, kStateDim>(local, kPriorLd, kP0, kP1) += a.transpose() * b;
+    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, kP0, 0) -= a.transpose() * r;
+    Blk<kStateDim, 1>(local_b_, kMaxLocalDim, kP1, 0) -= b.transpose() * r;
   }
   // p0's measurements, with the weights of the last solve.
   for (const Observation& o : p0.obs) {
@@ -152,23 +157,31 @@ void SlidingWindowFilter<Model, K, N, M, P>::MarginalizeOldestPose() {
     const int k = 2 * kStateDim + 3 * landmarks_[o.landmark].prior_index;
     const S norm = o.r.norm();
     const S w = norm <= tau_ ? S(1) : tau_ / norm;
-    Blk<6, 6>(local_, kMaxLocalDim, 0, 0) += w * o.jp.transpose() * o.jp;
-    Blk<3, 3>(local_, kMaxLocalDim, k, k) += w * o.jl.transpose() * o.jl;
-    Blk<3, 6>(local_, kMaxLocalDim, k, 0) += w * o.jl.transpose() * o.jp;
-    Blk<6, 3>(local_, kMaxLocalDim, 0, k) += w * o.jp.transpose() * o.jl;
-    Blk<6, 1>(local_b_, kMaxLocalDim, 0, 0) += w * o.jp.transpose() * o.r;
+    Blk<6, 6>(local, kPriorLd, kP0, kP0) += w * o.jp.transpose() * o.jp;
+    Blk<3, 3>(local, kPriorLd, k, k) += w * o.jl.transpose() * o.jl;
+    Blk<3, 6>(local, kPriorLd, k, kP0) += w * o.jl.transpose() * o.jp;
+    Blk<6, 3>(local, kPriorLd, kP0, k) += w * o.jp.transpose() * o.jl;
+    Blk<6, 1>(local_b_, kMaxLocalDim, kP0, 0) += w * o.jp.transpose() * o.r;
     Blk<3, 1>(local_b_, kMaxLocalDim, k, 0) += w * o.jl.transpose() * o.r;
   }
   // Eliminate p0 (or condition on it when it is fixed).
   if (!p0.fixed) {
     if (!EliminateFirstPose(dim)) fault_bits_ |= kFaultNotPositiveDefinite;
   }
-  // The new prior is the [p1 | landmarks] part, linearized at the current estimate.
+  // The new prior is [p1 | landmarks], linearized at the current estimate: p1's rows and
+  // columns move to p0's place, which is the prior's first.
+  for (int c = 0; c < kStateDim; ++c) {
+    for (int r = 0; r < kStateDim; ++r)
+      local[(kP0 + c) * kPriorLd + kP0 + r] = local[(kP1 + c) * kPriorLd + kP1 + r];
+    for (int r = 2 * kStateDim; r < dim; ++r)
+      local[(kP0 + c) * kPriorLd + r] = local[(kP1 + c) * kPriorLd + r];
+  }
+  for (int c = 2 * kStateDim; c < dim; ++c)
+    for (int r = 0; r < kStateDim; ++r)
+      local[c * kPriorLd + kP0 + r] = local[c * kPriorLd + kP1 + r];
   prior_dim_ = dim - kStateDim;
-  for (int c = 0; c < prior_dim_; ++c)
-    for (int r = 0; r < prior_dim_; ++r)
-      prior_[c * kMaxPriorDim + r] = local_[(c + kStateDim) * kMaxLocalDim + r + kStateDim];
-  for (int r = 0; r < prior_dim_; ++r) prior_g_[r] = local_b_[r + kStateDim];
+  for (int r = 0; r < kStateDim; ++r) prior_g_[r] = local_b_[kP1 + r];
+  for (int r = kStateDim; r < prior_dim_; ++r) prior_g_[r] = local_b_[r + kStateDim];
   prior_pose_lin_ = p1.pose;
   for (int q = 0; q < nq; ++q) prior_landmark_lin_[q] = landmarks_[prior_landmarks_[q]].params;
   // Drop p0.
@@ -228,14 +241,14 @@ void SlidingWindowFilter<Model, K, N, M, P>::GrowPrior() {
   const int d = prior_dim_;
   for (int c = 0; c < d + 3; ++c)
     for (int r = (c < d ? d : 0); r < d + 3; ++r) {
-      prior_[c * kMaxPriorDim + r] = S(0);
-      prior_[r * kMaxPriorDim + c] = S(0);
+      prior_[c * kPriorLd + r] = S(0);
+      prior_[r * kPriorLd + c] = S(0);
     }
   for (int r = d; r < d + 3; ++r) prior_g_[r] = S(0);
   prior_dim_ = d + 3;
 }
 
-// Schur complement of the first kStateDim variables (p0) of the local system onto the rest
+// Schur complement of p0 (the local system's second kStateDim variables) onto the rest
 // (eq. 9); in VSDF mode (eq. 12) only its blocks within p1 and within each landmark, or with
 // vsdf_scalar_diagonal only its scalar diagonal. False when p0's block is not positive definite
 // (nothing changed), or when the scalar diagonal left the new prior indefinite (see below).
@@ -243,15 +256,16 @@ template <typename Model, int K, int N, int M, int P>
 bool SlidingWindowFilter<Model, K, N, M, P>::EliminateFirstPose(int dim) {
   if (options_.mode != SwfMode::kVsdf) {
     for (int c = 0; c < dim / 3; ++c) local_chunk_dropped_[c] = false;
-    const int p0 = 0;
-    return EliminateVariablesExact<kStateDim>(local_, kMaxLocalDim, local_b_, dim, &p0, 1,
+    const int p0 = kStateDim;
+    return EliminateVariablesExact<kStateDim>(prior_storage_, kPriorLd, local_b_, dim, &p0, 1,
                                               local_chunk_dropped_, x_, kXRows);
   }
-  // Chunks of p1 are one variable; every later chunk is a landmark of its own.
+  // Chunks of p1 (the first kStateDim / 3) are one variable; every chunk after p0's is a
+  // landmark of its own.
   const auto variable = [](int chunk) { return chunk < 2 * kStateDim / 3 ? 0 : chunk; };
   const bool scalar = options_.vsdf_scalar_diagonal;
   const bool eliminated = EliminateVariable<kStateDim>(
-      local_, kMaxLocalDim, local_b_, dim, 0, x_, kXRows, [&](int r, int c) {
+      prior_storage_, kPriorLd, local_b_, dim, kStateDim, x_, kXRows, [&](int r, int c) {
         if (scalar) return r == c ? SchurFill::kDiagonal : SchurFill::kNone;
         return variable(r) == variable(c) ? SchurFill::kBlock : SchurFill::kNone;
       });
@@ -279,10 +293,10 @@ bool PositiveSemidefinite(const Eigen::Matrix<S, D, D>& a) {
 template <typename Model, int K, int N, int M, int P>
 bool SlidingWindowFilter<Model, K, N, M, P>::NewPriorBlocksPositiveSemidefinite(int dim) {
   if (!PositiveSemidefinite<S, kStateDim>(
-          Blk<kStateDim, kStateDim>(local_, kMaxLocalDim, kStateDim, kStateDim)))
+          Blk<kStateDim, kStateDim>(prior_storage_, kPriorLd, 0, 0)))
     return false;
   for (int o = 2 * kStateDim; o < dim; o += 3) {
-    if (!PositiveSemidefinite<S, 3>(Blk<3, 3>(local_, kMaxLocalDim, o, o))) return false;
+    if (!PositiveSemidefinite<S, 3>(Blk<3, 3>(prior_storage_, kPriorLd, o, o))) return false;
   }
   return true;
 }
@@ -346,11 +360,11 @@ bool SlidingWindowFilter<Model, K, N, M, P>::EliminatePriorLandmarks() {
     const int count = std::min(kEliminationBatch, leaving - b);
     int offsets[kEliminationBatch];
     for (int i = 0; i < count; ++i) offsets[i] = kStateDim + 3 * leaving_prior_[b + i];
-    ok = EliminateVariablesExact<3>(prior_, kMaxPriorDim, prior_g_, prior_dim_, offsets, count,
+    ok = EliminateVariablesExact<3>(prior_, kPriorLd, prior_g_, prior_dim_, offsets, count,
                                     prior_chunk_dropped_, x_, kXRows) &&
          ok;
   }
-  prior_dim_ = DropChunks(prior_, kMaxPriorDim, prior_g_, prior_dim_, prior_chunk_dropped_);
+  prior_dim_ = DropChunks(prior_, kPriorLd, prior_g_, prior_dim_, prior_chunk_dropped_);
   int kept = 0;
   for (int q = 0; q < static_cast<int>(prior_landmarks_.size()); ++q) {
     LandmarkSlot& l = landmarks_[prior_landmarks_[q]];
