@@ -72,29 +72,42 @@ struct DescentResult {
   std::size_t landmarks = 0;
 };
 
+// The rendered world of a descent: terrain (102.4 m square, covering the 44 m footprint at 100 m),
+// orbital-imagery appearance, a renderer of the EDL rig at `width_px` (4:3) and the trajectory.
+struct RenderedDescent {
+  std::unique_ptr<sim::Terrain> terrain = std::make_unique<sim::Terrain>();
+  std::unique_ptr<sim::Appearance> appearance = std::make_unique<sim::Appearance>();
+  std::unique_ptr<sim::Renderer> renderer = std::make_unique<sim::Renderer>();
+  std::unique_ptr<sim::Trajectory> trajectory = std::make_unique<sim::Trajectory>();
+  sim::RigOptions rig = sim::EdlRig();
+
+  void Build(int width_px, sim::TerrainPreset preset, const sim::TrajectoryOptions& descent) {
+    rig.width_px = width_px;
+    rig.height_px = width_px * 3 / 4;
+    sim::TerrainOptions terrain_options = sim::TerrainPresetOptions(preset, 3);
+    terrain_options.size = 1024;
+    ASSERT_EQ(terrain->Configure(terrain_options), core::Status::kOk);
+    ASSERT_EQ(appearance->Configure(*terrain, sim::DefaultImagery(SharedDir())), core::Status::kOk);
+    sim::RenderOptions render_options;
+    render_options.rig = rig;
+    render_options.seed = 7;
+    ASSERT_EQ(renderer->Configure(render_options), core::Status::kOk);
+    ASSERT_EQ(trajectory->Configure(descent), core::Status::kOk);
+  }
+};
+
 // Runs the front end over the rendered descent. with_prediction: the estimator's role is played
 // by the truth with estimator-sized errors (pose 0.05 deg / 2 cm, landmarks 0.5 % of range), so
 // the patches are warped by the plane homography (paper 4.1.2); otherwise pyramidal LK from the
 // previous frame.
 void RunDescent(int frame_step, int max_frames, bool with_prediction, DescentResult* result) {
-  sim::RigOptions rig = sim::EdlRig();
-  rig.width_px = 320;
-  rig.height_px = 240;
-  sim::TerrainOptions terrain_options =
-      sim::TerrainPresetOptions(sim::TerrainPreset::kCraterField, 3);
-  terrain_options.size = 1024;  // 102.4 m square: covers the 44 m footprint at 100 m
-  auto terrain = std::make_unique<sim::Terrain>();
-  ASSERT_EQ(terrain->Configure(terrain_options), core::Status::kOk);
-  auto appearance = std::make_unique<sim::Appearance>();
-  ASSERT_EQ(appearance->Configure(*terrain, sim::DefaultImagery(SharedDir())), core::Status::kOk);
-  sim::RenderOptions render_options;
-  render_options.rig = rig;
-  render_options.seed = 7;
-  sim::Renderer renderer;
-  ASSERT_EQ(renderer.Configure(render_options), core::Status::kOk);
-  sim::Trajectory trajectory;
-  sim::TrajectoryOptions descent = sim::DescentTrajectory(15.0);
-  ASSERT_EQ(trajectory.Configure(descent), core::Status::kOk);
+  RenderedDescent scene;
+  ASSERT_NO_FATAL_FAILURE(
+      scene.Build(320, sim::TerrainPreset::kCraterField, sim::DescentTrajectory(15.0)));
+  const sim::Terrain* terrain = scene.terrain.get();
+  const sim::Appearance* appearance = scene.appearance.get();
+  const sim::Renderer& renderer = *scene.renderer;
+  const sim::Trajectory& trajectory = *scene.trajectory;
   const estimator::StereoCamera<double>& camera = renderer.Camera();
 
   FrontendOptions options;
@@ -281,27 +294,18 @@ TEST(FrontendSimTest, DescentWithoutPredictionTracksSubpixelPerFrame) {
 // alone 0.45 % at m = 1.3, and 5-9 % over the whole descent, where the filter's prediction is the
 // start: tracker.hpp, docs/imu.md).
 TEST(FrontendSimTest, WarpedTrackingDoesNotFollowItsStartOverThePlains) {
-  sim::RigOptions rig = sim::EdlRig();
-  rig.width_px = 512;
-  rig.height_px = 384;
-  sim::TerrainOptions terrain_options =
-      sim::TerrainPresetOptions(sim::TerrainPreset::kSmoothPlains, 3);
-  terrain_options.size = 1024;
-  auto terrain = std::make_unique<sim::Terrain>();
-  ASSERT_EQ(terrain->Configure(terrain_options), core::Status::kOk);
-  auto appearance = std::make_unique<sim::Appearance>();
-  ASSERT_EQ(appearance->Configure(*terrain, sim::DefaultImagery(SharedDir())), core::Status::kOk);
-  sim::RenderOptions render_options;
-  render_options.rig = rig;
-  render_options.seed = 7;
-  sim::Renderer renderer;
-  ASSERT_EQ(renderer.Configure(render_options), core::Status::kOk);
-  sim::Trajectory trajectory;
-  ASSERT_EQ(trajectory.Configure(sim::DescentTrajectory(15.0, 100.0, 10.0)), core::Status::kOk);
+  RenderedDescent scene;
+  ASSERT_NO_FATAL_FAILURE(scene.Build(512, sim::TerrainPreset::kSmoothPlains,
+                                      sim::DescentTrajectory(15.0, 100.0, 10.0)));
+  const sim::Terrain& terrain = *scene.terrain;
+  const sim::Appearance& appearance = *scene.appearance;
+  const sim::Renderer& renderer = *scene.renderer;
+  const sim::Trajectory& trajectory = *scene.trajectory;
+  const sim::RigOptions& rig = scene.rig;
   const estimator::StereoCamera<double>& camera = renderer.Camera();
   const estimator::Pose<double>& ref_pose = trajectory.WorldTCamera(0);
   sim::StereoImages ref;
-  ASSERT_EQ(renderer.Render(*terrain, *appearance, ref_pose, 0, &ref), core::Status::kOk);
+  ASSERT_EQ(renderer.Render(terrain, appearance, ref_pose, 0, &ref), core::Status::kOk);
   const GrayView ref_view{ref.left.data(), ref.width, ref.height, ref.width};
   HarrisDetector harris;
   ASSERT_EQ(harris.Configure(HarrisOptions{}), core::Status::kOk);
@@ -312,7 +316,7 @@ TEST(FrontendSimTest, WarpedTrackingDoesNotFollowItsStartOverThePlains) {
   for (const int frame : {35, 55}) {
     const estimator::Pose<double>& pose = trajectory.WorldTCamera(frame);
     sim::StereoImages cur;
-    ASSERT_EQ(renderer.Render(*terrain, *appearance, pose, static_cast<std::uint64_t>(frame), &cur),
+    ASSERT_EQ(renderer.Render(terrain, appearance, pose, static_cast<std::uint64_t>(frame), &cur),
               core::Status::kOk);
     const GrayView cur_view{cur.left.data(), cur.width, cur.height, cur.width};
     std::vector<double> kept;
