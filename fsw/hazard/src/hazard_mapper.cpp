@@ -276,6 +276,118 @@ double SpheroidQuadrantIntegral(double radius_m, double x_m, double y_m) {
   return sum * step / 3.0;
 }
 
+// The kSatChannels sums over the cells of the (2r + 1)^2 window around (ci, cj), clipped to the
+// n x n grid.
+std::array<double, kSatChannels> SatWindow(const double* sat, int n, int ci, int cj, int r) {
+  std::array<double, kSatChannels> s{};
+  const int n1 = n + 1;
+  const int i0 = std::max(0, ci - r);
+  const int j0 = std::max(0, cj - r);
+  const int i1 = std::min(n, ci + r + 1);
+  const int j1 = std::min(n, cj + r + 1);
+  const double* a = sat + (static_cast<std::size_t>(j1) * n1 + i1) * kSatChannels;
+  const double* b = sat + (static_cast<std::size_t>(j0) * n1 + i1) * kSatChannels;
+  const double* c = sat + (static_cast<std::size_t>(j1) * n1 + i0) * kSatChannels;
+  const double* d = sat + (static_cast<std::size_t>(j0) * n1 + i0) * kSatChannels;
+  for (int k = 0; k < kSatChannels; ++k) s[k] = a[k] - b[k] - c[k] + d[k];
+  return s;
+}
+
+// Summed-area tables of the plane and quadric fits' moments, about the grid's centre (where the
+// fourth powers stay small enough for the tables' differences) and the elevation z_ref.
+void FillFitMoments(int n, const float* elevation, const float* sigma_rel, double z_ref,
+                    double* sat) {
+  const double grid_centre = 0.5 * (n - 1);
+  FillSummedAreaTable<kSatChannels>(n, sat, [&](std::size_t c, int i, int j, double* v) {
+    if (std::isnan(elevation[c])) return false;
+    const double x = i - grid_centre;
+    const double y = j - grid_centre;
+    const double z = elevation[c] - z_ref;
+    const double s = sigma_rel[c];
+    const double xx = x * x;
+    const double yy = y * y;
+    const double moments[kSatChannels] = {
+        1.0,        x,       y,          z,       xx,     x * y,     yy,     x * z,
+        y * z,      z * z,   s * s,      xx * x,  xx * y, x * yy,    yy * y, xx * xx,
+        xx * x * y, xx * yy, x * yy * y, yy * yy, xx * z, x * y * z, yy * z};
+    std::copy(moments, moments + kSatChannels, v);
+    return true;
+  });
+}
+
+// The footprint evidence of the "rock possible" test (hazard_mapper.hpp, RockCriterion), once the
+// fits are done: per cell with a relief, its count, relief, stereo sigma, that sigma's square
+// and the reference quadric's sigma.
+constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kFit = 4, kRockChannels = 5;
+void FillRockEvidence(int n, const float* rock_m, const float* sigma_rel, const float* relief_sigma,
+                      double* sat) {
+  FillSummedAreaTable<kRockChannels>(n, sat, [&](std::size_t c, int, int, double* v) {
+    if (std::isnan(rock_m[c])) return false;
+    const double stereo = sigma_rel[c];
+    const double total = relief_sigma[c];
+    v[kCount] = 1.0;
+    v[kRelief] = rock_m[c];
+    v[kStereo] = stereo;
+    v[kStereo2] = stereo * stereo;
+    v[kFit] = std::sqrt(std::max(0.0, total * total - stereo * stereo));
+    return true;
+  });
+}
+
+// Can a rock of the threshold size stand with its centre in cell (ci, cj)? Where the whole box
+// has a relief: its mean relief + k sigma against the threshold rock's box relief; else the
+// cell alone against the threshold rock's cell relief (the test at one cell's scale).
+bool RockPossible(const double* sat, int n, const RockCriterion& rocks, double k,
+                  const float* rock_m, const float* relief_sigma, int ci, int cj) {
+  const std::size_t c = static_cast<std::size_t>(cj) * n + ci;
+  const int half_box = (rocks.FootprintCells() - 1) / 2;
+  const double box_cells = static_cast<double>(rocks.FootprintCells()) * rocks.FootprintCells();
+  if (ci - half_box >= 0 && cj - half_box >= 0 && ci + half_box < n && cj + half_box < n) {
+    const int n1 = n + 1;
+    const int i0 = ci - half_box, j0 = cj - half_box;
+    const int i1 = ci + half_box + 1, j1 = cj + half_box + 1;
+    const auto sum = [&](int q) {
+      const auto at = [&](int a, int b) {
+        return sat[(static_cast<std::size_t>(b) * n1 + a) * kSatChannels + q];
+      };
+      return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
+    };
+    if (sum(kCount) >= box_cells - 0.5) {
+      const double mean = sum(kRelief) / box_cells;
+      const double sigma = rocks.FootprintSigma(sum(kStereo), sum(kStereo2), sum(kFit));
+      return mean + k * sigma > rocks.FootprintRelief();
+    }
+  }
+  return rock_m[c] + k * relief_sigma[c] > rocks.ThresholdRelief();
+}
+
+// The summed-area table of declared rocks ((n + 1)^2, row 0 and column 0 stay 0): a 1 m height
+// difference across a rock is the rock's, a hazard already (and kept a footprint away from any
+// site); the truth's slopes are the rock-free surface's, so the local slope is judged only where
+// its window holds no declared rock.
+void CountDeclaredRocks(int n, const HazardClass* cls, std::int32_t* rock_sat) {
+  const int n1 = n + 1;
+  for (int j = 0; j < n; ++j) {
+    std::int32_t row = 0;
+    for (int i = 0; i < n; ++i) {
+      row += cls[static_cast<std::size_t>(j) * n + i] == HazardClass::kRock ? 1 : 0;
+      rock_sat[static_cast<std::size_t>(j + 1) * n1 + i + 1] =
+          rock_sat[static_cast<std::size_t>(j) * n1 + i + 1] + row;
+    }
+  }
+}
+
+// Declared rocks in the (2r + 1)^2 window around (ci, cj), clipped to the grid.
+int RocksWithin(const std::int32_t* rock_sat, int n, int ci, int cj, int r) {
+  const int n1 = n + 1;
+  const int i0 = std::max(0, ci - r);
+  const int j0 = std::max(0, cj - r);
+  const int i1 = std::min(n, ci + r + 1);
+  const int j1 = std::min(n, cj + r + 1);
+  const auto at = [&](int a, int b) { return rock_sat[static_cast<std::size_t>(b) * n1 + a]; };
+  return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
+}
+
 }  // namespace
 
 RockCriterion::RockCriterion(const RockCriterionOptions& options, double cell_m)
@@ -950,7 +1062,10 @@ void HazardMapper::OverlayActiveLandmarks() {
   }
 }
 
-void HazardMapper::Analyze(const HazardFrame& frame) {
+// Fuses the frame into the cells: elevation, its pose-free sigma and its sigma with the
+// newest pose's datum error, for every cell with information; returns the known cells' mean
+// elevation (the fits' origin).
+double HazardMapper::FuseCells(const HazardFrame& frame) {
   const std::size_t cells = info_.size();
   double sum = 0.0;
   int known = 0;
@@ -983,39 +1098,14 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
     }
   }
   stats_.known_cells = known;
-  const double z_ref = known > 0 ? sum / known : 0.0;
-  // Summed-area tables of the plane and quadric fits' moments (about the grid's centre, where the
-  // fourth powers stay small enough for the tables' differences).
-  const int n1 = n_ + 1;
+  return known > 0 ? sum / known : 0.0;
+}
+
+void HazardMapper::Analyze(const HazardFrame& frame) {
+  const double z_ref = FuseCells(frame);
   const double grid_centre = 0.5 * (n_ - 1);
-  FillSummedAreaTable<kSatChannels>(n_, sat_.data(), [&](std::size_t c, int i, int j, double* v) {
-    if (std::isnan(elevation_[c])) return false;
-    const double x = i - grid_centre;
-    const double y = j - grid_centre;
-    const double z = elevation_[c] - z_ref;
-    const double s = sigma_rel_[c];
-    const double xx = x * x;
-    const double yy = y * y;
-    const double moments[kSatChannels] = {
-        1.0,        x,       y,          z,       xx,     x * y,     yy,     x * z,
-        y * z,      z * z,   s * s,      xx * x,  xx * y, x * yy,    yy * y, xx * xx,
-        xx * x * y, xx * yy, x * yy * y, yy * yy, xx * z, x * y * z, yy * z};
-    std::copy(moments, moments + kSatChannels, v);
-    return true;
-  });
-  const auto window = [&](int ci, int cj, int r) {
-    std::array<double, kSatChannels> s{};
-    const int i0 = std::max(0, ci - r);
-    const int j0 = std::max(0, cj - r);
-    const int i1 = std::min(n_, ci + r + 1);
-    const int j1 = std::min(n_, cj + r + 1);
-    const double* a = sat_.data() + (static_cast<std::size_t>(j1) * n1 + i1) * kSatChannels;
-    const double* b = sat_.data() + (static_cast<std::size_t>(j0) * n1 + i1) * kSatChannels;
-    const double* c = sat_.data() + (static_cast<std::size_t>(j1) * n1 + i0) * kSatChannels;
-    const double* d = sat_.data() + (static_cast<std::size_t>(j0) * n1 + i0) * kSatChannels;
-    for (int k = 0; k < kSatChannels; ++k) s[k] = a[k] - b[k] - c[k] + d[k];
-    return s;
-  };
+  FillFitMoments(n_, elevation_.data(), sigma_rel_.data(), z_ref, sat_.data());
+  const auto window = [&](int ci, int cj, int r) { return SatWindow(sat_.data(), n_, ci, cj, r); };
   const int rf = HalfWindowCells(options_.footprint_radius_m, cell_m_);
   const int rl = HalfWindowCells(0.5 * options_.local_slope_baseline_m, cell_m_);
   const int pl = std::max(
@@ -1113,64 +1203,8 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       }
     }
   }
-  // The footprint evidence of the "rock possible" test (hazard_mapper.hpp, RockCriterion): the
-  // fits are done, so sat_ now holds per cell, over the cells with a relief: count, relief,
-  // stereo sigma, its square and the reference quadric's sigma.
-  constexpr int kCount = 0, kRelief = 1, kStereo = 2, kStereo2 = 3, kFit = 4, kChannels = 5;
-  FillSummedAreaTable<kChannels>(n_, sat_.data(), [&](std::size_t c, int, int, double* v) {
-    if (std::isnan(rock_m_[c])) return false;
-    const double stereo = sigma_rel_[c];
-    const double total = relief_sigma_[c];
-    v[kCount] = 1.0;
-    v[kRelief] = rock_m_[c];
-    v[kStereo] = stereo;
-    v[kStereo2] = stereo * stereo;
-    v[kFit] = std::sqrt(std::max(0.0, total * total - stereo * stereo));
-    return true;
-  });
-  const int half_box = (rocks.FootprintCells() - 1) / 2;
-  const double box_cells = static_cast<double>(rocks.FootprintCells()) * rocks.FootprintCells();
-  // Can a rock of the threshold size stand with its centre in cell (i, j)? Where the whole box
-  // has a relief: its mean relief + k sigma against the threshold rock's box relief; else the
-  // cell alone against the threshold rock's cell relief (the test at one cell's scale).
-  const auto rock_possible = [&](int ci, int cj) {
-    const std::size_t c = static_cast<std::size_t>(cj) * n_ + ci;
-    if (ci - half_box >= 0 && cj - half_box >= 0 && ci + half_box < n_ && cj + half_box < n_) {
-      const int i0 = ci - half_box, j0 = cj - half_box;
-      const int i1 = ci + half_box + 1, j1 = cj + half_box + 1;
-      const auto sum = [&](int q) {
-        const auto at = [&](int a, int b) {
-          return sat_[(static_cast<std::size_t>(b) * n1 + a) * kSatChannels + q];
-        };
-        return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
-      };
-      if (sum(kCount) >= box_cells - 0.5) {
-        const double mean = sum(kRelief) / box_cells;
-        const double sigma = rocks.FootprintSigma(sum(kStereo), sum(kStereo2), sum(kFit));
-        return mean + k * sigma > rocks.FootprintRelief();
-      }
-    }
-    return rock_m_[c] + k * relief_sigma_[c] > rocks.ThresholdRelief();
-  };
-  // Declared rocks per window: a 1 m height difference across a rock is the rock's, a hazard
-  // already (and kept a footprint away from any site); the truth's slopes are the rock-free
-  // surface's, so the local slope is judged only where its window holds no declared rock.
-  for (int j = 0; j < n_; ++j) {
-    std::int32_t row = 0;
-    for (int i = 0; i < n_; ++i) {
-      row += class_[static_cast<std::size_t>(j) * n_ + i] == HazardClass::kRock ? 1 : 0;
-      rock_sat_[static_cast<std::size_t>(j + 1) * n1 + i + 1] =
-          rock_sat_[static_cast<std::size_t>(j) * n1 + i + 1] + row;
-    }
-  }
-  const auto rocks_within = [&](int ci, int cj, int r) {
-    const int i0 = std::max(0, ci - r);
-    const int j0 = std::max(0, cj - r);
-    const int i1 = std::min(n_, ci + r + 1);
-    const int j1 = std::min(n_, cj + r + 1);
-    const auto at = [&](int a, int b) { return rock_sat_[static_cast<std::size_t>(b) * n1 + a]; };
-    return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
-  };
+  FillRockEvidence(n_, rock_m_.data(), sigma_rel_.data(), relief_sigma_.data(), sat_.data());
+  CountDeclaredRocks(n_, class_.data(), rock_sat_.data());
   // A slope (footprint or 1 m scale) where the map resolves it; elsewhere an exceedance of either
   // threshold is kUncertain.
   for (int j = 0; j < n_; ++j) {
@@ -1179,13 +1213,15 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       if (class_[c] == HazardClass::kRock || std::isnan(slope_deg_[c])) continue;
       const double slope_deg = slope_deg_[c];
       const double slope_sigma_deg = slope_sigma_deg_[c];
-      const bool local = rocks_within(i, j, rl + pl) == 0;
+      const bool local = RocksWithin(rock_sat_.data(), n_, i, j, rl + pl) == 0;
       const double local_deg = local ? local_slope_deg_[c] : 0.0;
       const double local_sigma_deg = local ? local_slope_sigma_deg_[c] : 0.0;
       // Where the map resolves the threshold rock, the rock criterion has decided the cell (kRock
       // or not, at its false-alarm and detection rates); a rock is undecided only where it does
       // not, and possible there when the footprint's evidence leaves a threshold rock possible.
-      const bool undecided_rock = relief_sigma_[c] > rocks.ResolvedSigma() && rock_possible(i, j);
+      const bool undecided_rock =
+          relief_sigma_[c] > rocks.ResolvedSigma() &&
+          RockPossible(sat_.data(), n_, rocks, k, rock_m_.data(), relief_sigma_.data(), i, j);
       if (slope_declared(slope_deg, slope_sigma_deg) ||
           slope_declared(local_deg, local_sigma_deg)) {
         class_[c] = HazardClass::kSlope;

@@ -387,6 +387,7 @@ class HazardMapper {
   void FuseLandmarks(const HazardFrame& frame, double datum_shift_m);
   void CommitLandmark(double x_m, double y_m, double z_m, double var_m2);
   void OverlayActiveLandmarks();
+  double FuseCells(const HazardFrame& frame);  // the known cells' mean elevation
   void Analyze(const HazardFrame& frame);
   void SelectSite();
   void DistanceTransform();
