@@ -46,38 +46,50 @@ void SampleGradients(const GrayView& image, const float* offsets, int count, flo
   }
 }
 
-// Solves the centred 2x2 normal equations [sum j j^T] d = sum j e for the step d; false when
-// they are singular. `centre` is 1/count with the brightness offset, 0 without.
-bool SolveStep(const float* jx, const float* jy, const float* e, int count, float centre, float* dx,
-               float* dy) {
-  float mean_x = 0.0f;
-  float mean_y = 0.0f;
-  for (int k = 0; k < count; ++k) {
-    mean_x += jx[k];
-    mean_y += jy[k];
-  }
-  mean_x *= centre;
-  mean_y *= centre;
+// The normal equations of a translation with Jacobian rows (jx, jy) per sample: the rows
+// centred by their mean times `centre` (1/count when the brightness offset is eliminated, 0
+// without) and [sum c c^T].
+struct NormalEquations {
+  float cx[kMaxPatchPixels];
+  float cy[kMaxPatchPixels];
   float hxx = 0.0f;
   float hxy = 0.0f;
   float hyy = 0.0f;
-  float bx = 0.0f;
-  float by = 0.0f;
-  for (int k = 0; k < count; ++k) {
-    const float cx = jx[k] - mean_x;
-    const float cy = jy[k] - mean_y;
-    hxx += cx * cx;
-    hxy += cx * cy;
-    hyy += cy * cy;
-    bx += cx * e[k];
-    by += cy * e[k];
+
+  void Build(const float* jx, const float* jy, int count, float centre) {
+    float mean_x = 0.0f;
+    float mean_y = 0.0f;
+    for (int k = 0; k < count; ++k) {
+      mean_x += jx[k];
+      mean_y += jy[k];
+    }
+    mean_x *= centre;
+    mean_y *= centre;
+    hxx = hxy = hyy = 0.0f;
+    for (int k = 0; k < count; ++k) {
+      cx[k] = jx[k] - mean_x;
+      cy[k] = jy[k] - mean_y;
+      hxx += cx[k] * cx[k];
+      hxy += cx[k] * cy[k];
+      hyy += cy[k] * cy[k];
+    }
   }
-  const float det = hxx * hyy - hxy * hxy;
-  if (!(det > 0.0f)) return false;
-  *dx = (hyy * bx - hxy * by) / det;
-  *dy = (hxx * by - hxy * bx) / det;
-  return true;
-}
+  float Det() const { return hxx * hyy - hxy * hxy; }
+  // The step d of [sum c c^T] d = sum c e for residuals e; false when singular.
+  bool Step(const float* e, int count, float* dx, float* dy) const {
+    float bx = 0.0f;
+    float by = 0.0f;
+    for (int k = 0; k < count; ++k) {
+      bx += cx[k] * e[k];
+      by += cy[k] * e[k];
+    }
+    const float det = Det();
+    if (!(det > 0.0f)) return false;
+    *dx = (hyy * bx - hxy * by) / det;
+    *dy = (hxx * by - hxy * bx) / det;
+    return true;
+  }
+};
 
 }  // namespace
 
@@ -188,41 +200,25 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
                          const float* gy, const float* offsets, int count, int grid_radius,
                          bool clamped, bool second_order, float epsilon, float* cx, float* cy,
                          float* quality) const {
-  float mean_gx = 0.0f;
-  float mean_gy = 0.0f;
   float mean_t = 0.0f;
+  float max_offset = 0.0f;
   for (int k = 0; k < count; ++k) {
-    mean_gx += gx[k];
-    mean_gy += gy[k];
     mean_t += value[k];
+    max_offset =
+        std::fmax(max_offset, std::fmax(std::fabs(offsets[2 * k]), std::fabs(offsets[2 * k + 1])));
   }
   const float inv_n = 1.0f / static_cast<float>(count);
   mean_t *= inv_n;
   // With the offset b eliminated the gradients and residuals are centred; with constant
   // brightness they are not (a ramp across the patch then also constrains the translation).
   const float centre = options_.brightness_offset ? inv_n : 0.0f;
-  mean_gx *= centre;
-  mean_gy *= centre;
   const float offset_t = options_.brightness_offset ? mean_t : 0.0f;
-  float cgx[kMaxPatchPixels];
-  float cgy[kMaxPatchPixels];
-  float hxx = 0.0f;
-  float hxy = 0.0f;
-  float hyy = 0.0f;
-  float max_offset = 0.0f;
-  for (int k = 0; k < count; ++k) {
-    cgx[k] = gx[k] - mean_gx;
-    cgy[k] = gy[k] - mean_gy;
-    hxx += cgx[k] * cgx[k];
-    hxy += cgx[k] * cgy[k];
-    hyy += cgy[k] * cgy[k];
-    max_offset =
-        std::fmax(max_offset, std::fmax(std::fabs(offsets[2 * k]), std::fabs(offsets[2 * k + 1])));
-  }
-  const float det = hxx * hyy - hxy * hxy;
+  NormalEquations normal;
+  normal.Build(gx, gy, count, centre);
   // Reject an ill-conditioned (edge-like or flat) patch: smallest eigenvalue too small.
-  const float trace = hxx + hyy;
-  const float min_eig = 0.5f * (trace - std::sqrt(std::fmax(0.0f, trace * trace - 4.0f * det)));
+  const float trace = normal.hxx + normal.hyy;
+  const float min_eig =
+      0.5f * (trace - std::sqrt(std::fmax(0.0f, trace * trace - 4.0f * normal.Det())));
   if (!(min_eig > 1e-2f * static_cast<float>(count))) return false;
 
   // The second-order Jacobian samples one more pixel around every sample.
@@ -240,27 +236,19 @@ bool PatchTracker::Align(const GrayView& image, const float* value, const float*
       return false;
     sampled_at_xy = true;
     const float offset_s = options_.brightness_offset ? mean_s : 0.0f;
-    float dx = 0.0f;
-    float dy = 0.0f;
+    for (int k = 0; k < count; ++k) residual[k] = (value[k] - offset_t) - (samples[k] - offset_s);
     if (second_order) {
+      // ESM: the mean of the template's mapped gradient and the image's at the samples.
       SampleGradients(image, offsets, count, x, y, ix, iy);
       for (int k = 0; k < count; ++k) {
         ix[k] = 0.5f * (ix[k] + gx[k]);
         iy[k] = 0.5f * (iy[k] + gy[k]);
-        residual[k] = (value[k] - offset_t) - (samples[k] - offset_s);
       }
-      if (!SolveStep(ix, iy, residual, count, centre, &dx, &dy)) return false;
-    } else {
-      float bx = 0.0f;
-      float by = 0.0f;
-      for (int k = 0; k < count; ++k) {
-        const float e = (value[k] - offset_t) - (samples[k] - offset_s);
-        bx += cgx[k] * e;
-        by += cgy[k] * e;
-      }
-      dx = (hyy * bx - hxy * by) / det;
-      dy = (hxx * by - hxy * bx) / det;
+      normal.Build(ix, iy, count, centre);
     }
+    float dx = 0.0f;
+    float dy = 0.0f;
+    if (!normal.Step(residual, count, &dx, &dy)) return false;
     x += dx;
     y += dy;
     sampled_at_xy = false;
