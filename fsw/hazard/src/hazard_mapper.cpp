@@ -276,20 +276,21 @@ double SpheroidQuadrantIntegral(double radius_m, double x_m, double y_m) {
   return sum * step / 3.0;
 }
 
-// The kSatChannels sums over the cells of the (2r + 1)^2 window around (ci, cj), clipped to the
-// n x n grid.
-std::array<double, kSatChannels> SatWindow(const double* sat, int n, int ci, int cj, int r) {
-  std::array<double, kSatChannels> s{};
+// The first kChannels sums of a summed-area table (entries `stride` values apart, (n + 1)^2 of
+// them) over the cells of the (2r + 1)^2 window around (ci, cj), clipped to the n x n grid.
+template <int kChannels, typename T>
+std::array<T, kChannels> WindowSum(const T* sat, int stride, int n, int ci, int cj, int r) {
+  std::array<T, kChannels> s{};
   const int n1 = n + 1;
   const int i0 = std::max(0, ci - r);
   const int j0 = std::max(0, cj - r);
   const int i1 = std::min(n, ci + r + 1);
   const int j1 = std::min(n, cj + r + 1);
-  const double* a = sat + (static_cast<std::size_t>(j1) * n1 + i1) * kSatChannels;
-  const double* b = sat + (static_cast<std::size_t>(j0) * n1 + i1) * kSatChannels;
-  const double* c = sat + (static_cast<std::size_t>(j1) * n1 + i0) * kSatChannels;
-  const double* d = sat + (static_cast<std::size_t>(j0) * n1 + i0) * kSatChannels;
-  for (int k = 0; k < kSatChannels; ++k) s[k] = a[k] - b[k] - c[k] + d[k];
+  const T* a = sat + (static_cast<std::size_t>(j1) * n1 + i1) * stride;
+  const T* b = sat + (static_cast<std::size_t>(j0) * n1 + i1) * stride;
+  const T* c = sat + (static_cast<std::size_t>(j1) * n1 + i0) * stride;
+  const T* d = sat + (static_cast<std::size_t>(j0) * n1 + i0) * stride;
+  for (int k = 0; k < kChannels; ++k) s[k] = a[k] - b[k] - c[k] + d[k];
   return s;
 }
 
@@ -343,18 +344,11 @@ bool RockPossible(const double* sat, int n, const RockCriterion& rocks, double k
   const int half_box = (rocks.FootprintCells() - 1) / 2;
   const double box_cells = static_cast<double>(rocks.FootprintCells()) * rocks.FootprintCells();
   if (ci - half_box >= 0 && cj - half_box >= 0 && ci + half_box < n && cj + half_box < n) {
-    const int n1 = n + 1;
-    const int i0 = ci - half_box, j0 = cj - half_box;
-    const int i1 = ci + half_box + 1, j1 = cj + half_box + 1;
-    const auto sum = [&](int q) {
-      const auto at = [&](int a, int b) {
-        return sat[(static_cast<std::size_t>(b) * n1 + a) * kSatChannels + q];
-      };
-      return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
-    };
-    if (sum(kCount) >= box_cells - 0.5) {
-      const double mean = sum(kRelief) / box_cells;
-      const double sigma = rocks.FootprintSigma(sum(kStereo), sum(kStereo2), sum(kFit));
+    const std::array<double, kRockChannels> box =
+        WindowSum<kRockChannels>(sat, kSatChannels, n, ci, cj, half_box);
+    if (box[kCount] >= box_cells - 0.5) {
+      const double mean = box[kRelief] / box_cells;
+      const double sigma = rocks.FootprintSigma(box[kStereo], box[kStereo2], box[kFit]);
       return mean + k * sigma > rocks.FootprintRelief();
     }
   }
@@ -375,17 +369,6 @@ void CountDeclaredRocks(int n, const HazardClass* cls, std::int32_t* rock_sat) {
           rock_sat[static_cast<std::size_t>(j) * n1 + i + 1] + row;
     }
   }
-}
-
-// Declared rocks in the (2r + 1)^2 window around (ci, cj), clipped to the grid.
-int RocksWithin(const std::int32_t* rock_sat, int n, int ci, int cj, int r) {
-  const int n1 = n + 1;
-  const int i0 = std::max(0, ci - r);
-  const int j0 = std::max(0, cj - r);
-  const int i1 = std::min(n, ci + r + 1);
-  const int j1 = std::min(n, cj + r + 1);
-  const auto at = [&](int a, int b) { return rock_sat[static_cast<std::size_t>(b) * n1 + a]; };
-  return at(i1, j1) - at(i1, j0) - at(i0, j1) + at(i0, j0);
 }
 
 }  // namespace
@@ -1105,7 +1088,9 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   const double z_ref = FuseCells(frame);
   const double grid_centre = 0.5 * (n_ - 1);
   FillFitMoments(n_, elevation_.data(), sigma_rel_.data(), z_ref, sat_.data());
-  const auto window = [&](int ci, int cj, int r) { return SatWindow(sat_.data(), n_, ci, cj, r); };
+  const auto window = [&](int ci, int cj, int r) {
+    return WindowSum<kSatChannels>(sat_.data(), kSatChannels, n_, ci, cj, r);
+  };
   const int rf = HalfWindowCells(options_.footprint_radius_m, cell_m_);
   const int rl = HalfWindowCells(0.5 * options_.local_slope_baseline_m, cell_m_);
   const int pl = std::max(
@@ -1213,7 +1198,7 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
       if (class_[c] == HazardClass::kRock || std::isnan(slope_deg_[c])) continue;
       const double slope_deg = slope_deg_[c];
       const double slope_sigma_deg = slope_sigma_deg_[c];
-      const bool local = RocksWithin(rock_sat_.data(), n_, i, j, rl + pl) == 0;
+      const bool local = WindowSum<1>(rock_sat_.data(), 1, n_, i, j, rl + pl)[0] == 0;
       const double local_deg = local ? local_slope_deg_[c] : 0.0;
       const double local_sigma_deg = local ? local_slope_sigma_deg_[c] : 0.0;
       // Where the map resolves the threshold rock, the rock criterion has decided the cell (kRock
