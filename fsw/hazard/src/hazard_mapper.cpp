@@ -54,42 +54,40 @@ struct Gradient {
 struct Plane {
   bool ok = false;
   double n = 0.0;
-  double mx = 0.0, my = 0.0, mz = 0.0;
   Gradient gradient;  // var from the mean cell sigma^2 or the residuals
   double rss = 0.0;
-  double mean_var = 0.0;
 };
 
 // Least-squares plane through the window sums s (kSatChannels values). correlation_factor scales
 // the stereo noise's share of the slope variance for cells whose errors are correlated
 // (CorrelatedSlopeVarianceFactor; 1: independent cells).
 Plane FitPlane(const std::array<double, kSatChannels>& s, double min_count,
-               double correlation_factor = 1.0) {
+               double correlation_factor) {
   Plane p;
   const double n = s[0];
   if (n < std::max(3.0, min_count)) return p;
   p.n = n;
-  p.mx = s[1] / n;
-  p.my = s[2] / n;
-  p.mz = s[3] / n;
-  const double cxx = s[4] / n - p.mx * p.mx;
-  const double cxy = s[5] / n - p.mx * p.my;
-  const double cyy = s[6] / n - p.my * p.my;
-  const double cxz = s[7] / n - p.mx * p.mz;
-  const double cyz = s[8] / n - p.my * p.mz;
-  const double czz = s[9] / n - p.mz * p.mz;
+  const double mx = s[1] / n;
+  const double my = s[2] / n;
+  const double mz = s[3] / n;
+  const double cxx = s[4] / n - mx * mx;
+  const double cxy = s[5] / n - mx * my;
+  const double cyy = s[6] / n - my * my;
+  const double cxz = s[7] / n - mx * mz;
+  const double cyz = s[8] / n - my * mz;
+  const double czz = s[9] / n - mz * mz;
   const double det = cxx * cyy - cxy * cxy;
   if (!(det > 1e-6)) return p;
   Gradient& g = p.gradient;
   g.b = (cyy * cxz - cxy * cyz) / det;
   g.c = (cxx * cyz - cxy * cxz) / det;
-  p.mean_var = s[10] / n;
+  const double mean_var = s[10] / n;
   p.rss = std::max(0.0, n * (czz - g.b * cxz - g.c * cyz));
   // Slope variance from the larger of the predicted noise (for correlated cells) and the fit's
   // own residuals. The residuals are mostly relief where they exceed the noise (a rock, a crest
   // in the window), which tilts the plane as a bias, not as a correlated noise: the factor is
   // the stereo error's only.
-  const double noise = std::max(correlation_factor * p.mean_var, p.rss / (n - 3.0 + 1e-9));
+  const double noise = std::max(correlation_factor * mean_var, p.rss / (n - 3.0 + 1e-9));
   g.var_b = noise / n * (cyy / det);
   g.var_c = noise / n * (cxx / det);
   g.ok = p.ok = true;
