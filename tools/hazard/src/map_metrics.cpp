@@ -34,10 +34,15 @@ class TruthNodes {
     int cj = 0;
     Nearest(x, y, &ci, &cj);
     const int rn = static_cast<int>(std::ceil(radius / cell_));
+    // Squared distances, and a root only for the nodes inside: this runs for every cell of
+    // every map on the SIL's output thread, beside the flight threads.
+    const double radius2 = radius * radius;
     for (int j = std::max(0, cj - rn); j <= std::min(n_ - 1, cj + rn); ++j) {
+      const double dy = terrain_.NodeY(j) - y;
       for (int i = std::max(0, ci - rn); i <= std::min(n_ - 1, ci + rn); ++i) {
-        const double d = std::hypot(terrain_.NodeX(i) - x, terrain_.NodeY(j) - y);
-        if (d <= radius) f(static_cast<std::size_t>(j) * n_ + i, d);
+        const double dx = terrain_.NodeX(i) - x;
+        const double d2 = dx * dx + dy * dy;
+        if (d2 <= radius2) f(static_cast<std::size_t>(j) * n_ + i, std::sqrt(d2));
       }
     }
   }
