@@ -57,7 +57,7 @@ def write_report(out, spec, sil, refly, plots):
     if bad_repro:
         print('  re-flown runs differ from the campaign: %s' % bad_repro, file=sys.stderr)
     for e in plot_errors:
-        print('  the worst runs\' plots: %s' % e, file=sys.stderr)
+        print('  plots: %s' % e, file=sys.stderr)
     return 0 if not rep['not_completed'] and not bad_repro and not plot_errors else 1
 
 

@@ -574,6 +574,8 @@ def markdown(report, pngs, reproduced, worst_plots=None):
                                 fmt(t['wall_s_per_run']['p50'])), '']
     if pngs:
         lines += ['## Plots', ''] + ['![%s](%s)' % (p, p) for p in pngs] + ['']
+    if report.get('plot_errors'):
+        lines += ['## Plots not drawn', ''] + ['- %s' % e for e in report['plot_errors']] + ['']
     if worst_plots and report['worst_runs'] and worst_plots.get(report['worst_runs'][0]['run']):
         w = report['worst_runs'][0]['run']
         lines += ['## The worst run (%d), drawn by swf-plot from its log' % w, ''] + [
@@ -583,15 +585,23 @@ def markdown(report, pngs, reproduced, worst_plots=None):
 
 def write(out, spec, reproduced=None, with_plots=True, plot_tool=None):
     """Writes report.json and report.md (with the plots when with_plots; the worst re-flown runs'
-    own plots too when plot_tool names swf-plot). Returns (report, errors of the run plots)."""
+    own plots too when plot_tool names swf-plot). Returns (report, the plots not drawn, why)."""
     report, outputs, edges, done = aggregate(out, spec)
     report['worst_reproduced'] = {str(k): v for k, v in sorted((reproduced or {}).items())}
     report_dir = os.path.join(out, 'report')
     os.makedirs(report_dir, exist_ok=True)
-    pngs = plots(report, outputs, edges, done, report_dir) if with_plots and done else []
-    worst_plots, errors = {}, []
+    pngs, worst_plots, errors = [], {}, []
+    if with_plots and done:
+        try:
+            pngs = plots(report, outputs, edges, done, report_dir)
+        except ImportError as e:
+            # The report stands without its figures; the missing ones are named, not hidden.
+            errors.append('the campaign plots were not drawn: %s (Debian: python3-matplotlib; '
+                          'or run with the system /usr/bin/python3)' % e)
     if with_plots and plot_tool and reproduced:
-        worst_plots, errors = run_plots(out, report, reproduced, report_dir, plot_tool)
+        worst_plots, run_errors = run_plots(out, report, reproduced, report_dir, plot_tool)
+        errors += run_errors
+    report['plot_errors'] = errors
     engine.write_atomically(os.path.join(report_dir, 'report.json'),
                             json.dumps(report, indent=1, sort_keys=True, allow_nan=False) + '\n')
     engine.write_atomically(os.path.join(report_dir, 'report.md'),

@@ -23,10 +23,10 @@ from swfcampaign import report as reportmod  # noqa: E402
 from swfcampaign import spec as specmod  # noqa: E402
 
 
-def campaign(*args, sil=None):
+def campaign(*args, sil=None, env=None):
     cmd = ['/usr/bin/python3', TOOL] + list(args) + ['--sil', sil or SIL]
     return subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                          check=False)
+                          check=False, env=env)
 
 
 def read_json(path):
@@ -223,6 +223,23 @@ class LocalEngine(unittest.TestCase):
         self.assertIn('6 runs, 3 done, 3 to fly', r.stdout)
         self.assertEqual(read_json(os.path.join(self.out, 'report', 'report.json'))['completed'],
                          6)
+
+        # A Python without matplotlib still writes the report, and says which plots are missing.
+        blocker = os.path.join(self.dir, 'no_matplotlib', 'matplotlib')
+        os.makedirs(blocker)
+        with open(os.path.join(blocker, '__init__.py'), 'w', encoding='utf-8') as f:
+            f.write("raise ImportError('No module named matplotlib')\n")
+        env = dict(os.environ, PYTHONPATH=os.path.dirname(blocker))
+        r = campaign('report', self.out, '--no-refly', env=env)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)  # a report short of its plots
+        self.assertNotIn('Traceback', r.stderr)
+        self.assertIn('plots: the campaign plots were not drawn: No module named matplotlib',
+                      r.stderr)
+        report = read_json(os.path.join(self.out, 'report', 'report.json'))
+        self.assertEqual(report['completed'], 6)
+        self.assertEqual(len(report['plot_errors']), 1)
+        with open(os.path.join(self.out, 'report', 'report.md'), encoding='utf-8') as f:
+            self.assertIn('## Plots not drawn', f.read())
 
     def check_report(self, report):
         nav = report['navigation']
