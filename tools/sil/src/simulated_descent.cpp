@@ -43,6 +43,18 @@ void WriteOutputs(std::FILE* f, const evaluation::RunScore& score) {
   column("status", [](const Output& o) { return std::to_string(o.status); });
   column("hpl_m", [](const Output& o) { return app::JsonNumber(o.hpl_m); });
   column("vpl_m", [](const Output& o) { return app::JsonNumber(o.vpl_m); });
+  // Per world axis, to tell which direction a NEES outside its band comes from.
+  const auto triple = [](const double* v) {
+    std::string s = "[";
+    for (int i = 0; i < 3; ++i) s.append(i > 0 ? ", " : "").append(app::JsonNumber(v[i]));
+    return s.append("]");
+  };
+  column("position_error_m", [&](const Output& o) {
+    const double e[3] = {o.estimate_m[0] - o.truth_m[0], o.estimate_m[1] - o.truth_m[1],
+                         o.estimate_m[2] - o.truth_m[2]};
+    return triple(e);
+  });
+  column("position_sigma_m", [&](const Output& o) { return triple(o.position_sigma_m); });
   std::fprintf(f, "},\n");
 }
 
