@@ -345,14 +345,18 @@ bool WriteSummary(const std::string& path, const RunEcho& run, const FswConfig& 
   std::fprintf(f, "  },\n");
   std::fprintf(
       f,
-      "  \"overruns\": %lld,\n  \"allocations_after_start\": %lld,\n"
+      "  \"overruns\": %lld,\n  \"hazard_overruns\": %lld,\n"
+      "  \"lockstep_waits\": {\"cycles\": %lld, \"total_ms\": %.3f, \"max_ms\": %.3f},\n"
+      "  \"allocations_after_start\": %lld,\n"
       "  \"outputs_dropped\": %lld,\n  \"frames_dropped\": %lld,\n"
       "  \"frames_rejected\": %lld,\n"
       "  \"camera\": {\"missing_packets\": %lld, \"pairing_failures\": %lld, \"timeouts\": %lld},\n"
       "  \"stage_errors\": %lld,\n  \"records_lost\": %lld,\n  \"fault_bits\": %d,\n"
       "  \"num_landmarks\": %d,\n"
       "  \"mlockall\": %s,\n  \"sched_fifo\": %s,\n",
-      static_cast<long long>(counters.overruns),
+      static_cast<long long>(counters.overruns), static_cast<long long>(counters.hazard_overruns),
+      static_cast<long long>(counters.lockstep_waits), core::NsToMs(counters.lockstep_wait_ns),
+      core::NsToMs(counters.lockstep_wait_max_ns),
       static_cast<long long>(health.allocations_after_start),
       static_cast<long long>(health.outputs_dropped), static_cast<long long>(health.frames_dropped),
       static_cast<long long>(health.frames_rejected),
@@ -979,11 +983,12 @@ void PrintRunLine(const FlightProcess& fp) {
                h.stages[kStageCycle].p99_ms, h.stages[kStageCycle].max_ms,
                fp.extension_source ? fp.extension->RunLine().c_str() : "");
   std::fprintf(stderr,
-               ", %lld hazard maps (%lld skipped, %lld failed; %lld outlier cells rejected, %lld "
-               "replaced), hazard p50 %.1f ms\n",
+               ", %lld hazard maps (%lld skipped, %lld failed, %lld over their period; %lld "
+               "outlier cells rejected, %lld replaced), hazard p50 %.1f ms\n",
                static_cast<long long>(fp.hazard_counter.maps),
                static_cast<long long>(counters.hazard_skipped),
                static_cast<long long>(fp.loop.HazardErrors()),
+               static_cast<long long>(counters.hazard_overruns),
                static_cast<long long>(fp.hazard_counter.outliers_rejected),
                static_cast<long long>(fp.hazard_counter.cells_replaced),
                h.stages[kStageHazard].p50_ms);

@@ -13,24 +13,29 @@
 namespace swf::app {
 namespace {
 
-// A free slot of an output pool. Under lockstep pacing the frame group waits (bounded, 20 s) for
-// the output thread instead of dropping: a lockstep run is a reference run and must lose no
-// output, whatever the machine's load. Real-time pacing never waits: a full pool is a counted
-// drop.
+// A free slot of a pool another thread empties. Under lockstep pacing the frame group waits
+// (bounded, 20 s) instead of dropping, and adds the time waited to *waited_ns: a lockstep run is
+// a reference run and must lose no output, whatever the machine's load, and it runs faster than
+// the camera rate, so that wait is the simulator's, not frame-group work. Real-time pacing never
+// waits: a full pool is a counted drop.
 template <typename Pool>
-std::int32_t AcquireOutput(Pool* pool, bool lockstep) {
+std::int32_t AcquireSlot(Pool* pool, bool lockstep, core::TimeNs* waited_ns) {
   std::int32_t slot = pool->Acquire();
-  for (int i = 0; slot < 0 && lockstep && i < 200000; ++i) {
+  if (slot >= 0 || !lockstep) return slot;
+  const core::TimeNs start = core::MonotonicNs();
+  for (int i = 0; slot < 0 && i < 200000; ++i) {
     std::this_thread::sleep_for(std::chrono::microseconds(100));
     slot = pool->Acquire();
   }
+  *waited_ns += core::MonotonicNs() - start;
   return slot;
 }
 
-// AcquireOutput for an output that is dropped whole when no slot is free: -1 is counted.
+// AcquireSlot for an output that is dropped whole when no slot is free: -1 is counted.
 template <typename Pool>
-std::int32_t AcquireOutputOrCountDrop(Pool* pool, bool lockstep, std::int64_t* outputs_dropped) {
-  const std::int32_t slot = AcquireOutput(pool, lockstep);
+std::int32_t AcquireOutputOrCountDrop(Pool* pool, bool lockstep, std::int64_t* outputs_dropped,
+                                      core::TimeNs* waited_ns) {
+  const std::int32_t slot = AcquireSlot(pool, lockstep, waited_ns);
   if (slot < 0) ++*outputs_dropped;
   return slot;
 }
@@ -138,7 +143,8 @@ void FlightLoop::FeedImu(std::int64_t until_utime) {
     ++counters_.imu_samples;
     if (!options_.record_frames) continue;
     if (slot < 0) {
-      slot = AcquireOutputOrCountDrop(&out_->imus, lockstep, &counters_.outputs_dropped);
+      slot = AcquireOutputOrCountDrop(&out_->imus, lockstep, &counters_.outputs_dropped,
+                                      &lockstep_wait_ns_);
       if (slot < 0) continue;
       out_->imus[slot].count = 0;
     }
@@ -161,6 +167,7 @@ void FlightLoop::Push(core::SpscQueue<RecordRef, kOrderQueueSize>* q, RecordRef 
 Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
                          TimeNs* processing_ns) {
   *processing_ns = 0;
+  lockstep_wait_ns_ = 0;
   const TimeNs t0 = core::MonotonicNs();
   // kNotConfigured: the source is down (being restarted, or its last restart failed).
   if (SourceDown()) return MissCycle(Status::kNotConfigured, synchronous_hazard);
@@ -208,7 +215,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   Inject(kStageRectify);
   Status stage = pipeline_->Rectify(frame);
   const TimeNs t2 = core::MonotonicNs();
-  stages_[kStageRectify].Add(t2 - t1);
+  stages_[kStageRectify].Add(t2 - t1 - lockstep_wait_ns_);
   Inject(kStageTrack);
   if (stage == Status::kOk) stage = pipeline_->Track();
   const TimeNs t3 = core::MonotonicNs();
@@ -220,6 +227,7 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   if (stage != Status::kOk) ++counters_.stage_errors;
 
   Inject(kStageOutput);
+  const TimeNs waited_before_output = lockstep_wait_ns_;
   if (options_.record_frames) RecordFrame(frame, pair, motion);
   // The hazard snapshot's images are copied before the source gets its buffer back.
   const bool snapshot_frame = (counters_.frames + 1) % options_.hazard_every == 0;
@@ -234,7 +242,8 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
     PublishNav();
   }
   const TimeNs t5 = core::MonotonicNs();
-  stages_[kStageOutput].Add(t5 - t4);
+  const TimeNs waited_before_map = lockstep_wait_ns_;
+  stages_[kStageOutput].Add(t5 - t4 - (waited_before_map - waited_before_output));
 
   ++counters_.frames;
   TimeNs t6 = t5;
@@ -242,10 +251,12 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
     Inject(kStageMap);
     TakeSnapshot(synchronous_hazard, hazard_slot);
     t6 = core::MonotonicNs();
-    stages_[kStageMap].Add(t6 - t5);
+    stages_[kStageMap].Add(t6 - t5 - (lockstep_wait_ns_ - waited_before_map));
   }
-  stages_[kStageCycle].Add(t6 - t1);
-  *processing_ns = t6 - t1;
+  // The frame group's own work: a lockstep wait for another thread is counted apart.
+  *processing_ns = t6 - t1 - lockstep_wait_ns_;
+  stages_[kStageCycle].Add(*processing_ns);
+  CountLockstepWait();
   if (++cycles_ % options_.health_every == 0) PublishHealth();
   return Status::kOk;
 }
@@ -255,7 +266,8 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
 // slot goes back to the pool at once (kept, every such pair would shrink the pool for good).
 void FlightLoop::RecordFrame(const PipelineFrame& frame, const drivers::StereoPair& pair,
                              const drivers::MotionInput& motion) {
-  const std::int32_t slot = AcquireOutput(&out_->frames, options_.pacing == Pacing::kLockstep);
+  const std::int32_t slot =
+      AcquireSlot(&out_->frames, options_.pacing == Pacing::kLockstep, &lockstep_wait_ns_);
   if (slot < 0) {
     ++counters_.outputs_dropped;
     return;
@@ -291,8 +303,9 @@ void FlightLoop::RecordFrame(const PipelineFrame& frame, const drivers::StereoPa
 }
 
 void FlightLoop::PublishNav() {
-  const std::int32_t slot = AcquireOutputOrCountDrop(
-      &out_->navs, options_.pacing == Pacing::kLockstep, &counters_.outputs_dropped);
+  const std::int32_t slot =
+      AcquireOutputOrCountDrop(&out_->navs, options_.pacing == Pacing::kLockstep,
+                               &counters_.outputs_dropped, &lockstep_wait_ns_);
   if (slot < 0) return;
   NavRecord& r = out_->navs[slot];
   r.seq = nav_seq_++;
@@ -351,7 +364,8 @@ Status FlightLoop::MissCycle(Status source_status, bool synchronous) {
     ++counters_.cycles_coasted;
     PublishNav();
   }
-  stages_[kStageOutput].Add(core::MonotonicNs() - t1);
+  stages_[kStageOutput].Add(core::MonotonicNs() - t1 - lockstep_wait_ns_);
+  CountLockstepWait();
   if (++cycles_ % options_.health_every == 0) PublishHealth();
   // A lockstep group has no clock but the camera's: a cycle that did not wait a period in
   // Next() waits it here.
@@ -423,13 +437,16 @@ void FlightLoop::StopRecoveryThread() {
   recovery_thread_.join();
 }
 
+void FlightLoop::CountLockstepWait() {
+  if (lockstep_wait_ns_ <= 0) return;
+  ++counters_.lockstep_waits;
+  counters_.lockstep_wait_ns += lockstep_wait_ns_;
+  counters_.lockstep_wait_max_ns = std::max(counters_.lockstep_wait_max_ns, lockstep_wait_ns_);
+}
+
 std::int32_t FlightLoop::AcquireHazardInput(bool wait) {
-  std::int32_t slot = out_->hazard_inputs.Acquire();
   // Lockstep: wait for the hazard group (bounded) so every snapshot frame is mapped.
-  for (int i = 0; slot < 0 && wait && i < 200000; ++i) {
-    std::this_thread::sleep_for(std::chrono::microseconds(100));
-    slot = out_->hazard_inputs.Acquire();
-  }
+  const std::int32_t slot = AcquireSlot(&out_->hazard_inputs, wait, &lockstep_wait_ns_);
   if (slot < 0) ++counters_.hazard_skipped;
   return slot;
 }
@@ -454,8 +471,9 @@ void FlightLoop::CopyRectified(HazardInput* h) {
 }
 
 void FlightLoop::TakeSnapshot(bool synchronous, std::int32_t hazard_slot) {
-  const std::int32_t slot = AcquireOutputOrCountDrop(
-      &out_->maps, options_.pacing == Pacing::kLockstep, &counters_.outputs_dropped);
+  const std::int32_t slot =
+      AcquireOutputOrCountDrop(&out_->maps, options_.pacing == Pacing::kLockstep,
+                               &counters_.outputs_dropped, &lockstep_wait_ns_);
   if (slot < 0) {
     if (hazard_slot >= 0) out_->hazard_inputs.Release(hazard_slot);
     return;
@@ -517,6 +535,10 @@ void FlightLoop::RunHazard(std::int32_t input_slot, core::SpscQueue<RecordRef, k
   const TimeNs t1 = core::MonotonicNs();
   out_->hazard_inputs.Release(input_slot);
   hazard_stage_.Add(t1 - t0);
+  // Slower than the snapshots come at the camera rate: in real time the next would be skipped.
+  if (t1 - t0 > options_.hazard_every * period_ns_) {
+    hazard_overruns_.fetch_add(1, std::memory_order_relaxed);
+  }
   const StageSummary summary = hazard_stage_.Summarize();
   while (hazard_summary_lock_.test_and_set(std::memory_order_acquire)) {
   }
@@ -550,8 +572,9 @@ void FlightLoop::HazardMain() {
 }
 
 void FlightLoop::PublishHealth() {
-  const std::int32_t slot = AcquireOutputOrCountDrop(
-      &out_->healths, options_.pacing == Pacing::kLockstep, &counters_.outputs_dropped);
+  const std::int32_t slot =
+      AcquireOutputOrCountDrop(&out_->healths, options_.pacing == Pacing::kLockstep,
+                               &counters_.outputs_dropped, &lockstep_wait_ns_);
   if (slot < 0) return;
   HealthRecord& h = out_->healths[slot];
   h.utime = last_frame_utime_;
@@ -590,6 +613,7 @@ Status FlightLoop::Step() {
   TimeNs processing = 0;
   const Status s = Cycle(options_.acquire_timeout_ns, true, &processing);
   if (s == Status::kOk && processing > period_ns_) ++counters_.overruns;
+  counters_.hazard_overruns = hazard_overruns_.load();
   return s;
 }
 
@@ -650,6 +674,7 @@ Status FlightLoop::Run() {
   hazard_quit_.store(true, std::memory_order_release);
   hazard_wake_.release();
   hazard_thread_.join();
+  counters_.hazard_overruns = hazard_overruns_.load();
   StopRecoveryThread();
   memory_.frame_group.Measure();
   memory_.at_end = core::ReadProcessMemory();

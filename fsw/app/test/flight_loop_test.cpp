@@ -8,9 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include "small_rig.hpp"
@@ -248,6 +250,54 @@ TEST(FlightLoopTest, ThreadedHazardMapsAreIdenticalToSynchronousOnes) {
     EXPECT_EQ(a.classes, b.classes) << "map " << k;
   }
   EXPECT_GT(KnownCells(threaded.maps.back()), 500);
+}
+
+// A hazard stage that takes at least `delay_ms` per update: the mapper, then a sleep.
+class SlowHazard : public HazardStage {
+ public:
+  SlowHazard(HazardStage* inner, double delay_ms) : inner_(inner), delay_ms_(delay_ms) {}
+  core::Status Process(const HazardInput& input, HazardRecord* out) override {
+    const core::Status s = inner_->Process(input, out);
+    std::this_thread::sleep_for(std::chrono::microseconds(static_cast<int>(delay_ms_ * 1e3)));
+    return s;
+  }
+
+ private:
+  HazardStage* inner_;
+  double delay_ms_;
+};
+
+// GIVEN a lockstep run (as fast as the frame group goes) whose hazard group takes 120 ms per
+// map, a map every frame at 20 Hz WHEN it runs THEN every snapshot is mapped, the frame group's
+// waits for the busy hazard group are counted as lockstep waits and not as its overruns, and
+// every map that took longer than its 50 ms period is a hazard overrun.
+TEST(FlightLoopTest, LockstepWaitsForTheHazardGroupAreNotFrameGroupOverruns) {
+  Rig rig(
+      "source: sim\nsim.scenario: hover\nsim.frames: 12\nsim.width_px: 128\nsim.height_px: 96\n"
+      "sim.terrain_size: 512\nmax_disparity_px: 40\nrate_hz: 20\n");
+  SlowHazard slow(rig.hazard.get(), 120.0);
+  FlightLoop loop;
+  rig.loop_options.rate_hz = 20.0;
+  rig.loop_options.pacing = Pacing::kLockstep;
+  rig.loop_options.hazard_every = 1;
+  ASSERT_EQ(loop.Configure(rig.loop_options, rig.pipeline.get(), rig.source.get(),
+                           rig.channels.get(), rig.world.get(), &slow),
+            core::Status::kOk);
+  rig.output.Start();
+  ASSERT_EQ(loop.Run(), core::Status::kOk);
+  rig.output.StopAndDrain();
+  const LoopCounters& c = loop.Counters();
+  EXPECT_EQ(c.frames, 12);
+  EXPECT_EQ(c.hazard_skipped, 0);
+  EXPECT_EQ(c.hazard_overruns, 12);
+  // Two input slots: from the third snapshot on the frame group waits ~120 ms for each.
+  EXPECT_GE(c.lockstep_waits, 8);
+  EXPECT_GE(core::NsToMs(c.lockstep_wait_max_ns), 60.0);
+  EXPECT_GE(core::NsToMs(c.lockstep_wait_ns), 8 * 60.0);
+  // The frame group's own work on 128 x 96 images is a few ms; a loaded machine may add one.
+  EXPECT_LE(c.overruns, 1);
+  EXPECT_LT(loop.Summary(kStageCycle).p50_ms, 50.0f);
+  EXPECT_LT(loop.Summary(kStageOutput).p50_ms, 50.0f);
 }
 
 // GIVEN a 20 Hz frame group on a hover (fast cycles) WHEN the track stage of frame 10 takes

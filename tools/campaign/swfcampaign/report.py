@@ -287,6 +287,13 @@ def timing(done):
                        for name, v in stages.items()},
             'overruns': sum(r['summary'].get('overruns', 0) or 0 for r in done),
             'runs_with_overruns': sum(1 for r in done if r['summary'].get('overruns')),
+            'hazard_overruns': sum(r['summary'].get('hazard_overruns', 0) or 0 for r in done),
+            'runs_with_hazard_overruns': sum(1 for r in done
+                                             if r['summary'].get('hazard_overruns')),
+            'lockstep_wait_cycles': sum((r['summary'].get('lockstep_waits') or {}).get('cycles', 0)
+                                        for r in done),
+            'lockstep_wait_max_ms': max([(r['summary'].get('lockstep_waits') or {})
+                                         .get('max_ms', 0.0) for r in done] or [0.0]),
             'allocations_after_start': sum(max(0, r['summary'].get('allocations_after_start', 0)
                                                or 0) for r in done),
             'wall_s_per_run': stats([r['status'].get('wall_s') for r in done])}
@@ -568,10 +575,16 @@ def markdown(report, pngs, reproduced, worst_plots=None):
     for name, s in sorted(t['stages'].items()):
         lines.append('| %s | %s | %s | %s |' % (name, fmt(s['p99_ms_median_over_runs']),
                                                fmt(s['p99_ms_worst_run']), fmt(s['max_ms'])))
-    lines += ['', 'Overruns: %d (in %d runs). Allocations after start: %d. Wall time per run: '
-              'median %s s.' % (t['overruns'], t['runs_with_overruns'],
-                                t['allocations_after_start'],
-                                fmt(t['wall_s_per_run']['p50'])), '']
+    lines += ['', 'Frame-group overruns: %d (in %d runs). Hazard updates longer than their '
+              'period (hazard_every frames): %d (in %d runs). Allocations after start: %d. Wall '
+              'time per run: median %s s.' % (
+                  t['overruns'], t['runs_with_overruns'], t['hazard_overruns'],
+                  t['runs_with_hazard_overruns'], t['allocations_after_start'],
+                  fmt(t['wall_s_per_run']['p50'])), '',
+              'Lockstep runs go faster than the camera rate, so the frame group sometimes waits '
+              'for the hazard group or the output thread to give a slot back (%d cycles, at most '
+              '%s ms); that wait is the simulator\'s, and is left out of the stages and the '
+              'overruns.' % (t['lockstep_wait_cycles'], fmt(t['lockstep_wait_max_ms'])), '']
     if pngs:
         lines += ['## Plots', ''] + ['![%s](%s)' % (p, p) for p in pngs] + ['']
     if report.get('plot_errors'):

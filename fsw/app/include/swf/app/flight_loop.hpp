@@ -109,6 +109,15 @@ struct LoopCounters {
   std::int64_t imu_samples = 0;            // handed to the pipeline (before its checks)
   std::int64_t imu_waits = 0;              // cycles that waited for a live IMU's samples
   std::int64_t imu_wait_timeouts = 0;      // ... and integrated without them (imu_wait_ns)
+  // Lockstep pacing: cycles whose frame group waited for a slot the output thread or the hazard
+  // group had not given back yet, and how long. A lockstep run goes as fast as the frame group
+  // can, so that wait is not frame-group work: it is left out of the stages and of `overruns`.
+  std::int64_t lockstep_waits = 0;
+  core::TimeNs lockstep_wait_ns = 0;
+  core::TimeNs lockstep_wait_max_ns = 0;
+  // Hazard updates that took longer than hazard_every periods: at the camera rate the snapshot
+  // after each would have been skipped (either pacing; set when Run() or Step() returns).
+  std::int64_t hazard_overruns = 0;
 };
 
 class FlightLoop {
@@ -157,6 +166,7 @@ class FlightLoop {
   core::Status Cycle(core::TimeNs acquire_timeout_ns, bool synchronous_hazard,
                      core::TimeNs* processing_ns);
   void Inject(int stage);
+  void CountLockstepWait();
   void Push(core::SpscQueue<RecordRef, kOrderQueueSize>* q, RecordRef ref);
   void HazardMain();
   void TakeSnapshot(bool synchronous, std::int32_t hazard_slot);
@@ -200,7 +210,8 @@ class FlightLoop {
   std::int32_t hazard_spare_slot_ = -1;  // hazards slot kept after a failed update
   std::int64_t health_seq_ = 0;
   std::int64_t last_frame_utime_ = 0;
-  std::int64_t cycles_ = 0;  // frame-group cycles, missed ones included (health cadence)
+  std::int64_t cycles_ = 0;            // frame-group cycles, missed ones included (health cadence)
+  core::TimeNs lockstep_wait_ns_ = 0;  // this cycle's lockstep waits (LoopCounters)
 
   // Camera outage state (frame group) and the recovery thread's hand-over: while restart_busy_
   // the recovery thread owns the source and the frame group does not touch it; source_down_ from
@@ -225,6 +236,7 @@ class FlightLoop {
   std::atomic<std::int64_t> hazard_errors_{0};
   std::counting_semaphore<1024> hazard_wake_{0};
   std::atomic<std::int64_t> hazard_outputs_dropped_{0};
+  std::atomic<std::int64_t> hazard_overruns_{0};
   std::thread hazard_thread_;
   Memory memory_;
 };
