@@ -538,11 +538,8 @@ core::Status AravisStereoSource::Emit(std::int32_t slot_index, StereoPair* pair)
   if (!core::IsOk(result)) return result;
   pair->left_exposure_ns = times[0];
   pair->right_exposure_ns = times[1];
-  numbering_.Number(pair);
-  pair->handle = slot_index;
-  slot.in_use = true;
+  ServePair(slot_index, &slot, &numbering_, &stats_, pair);
   trigger_pending_ = false;
-  ++stats_.pairs_served;
   return core::Status::kOk;
 }
 

@@ -225,10 +225,7 @@ core::Status V4l2StereoSource::Emit(Slot& slot, std::int32_t slot_index, StereoP
   }
   pair->left_exposure_ns = lf.timestamp_ns;
   pair->right_exposure_ns = rf.timestamp_ns;
-  numbering_.Number(pair);
-  pair->handle = slot_index;
-  slot.in_use = true;
-  ++stats_.pairs_served;
+  ServePair(slot_index, &slot, &numbering_, &stats_, pair);
   return core::Status::kOk;
 }
 

@@ -66,4 +66,15 @@ std::int32_t FreeSlot(const Slot* slots, std::int32_t count) {
   return -1;
 }
 
+// Serves the pair filled from slot `index` (found by FreeSlot): numbered, the slot held until the
+// caller releases the pair's handle, and one more pair served.
+template <typename Slot>
+void ServePair(std::int32_t index, Slot* slot, PairNumbering* numbering, SourceStats* stats,
+               StereoPair* pair) {
+  numbering->Number(pair);
+  pair->handle = index;
+  slot->in_use = true;
+  ++stats->pairs_served;
+}
+
 }  // namespace swf::drivers
