@@ -108,6 +108,14 @@ inline void SubtractScaled(Column8<S>* c, const S* a, S s) {
   c->q2 -= Load(a + 4) * sv;
   c->q3 -= Load(a + 6) * sv;
 }
+// c -= a b with the column a already in pairs (16-byte aligned) and b a pair: per lane.
+template <typename S>
+inline void SubtractProductOfPairs(Column8<S>* c, const PairT<S>* a, const PairT<S>& b) {
+  c->q0 -= a[0] * b;
+  c->q1 -= a[1] * b;
+  c->q2 -= a[2] * b;
+  c->q3 -= a[3] * b;
+}
 }  // namespace dense_detail
 
 template <typename S, int MaxDim>
@@ -551,42 +559,17 @@ class DenseCholesky {
     for (int s = 0; s < kBlock / 2; ++s) {
       S* t0 = tile + 2 * s * kBlock;
       S* t1 = t0 + kBlock;
-      V c00 = dense_detail::Load(t0);
-      V c10 = dense_detail::Load(t0 + 2);
-      V c20 = dense_detail::Load(t0 + 4);
-      V c30 = dense_detail::Load(t0 + 6);
-      V c01 = dense_detail::Load(t1);
-      V c11 = dense_detail::Load(t1 + 2);
-      V c21 = dense_detail::Load(t1 + 4);
-      V c31 = dense_detail::Load(t1 + 6);
+      dense_detail::Column8<S> c0 = dense_detail::LoadColumn(t0);
+      dense_detail::Column8<S> c1 = dense_detail::LoadColumn(t1);
       const V* b = static_cast<const V*>(__builtin_assume_aligned(dup_ + s * 4 * kChunk, 16));
       const V* av = static_cast<const V*>(__builtin_assume_aligned(a, 16));
 #pragma GCC unroll 2
       for (int p = 0; p < len; ++p) {
-        const V* ap = av + 4 * p;
-        const V a0 = ap[0];
-        const V a1 = ap[1];
-        const V a2 = ap[2];
-        const V a3 = ap[3];
-        const V b0 = b[2 * p];
-        const V b1 = b[2 * p + 1];
-        c00 -= a0 * b0;
-        c10 -= a1 * b0;
-        c20 -= a2 * b0;
-        c30 -= a3 * b0;
-        c01 -= a0 * b1;
-        c11 -= a1 * b1;
-        c21 -= a2 * b1;
-        c31 -= a3 * b1;
+        dense_detail::SubtractProductOfPairs(&c0, av + 4 * p, b[2 * p]);
+        dense_detail::SubtractProductOfPairs(&c1, av + 4 * p, b[2 * p + 1]);
       }
-      dense_detail::Store(t0, c00);
-      dense_detail::Store(t0 + 2, c10);
-      dense_detail::Store(t0 + 4, c20);
-      dense_detail::Store(t0 + 6, c30);
-      dense_detail::Store(t1, c01);
-      dense_detail::Store(t1 + 2, c11);
-      dense_detail::Store(t1 + 4, c21);
-      dense_detail::Store(t1 + 6, c31);
+      dense_detail::StoreColumn(t0, c0);
+      dense_detail::StoreColumn(t1, c1);
     }
   }
 
@@ -600,35 +583,26 @@ class DenseCholesky {
     const Quad* av = static_cast<const Quad*>(__builtin_assume_aligned(a, 32));
     for (int h = 0; h < 2; ++h) {
       Quad* t = static_cast<Quad*>(__builtin_assume_aligned(tile + 4 * h * kBlock, 32));
-      Quad c00 = t[0], c01 = t[1], c10 = t[2], c11 = t[3];
-      Quad c20 = t[4], c21 = t[5], c30 = t[6], c31 = t[7];
+      Quad c[8];  // tile column 4h + k: rows 0-3 in c[2k], rows 4-7 in c[2k + 1]
+#pragma GCC unroll 8
+      for (int k = 0; k < 8; ++k) c[k] = t[k];
       const double* bh = b + 4 * h;
 #pragma GCC unroll 2
       for (int p = 0; p < len; ++p) {
         const Quad a0 = av[2 * p];
         const Quad a1 = av[2 * p + 1];
         const double* bp = bh + kBlock * p;
-        const Quad b0 = {bp[0], bp[0], bp[0], bp[0]};
-        const Quad b1 = {bp[1], bp[1], bp[1], bp[1]};
-        const Quad b2 = {bp[2], bp[2], bp[2], bp[2]};
-        const Quad b3 = {bp[3], bp[3], bp[3], bp[3]};
-        c00 -= a0 * b0;
-        c01 -= a1 * b0;
-        c10 -= a0 * b1;
-        c11 -= a1 * b1;
-        c20 -= a0 * b2;
-        c21 -= a1 * b2;
-        c30 -= a0 * b3;
-        c31 -= a1 * b3;
+        Quad bk[4];  // panel J's scalar k broadcast
+#pragma GCC unroll 4
+        for (int k = 0; k < 4; ++k) bk[k] = Quad{bp[k], bp[k], bp[k], bp[k]};
+#pragma GCC unroll 4
+        for (int k = 0; k < 4; ++k) {
+          c[2 * k] -= a0 * bk[k];
+          c[2 * k + 1] -= a1 * bk[k];
+        }
       }
-      t[0] = c00;
-      t[1] = c01;
-      t[2] = c10;
-      t[3] = c11;
-      t[4] = c20;
-      t[5] = c21;
-      t[6] = c30;
-      t[7] = c31;
+#pragma GCC unroll 8
+      for (int k = 0; k < 8; ++k) t[k] = c[k];
     }
   }
 #endif
@@ -642,28 +616,19 @@ class DenseCholesky {
     using dense_detail::Oct;
     const Oct* av = static_cast<const Oct*>(__builtin_assume_aligned(a, 64));
     Oct* t = static_cast<Oct*>(__builtin_assume_aligned(tile, 64));
-    Oct c0 = t[0], c1 = t[1], c2 = t[2], c3 = t[3], c4 = t[4], c5 = t[5], c6 = t[6], c7 = t[7];
+    Oct c[kBlock];  // tile column k
+#pragma GCC unroll 8
+    for (int k = 0; k < kBlock; ++k) c[k] = t[k];
 #pragma GCC unroll 2
     for (int p = 0; p < len; ++p) {
       const Oct ap = av[p];
       const double* bp = b + kBlock * p;
-      c0 -= ap * Oct{bp[0], bp[0], bp[0], bp[0], bp[0], bp[0], bp[0], bp[0]};
-      c1 -= ap * Oct{bp[1], bp[1], bp[1], bp[1], bp[1], bp[1], bp[1], bp[1]};
-      c2 -= ap * Oct{bp[2], bp[2], bp[2], bp[2], bp[2], bp[2], bp[2], bp[2]};
-      c3 -= ap * Oct{bp[3], bp[3], bp[3], bp[3], bp[3], bp[3], bp[3], bp[3]};
-      c4 -= ap * Oct{bp[4], bp[4], bp[4], bp[4], bp[4], bp[4], bp[4], bp[4]};
-      c5 -= ap * Oct{bp[5], bp[5], bp[5], bp[5], bp[5], bp[5], bp[5], bp[5]};
-      c6 -= ap * Oct{bp[6], bp[6], bp[6], bp[6], bp[6], bp[6], bp[6], bp[6]};
-      c7 -= ap * Oct{bp[7], bp[7], bp[7], bp[7], bp[7], bp[7], bp[7], bp[7]};
+#pragma GCC unroll 8
+      for (int k = 0; k < kBlock; ++k)
+        c[k] -= ap * Oct{bp[k], bp[k], bp[k], bp[k], bp[k], bp[k], bp[k], bp[k]};
     }
-    t[0] = c0;
-    t[1] = c1;
-    t[2] = c2;
-    t[3] = c3;
-    t[4] = c4;
-    t[5] = c5;
-    t[6] = c6;
-    t[7] = c7;
+#pragma GCC unroll 8
+    for (int k = 0; k < kBlock; ++k) t[k] = c[k];
   }
 #endif
 
