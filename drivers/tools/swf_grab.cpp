@@ -263,7 +263,7 @@ int Grab(const GrabArgs& a, const nlohmann::json& run) {
                                   {"pairing_failures", s.pairing_failures},
                                   {"timeouts", s.timeouts},
                                   {"run", run}};
-  std::printf("%s\n", summary.dump().c_str());
+  ground_cli::PrintJson(summary, -1);
   return written == a.pairs ? cli::kExitOk : cli::kExitFailed;
 }
 

@@ -106,6 +106,6 @@ int main(int argc, char** argv) {
                         {"overruns", monitor.LastHealth().overruns},
                         {"allocations_after_start", monitor.LastHealth().allocations_after_start},
                         {"run", swf::ground_cli::RunEcho(app, "swf-guidance", argc, argv)}};
-  std::printf("%s\n", summary.dump().c_str());
+  swf::ground_cli::PrintJson(summary, -1);
   return code;
 }

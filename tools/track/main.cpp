@@ -118,7 +118,7 @@ int Flow(const char* a_path, const char* b_path, const json& run) {
                                   {"dy", Number(y - c.y)},
                                   {"quality", Number(q)}});
   }
-  std::printf("%s\n", report.dump(1).c_str());
+  swf::ground_cli::PrintJson(report, 1);
   return 0;
 }
 
@@ -143,7 +143,7 @@ int Stereo(const char* l_path, const char* r_path, const json& run) {
                                   {"disparity", Number(m.disparity)},
                                   {"quality", Number(m.quality)}});
   }
-  std::printf("%s\n", report.dump(1).c_str());
+  swf::ground_cli::PrintJson(report, 1);
   return 0;
 }
 
@@ -203,7 +203,7 @@ int Rectify(const char* cam0, const char* cam1, const char* l_path, const char* 
                        {"baseline_m", Number(cam.baseline_m)},
                        {"out", out_path},
                        {"run", run}};
-  std::printf("%s\n", report.dump(1).c_str());
+  swf::ground_cli::PrintJson(report, 1);
   return 0;
 }
 

@@ -48,6 +48,6 @@ int main(int argc, char** argv) {
   // The run echoed after the results (docs/cli.md).
   nlohmann::ordered_json report = swf::tools::KittiVoReport(problem, r, window);
   report["run"] = nlohmann::ordered_json(swf::ground_cli::RunEcho(app, "swf-vo", argc, argv));
-  std::printf("%s\n", report.dump(2).c_str());
+  swf::ground_cli::PrintJson(report);
   return swf::cli::kExitOk;
 }

@@ -83,7 +83,7 @@ int RunCalibration(const std::vector<std::string>& files, const std::string& for
                        {"linearization_error_px", c.linearization_error_px},
                        {"written_to", out},
                        {"run", run}};
-  std::printf("%s\n", report.dump(2).c_str());
+  swf::ground_cli::PrintJson(report);
   return 0;
 }
 
@@ -163,7 +163,7 @@ int main(int argc, char** argv) {
   const json run = swf::ground_cli::RunEcho(app, "swf-convert", argc, argv);
   const auto print = [&run](json summary) {
     summary["run"] = run;
-    std::printf("%s\n", summary.dump(2).c_str());
+    swf::ground_cli::PrintJson(summary);
   };
 
   std::string error;

@@ -7,7 +7,6 @@
 // truth: the report says which); 2 usage.
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -151,7 +150,7 @@ int main(int argc, char** argv) {
   }
   report["run"] = swf::ground_cli::RunEcho(app, "swf-judge", argc, argv);
   if (json_path.empty()) {
-    std::cout << report.dump(2) << "\n";
+    swf::ground_cli::PrintJson(report);
   } else if (std::string error; !swf::ground_cli::WriteJson(json_path, report, &error)) {
     std::fprintf(stderr, "swf-judge: %s\n", error.c_str());
     return swf::cli::kExitFailed;

@@ -119,24 +119,30 @@ nlohmann::json RunEcho(const CLI::App& app, const char* tool, int argc, char** a
 
 namespace {
 
+// The document's text with its newline; invalid UTF-8 replaced (dump() would throw on it).
 template <typename Document>
-bool WriteDocument(const std::string& path, const Document& document, std::string* error,
-                   int indent) {
-  const std::string text =
-      document.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
-  return cli::WriteFileAtomically(path, text, error);
+std::string TextOf(const Document& document, int indent) {
+  return document.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace
 
 bool WriteJson(const std::string& path, const nlohmann::json& document, std::string* error,
                int indent) {
-  return WriteDocument(path, document, error, indent);
+  return cli::WriteFileAtomically(path, TextOf(document, indent), error);
 }
 
 bool WriteJson(const std::string& path, const nlohmann::ordered_json& document, std::string* error,
                int indent) {
-  return WriteDocument(path, document, error, indent);
+  return cli::WriteFileAtomically(path, TextOf(document, indent), error);
+}
+
+void PrintJson(const nlohmann::json& document, int indent) {
+  std::fputs(TextOf(document, indent).c_str(), stdout);
+}
+
+void PrintJson(const nlohmann::ordered_json& document, int indent) {
+  std::fputs(TextOf(document, indent).c_str(), stdout);
 }
 
 nlohmann::json Number(double value) {

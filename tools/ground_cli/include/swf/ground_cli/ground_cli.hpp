@@ -1,7 +1,7 @@
 // The command-line convention (docs/cli.md) for the ground tools, on CLI11: the same --help,
 // --version, refusals and exit codes as the flight processes' parser (swf::cli), the run echoed
-// into every summary, JSON written whole through swf::cli::OutputFile, and where the shared data
-// is (SharedDir(), shared_dir.hpp).
+// into every summary, JSON written whole through swf::cli::OutputFile or printed, and where the
+// shared data is (SharedDir(), shared_dir.hpp).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -35,6 +35,11 @@ bool WriteJson(const std::string& path, const nlohmann::json& document, std::str
 // The same for a document whose fields keep their insertion order.
 bool WriteJson(const std::string& path, const nlohmann::ordered_json& document, std::string* error,
                int indent = 2);
+
+// A summary on stdout: the document dumped with `indent` (-1: on one line) and a newline, with the
+// same replacement of bytes that are not UTF-8 as WriteJson (an argument echoed by RunEcho).
+void PrintJson(const nlohmann::json& document, int indent = 2);
+void PrintJson(const nlohmann::ordered_json& document, int indent = 2);
 
 // A finite number, or null (JSON has no inf/nan).
 nlohmann::json Number(double value);
