@@ -131,12 +131,7 @@ std::string GnuplotJob::Binary(const std::string& name, const void* bytes, std::
   return Write(name, bytes, size);
 }
 
-void GnuplotJob::Script(const std::string& lines) {
-  script_ += lines;
-  if (!lines.empty() && lines.back() != '\n') script_ += '\n';
-}
-
-bool GnuplotJob::Render(const std::string& png, std::string* error) {
+bool GnuplotJob::Render(const std::string& script, const std::string& png, std::string* error) {
   const auto fail = [&](const std::string& why) {
     *error = png + ": " + why;
     return false;
@@ -146,8 +141,9 @@ bool GnuplotJob::Render(const std::string& png, std::string* error) {
   std::ostringstream head;
   head << "set encoding utf8\nset terminal pngcairo size " << width_px_ << "," << height_px_
        << " noenhanced font 'Sans,10'\nset output " << Quoted(image) << "\n";
-  const std::string script = dir_ + "/plot.gp";
-  Data("plot.gp", head.str() + script_ + "unset output\n");
+  const std::string script_path = dir_ + "/plot.gp";
+  const bool ends_line = script.empty() || script.back() == '\n';
+  Data("plot.gp", head.str() + script + (ends_line ? "" : "\n") + "unset output\n");
   if (!error_.empty()) return fail(error_);
 
   const std::string program = GnuplotProgram();
@@ -157,8 +153,8 @@ bool GnuplotJob::Render(const std::string& png, std::string* error) {
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  std::vector<char*> argv = {const_cast<char*>(program.c_str()), const_cast<char*>(script.c_str()),
-                             nullptr};
+  std::vector<char*> argv = {const_cast<char*>(program.c_str()),
+                             const_cast<char*>(script_path.c_str()), nullptr};
   pid_t pid = 0;
   const int spawned = posix_spawnp(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);

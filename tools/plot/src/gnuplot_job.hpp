@@ -20,10 +20,9 @@ class GnuplotJob {
   // A write failure is remembered and reported by Render.
   std::string Data(const std::string& name, const std::string& text);
   std::string Binary(const std::string& name, const void* bytes, std::size_t size);
-  // Appends script lines (after the terminal and output settings the job writes itself).
-  void Script(const std::string& lines);
-  // Runs gnuplot and copies the PNG to `png`; false with the reason, naming `png`.
-  bool Render(const std::string& png, std::string* error);
+  // Runs gnuplot on `script` (after the terminal and output settings the job writes itself) and
+  // copies the PNG to `png`; false with the reason, naming `png`.
+  bool Render(const std::string& script, const std::string& png, std::string* error);
 
  private:
   std::string Write(const std::string& name, const void* bytes, std::size_t size);
@@ -31,7 +30,6 @@ class GnuplotJob {
   int width_px_;
   int height_px_;
   std::string dir_;  // empty: mkdtemp failed (error_ says why)
-  std::string script_;
   std::string error_;
 };
 

@@ -135,8 +135,7 @@ bool DrawGridPanels(const GridPanels& g, const std::string& title, const std::st
                 g.count_unit + ")");
   }
   s << site_plot << "\nunset multiplot\n";
-  job.Script(s.str());
-  return job.Render(png, error);
+  return job.Render(s.str(), png, error);
 }
 
 std::string Fixed1(double v) {
@@ -268,8 +267,7 @@ bool DrawContactSheet(const std::vector<ContactFrame>& frames, const std::string
       << ") flipy format='%uchar' with image\n";
   }
   s << "unset multiplot\n";
-  job.Script(s.str());
-  return job.Render(png, error);
+  return job.Render(s.str(), png, error);
 }
 
 namespace {
@@ -308,8 +306,7 @@ bool DrawLineChart(const LineChart& chart, const std::string& png, std::string* 
       << " using 1:2 with linespoints lw 2 " << SeriesStyle(k) << " title " << Quoted(series.title);
   }
   s << "\n";
-  job.Script(s.str());
-  return job.Render(png, error);
+  return job.Render(s.str(), png, error);
 }
 
 }  // namespace swf::plot

@@ -75,8 +75,7 @@ bool DrawTrajectory(const evaluation::RunScore& score, const std::string& png, s
                     "estimate − truth");
   }
   s << "unset multiplot\n";
-  job.Script(s.str());
-  return job.Render(png, error);
+  return job.Render(s.str(), png, error);
 }
 
 bool DrawAttitudeError(const evaluation::RunScore& score, const std::string& png,
@@ -98,8 +97,7 @@ bool DrawAttitudeError(const evaluation::RunScore& score, const std::string& png
     << "plot " << d << " using 1:20 with lines " << kEstimateStyle
     << " title 'angle of est_R^T true_R'\n"
     << "unset multiplot\n";
-  job.Script(s.str());
-  return job.Render(png, error);
+  return job.Render(s.str(), png, error);
 }
 
 bool DrawLandmarkError(const evaluation::RunScore& score, const std::string& png,
@@ -124,8 +122,7 @@ bool DrawLandmarkError(const evaluation::RunScore& score, const std::string& png
     << "'landmarks judged (right axis)', \\\n  " << d
     << " using 1:2 with linespoints pt 7 ps 0.6 lw 1.5 lc rgb '#c0392b' title 'RMS', \\\n  " << d
     << " using 1:3 with linespoints pt 5 ps 0.6 lw 1.5 lc rgb '#2c7bb6' title 'median'\n";
-  job.Script(s.str());
-  return job.Render(png, error);
+  return job.Render(s.str(), png, error);
 }
 
 bool DrawLandmarkMap(const evaluation::RunScore& score, const std::string& png,
@@ -184,8 +181,7 @@ bool DrawLandmarkMap(const evaluation::RunScore& score, const std::string& png,
       << out << " using 1:2 with points pt 9 ps 1.4 lc rgb 'black' title '" << label << "'";
   }
   s << "\n";
-  job.Script(s.str());
-  return job.Render(png, error);
+  return job.Render(s.str(), png, error);
 }
 
 std::vector<std::string> DrawRun(const evaluation::RunScore& score, const RunPictures& pictures,
