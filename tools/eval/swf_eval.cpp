@@ -180,12 +180,16 @@ std::string NeesVerdict(const char* what, double mean, double dof, double lower,
 // A line of docs/results.md.
 void AddLine(std::string* md, const std::string& line) { *md += line + "\n"; }
 
-// A figure's section of docs/results.md: its heading and its plots, each followed by a blank line.
+// A paragraph (or heading) of docs/results.md: its line and the blank line that ends it.
+void AddParagraph(std::string* md, const std::string& text) {
+  AddLine(md, text);
+  AddParagraph(md, "");
+}
+
+// A figure's section of docs/results.md: its heading and its plots, each a paragraph.
 void AddFigure(std::string* md, const std::string& heading, const std::string& plots) {
-  AddLine(md, heading);
-  AddLine(md, "");
-  AddLine(md, plots);
-  AddLine(md, "");
+  AddParagraph(md, heading);
+  AddParagraph(md, plots);
 }
 
 // The filter in `mode` with a window of k poses, as a Monte Carlo run.
@@ -307,10 +311,8 @@ bool AddNees(const Output& out, int runs, std::string* md) {
   if (!WriteExperiment(out, "nees_landmark", landmark_figure, landmark, summary, frame_numbers)) {
     return false;
   }
-  AddLine(md, "## Consistency: NEES over " + std::to_string(runs) + " Monte Carlo runs");
-  AddLine(md, "");
-  AddLine(md, "![nees pose](eval/nees_pose.png) ![nees landmark](eval/nees_landmark.png)");
-  AddLine(md, "");
+  AddParagraph(md, "## Consistency: NEES over " + std::to_string(runs) + " Monte Carlo runs");
+  AddParagraph(md, "![nees pose](eval/nees_pose.png) ![nees landmark](eval/nees_landmark.png)");
   AddLine(
       md,
       "Normalized estimation error squared of the newest pose (6 dof, error in the estimator's "
@@ -321,7 +323,6 @@ bool AddNees(const Output& out, int runs, std::string* md) {
       "a new scene, new pixel noise (0.5 px, as R states) and new motion-input noise (as Q "
       "states); the first pose's prior is centred on the truth. Averages below are over frames "
       "2-40 (`out/eval/nees_pose.json`).");
-  AddLine(md, "");
   for (const NeesResult& r : results) {
     AddLine(md, "- " + r.name + ": " +
                     NeesVerdict("pose", r.mean_pose_nees, 6, r.pose_lower, r.pose_upper,
@@ -396,9 +397,7 @@ bool AddNees(const Output& out, int runs, std::string* md) {
       p10.final_error_m[0], p5.mean_poses, p10.mean_poses, p5.max_poses, p10.max_poses,
       p30.mean_poses, p30.max_poses, c30.mean_poses, c30.max_poses, p30.mean_pose_nees / 6);
   summary_text += buf;
-  AddLine(md, summary_text);
-
-  AddLine(md, "");
+  AddParagraph(md, summary_text);
   return true;
 }
 
@@ -574,10 +573,8 @@ bool AddFig16(const Output& out, int runs, std::string* md) {
   if (!WriteExperiment(out, "fig16_track_length", figure, series, summary, x)) {
     return false;
   }
-  AddLine(md, "## Fig. 16: final map MSE against average track length and window size");
-  AddLine(md, "");
-  AddLine(md, "![fig16](eval/fig16_track_length.png)");
-  AddLine(md, "");
+  AddParagraph(md, "## Fig. 16: final map MSE against average track length and window size");
+  AddParagraph(md, "![fig16](eval/fig16_track_length.png)");
   std::string table = "| track length |";
   for (int k : o.windows) table += " SWF(" + std::to_string(k) + ") |";
   AddLine(md, table);
@@ -630,8 +627,7 @@ bool AddFig16(const Output& out, int runs, std::string* md) {
                   std::max(short_ratio, 1.0));
   }
   text += buf;
-  AddLine(md, text);
-  AddLine(md, "");
+  AddParagraph(md, text);
   return true;
 }
 
@@ -666,8 +662,7 @@ bool AddFig12(const Output& output, int runs, std::string* md) {
           ? "matches the paper"
           : "differs from the paper: the 1/m line is anchored at one noisy first frame, the "
             "CRLB is the measured reference");
-  AddLine(md, buf);
-  AddLine(md, "");
+  AddParagraph(md, buf);
   return true;
 }
 
@@ -735,8 +730,7 @@ bool AddFig13(const Output& output, int runs, std::string* md) {
       100.0 * (Mean(rms_s3) / Mean(rms_batch) - 1.0),
       100.0 * (Mean(rms_s10) / Mean(rms_batch) - 1.0), Mean(rms_plain3),
       Mean(rms_plain3) / Mean(rms_batch));
-  AddLine(md, buf);
-  AddLine(md, "");
+  AddParagraph(md, buf);
   std::snprintf(
       buf, sizeof(buf),
       "**Paper claim (4.2.4): over 10 frames SWF error ~76%% below VO, standard deviation "
@@ -753,8 +747,7 @@ bool AddFig13(const Output& output, int runs, std::string* md) {
                   "remaining gap to 76% is not attributable further."
                 : "The paper does not state its VO's window or scene, so the remaining gap to "
                   "76% is not attributable further.");
-  AddLine(md, buf);
-  AddLine(md, "");
+  AddParagraph(md, buf);
   return true;
 }
 
@@ -809,8 +802,7 @@ bool AddFig14(const Output& output, std::string* md) {
       "Benchmarks with medians: docs/benchmarks.md.",
       Median(s10.update_ms), Median(s20.update_ms), batch.update_ms.back(), Mean(s10.state_dim),
       Mean(s20.state_dim), features_per_frame, Mean(with.state_dim), without.state_dim.back());
-  AddLine(md, buf);
-  AddLine(md, "");
+  AddParagraph(md, buf);
   return true;
 }
 
@@ -853,8 +845,7 @@ bool AddFig15(const Output& output, int runs, std::string* md) {
       s[4].y.back() / s[0].y.back(),
       s[3].y.back() > 1.5 * s[0].y.back() ? "reproduced" : "not reproduced on this scene",
       s[1].y.back() / s[0].y.back(), s[2].y.back() / s[0].y.back());
-  AddLine(md, buf);
-  AddLine(md, "");
+  AddParagraph(md, buf);
   return true;
 }
 
@@ -927,27 +918,26 @@ bool AddFig17(const Output& output, int runs, std::string* md) {
       "of carrying a prior comes from the off-diagonal terms\".",
       runs, swf3, s[2].y.back(), block, block / swf3, verdict(block), diagonal, diagonal / swf3,
       verdict(diagonal), diverged, runs, s[3].y.back(), failed_diagonal, failed_swf, failed_block);
-  AddLine(md, buf);
-  AddLine(md, "");
-  AddLine(md,
-          "Why the two readings differ: subtracting only part of a positive semi-definite Schur "
-          "term from the information matrix does not keep the result positive definite. Lambda_rr "
-          "keeps its own off-diagonal elements (the marginalized pose's measurements couple each "
-          "landmark's x, y and depth, and the next pose's six coordinates) while the diagonal "
-          "loses what the exact complement would take from them, so the prior can claim more "
-          "correlation than variance. Keeping whole blocks within each variable removes that "
-          "inside a variable, and only the fill-in *between* variables is dropped: the "
-          "correlation that the marginalized pose's uncertainty puts between its landmarks, which "
-          "matters only when the pose is weakly determined relative to the landmarks; with 100 "
-          "landmarks tracked it is not. Measured in the estimator (estimator/README.md, known "
-          "limits): with 10-50 landmarks in the linear regime the block-diagonal VSDF is 7-15% "
-          "worse in MSE on average (too little against run-to-run spread to assert), and in the "
-          "nonlinear regime (20 landmarks from 100 m, loose motion input) it is better, because "
-          "the dense prior also carries the linearization error of a weakly determined pose. "
-          "Where the block-diagonal VSDF does fail clearly is the covariance: the NEES section "
-          "below runs it on the same descents as SWF, and its marginals are several times "
-          "over-confident where SWF's are consistent.");
-  AddLine(md, "");
+  AddParagraph(md, buf);
+  AddParagraph(
+      md,
+      "Why the two readings differ: subtracting only part of a positive semi-definite Schur "
+      "term from the information matrix does not keep the result positive definite. Lambda_rr "
+      "keeps its own off-diagonal elements (the marginalized pose's measurements couple each "
+      "landmark's x, y and depth, and the next pose's six coordinates) while the diagonal "
+      "loses what the exact complement would take from them, so the prior can claim more "
+      "correlation than variance. Keeping whole blocks within each variable removes that "
+      "inside a variable, and only the fill-in *between* variables is dropped: the "
+      "correlation that the marginalized pose's uncertainty puts between its landmarks, which "
+      "matters only when the pose is weakly determined relative to the landmarks; with 100 "
+      "landmarks tracked it is not. Measured in the estimator (estimator/README.md, known "
+      "limits): with 10-50 landmarks in the linear regime the block-diagonal VSDF is 7-15% "
+      "worse in MSE on average (too little against run-to-run spread to assert), and in the "
+      "nonlinear regime (20 landmarks from 100 m, loose motion input) it is better, because "
+      "the dense prior also carries the linearization error of a weakly determined pose. "
+      "Where the block-diagonal VSDF does fail clearly is the covariance: the NEES section "
+      "below runs it on the same descents as SWF, and its marginals are several times "
+      "over-confident where SWF's are consistent.");
   return true;
 }
 
@@ -989,8 +979,7 @@ bool AddKittiWindows(const Output& output, const std::string& shared, std::strin
                       "final cost (unitless), position difference to batch (m)", true};
   if (!WriteExperiment(output, "kitti_windows", figure, {cost, dpos}, summary, windows))
     return false;
-  AddLine(md, "## Real data: kitti-vo, batch against sliding windows");
-  AddLine(md, "");
+  AddParagraph(md, "## Real data: kitti-vo, batch against sliding windows");
   std::snprintf(
       buf, sizeof(buf),
       "Initial cost %.6g, batch optimum %.6g (equal to Ceres's, tested). Windowed final costs "
@@ -998,8 +987,7 @@ bool AddKittiWindows(const Output& output, const std::string& shared, std::strin
       "camera position difference to batch: %.3g / %.3g / %.3g / %.3g / %.3g m.",
       batch.initial_cost, batch.final_cost, cost.y[0], cost.y[1], cost.y[2], cost.y[3], cost.y[4],
       dpos.y[0], dpos.y[1], dpos.y[2], dpos.y[3], dpos.y[4]);
-  AddLine(md, buf);
-  AddLine(md, "");
+  AddParagraph(md, buf);
   return true;
 }
 
