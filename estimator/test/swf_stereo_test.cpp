@@ -24,6 +24,14 @@ using testing::SceneOptions;
 using testing::StereoSwf;
 using testing::SyntheticScene;
 
+// The default descent (SceneOptions) shortened to `frames` frames with `landmarks` landmarks.
+SyntheticScene StereoDescent(int frames, int landmarks) {
+  SceneOptions so;
+  so.frames = frames;
+  so.num_landmarks = landmarks;
+  return SyntheticScene(so);
+}
+
 // ---- Jacobians against central differences ----------------------------------------------
 
 // Central differences of predict(pose, params, &z) against the analytic pose (3x6) and
@@ -167,10 +175,7 @@ TEST(StereoModel, ProcessJacobiansMatchNumeric) {
 }
 
 TEST(SwfStereo, HuberWeightingResistsGrossOutliers) {
-  SceneOptions so;
-  so.frames = 20;
-  so.num_landmarks = 60;
-  SyntheticScene clean(so);
+  const SyntheticScene clean = StereoDescent(20, 60);
   SwfOptions robust = ModeOptions(SwfMode::kSlidingWindow);
   SwfOptions plain = robust;
   plain.robust = false;
@@ -204,10 +209,7 @@ TEST(SwfStereo, HuberWeightingResistsGrossOutliers) {
 // The summary says why the last solve stopped; only the converged reasons set `converged`, and
 // a solve that runs out of iterations raises kFaultNotConverged.
 TEST(SwfStereo, SummaryGivesTheTerminationReason) {
-  SceneOptions so;
-  so.frames = 8;
-  so.num_landmarks = 40;
-  const SyntheticScene scene(so);
+  const SyntheticScene scene = StereoDescent(8, 40);
   auto swf = std::make_unique<StereoSwf<5>>();
   EXPECT_EQ(swf->Summary().termination, SwfTermination::kNoSolve);
   (void)RunScene(swf.get(), scene, ModeOptions(SwfMode::kSlidingWindow));
@@ -247,10 +249,7 @@ TEST(SwfStereo, SummaryGivesTheTerminationReason) {
 //   far:  every 10th landmark's first sighting gets 0.05 px of disparity (~46 km away),
 //   near: every 10th (offset 5) gets half its disparity (twice as far, still inside the gate).
 TEST(SwfStereo, CorruptedFirstMeasurementsAreContained) {
-  SceneOptions so;
-  so.frames = 20;
-  so.num_landmarks = 60;
-  SyntheticScene clean(so);
+  const SyntheticScene clean = StereoDescent(20, 60);
   const SwfOptions robust = ModeOptions(SwfMode::kSlidingWindow);
   const double e_clean = RunScene(std::make_unique<StereoSwf<5>>().get(), clean, robust).rms_m;
   auto corrupted = clean;

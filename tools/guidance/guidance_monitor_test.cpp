@@ -37,6 +37,14 @@ class GuidanceMonitorTest : public ::testing::Test {
     }
   }
 
+  // One channel's counts after Deliver().
+  static void ExpectCounts(const ChannelStats& channel, std::int64_t received,
+                           std::int64_t malformed, std::int64_t lost) {
+    EXPECT_EQ(channel.received, received);
+    EXPECT_EQ(channel.malformed, malformed);
+    EXPECT_EQ(channel.lost, lost);
+  }
+
   lcm::LCM lcm_{"memq://"};
   GuidanceMonitor monitor_{&lcm_, "SWF_", false};
 };
@@ -52,9 +60,7 @@ TEST_F(GuidanceMonitorTest, CountsLostAndMalformedAndKeepsGoing) {
   PublishNav(5);
   PublishNav(3);  // late
   Deliver();
-  EXPECT_EQ(monitor_.Nav().received, 5);
-  EXPECT_EQ(monitor_.Nav().malformed, 2);
-  EXPECT_EQ(monitor_.Nav().lost, 2);
+  ExpectCounts(monitor_.Nav(), 5, 2, 2);
   EXPECT_EQ(monitor_.Nav().out_of_order, 1);
   EXPECT_EQ(monitor_.LastNav().seq, 3);
   EXPECT_DOUBLE_EQ(monitor_.LastNav().position_world_m[2], 97.0);
@@ -81,9 +87,7 @@ TEST_F(GuidanceMonitorTest, HazardMapsAreCheckedForConsistency) {
   next.frame_seq = 9;
   ASSERT_EQ(lcm_.publish("SWF_HAZARD", &next), 0);
   Deliver();
-  EXPECT_EQ(monitor_.Hazard().received, 2);
-  EXPECT_EQ(monitor_.Hazard().malformed, 2);
-  EXPECT_EQ(monitor_.Hazard().lost, 0);
+  ExpectCounts(monitor_.Hazard(), 2, 2, 0);
   EXPECT_EQ(monitor_.LastHazard().frame_seq, 9);
 }
 
@@ -112,9 +116,7 @@ TEST_F(GuidanceMonitorTest, HostileLengthFieldsAreCountedNotFatal) {
   map.position_world_m[0][2] = 4.0;
   ASSERT_EQ(lcm_.publish("SWF_LANDMARKS", &map), 0);
   Deliver();
-  EXPECT_EQ(monitor_.Landmarks().received, 2);
-  EXPECT_EQ(monitor_.Landmarks().malformed, 3);
-  EXPECT_EQ(monitor_.Landmarks().lost, 0);
+  ExpectCounts(monitor_.Landmarks(), 2, 3, 0);
   EXPECT_EQ(monitor_.Health().malformed, 1);
   EXPECT_DOUBLE_EQ(monitor_.LastMap().position_world_m[0][2], 4.0);
 }
@@ -127,9 +129,7 @@ TEST_F(GuidanceMonitorTest, ExtremeSequenceNumbersDoNotOverflow) {
   PublishNav(std::numeric_limits<std::int64_t>::max());
   PublishNav(5);  // a step back: out of order
   Deliver();
-  EXPECT_EQ(monitor_.Nav().malformed, 1);
-  EXPECT_EQ(monitor_.Nav().received, 3);
-  EXPECT_EQ(monitor_.Nav().lost, std::numeric_limits<std::int64_t>::max() - 1);
+  ExpectCounts(monitor_.Nav(), 3, 1, std::numeric_limits<std::int64_t>::max() - 1);
   EXPECT_EQ(monitor_.Nav().out_of_order, 1);
 }
 
