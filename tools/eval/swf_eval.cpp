@@ -183,7 +183,7 @@ void AddLine(std::string* md, const std::string& line) { *md += line + "\n"; }
 // A paragraph (or heading) of docs/results.md: its line and the blank line that ends it.
 void AddParagraph(std::string* md, const std::string& text) {
   AddLine(md, text);
-  AddParagraph(md, "");
+  AddLine(md, "");
 }
 
 // A figure's section of docs/results.md: its heading and its plots, each a paragraph.
@@ -313,7 +313,7 @@ bool AddNees(const Output& out, int runs, std::string* md) {
   }
   AddParagraph(md, "## Consistency: NEES over " + std::to_string(runs) + " Monte Carlo runs");
   AddParagraph(md, "![nees pose](eval/nees_pose.png) ![nees landmark](eval/nees_landmark.png)");
-  AddLine(
+  AddParagraph(
       md,
       "Normalized estimation error squared of the newest pose (6 dof, error in the estimator's "
       "own retraction, against `ComputeCovariances`' marginal) and of the active landmarks (3 "
