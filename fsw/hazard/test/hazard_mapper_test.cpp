@@ -736,8 +736,8 @@ double ElevationAt(const HazardMapper& m, double x, double y) {
 
 // A map made of anonymous landmarks alone, one at each cell centre (a textureless pair matches
 // nothing), each with the same elevation sigma: the relief and its sigma exactly as constructed.
-void FillWithLandmarks(HazardMapper* m, double sigma_m, double (*height_m)(double, double)) {
-  HazardMapperOptions o = Options();
+void FillWithLandmarks(HazardMapper* m, double sigma_m, double (*height_m)(double, double),
+                       HazardMapperOptions o = Options()) {
   o.max_landmarks = o.grid_cells * o.grid_cells;
   ASSERT_EQ(m->Configure(o), core::Status::kOk);
   BlankFrame blank;
@@ -819,6 +819,79 @@ TEST(HazardMapperTest, ThresholdRockStillMarkedUncertainOrRock) {
     std::printf("sigma %.2f: safe %d uncertain %d rock %d slope %d\n", sigma, m.Stats().safe_cells,
                 m.Stats().uncertain_cells, m.Stats().rock_cells, m.Stats().slope_cells);
   }
+}
+
+// A ripple along x (2 m wavelength, 0.12 m amplitude: its 1 m central difference, 2 A cos(pi x)
+// over 1 m, reaches 13.5 deg at x = 0, +-1, +-2 m and stays below 10 deg within 0.26 m of the
+// crests and troughs; the flight footprint's +-1.5 m plane reads it at ~1 deg) with a 0.4 m rock,
+// 0.6 m wide, standing on its steepest line at the grid's centre.
+constexpr double kRippleAmplitude = 0.12;
+double RippleSlopeDeg(double x) {
+  return std::atan(2.0 * kRippleAmplitude * std::fabs(std::cos(M_PI * x))) * 180.0 / M_PI;
+}
+double RippleWithRock(double x, double y) {
+  const double q = 1.0 - ((x - 0.025) * (x - 0.025) + (y - 0.025) * (y - 0.025)) / (0.3 * 0.3);
+  return kRippleAmplitude * std::sin(M_PI * x) + (q > 0.0 ? 0.4 * std::sqrt(q) : 0.0);
+}
+
+// GIVEN that ripple mapped sharp (0.02 m) with the flight footprint (1.5 m) and a declared rock on
+// its steepest line THEN the 1 m slope beside the rock is still judged, on the ground without the
+// rock: no cell whose true 1 m slope exceeds 11 deg is kSafe however close to the rock, and where
+// the slope is measured there it reads the ripple's, not the rock's. Until the every-2nd-frame
+// campaigns the 1 m slope was not judged where its window held a declared rock (the height
+// difference being the rock's), which left the ground within 0.65 m of a rock unjudged though a
+// site keeps only the footprint's radius from the rock: the 1024 px campaign's run 64 chose a site
+// 1.45 m from a crater wall's 10-25 deg cells beside false rocks.
+TEST(HazardMapperTest, TheMetreSlopeIsJudgedBesideADeclaredRock) {
+  HazardMapperOptions o = Options();
+  o.grid_cells = 128;
+  o.footprint_radius_m = 1.5;
+  HazardMapper m;
+  FillWithLandmarks(&m, 0.02, &RippleWithRock, o);
+  int i = 0;
+  int j = 0;
+  ASSERT_TRUE(m.CellOf(0.025, 0.025, &i, &j));
+  ASSERT_EQ(m.Classes()[j * m.GridCells() + i], HazardClass::kRock);
+  int steep_near = 0;
+  int steep_near_safe = 0;
+  int measured_near = 0;
+  int measured_near_close = 0;
+  int gentle_far = 0;
+  int gentle_far_safe = 0;
+  for (int cj = 0; cj < m.GridCells(); ++cj) {
+    for (int ci = 0; ci < m.GridCells(); ++ci) {
+      const int c = cj * m.GridCells() + ci;
+      if (m.Classes()[c] == HazardClass::kUnknown || std::isnan(m.SlopeDeg()[c])) continue;
+      const double x = m.CornerX() + (ci + 0.5) * m.CellM();
+      const double y = m.CornerY() + (cj + 0.5) * m.CellM();
+      const double from_rock = std::hypot(x - 0.025, y - 0.025);
+      const double truth = RippleSlopeDeg(x);
+      if (from_rock > 0.35 && from_rock < 0.8) {
+        if (truth > 11.0) {
+          ++steep_near;
+          steep_near_safe += m.Classes()[c] == HazardClass::kSafe;
+        }
+        if (!std::isnan(m.LocalSlopeDeg()[c])) {
+          ++measured_near;
+          measured_near_close += std::fabs(m.LocalSlopeDeg()[c] - truth) < 1.5;
+        }
+      }
+      if (from_rock > 1.5 && truth < 6.0) {
+        ++gentle_far;
+        gentle_far_safe += m.Classes()[c] == HazardClass::kSafe;
+      }
+    }
+  }
+  std::printf(
+      "ripple: %d / %d cells above 11 deg near the rock safe; %d / %d measured near it within 1.5 "
+      "deg; %d / %d gentle cells away from it safe\n",
+      steep_near_safe, steep_near, measured_near_close, measured_near, gentle_far_safe, gentle_far);
+  ASSERT_GT(steep_near, 100);
+  EXPECT_EQ(steep_near_safe, 0);
+  ASSERT_GT(measured_near, 100);
+  EXPECT_GT(measured_near_close, measured_near * 9 / 10);
+  ASSERT_GT(gentle_far, 1000);
+  EXPECT_GT(gentle_far_safe, gentle_far * 9 / 10);
 }
 
 // GIVEN one SWF landmark published at three updates as its estimate improves THEN its cell holds

@@ -49,10 +49,11 @@
 //     (the mean cell variance times the quadric's leverage at the cell).
 //     Classes: kRock when the rock height exceeds the rock criterion's decision relief
 //     (RockCriterion below); kSlope when either slope exceeds its threshold by confidence_k sigma
-//     and its sigma resolves it (sigma <= a third of the threshold; the 1 m slope only where its
-//     window holds no kRock cell, since a height difference across a rock is the rock's, and the
-//     rock is the hazard there); kUncertain when value + k sigma
-//     exceeds a slope threshold, or, where the criterion does not resolve the threshold rock
+//     and its sigma resolves it (sigma <= a third of the threshold; the 1 m slope's patches leave
+//     out the cells of declared rocks and their flanks, since a height difference across a rock
+//     is the rock's, and the rock is the hazard there); kUncertain when value + k sigma
+//     exceeds a slope threshold (or the 1 m slope cannot be measured: a patch wholly covered by
+//     a rock), or, where the criterion does not resolve the threshold rock
 //     (where it does, it has decided), when the relief over the threshold rock's footprint leaves
 //     such a rock possible (RockCriterion, "Possible"); kSafe otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
