@@ -52,8 +52,9 @@
 //     and its sigma resolves it (sigma <= a third of the threshold; the 1 m slope's patches leave
 //     out the cells of declared rocks and their flanks, since a height difference across a rock
 //     is the rock's, and the rock is the hazard there); kUncertain when value + k sigma
-//     exceeds a slope threshold (or the 1 m slope cannot be measured: a patch wholly covered by
-//     a rock), or, where the criterion does not resolve the threshold rock
+//     exceeds a slope threshold (where a rock covers a 1 m slope's patch: when it does so at a
+//     measured cell within half the baseline, or none is measured there), or, where the criterion
+//     does not resolve the threshold rock
 //     (where it does, it has decided), when the relief over the threshold rock's footprint leaves
 //     such a rock possible (RockCriterion, "Possible"); kSafe otherwise, kUnknown without data.
 //  5. Safe site: clearance = Euclidean distance (exact distance transform) to the nearest cell that
@@ -454,7 +455,8 @@ class HazardMapper {
   std::vector<float> clearance_m_;
   // Summed-area tables, (n+1)^2 each: count, x, y, z, xx, xy, yy, xz, yz, zz, sigma^2.
   std::vector<double> sat_;
-  std::vector<std::int32_t> rock_sat_;  // (n+1)^2: declared rocks (row 0 and column 0 stay 0)
+  std::vector<std::int32_t> rock_sat_;   // (n+1)^2: declared rocks (row 0 and column 0 stay 0)
+  std::vector<std::int32_t> local_sat_;  // 2 (n+1)^2: measured 1 m slopes, of them possible hazards
   // Distance transform scratch.
   std::vector<float> dt_f_;
   std::vector<float> dt_d_;
