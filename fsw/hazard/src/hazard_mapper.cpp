@@ -371,7 +371,7 @@ void CountDeclaredRocks(int n, const HazardClass* cls, std::int32_t* rock_sat) {
 // after the rock evidence's: per known cell farther than rock_cells (square) from every declared
 // rock, its count, x, y, height above z_ref and stereo variance. A 1 m height difference across a
 // rock is the rock's, a hazard already, and the truth's slopes are the rock-free surface's: the
-// rock's cells and its flanks (the threshold rock's radius beyond its declared cells) are left out
+// rock's cells and its flanks (the profile beyond its declared cells: Analyze) are left out
 // of the patch means, not the whole slope test (until issue 16's every-2nd-frame campaigns the 1 m
 // slope was not judged where its window held a declared rock; a false rock on a crater wall then
 // let a site within 1.5 m of the wall's 10-25 deg cells: 1024 px campaign run 64).
@@ -1269,8 +1269,9 @@ void HazardMapper::Analyze(const HazardFrame& frame) {
   // judged by the ground around it: a slope above the threshold is possible there when it is at a
   // measured cell within rl (the baseline's half; the chords of those cells overlap the hidden
   // one by at least half), or when no cell there is measured. Until the every-2nd-frame campaigns
-  // such a cell was not judged at all; taking it as kUncertain instead cost a site in 3 of 20 rock
-  // field runs (a 0.8 m rock leaves a ring of flat ground 0.3-0.7 m from it unmeasured).
+  // such a cell was not judged at all; taking it as kUncertain instead cost 8 of the 51 rock-field
+  // runs of the 512 px every-2nd-frame campaign their site (a 1 m rock leaves a ring of flat
+  // ground 0.3-0.7 m from it unmeasured).
   CountMeasuredLocalSlopes(n_, local_slope_deg_.data(), local_slope_sigma_deg_.data(),
                            slope_possible, local_sat_.data());
   // A slope (footprint or 1 m scale) where the map resolves it; elsewhere an exceedance of either
