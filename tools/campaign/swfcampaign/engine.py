@@ -34,7 +34,8 @@ LOG_NAME = 'descent.lcmlog'
 # Summary fields measured on the machine (times, memory use), not results: they differ between
 # any two flights. 'run' echoes the command line (its output paths differ between a run and its
 # reproduction), not a result either.
-TIMING_KEYS = ('stages', 'mlockall', 'sched_fifo', 'overruns', 'memory', 'run')
+TIMING_KEYS = ('stages', 'mlockall', 'sched_fifo', 'overruns', 'hazard_overruns',
+               'lockstep_waits', 'memory', 'run')
 
 
 class CampaignError(Exception):
