@@ -51,6 +51,16 @@ rms = (sum(hh * hh + v * v for hh, v in zip(out["horizontal_error_m"], out["vert
        / len(out["frame"])) ** 0.5
 if abs(rms - s["pose_rms_error_m"]) > 1e-4 * max(1.0, rms):
     problems.append("per-output errors give RMS %.6f, the summary %.6f" % (rms, s["pose_rms_error_m"]))
+# The per-axis columns agree with the horizontal and vertical errors, and every output stated a
+# positive sigma on each axis.
+for e, hh, v, sg in zip(out["position_error_m"], out["horizontal_error_m"],
+                        out["vertical_error_m"], out["position_sigma_m"]):
+    if abs((e[0] ** 2 + e[1] ** 2) ** 0.5 - hh) > 1e-6 or abs(abs(e[2]) - abs(v)) > 1e-6:
+        problems.append("per-axis error %s disagrees with horizontal %s / vertical %s" % (e, hh, v))
+        break
+    if not all(x is not None and x > 0.0 for x in sg):
+        problems.append("per-axis sigma %s not positive" % (sg,))
+        break
 if not 9.0 < out["altitude_m"][-1] < 12.0 or not 95.0 < out["altitude_m"][0] < 105.0:
     problems.append("true altitudes %.1f .. %.1f m, not the demo's 100 -> 10 m"
                     % (out["altitude_m"][0], out["altitude_m"][-1]))
