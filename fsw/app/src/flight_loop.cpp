@@ -256,8 +256,8 @@ Status FlightLoop::Cycle(TimeNs acquire_timeout_ns, bool synchronous_hazard,
   // The frame group's own work: a lockstep wait for another thread is counted apart.
   *processing_ns = t6 - t1 - lockstep_wait_ns_;
   stages_[kStageCycle].Add(*processing_ns);
-  CountLockstepWait();
   if (++cycles_ % options_.health_every == 0) PublishHealth();
+  CountLockstepWait();
   return Status::kOk;
 }
 
@@ -365,8 +365,8 @@ Status FlightLoop::MissCycle(Status source_status, bool synchronous) {
     PublishNav();
   }
   stages_[kStageOutput].Add(core::MonotonicNs() - t1 - lockstep_wait_ns_);
-  CountLockstepWait();
   if (++cycles_ % options_.health_every == 0) PublishHealth();
+  CountLockstepWait();
   // A lockstep group has no clock but the camera's: a cycle that did not wait a period in
   // Next() waits it here.
   if (options_.pacing == Pacing::kLockstep && !synchronous && source_status != Status::kTimeout) {
